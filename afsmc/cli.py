@@ -1,2 +1,54 @@
-def main() -> int:
-    return 0
+"""The `afsmc` command line. Thin: each subcommand lives in afsmc/commands/<name>.py
+with `add_arguments(parser)` and `run(args) -> int`.
+
+Exit codes: 0 ok, 1 diagnostics (errors in the input, a failed check), 2 usage.
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib
+import sys
+from collections.abc import Sequence
+
+from afsmc import __version__
+
+# name -> one-line help; the module afsmc.commands.<name> implements it
+COMMANDS: dict[str, str] = {
+    "check": "check an .afsm file and report every problem",
+    "compile": "compile an .afsm file to PRISM, JANI or Graphviz DOT",
+}
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(
+        prog="afsmc",
+        description="Compiler for autonomous probabilistic finite-state machines (.afsm).")
+    parser.add_argument("--version", action="version", version=f"afsmc {__version__}")
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND")
+    for name, help_text in COMMANDS.items():
+        mod = importlib.import_module(f"afsmc.commands.{name.replace('-', '_')}")
+        p = sub.add_parser(name, help=help_text, description=help_text)
+        mod.add_arguments(p)
+        p.set_defaults(_run=mod.run)
+    return parser
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    if not getattr(args, "command", None):
+        parser.print_help(sys.stderr)
+        return 2
+    try:
+        code: int = args._run(args)
+    except KeyboardInterrupt:
+        print("afsmc: interrupted", file=sys.stderr)
+        return 130
+    except BrokenPipeError:
+        return 0
+    return code
+
+
+if __name__ == "__main__":
+    sys.exit(main())

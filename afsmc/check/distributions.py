@@ -1,0 +1,61 @@
+"""Outcome probabilities lie in [0, 1] and sum to 1, in every state where the action or
+hazard can happen."""
+
+from __future__ import annotations
+
+from afsmc.check.search import find
+from afsmc.diagnostics import Reporter, Span
+from afsmc.model import expr as E
+from afsmc.model import ir
+from afsmc.model.expr import Type
+from afsmc.model.lower import enabled, static_value
+
+EPSILON = 1e-9
+
+
+def _check(model: ir.Model, rep: Reporter, owner: str, when: dict[int, E.Expr],
+           outcomes: tuple[ir.Outcome, ...], span: Span) -> None:
+    for o in outcomes:
+        bad = E.disj(E.Binary("<", o.prob, E.lit(0), Type.BOOL),
+                     E.Binary(">", o.prob, E.lit(1), Type.BOOL))
+        for mode, cond in when.items():
+            wit = find(model, mode, E.conj(cond, bad))
+            if wit is not None:
+                rep.error("E304", f"a probability of {owner} is outside [0, 1] in the state {wit}",
+                          o.prob.span or o.span)
+                break
+    total: E.Expr = outcomes[0].prob
+    for o in outcomes[1:]:
+        total = E.Binary("+", total, o.prob, Type.DOUBLE)
+    static = static_value(total, model)
+    if static is not None:
+        if abs(static - 1.0) > EPSILON:
+            rep.error("E305", f"the outcome probabilities of {owner} sum to {static:.12g}, not 1",
+                      span, hint="make the last outcome '1 - ...' of the others")
+        return
+    off = E.disj(E.Binary(">", total, E.lit(1 + EPSILON), Type.BOOL),
+                 E.Binary("<", total, E.lit(1 - EPSILON), Type.BOOL))
+    for mode, cond in when.items():
+        wit = find(model, mode, E.conj(cond, off))
+        if wit is not None:
+            rep.error("E305", f"the outcome probabilities of {owner} do not sum to 1 in the "
+                      f"state {wit}", span, hint="make the last outcome '1 - ...' of the others")
+            return
+
+
+def check_distributions(model: ir.Model, rep: Reporter) -> None:
+    for a in model.actions:
+        when = {m: enabled(model, a, m) for m in a.modes}
+        _check(model, rep, f"{'hazard' if a.kind == 'preemptive' else 'action'} {a.name}", when,
+               a.outcomes, a.span)
+    for h in model.hazards:
+        when = {m: E.disj(*(enabled(model, a, m) for a in model.actions_in(m))) for m in h.modes}
+        bad = E.disj(E.Binary("<", h.prob, E.lit(0), Type.BOOL),
+                     E.Binary(">", h.prob, E.lit(1), Type.BOOL))
+        for mode, cond in when.items():
+            wit = find(model, mode, E.conj(cond, bad))
+            if wit is not None:
+                rep.error("E304", f"the probability of hazard {h.name} is outside [0, 1] in the "
+                          f"state {wit}", h.prob.span or h.span)
+                break
+        _check(model, rep, f"hazard {h.name}", when, h.outcomes, h.span)

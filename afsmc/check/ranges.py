@@ -1,0 +1,77 @@
+"""An update must not take a variable out of its declared range (unless it clamps).
+
+Checked where the action actually fires (after the weights pick it), for every
+floor/ceil choice of the interval constants it uses.
+"""
+
+from __future__ import annotations
+
+import itertools
+
+from afsmc.check.search import Witness, find, inline
+from afsmc.diagnostics import Reporter
+from afsmc.model import expr as E
+from afsmc.model import ir
+from afsmc.model.evaluate import Env, EvalError, evaluate
+from afsmc.model.expr import Type
+from afsmc.model.lower import enabled, fire_condition
+from afsmc.model.pretty import number, show
+
+
+def _interval_choices(model: ir.Model, e: E.Expr) -> list[dict[str, int]]:
+    used = [c for c in model.interval_constants if c.name in E.consts_read(e)]
+    choices = []
+    for ends in itertools.product((0, 1), repeat=len(used)):
+        choices.append({c.name: c.interval[end] for c, end in zip(used, ends, strict=True)
+                        if c.interval is not None})
+    return choices
+
+
+def _value(model: ir.Model, e: E.Expr, w: Witness, mode: int, consts: dict[str, int]) -> str:
+    by_display = {v.display: v.name for v in model.variables}
+    env = Env(vars={by_display[n]: val for n, val in w.values}, mode=mode,
+              consts=model.const_values | consts)
+    try:
+        return number(evaluate(inline(e, model), env))
+    except (EvalError, KeyError):
+        return "?"
+
+
+def _check_updates(model: ir.Model, rep: Reporter, when: dict[int, E.Expr],
+                   outcomes: tuple[ir.Outcome, ...]) -> None:
+    for o in outcomes:
+        for u in o.updates:
+            if u.var == "mode":
+                continue
+            var = model.variable(u.var)
+            if var.clamp or var.type is not Type.INT:
+                continue
+            out = E.disj(E.Binary("<", u.value, E.lit(var.lo), Type.BOOL),
+                         E.Binary(">", u.value, E.lit(var.hi), Type.BOOL))
+            done = False
+            for consts in _interval_choices(model, u.value):
+                for mode, cond in when.items():
+                    wit = find(model, mode, E.conj(cond, out), consts)
+                    if wit is None:
+                        continue
+                    chosen = "".join(f", {k} = {v}" for k, v in consts.items())
+                    rep.error(
+                        "E303",
+                        f"this update can take {var.display} out of its range [{var.lo}..{var.hi}]: "
+                        f"{show(u.value)} = {_value(model, u.value, wit, mode, consts)} in the "
+                        f"state {wit}{chosen}",
+                        u.span,
+                        hint=f"guard the action, bound the value with min/max, or declare "
+                             f"'{var.display}' with 'clamp' to saturate at the range's ends")
+                    done = True
+                    break
+                if done:
+                    break
+
+
+def check_update_ranges(model: ir.Model, rep: Reporter) -> None:
+    for a in model.actions:
+        _check_updates(model, rep, {m: fire_condition(model, a, m) for m in a.modes}, a.outcomes)
+    for h in model.hazards:
+        when = {m: E.disj(*(enabled(model, a, m) for a in model.actions_in(m))) for m in h.modes}
+        _check_updates(model, rep, when, h.outcomes)

@@ -1,0 +1,181 @@
+"""Find a state of one mode that satisfies a predicate, exactly.
+
+Every semantic check is phrased as "is there a state where ... ?". The answer is exact:
+over the product of the domains of the variables the predicate reads, enumerated with
+numpy when that product is small enough, and otherwise decided by the Z3 SMT solver.
+Reachability is not considered: a check speaks of every state of the mode.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass
+from fractions import Fraction
+from typing import Any
+
+import numpy as np
+
+from afsmc.model import expr as E
+from afsmc.model import ir
+from afsmc.model.evaluate import Env, EvalError, evaluate
+from afsmc.model.lower import effective_weight
+from afsmc.model.pretty import number
+
+ENUMERATION_LIMIT = 4_000_000  # states enumerated at once before switching to Z3
+
+
+@dataclass(frozen=True)
+class Witness:
+    mode: str
+    values: tuple[tuple[str, int | bool], ...]  # (display name, value) of the variables read
+
+    def __str__(self) -> str:
+        parts = [f"mode = {self.mode}"] + [f"{n} = {number(v)}" for n, v in self.values]
+        return ", ".join(parts)
+
+    def as_dict(self) -> dict[str, int | bool | str]:
+        return {"mode": self.mode} | dict(self.values)
+
+
+def inline(e: E.Expr, model: ir.Model) -> E.Expr:
+    """Replace formulas and weight references by what they stand for."""
+    memo: dict[str, E.Expr] = {}
+
+    def fn(n: E.Expr) -> E.Expr | None:
+        if isinstance(n, E.FormulaRef):
+            if n.name not in memo:
+                memo[n.name] = inline(model.formula(n.name).value, model)
+            return memo[n.name]
+        if isinstance(n, E.WeightRef):
+            key = "w:" + n.action
+            if key not in memo:
+                memo[key] = inline(effective_weight(model, model.action(n.action)), model)
+            return memo[key]
+        return None
+
+    return E.transform(e, fn)
+
+
+def find(model: ir.Model, mode: int, pred: E.Expr,
+         consts: Mapping[str, Any] | None = None) -> Witness | None:
+    """A state with the given mode where `pred` holds, or None if there is none."""
+    pred = inline(pred, model)
+    values = dict(model.const_values) | dict(consts or {})
+    names = sorted(E.vars_read(pred), key=[v.name for v in model.variables].index)
+    variables = [model.variable(n) for n in names]
+    size = 1
+    for v in variables:
+        size *= v.size
+    if size <= ENUMERATION_LIMIT:
+        return _enumerate(model, mode, pred, variables, values)
+    return _smt(model, mode, pred, variables, values)
+
+
+def _enumerate(model: ir.Model, mode: int, pred: E.Expr, variables: list[ir.Variable],
+               consts: Mapping[str, Any]) -> Witness | None:
+    if variables:
+        axes = [np.arange(v.lo, v.hi + 1) if v.type is E.Type.INT else np.array([False, True])
+                for v in variables]
+        grids = np.meshgrid(*axes, indexing="ij")
+        env_vars = {v.name: g.ravel() for v, g in zip(variables, grids, strict=True)}
+    else:
+        env_vars = {}
+    env = Env(vars=env_vars, mode=mode, consts=consts)
+    with np.errstate(all="ignore"):
+        try:
+            hit = np.asarray(evaluate(pred, env), dtype=bool)
+        except EvalError:
+            return None
+    if hit.ndim == 0:
+        if not hit:
+            return None
+        idx = 0
+    else:
+        where = np.flatnonzero(hit)
+        if where.size == 0:
+            return None
+        idx = int(where[0])
+    vals = []
+    for v in variables:
+        raw = env_vars[v.name][idx]
+        vals.append((v.display, bool(raw) if v.type is E.Type.BOOL else int(raw)))
+    return Witness(model.mode_by_number(mode).name, tuple(vals))
+
+
+def _smt(model: ir.Model, mode: int, pred: E.Expr, variables: list[ir.Variable],
+         consts: Mapping[str, Any]) -> Witness | None:
+    import z3
+
+    zvars: dict[str, Any] = {}
+    solver = z3.Solver()
+    solver.set("timeout", 20_000)
+    for v in variables:
+        if v.type is E.Type.BOOL:
+            zvars[v.name] = z3.Bool(v.name)
+        else:
+            zvars[v.name] = z3.Int(v.name)
+            solver.add(zvars[v.name] >= v.lo, zvars[v.name] <= v.hi)
+    solver.add(_z3(pred, zvars, mode, consts))
+    if solver.check() != z3.sat:
+        return None
+    model_z3 = solver.model()
+    vals = []
+    for v in variables:
+        val = model_z3.eval(zvars[v.name], model_completion=True)
+        vals.append((v.display, z3.is_true(val) if v.type is E.Type.BOOL else val.as_long()))
+    return Witness(model.mode_by_number(mode).name, tuple(vals))
+
+
+def _z3(e: E.Expr, zvars: dict[str, Any], mode: int, consts: Mapping[str, Any]) -> Any:
+    import z3
+
+    def lit(v: Any) -> Any:
+        if isinstance(v, bool):
+            return z3.BoolVal(v)
+        if isinstance(v, int):
+            return z3.IntVal(v)
+        return z3.RealVal(Fraction(v).limit_denominator(10**12))
+
+    def go(n: E.Expr) -> Any:
+        if isinstance(n, E.Lit):
+            return lit(n.value)
+        if isinstance(n, E.VarRef):
+            return zvars[n.name]
+        if isinstance(n, E.ConstRef):
+            return lit(consts[n.name])
+        if isinstance(n, E.ModeVal):
+            return z3.IntVal(n.number)
+        if isinstance(n, E.CurrentMode):
+            return z3.IntVal(mode)
+        if isinstance(n, E.Unary):
+            x = go(n.operand)
+            return z3.Not(x) if n.op == "!" else -x
+        if isinstance(n, E.Ite):
+            return z3.If(go(n.cond), go(n.then), go(n.other))
+        if isinstance(n, E.Binary):
+            a, b = go(n.left), go(n.right)
+            ops: dict[str, Any] = {
+                "&&": lambda: z3.And(a, b), "||": lambda: z3.Or(a, b),
+                "=>": lambda: z3.Implies(a, b), "+": lambda: a + b, "-": lambda: a - b,
+                "*": lambda: a * b, "/": lambda: z3.ToReal(a) / z3.ToReal(b),
+                "==": lambda: a == b, "!=": lambda: a != b, "<": lambda: a < b,
+                "<=": lambda: a <= b, ">": lambda: a > b, ">=": lambda: a >= b}
+            return ops[n.op]()
+        if isinstance(n, E.Call):
+            args = [go(a) for a in n.args]
+            if n.func in ("min", "max"):
+                out = args[0]
+                for a in args[1:]:
+                    out = z3.If(a < out, a, out) if n.func == "min" else z3.If(a > out, a, out)
+                return out
+            if n.func == "floor":
+                return z3.ToInt(z3.ToReal(args[0]))
+            if n.func == "ceil":
+                return -z3.ToInt(-z3.ToReal(args[0]))
+            if n.func == "mod":
+                return args[0] % args[1]
+            if n.func == "pow":
+                return args[0] ** args[1]
+        raise EvalError(f"cannot translate {type(n).__name__} for the SMT solver")
+
+    return go(e)

@@ -1,0 +1,50 @@
+"""Declarations nothing uses are usually mistakes: report them as warnings."""
+
+from __future__ import annotations
+
+from afsmc.diagnostics import Reporter
+from afsmc.model import expr as E
+from afsmc.model import ir
+
+
+def _exprs(model: ir.Model) -> list[E.Expr]:
+    out: list[E.Expr] = []
+    for a in model.actions:
+        out += [a.guard, a.weight]
+        for o in a.outcomes:
+            out.append(o.prob)
+            out += [u.value for u in o.updates]
+    for h in model.hazards:
+        out.append(h.prob)
+        for o in h.outcomes:
+            out.append(o.prob)
+            out += [u.value for u in o.updates]
+    out += [f.value for f in model.formulas] + [lb.value for lb in model.labels]
+    for r in model.rewards:
+        out += [x for it in r.items for x in (it.guard, it.value)]
+    for p in model.properties:
+        path = p.path
+        out += [x for x in (getattr(path, "target", None), getattr(path, "left", None),
+                            getattr(path, "bound", None)) if x is not None]
+    return out
+
+
+def check_unused(model: ir.Model, rep: Reporter) -> None:
+    read: set[str] = set()
+    for e in _exprs(model):
+        for n in E.walk(e):
+            if isinstance(n, (E.VarRef, E.ConstRef, E.FormulaRef)):
+                read.add(n.name)
+    used = model.cache.get("used_names", frozenset())
+    assert isinstance(used, frozenset)
+    read |= used
+    for v in model.variables:
+        if v.name not in read:
+            rep.warning("W303", f"variable {v.display} is never read", v.span,
+                        hint="it only multiplies the state space; remove it or use it")
+    for c in model.constants:
+        if c.name not in read and not c.is_param:
+            rep.warning("W304", f"constant {c.name} is never used", c.span)
+    for f in model.formulas:
+        if f.name not in read:
+            rep.warning("W304", f"formula {f.name} is never used", f.span)

@@ -1,0 +1,81 @@
+"""Definition 2 of the paper: in every state the enabled actions' weights are pairwise
+distinct and lie in [0, 1]; and every non-final mode has an enabled action (no deadlock)."""
+
+from __future__ import annotations
+
+import itertools
+
+from afsmc.check.search import Witness, find, inline
+from afsmc.diagnostics import Related, Reporter
+from afsmc.model import expr as E
+from afsmc.model import ir
+from afsmc.model.evaluate import Env, EvalError, evaluate
+from afsmc.model.expr import Type
+from afsmc.model.lower import competitors, enabled
+from afsmc.model.pretty import number
+
+
+def _value_at(model: ir.Model, e: E.Expr, w: Witness, mode: int) -> str:
+    by_display = {v.display: v.name for v in model.variables}
+    env = Env(vars={by_display[n]: val for n, val in w.values}, mode=mode,
+              consts=model.const_values)
+    try:
+        return number(evaluate(inline(e, model), env))
+    except (EvalError, KeyError):
+        return "?"
+
+
+def check_weight_range(model: ir.Model, rep: Reporter) -> None:
+    for a in model.actions:
+        for mode in a.modes:
+            w = a.weight
+            bad = E.disj(E.Binary("<", w, E.lit(0), Type.BOOL), E.Binary(">", w, E.lit(1), Type.BOOL))
+            wit = find(model, mode, E.conj(enabled(model, a, mode), bad))
+            if wit is not None:
+                rep.error("E302", f"the weight of {a.name} is {_value_at(model, w, wit, mode)}, "
+                          f"outside [0, 1], in the state {wit}", a.weight_span or a.name_span,
+                          hint="Definition 2 maps weights into [0, 1]")
+                break
+
+
+def check_weight_uniqueness(model: ir.Model, rep: Reporter) -> None:
+    reported: set[tuple[str, str]] = set()
+    for m in model.modes:
+        if m.final:
+            continue
+        acts = model.actions_in(m.number)
+        for a, b in itertools.combinations(acts, 2):
+            if a.kind != b.kind or (a.name, b.name) in reported or b not in competitors(model, a, m.number):
+                continue
+            tie = E.conj(enabled(model, a, m.number), enabled(model, b, m.number),
+                         E.Binary("==", a.weight, b.weight, Type.BOOL))
+            wit = find(model, m.number, tie)
+            if wit is None:
+                continue
+            reported.add((a.name, b.name))
+            value = _value_at(model, a.weight, wit, m.number)
+            rep.error(
+                "E301",
+                f"weights of {a.name} and {b.name} tie (both {value}) in the state {wit}",
+                a.weight_span or a.name_span,
+                hint="in every state the enabled actions need distinct weights, so that one "
+                     "action fires; give one a larger weight or make their guards exclusive",
+                related=[Related(f"the weight of {b.name}", b.weight_span or b.name_span)])
+
+
+def check_deadlock(model: ir.Model, rep: Reporter) -> None:
+    for m in model.modes:
+        if m.final:
+            continue
+        acts = model.actions_in(m.number)
+        if not acts:
+            rep.warning("W301", f"mode {m.name} has no actions: the machine stops there",
+                        m.span, hint=f"mark it final ('mode {m.name} final;') if it ends the mission")
+            continue
+        stuck = E.conj(*(E.neg(enabled(model, a, m.number)) for a in acts))
+        wit = find(model, m.number, stuck)
+        if wit is not None:
+            names = ", ".join(a.name for a in acts)
+            rep.warning("W302", f"no action is enabled in the state {wit}: the machine stops "
+                        f"there (actions of {m.name}: {names})", m.span,
+                        hint="add an action for this case, or widen a guard")

@@ -1,0 +1,1 @@
+"""Subcommands of the `afsmc` command line; see afsmc/cli.py."""

@@ -1,0 +1,68 @@
+"""Arguments and output helpers shared by subcommands."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from collections.abc import Iterable
+
+from afsmc.diagnostics import CompileError, Diagnostic, render_all
+from afsmc.diagnostics import to_json as diags_to_json
+from afsmc.model.lower import RESOLUTIONS
+from afsmc.model.resolve import parse_override
+
+
+def add_file(p: argparse.ArgumentParser) -> None:
+    p.add_argument("file", metavar="FILE", help="the .afsm file")
+
+
+def add_consts(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--const", "-c", action="append", default=[], metavar="NAME=VALUE",
+                   help="give an open constant ('param') a value; repeatable, or NAME=V,NAME=V")
+
+
+def add_resolve(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--resolve", choices=RESOLUTIONS, default="nondet",
+                   help="interval constants [lo, hi]: nondeterministic choice (MDP, min/max "
+                        "bounds; default), uniform random choice (DTMC), or always lo / hi")
+
+
+def overrides(args: argparse.Namespace) -> dict[str, str]:
+    out: dict[str, str] = {}
+    for item in args.const:
+        for part in item.split(","):
+            if not part.strip():
+                continue
+            try:
+                name, value = parse_override(part)
+            except ValueError as exc:
+                usage_error(f"--const: {exc}")
+            out[name] = value
+    return out
+
+
+def usage_error(message: str) -> None:
+    print(f"afsmc: error: {message}", file=sys.stderr)
+    raise SystemExit(2)
+
+
+def color_enabled() -> bool:
+    return sys.stderr.isatty()
+
+
+def report(diags: Iterable[Diagnostic], as_json: bool = False) -> None:
+    diags = list(diags)
+    if as_json:
+        print(diags_to_json(diags))
+    elif diags:
+        print(render_all(diags, color_enabled()), file=sys.stderr)
+
+
+def fail(exc: CompileError, as_json: bool = False) -> int:
+    report(exc.diagnostics, as_json)
+    return 1
+
+
+def print_json(obj: object) -> None:
+    print(json.dumps(obj, indent=2, sort_keys=False))

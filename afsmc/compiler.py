@@ -1,0 +1,92 @@
+"""The pipeline in one place: read -> parse -> resolve -> check -> lower -> emit.
+
+Commands call these functions; each raises CompileError with every diagnostic it
+collected, so a caller renders them once.
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Mapping
+from dataclasses import dataclass
+
+from afsmc import check
+from afsmc.diagnostics import CompileError, Diagnostic, Reporter, Severity
+from afsmc.model import ir
+from afsmc.model.lower import Lowered, Resolution, lower
+from afsmc.model.resolve import resolve
+from afsmc.syntax import ast
+from afsmc.syntax.parser import parse
+
+
+def read_source(path: str) -> str:
+    try:
+        with open(path, encoding="utf-8") as f:
+            return f.read()
+    except FileNotFoundError:
+        raise CompileError([_io_error(path, "no such file")]) from None
+    except IsADirectoryError:
+        raise CompileError([_io_error(path, "is a directory, not an .afsm file")]) from None
+    except UnicodeDecodeError:
+        raise CompileError([_io_error(path, "is not UTF-8 text")]) from None
+    except OSError as exc:
+        raise CompileError([_io_error(path, exc.strerror or str(exc))]) from None
+
+
+def _io_error(path: str, why: str) -> Diagnostic:
+    return Diagnostic("E001", Severity.ERROR, f"cannot read {path}: {why}", None)
+
+
+def parse_file(path: str) -> ast.Module:
+    return parse(read_source(path), path)
+
+
+@dataclass
+class Checked:
+    model: ir.Model
+    diagnostics: list[Diagnostic]  # warnings and notes; errors raise instead
+
+
+def load(path: str, overrides: Mapping[str, str] | None = None, *, text: str | None = None,
+         run_checks: bool = True) -> Checked:
+    """Parse, resolve and check one file. Raises CompileError if anything is an error."""
+    module = parse(read_source(path) if text is None else text, path)
+    model = resolve(module, overrides)
+    warnings = list(model.cache.get("warnings", []))  # type: ignore[call-overload]
+    if run_checks:
+        rep = Reporter(warnings)
+        rep.extend(check.run(model))
+        if rep.has_errors:
+            raise CompileError(rep.sorted())
+        warnings = rep.sorted()
+    return Checked(model, warnings)
+
+
+def lowered(model: ir.Model, resolution: Resolution = "nondet") -> Lowered:
+    return lower(model, resolution)
+
+
+def write_atomic(path: str, content: str, *, protect: tuple[str, ...] = ()) -> None:
+    """Write via a temporary file and rename, so a reader never sees half a file.
+
+    Refuses to overwrite any of `protect` (the inputs)."""
+    real = os.path.realpath(path)
+    for p in protect:
+        if os.path.exists(p) and os.path.realpath(p) == real:
+            raise CompileError([Diagnostic("E002", Severity.ERROR,
+                                           f"refusing to overwrite the input {p}", None,
+                                           hint="choose another output with -o")])
+    directory = os.path.dirname(real) or "."
+    os.makedirs(directory, exist_ok=True)
+    tmp = os.path.join(directory, f".{os.path.basename(real)}.tmp{os.getpid()}")
+    try:
+        with open(tmp, "w", encoding="utf-8", newline="\n") as f:
+            f.write(content)
+            f.flush()
+            os.fsync(f.fileno())
+        os.replace(tmp, real)
+    except OSError as exc:
+        if os.path.exists(tmp):
+            os.unlink(tmp)
+        raise CompileError([Diagnostic("E003", Severity.ERROR,
+                                       f"cannot write {path}: {exc.strerror or exc}", None)]) from None

@@ -1,0 +1,183 @@
+"""Vectorised evaluation of IR expressions over many states at once (numpy).
+
+The checks enumerate state spaces with it and the Monte Carlo simulator advances
+thousands of runs with it, so it evaluates one expression over whole arrays of states.
+Scalars work too (constants). Semantics follow PRISM: `/` is real division, `floor` and
+`ceil` give integers, `=>` is implication.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from afsmc.model.expr import (
+    Binary,
+    Call,
+    ConstRef,
+    CurrentMode,
+    Expr,
+    FormulaRef,
+    Ite,
+    LabelRef,
+    Lit,
+    ModeVal,
+    Type,
+    Unary,
+    VarRef,
+    WeightRef,
+)
+
+Array = Any  # numpy array or Python scalar
+
+
+class EvalError(Exception):
+    """An expression cannot be evaluated (division by zero, a missing name)."""
+
+
+@dataclass
+class Env:
+    vars: Mapping[str, Array] = field(default_factory=dict)
+    mode: Array | None = None
+    consts: Mapping[str, Any] = field(default_factory=dict)
+    formulas: Mapping[str, Expr] = field(default_factory=dict)
+    labels: Mapping[str, Expr] = field(default_factory=dict)
+    weight: Callable[[str], Array] | None = None
+    memo: dict[int, Array] = field(default_factory=dict)
+
+
+def evaluate(e: Expr, env: Env) -> Array:
+    if isinstance(e, Lit):
+        return e.value
+    if isinstance(e, VarRef):
+        try:
+            return env.vars[e.name]
+        except KeyError:
+            raise EvalError(f"variable {e.name} has no value here") from None
+    if isinstance(e, ConstRef):
+        try:
+            return env.consts[e.name]
+        except KeyError:
+            raise EvalError(f"constant {e.name} has no value") from None
+    if isinstance(e, ModeVal):
+        return e.number
+    if isinstance(e, CurrentMode):
+        if env.mode is None:
+            raise EvalError("the current mode is not known here")
+        return env.mode
+    if isinstance(e, FormulaRef):
+        key = id(env.formulas[e.name])
+        if key not in env.memo:
+            env.memo[key] = evaluate(env.formulas[e.name], env)
+        return env.memo[key]
+    if isinstance(e, LabelRef):
+        return evaluate(env.labels[e.name], env)
+    if isinstance(e, WeightRef):
+        if env.weight is None:
+            raise EvalError("weights are not known here")
+        return env.weight(e.action)
+    if isinstance(e, Unary):
+        v = evaluate(e.operand, env)
+        return np.logical_not(v) if e.op == "!" else -v
+    if isinstance(e, Binary):
+        return _binary(e, env)
+    if isinstance(e, Ite):
+        c = evaluate(e.cond, env)
+        a = evaluate(e.then, env)
+        b = evaluate(e.other, env)
+        if np.ndim(c) == 0 and np.ndim(a) == 0 and np.ndim(b) == 0:
+            return a if c else b
+        return np.where(c, a, b)
+    if isinstance(e, Call):
+        return _call(e, env)
+    raise EvalError(f"cannot evaluate {type(e).__name__}")
+
+
+def _binary(e: Binary, env: Env) -> Array:
+    op = e.op
+    left = evaluate(e.left, env)
+    if op in ("&&", "||", "=>"):
+        right = evaluate(e.right, env)
+        if op == "&&":
+            return np.logical_and(left, right)
+        if op == "||":
+            return np.logical_or(left, right)
+        return np.logical_or(np.logical_not(left), right)
+    right = evaluate(e.right, env)
+    if op == "+":
+        return left + right
+    if op == "-":
+        return left - right
+    if op == "*":
+        return left * right
+    if op == "/":
+        if np.any(np.asarray(right) == 0):
+            raise EvalError("division by zero")
+        return np.true_divide(left, right)
+    if op == "==":
+        return _eq(left, right)
+    if op == "!=":
+        return np.logical_not(_eq(left, right))
+    if op == "<":
+        return np.less(left, right)
+    if op == "<=":
+        return np.less_equal(left, right)
+    if op == ">":
+        return np.greater(left, right)
+    if op == ">=":
+        return np.greater_equal(left, right)
+    raise EvalError(f"unknown operator {op}")
+
+
+def _eq(a: Array, b: Array) -> Array:
+    # Doubles compare with a tolerance, as Storm does for its constants.
+    if np.issubdtype(np.asarray(a).dtype, np.floating) or np.issubdtype(np.asarray(b).dtype, np.floating):
+        return np.isclose(a, b, rtol=0.0, atol=1e-12)
+    return np.equal(a, b)
+
+
+def _call(e: Call, env: Env) -> Array:
+    args = [evaluate(a, env) for a in e.args]
+    f = e.func
+    if f == "min":
+        out = args[0]
+        for a in args[1:]:
+            out = np.minimum(out, a)
+        return out
+    if f == "max":
+        out = args[0]
+        for a in args[1:]:
+            out = np.maximum(out, a)
+        return out
+    if f == "floor":
+        return _to_int(np.floor(args[0]))
+    if f == "ceil":
+        return _to_int(np.ceil(args[0]))
+    if f == "pow":
+        if e.type is Type.INT:
+            return np.power(np.asarray(args[0], dtype=np.int64), np.asarray(args[1], dtype=np.int64))
+        return np.power(np.asarray(args[0], dtype=float), args[1])
+    if f == "mod":
+        if np.any(np.asarray(args[1]) == 0):
+            raise EvalError("mod by zero")
+        return np.mod(args[0], args[1])
+    raise EvalError(f"unknown function {f}")
+
+
+def _to_int(v: Array) -> Array:
+    if np.ndim(v) == 0:
+        return int(v)
+    return np.asarray(v).astype(np.int64)
+
+
+def scalar(e: Expr, consts: Mapping[str, Any], formulas: Mapping[str, Expr] | None = None) -> Any:
+    """The value of a state-free expression, as a Python scalar."""
+    v = evaluate(e, Env(consts=consts, formulas=formulas or {}))
+    if isinstance(v, np.generic):
+        return v.item()
+    if isinstance(v, np.ndarray):
+        return v.item()
+    return v

@@ -1,0 +1,229 @@
+"""The typed, name-resolved IR of one APFSM (Hoffmann et al., Definition 2).
+
+Frozen dataclasses, one concept each. Every constant has a concrete value (open
+constants are instantiated from the command line or their defaults), so every range
+is a pair of integers and every later stage can enumerate states.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Literal, Union
+
+from afsmc.diagnostics import Source, Span
+from afsmc.model.expr import Expr, Type
+
+Value = Union[int, float, bool]
+
+
+@dataclass(frozen=True)
+class SimSource:
+    ref: str
+    policy: tuple[tuple[str, float], ...]
+    span: Span
+
+
+@dataclass(frozen=True)
+class Constant:
+    name: str
+    type: Type
+    value: Value  # for an interval constant: its lower end
+    interval: tuple[int, int] | None
+    is_param: bool
+    source: SimSource | None
+    span: Span
+    declared_type: str = "int"  # as written: int, double, prob, bool
+
+    @property
+    def is_interval(self) -> bool:
+        return self.interval is not None and self.interval[0] != self.interval[1]
+
+
+@dataclass(frozen=True)
+class Variable:
+    name: str  # flat name, e.g. pos_x
+    display: str  # as the author writes it, e.g. pos.x
+    type: Type  # INT or BOOL
+    lo: int
+    hi: int
+    init: int | bool
+    clamp: bool
+    span: Span
+
+    @property
+    def size(self) -> int:
+        return self.hi - self.lo + 1
+
+
+@dataclass(frozen=True)
+class Mode:
+    name: str
+    number: int
+    initial: bool
+    final: bool
+    span: Span
+
+
+@dataclass(frozen=True)
+class Update:
+    var: str  # flat variable name, or "mode"
+    value: Expr
+    span: Span
+
+
+@dataclass(frozen=True)
+class Outcome:
+    prob: Expr
+    updates: tuple[Update, ...]
+    span: Span
+
+
+@dataclass(frozen=True)
+class Action:
+    """A weighted action (or a preemptive hazard, which is one in every mode it covers)."""
+
+    name: str
+    modes: tuple[int, ...]  # mode numbers, sorted
+    guard: Expr
+    weight: Expr
+    outcomes: tuple[Outcome, ...]
+    span: Span
+    name_span: Span
+    weight_span: Span | None
+    guard_span: Span | None
+    kind: Literal["action", "preemptive"] = "action"
+
+
+@dataclass(frozen=True)
+class Hazard:
+    """A probabilistic hazard: in every covered mode, every action may instead do this."""
+
+    name: str
+    modes: tuple[int, ...]
+    prob: Expr
+    outcomes: tuple[Outcome, ...]
+    span: Span
+    name_span: Span
+
+
+@dataclass(frozen=True)
+class Formula:
+    name: str
+    value: Expr
+    span: Span
+
+
+@dataclass(frozen=True)
+class Label:
+    name: str
+    value: Expr
+    span: Span
+
+
+@dataclass(frozen=True)
+class RewardItem:
+    action: str | None
+    guard: Expr
+    value: Expr
+    span: Span
+
+
+@dataclass(frozen=True)
+class RewardStruct:
+    name: str
+    items: tuple[RewardItem, ...]
+    span: Span
+
+
+# ---- properties ------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class Path:
+    """F / G / U / X, with an optional step bound."""
+
+    kind: Literal["F", "G", "U", "X"]
+    target: Expr  # for U: the right-hand side
+    left: Expr | None = None
+    bound: Expr | None = None
+
+
+@dataclass(frozen=True)
+class RewardPath:
+    kind: Literal["F", "C", "I"]
+    target: Expr | None = None  # F
+    bound: Expr | None = None  # C<=k, I=k
+
+
+@dataclass(frozen=True)
+class Property:
+    name: str
+    kind: Literal["P", "R"]
+    opt: Literal["", "min", "max"]
+    path: Path | RewardPath
+    reward: str | None
+    span: Span
+
+
+@dataclass(frozen=True)
+class Model:
+    name: str
+    source: Source
+    constants: tuple[Constant, ...]
+    variables: tuple[Variable, ...]
+    modes: tuple[Mode, ...]
+    actions: tuple[Action, ...]
+    hazards: tuple[Hazard, ...]
+    formulas: tuple[Formula, ...]
+    labels: tuple[Label, ...]
+    rewards: tuple[RewardStruct, ...]
+    properties: tuple[Property, ...]
+    cache: dict[str, object] = field(default_factory=dict, compare=False, repr=False)
+
+    # Lookups; models are small, so linear scans keep the IR plain data.
+    def constant(self, name: str) -> Constant:
+        return next(c for c in self.constants if c.name == name)
+
+    def variable(self, name: str) -> Variable:
+        return next(v for v in self.variables if v.name == name)
+
+    def mode(self, name: str) -> Mode:
+        return next(m for m in self.modes if m.name == name)
+
+    def mode_by_number(self, number: int) -> Mode:
+        return next(m for m in self.modes if m.number == number)
+
+    def action(self, name: str) -> Action:
+        return next(a for a in self.actions if a.name == name)
+
+    def formula(self, name: str) -> Formula:
+        return next(f for f in self.formulas if f.name == name)
+
+    def label(self, name: str) -> Label:
+        return next(lb for lb in self.labels if lb.name == name)
+
+    @property
+    def initial_mode(self) -> Mode:
+        return next(m for m in self.modes if m.initial)
+
+    @property
+    def mode_names(self) -> dict[int, str]:
+        return {m.number: m.name for m in self.modes}
+
+    @property
+    def interval_constants(self) -> tuple[Constant, ...]:
+        return tuple(c for c in self.constants if c.is_interval)
+
+    @property
+    def is_nondeterministic(self) -> bool:
+        return bool(self.interval_constants)
+
+    def actions_in(self, mode: int) -> tuple[Action, ...]:
+        return tuple(a for a in self.actions if mode in a.modes)
+
+    def hazards_in(self, mode: int) -> tuple[Hazard, ...]:
+        return tuple(h for h in self.hazards if mode in h.modes)
+
+    @property
+    def const_values(self) -> dict[str, Value]:
+        return {c.name: c.value for c in self.constants}

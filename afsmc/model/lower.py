@@ -1,0 +1,269 @@
+"""Lowering: the APFSM's weights, hazards and interval constants become plain guarded
+commands, the common input of every backend (PRISM, JANI, the simulator).
+
+* Weights -> guards (Definition 2): action `a` of mode M fires iff it is enabled and no
+  other enabled action of M has a larger weight. Weights are checked to be distinct, so
+  exactly the arg-max fires.
+* Preemptive hazards (`hazard H from {...} when c`) are actions that, while `c` holds,
+  disable every ordinary action of the modes they cover.
+* Probabilistic hazards (`with probability p`) are woven into every command of the modes
+  they cover: with probability p the hazard's outcome replaces the action's.
+* Interval constants `[lo, hi]`: a command whose updates use some become one command per
+  floor/ceil combination (an MDP, as in the paper), or one command that picks each
+  combination uniformly (a DTMC, the paper's third curve), or a fixed end.
+"""
+
+from __future__ import annotations
+
+import itertools
+from dataclasses import dataclass, field
+from typing import Literal
+
+from afsmc.diagnostics import Span
+from afsmc.model import expr as E
+from afsmc.model import ir
+from afsmc.model.evaluate import EvalError, scalar
+from afsmc.model.expr import Type
+
+Resolution = Literal["nondet", "uniform", "lo", "hi"]
+RESOLUTIONS: tuple[Resolution, ...] = ("nondet", "uniform", "lo", "hi")
+
+
+@dataclass(frozen=True)
+class Branch:
+    prob: E.Expr
+    updates: tuple[tuple[str, E.Expr], ...]  # (variable or "mode", new value)
+    span: Span
+    hazard: str | None = None  # the probabilistic hazard this branch comes from
+
+
+@dataclass(frozen=True)
+class Command:
+    action: str
+    modes: tuple[int, ...]
+    guard: E.Expr  # complete: mode, the action's guard, priority over competitors
+    branches: tuple[Branch, ...]
+    span: Span  # the action's declaration
+    choice: tuple[tuple[str, str], ...] = ()  # (interval constant, "lo"|"hi") fixed here
+    kind: Literal["action", "preemptive", "final"] = "action"
+
+
+@dataclass(frozen=True)
+class Lowered:
+    model: ir.Model
+    commands: tuple[Command, ...]
+    resolution: Resolution
+    weights: dict[str, E.Expr]  # action -> effective weight w(s, a) (0 where not enabled)
+    bounds: dict[str, tuple[str, int]] = field(default_factory=dict)  # generated const -> (interval const, value)
+
+    @property
+    def kind(self) -> Literal["dtmc", "mdp"]:
+        return "mdp" if self.resolution == "nondet" and self.model.is_nondeterministic else "dtmc"
+
+
+def enabled(model: ir.Model, action: ir.Action, mode: int) -> E.Expr:
+    """A(s) for one mode: the guard, and for ordinary actions no preemptive hazard firing."""
+    parts = [action.guard]
+    if action.kind == "action":
+        parts += [E.neg(h.guard) for h in model.actions_in(mode) if h.kind == "preemptive"]
+    return E.conj(*parts)
+
+
+def competitors(model: ir.Model, action: ir.Action, mode: int) -> tuple[ir.Action, ...]:
+    return tuple(b for b in model.actions_in(mode) if b is not action and b.kind == action.kind)
+
+
+def effective_weight(model: ir.Model, action: ir.Action) -> E.Expr:
+    """w(s, a): the weight where `a` is enabled, else 0 (Definition 2: w > 0 => enabled)."""
+    names = model.mode_names
+    when = E.conj(E.mode_in(set(action.modes), names), action.guard)
+    if isinstance(when, E.Lit) and when.value is True:
+        return action.weight
+    return E.Ite(when, action.weight, E.Lit(0, Type.INT), Type.DOUBLE
+                 if action.weight.type is Type.DOUBLE else Type.INT)
+
+
+def static_value(e: E.Expr, model: ir.Model) -> float | None:
+    """The value of a state-free expression, or None if it depends on the state."""
+    for n in E.walk(e):
+        if isinstance(n, (E.VarRef, E.CurrentMode, E.WeightRef, E.LabelRef)):
+            return None
+        if isinstance(n, E.FormulaRef):
+            return None
+        if isinstance(n, E.ConstRef) and model.constant(n.name).is_interval:
+            return None
+    try:
+        v = scalar(e, model.const_values)
+    except EvalError:
+        return None
+    return float(v)
+
+
+def fire_condition(model: ir.Model, action: ir.Action, mode: int) -> E.Expr:
+    """Without the mode test: `a` is enabled and beats every enabled competitor."""
+    parts = [enabled(model, action, mode)]
+    wa = static_value(action.weight, model)
+    for b in competitors(model, action, mode):
+        en_b = enabled(model, b, mode)
+        wb = static_value(b.weight, model)
+        if wa is not None and wb is not None:
+            if wb < wa:
+                continue
+            parts.append(E.neg(en_b))
+        else:
+            parts.append(E.disj(E.neg(en_b),
+                                E.Binary("<", b.weight, action.weight, Type.BOOL)))
+    return E.conj(*parts)
+
+
+def lower(model: ir.Model, resolution: Resolution = "nondet") -> Lowered:
+    names = model.mode_names
+    commands: list[Command] = []
+    bounds: dict[str, tuple[str, int]] = {}
+    taken = {c.name for c in model.constants} | {v.name for v in model.variables} | {
+        f.name for f in model.formulas}
+
+    def bound_name(const: str, end: str, value: int) -> str:
+        base = f"{const}_{end}"
+        name = base
+        while name in taken and bounds.get(name) != (const, value):
+            name += "_"
+        bounds[name] = (const, value)
+        taken.add(name)
+        return name
+
+    for action in model.actions:
+        # Group modes that lower identically: same competitors, hazards and preemptions.
+        groups: dict[tuple[object, ...], list[int]] = {}
+        for mode in action.modes:
+            key = (tuple(b.name for b in model.actions_in(mode) if b is not action),
+                   tuple(h.name for h in model.hazards_in(mode)))
+            groups.setdefault(key, []).append(mode)
+        for modes in groups.values():
+            rep = modes[0]
+            guard = E.conj(E.mode_in(set(modes), names), fire_condition(model, action, rep))
+            branches = tuple(Branch(o.prob, _updates(model, o.updates), o.span)
+                             for o in action.outcomes)
+            branches = _weave(model, branches, model.hazards_in(rep))
+            for choice, bs in _resolve_intervals(model, branches, resolution, bound_name):
+                commands.append(Command(action.name, tuple(modes), guard, bs, action.span, choice,
+                                        action.kind))
+    for m in model.modes:
+        if m.final:
+            commands.append(Command(
+                f"{m.name}", (m.number,), E.mode_in({m.number}, names),
+                (Branch(E.Lit(1, Type.INT), (), m.span),), m.span, (), "final"))
+    weights = {a.name: effective_weight(model, a) for a in model.actions}
+    return Lowered(model, tuple(commands), resolution, weights, bounds)
+
+
+def _updates(model: ir.Model, updates: tuple[ir.Update, ...]) -> tuple[tuple[str, E.Expr], ...]:
+    order = {"mode": -1} | {v.name: i for i, v in enumerate(model.variables)}
+    out = []
+    for u in sorted(updates, key=lambda u: order[u.var]):
+        value = u.value
+        if u.var != "mode":
+            var = model.variable(u.var)
+            if var.clamp:
+                value = _clamp(value, var, model)
+        out.append((u.var, value))
+    return tuple(out)
+
+
+def _clamp(value: E.Expr, var: ir.Variable, model: ir.Model) -> E.Expr:
+    """Saturate at the range's ends; only the end an update can reach is emitted."""
+    static = static_value(value, model)
+    if static is not None and var.lo <= static <= var.hi:
+        return value
+    up = down = True
+    if isinstance(value, E.Binary) and isinstance(value.left, E.VarRef) and \
+            value.left.name == var.name and value.op in "+-":
+        k = _min_static(value.right, model)
+        if k is not None and k >= 0:
+            up, down = value.op == "+", value.op == "-"
+    if up:
+        value = E.Call("min", (value, E.Lit(var.hi, Type.INT)), Type.INT)
+    if down:
+        value = E.Call("max", (value, E.Lit(var.lo, Type.INT)), Type.INT)
+    return value
+
+
+def _min_static(e: E.Expr, model: ir.Model) -> float | None:
+    """The smallest value a state-free expression takes over interval choices."""
+    lows = {c.name: c.interval[0] for c in model.interval_constants if c.interval}
+    vals = []
+    for consts in (model.const_values | lows,
+                   model.const_values | {c.name: c.interval[1] for c in model.interval_constants
+                                          if c.interval}):
+        if any(isinstance(n, (E.VarRef, E.CurrentMode, E.FormulaRef, E.WeightRef))
+               for n in E.walk(e)):
+            return None
+        try:
+            vals.append(float(scalar(e, consts)))
+        except EvalError:
+            return None
+    return min(vals)
+
+
+def _weave(model: ir.Model, branches: tuple[Branch, ...],
+           hazards: tuple[ir.Hazard, ...]) -> tuple[Branch, ...]:
+    current = list(branches)
+    for h in reversed(hazards):
+        woven = [Branch(E.mul(h.prob, o.prob), _updates(model, o.updates), o.span, h.name)
+                 for o in h.outcomes]
+        rest = E.sub(E.Lit(1, Type.INT), h.prob)
+        woven += [Branch(E.mul(rest, b.prob), b.updates, b.span, b.hazard) for b in current]
+        current = woven
+    return tuple(current)
+
+
+def _interval_consts(model: ir.Model, branches: tuple[Branch, ...]) -> list[str]:
+    used: set[str] = set()
+    for b in branches:
+        for _, v in b.updates:
+            used |= E.consts_read(v)
+    return sorted(c.name for c in model.interval_constants if c.name in used)
+
+
+def _resolve_intervals(model: ir.Model, branches: tuple[Branch, ...], resolution: Resolution,
+                       bound_name: object) -> list[tuple[tuple[tuple[str, str], ...],
+                                                         tuple[Branch, ...]]]:
+    consts = _interval_consts(model, branches)
+    if not consts:
+        return [((), branches)]
+    assert callable(bound_name)
+
+    def fix(bs: tuple[Branch, ...], ends: tuple[str, ...], scale: E.Expr | None) -> tuple[Branch, ...]:
+        sub: dict[str, E.Expr] = {}
+        for name, end in zip(consts, ends, strict=True):
+            c = model.constant(name)
+            assert c.interval is not None
+            value = c.interval[0] if end == "lo" else c.interval[1]
+            sub[name] = E.ConstRef(bound_name(name, end, value), Type.INT)
+
+        def swap(n: E.Expr) -> E.Expr | None:
+            return sub.get(n.name) if isinstance(n, E.ConstRef) else None
+
+        return tuple(Branch(b.prob if scale is None else E.mul(scale, b.prob),
+                            tuple((v, E.transform(x, swap)) for v, x in b.updates), b.span, b.hazard)
+                     for b in bs)
+
+    if resolution in ("lo", "hi"):
+        ends: tuple[str, ...] = tuple(resolution for _ in consts)
+        return [(tuple(zip(consts, ends, strict=True)), fix(branches, ends, None))]
+    combos = list(itertools.product(("lo", "hi"), repeat=len(consts)))
+    if resolution == "nondet":
+        return [(tuple(zip(consts, ends, strict=True)), fix(branches, ends, None))
+                for ends in combos]
+    scale = E.Binary("/", E.Lit(1, Type.INT), E.Lit(len(combos), Type.INT), Type.DOUBLE)
+    # Branches that do the same under every choice (e.g. a hazard's) are merged.
+    merged: dict[tuple[tuple[str, E.Expr], ...], Branch] = {}
+    for ends in combos:
+        for b in fix(branches, ends, scale):
+            if b.updates in merged:
+                old = merged[b.updates]
+                merged[b.updates] = Branch(E.Binary("+", old.prob, b.prob, Type.DOUBLE),
+                                           b.updates, old.span, old.hazard)
+            else:
+                merged[b.updates] = b
+    return [((), tuple(merged.values()))]

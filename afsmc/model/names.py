@@ -1,0 +1,26 @@
+"""Names the generated PRISM/JANI/Storm inputs cannot use, and helpers for naming."""
+
+from __future__ import annotations
+
+import difflib
+from collections.abc import Iterable
+
+# PRISM's keywords (prism/PrismParser.jj) and the operators of Storm's property grammar.
+PRISM_KEYWORDS = frozenset(["A", "bool", "clock", "const", "ctmc", "C", "double", "dtmc", "E", "endinit", "endinvariant", "endmodule", "endobservables", "endrewards", "endsystem", "false", "formula", "filter", "func", "F", "global", "G", "init", "invariant", "I", "int", "label", "max", "mdp", "min", "module", "X", "nondeterministic", "observable", "observables", "of", "Pmax", "Pmin", "P", "pomdp", "popta", "probabilistic", "prob", "pta", "rate", "rewards", "Rmax", "Rmin", "R", "S", "stochastic", "system", "true", "U", "W"])
+STORM_PROPERTY_WORDS = frozenset(["T", "X", "Y", "S", "F", "G", "U", "W", "R", "P", "I", "C", "E", "A", "multi", "quantile"])
+# afsmc's own keywords (grammar/afsm.lark) can never be names, but are listed for hints.
+AFSM_KEYWORDS = frozenset(["machine", "const", "param", "var", "mode", "action", "hazard", "formula", "label", "rewards", "property", "in", "when", "weight", "goto", "skip", "from", "with", "probability", "sim", "init", "initial", "final", "clamp", "except", "true", "false", "int", "double", "prob", "bool", "min", "max"])
+# Names afsmc itself generates in its outputs.
+GENERATED = frozenset({"mode"})
+
+RESERVED = PRISM_KEYWORDS | STORM_PROPERTY_WORDS | GENERATED
+
+
+def suggest(name: str, candidates: Iterable[str]) -> str | None:
+    close = difflib.get_close_matches(name, sorted(set(candidates)), n=1, cutoff=0.6)
+    return close[0] if close else None
+
+
+def did_you_mean(name: str, candidates: Iterable[str]) -> str | None:
+    best = suggest(name, candidates)
+    return f"did you mean '{best}'?" if best else None
