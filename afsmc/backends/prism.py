@@ -190,3 +190,9 @@ def properties(low: Lowered, p: Printer) -> tuple[list[str], list[str]]:
             names.append(name)
             lines.append(f'"{name}": {formula_text(prop, opt, p)};')
     return names, lines
+
+
+def files(low: Lowered) -> dict[str, str]:
+    """`afsmc compile -t prism`: the model and its properties."""
+    out = emit(low)
+    return {".prism": out.model, ".props": out.properties}

@@ -3,51 +3,36 @@
 from __future__ import annotations
 
 import argparse
-import contextlib
+import importlib
 import os
 import sys
 from collections.abc import Callable
 
 from afsmc.commands.common import add_consts, add_file, add_resolve, fail, overrides, report
-from afsmc.compiler import Checked, load, write_atomic
+from afsmc.compiler import load, write_atomic
 from afsmc.diagnostics import CompileError
+from afsmc.model.lower import Lowered, lower
 
-# target -> (function from a checked model and args to {suffix: text}), registered below
-TARGETS: dict[str, Callable[[Checked, argparse.Namespace], dict[str, str]]] = {}
-
-
-def _prism(checked: Checked, args: argparse.Namespace) -> dict[str, str]:
-    from afsmc.backends.prism import emit
-    from afsmc.model.lower import lower
-
-    out = emit(lower(checked.model, args.resolve))
-    return {".prism": out.model, ".props": out.properties}
+# -t NAME -> "module:function"; the function maps a Lowered model to {suffix: text}.
+TARGETS: dict[str, str] = {
+    "prism": "afsmc.backends.prism:files",
+}
 
 
-TARGETS["prism"] = _prism
-
-
-def target(name: str) -> Callable[[Callable[[Checked, argparse.Namespace], dict[str, str]]],
-                                  Callable[[Checked, argparse.Namespace], dict[str, str]]]:
-    """Register another backend under `-t name`."""
-    def deco(fn: Callable[[Checked, argparse.Namespace], dict[str, str]]) -> Callable[
-            [Checked, argparse.Namespace], dict[str, str]]:
-        TARGETS[name] = fn
-        return fn
-    return deco
-
-
-def _load_targets() -> None:
-    # Backends that register themselves; absent ones are simply not offered.
-    for mod in ("afsmc.backends.jani", "afsmc.backends.dot"):
-        with contextlib.suppress(ImportError):
-            __import__(mod)
+def available_targets() -> dict[str, Callable[[Lowered], dict[str, str]]]:
+    out = {}
+    for name, ref in TARGETS.items():
+        module, func = ref.split(":")
+        try:
+            out[name] = getattr(importlib.import_module(module), func)
+        except (ImportError, AttributeError):
+            continue  # a backend that is not installed is not offered
+    return out
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
-    _load_targets()
     add_file(p)
-    p.add_argument("-t", "--target", default="prism", choices=sorted(TARGETS),
+    p.add_argument("-t", "--target", default="prism", choices=sorted(available_targets()),
                    help="output language (default: prism)")
     p.add_argument("-o", "--output", metavar="DIR|FILE",
                    help="output directory, or file name (its suffix is replaced per output); "
@@ -69,7 +54,7 @@ def run(args: argparse.Namespace) -> int:
     try:
         checked = load(args.file, overrides(args))
         report(checked.diagnostics)
-        files = TARGETS[args.target](checked, args)
+        files = available_targets()[args.target](lower(checked.model, args.resolve))
         if args.output == "-":
             for text in files.values():
                 sys.stdout.write(text)
