@@ -161,16 +161,22 @@ def test_third_party_entry_points(monkeypatch: pytest.MonkeyPatch, fresh_registr
         refs = simlib.available()
     assert calls == ["afsmc.simulators"]
     messages = " ".join(str(w.message) for w in record)
-    assert "broken" in messages and "already registered" in messages and "not a Simulator" in messages
+    assert (
+        "broken" in messages and "already registered" in messages and "not a Simulator" in messages
+    )
     assert "rover.drive.duration" in refs
     x = simlib.sample("rover.drive.duration", 100, 0)
     assert x.shape == (100,) and np.all((x >= 4.0) & (x < 5.0))
     # A plugin neither shadows a built-in nor changes the built-ins' samples.
-    assert simlib.lookup("uav.search.duration")[0] is next(s for s in uav.SIMULATORS if s.name == "uav.search")
+    assert simlib.lookup("uav.search.duration")[0] is next(
+        s for s in uav.SIMULATORS if s.name == "uav.search"
+    )
     np.testing.assert_array_equal(simlib.sample("uav.search.duration", 500, 3), before)
 
 
-def test_builtin_fallback_without_metadata(monkeypatch: pytest.MonkeyPatch, fresh_registry: None) -> None:
+def test_builtin_fallback_without_metadata(
+    monkeypatch: pytest.MonkeyPatch, fresh_registry: None
+) -> None:
     monkeypatch.setattr(registry, "entry_points", lambda *, group: [])
     registry.reload()
     assert "uav.approach.duration" in simlib.available()
@@ -183,7 +189,9 @@ def test_registry_is_cached(monkeypatch: pytest.MonkeyPatch, fresh_registry: Non
     simlib.lookup("uav.land.duration")
 
 
-def test_misbehaving_plugin_output_is_rejected(monkeypatch: pytest.MonkeyPatch, fresh_registry: None) -> None:
+def test_misbehaving_plugin_output_is_rejected(
+    monkeypatch: pytest.MonkeyPatch, fresh_registry: None
+) -> None:
     def run(runs: int, rng: np.random.Generator) -> dict[str, np.ndarray[Any, Any]]:
         return {"duration": np.ones(runs + 1)}
 
@@ -200,7 +208,12 @@ def test_misbehaving_plugin_output_is_rejected(monkeypatch: pytest.MonkeyPatch, 
 
 
 def test_deterministic_for_a_seed() -> None:
-    for ref in ["uav.approach.duration", "uav.grab.fail", "uav.transport.battery", "uav.recharge.duration"]:
+    for ref in [
+        "uav.approach.duration",
+        "uav.grab.fail",
+        "uav.transport.battery",
+        "uav.recharge.duration",
+    ]:
         a = simlib.sample(ref, 2000, 11)
         registry.reload()  # drop the sample cache: recomputed, not just remembered
         b = simlib.sample(ref, 2000, 11)
@@ -264,7 +277,9 @@ def test_flights_take_time_and_battery(name: str) -> None:
 
 
 def test_all_flights_complete() -> None:
-    res = quadrotor.fly(5000, np.random.default_rng(0), np.zeros(3), np.array([6.0, 0.0, 10.0]), v_max=3, a_max=1.5)
+    res = quadrotor.fly(
+        5000, np.random.default_rng(0), np.zeros(3), np.array([6.0, 0.0, 10.0]), v_max=3, a_max=1.5
+    )
     assert res.completed.all()
     assert np.all(np.abs(res.final_error) < 0.5)
 
@@ -307,7 +322,9 @@ def test_recharge_depends_on_level() -> None:
     assert 60.0 < simlib.sample("uav.recharge.duration", 4000, 0).mean() < 400.0
 
 
-def test_failure_probabilities_are_small_but_present(summary: dict[str, tuple[str, str, str, str]]) -> None:
+def test_failure_probabilities_are_small_but_present(
+    summary: dict[str, tuple[str, str, str, str]],
+) -> None:
     for ref in ["uav.initialise.fail", "uav.grab.fail", "uav.transport.drop"]:
         p = float(summary[ref][1])
         assert 0.001 < p < 0.15, (ref, p)

@@ -17,6 +17,7 @@ from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass
 from importlib.metadata import entry_points
 from types import MappingProxyType
+from typing import Any
 
 import numpy as np
 import numpy.typing as npt
@@ -26,7 +27,7 @@ KINDS = frozenset({"duration", "battery", "probability"})
 _NAME = re.compile(r"^[a-z][a-z0-9_]*(\.[a-z][a-z0-9_]*)*$")
 _OUTPUT = re.compile(r"^[a-z][a-z0-9_]*$")
 
-RunFn = Callable[[int, np.random.Generator], Mapping[str, npt.NDArray[np.generic]]]
+RunFn = Callable[[int, np.random.Generator], Mapping[str, npt.NDArray[Any]]]
 
 
 @dataclass(frozen=True)
@@ -164,10 +165,10 @@ def _stream(name: str, seed: int) -> np.random.Generator:
 
 
 @functools.lru_cache(maxsize=32)
-def _simulate(name: str, runs: int, seed: int) -> Mapping[str, npt.NDArray[np.generic]]:
+def _simulate(name: str, runs: int, seed: int) -> Mapping[str, npt.NDArray[Any]]:
     sim, _ = next(v for v in _registry().values() if v[0].name == name)
     raw = sim.run(runs, _stream(name, seed))
-    result: dict[str, npt.NDArray[np.generic]] = {}
+    result: dict[str, npt.NDArray[Any]] = {}
     for out, k in sim.outputs.items():
         if out not in raw:
             raise ValueError(f"simulator {name!r} returned no output {out!r}")
@@ -182,7 +183,7 @@ def _simulate(name: str, runs: int, seed: int) -> Mapping[str, npt.NDArray[np.ge
     return MappingProxyType(result)
 
 
-def simulate(name: str, runs: int, seed: int) -> dict[str, npt.NDArray[np.generic]]:
+def simulate(name: str, runs: int, seed: int) -> dict[str, npt.NDArray[Any]]:
     """All outputs of simulator `name` for `runs` runs; deterministic for (name, runs, seed)."""
     if not any(sim.name == name for sim, _ in _registry().values()):
         raise UnknownSimulator(f"unknown simulator {name!r}")
@@ -191,7 +192,7 @@ def simulate(name: str, runs: int, seed: int) -> dict[str, npt.NDArray[np.generi
     return {k: v.copy() for k, v in _simulate(name, int(runs), int(seed)).items()}
 
 
-def sample(ref: str, runs: int, seed: int) -> npt.NDArray[np.generic]:
+def sample(ref: str, runs: int, seed: int) -> npt.NDArray[Any]:
     """`runs` samples of one output; deterministic for (ref, runs, seed).
 
     Outputs of the same simulator come from the same runs, so e.g. the duration and
@@ -229,4 +230,3 @@ def summary_table(runs: int = 100_000, seed: int = 0) -> str:
     ]
     lines += [f"| `{r}` | {k} | {m} | {s} | {h} |" for r, k, m, s, h in summary_rows(runs, seed)]
     return "\n".join(lines)
-

@@ -7,8 +7,8 @@ of CELL x CELL m squares searched at SEARCH_HEIGHT; see docs/simulation.md.
 
 from __future__ import annotations
 
-import math
 from collections.abc import Mapping
+from typing import Any
 
 import numpy as np
 import numpy.typing as npt
@@ -23,7 +23,7 @@ from afsmc.simlib.quadrotor import (
 )
 from afsmc.simlib.registry import Simulator
 
-Outputs = Mapping[str, npt.NDArray[np.generic]]
+Outputs = Mapping[str, npt.NDArray[Any]]
 
 VEHICLE = Vehicle()
 
@@ -74,7 +74,7 @@ _NEXT_CELL = np.array([CELL, 0.0, SEARCH_HEIGHT])
 
 def _out(
     res: FlightResult, extra_time: FloatArray | float = 0.0, extra_battery: FloatArray | float = 0.0
-) -> dict[str, npt.NDArray[np.generic]]:
+) -> dict[str, npt.NDArray[Any]]:
     return {"duration": res.duration + extra_time, "battery": res.battery + extra_battery}
 
 
@@ -331,5 +331,3 @@ SIMULATORS: tuple[Simulator, ...] = (
         recharge,
     ),
 )
-
-assert math.isclose(VEHICLE.joules_per_unit * 100, VEHICLE.usable_energy_j)
