@@ -27,6 +27,10 @@ def _check(model: ir.Model, rep: Reporter, owner: str, when: dict[int, E.Expr],
     total: E.Expr = outcomes[0].prob
     for o in outcomes[1:]:
         total = E.Binary("+", total, o.prob, Type.DOUBLE)
+    # Point at the outcomes, from the first to the last.
+    first, last = outcomes[0].span, outcomes[-1].span
+    if first.source is last.source and last.end > first.start:
+        span = Span.at_offset(first.source, first.start, last.end)
     static = static_value(total, model)
     if static is not None:
         if abs(static - 1.0) > EPSILON:

@@ -135,7 +135,7 @@ class _Resolver:
     def _declare_value(self, name: ast.Ident, kind: str) -> None:
         if name.text in self.value_names:
             other_kind, other = self.value_names[name.text]
-            self.rep.error("E201", f"'{name.text}' is already declared as a {other_kind}", name.span,
+            self.rep.error("E201", f"'{name.text}' is already declared as {_a(other_kind)}", name.span,
                            related=[Related("first declared here", other)])
             return
         if kind != "mode":  # modes compile to numbers, never to identifiers
@@ -154,7 +154,7 @@ class _Resolver:
     def _check_reserved(self, name: ast.Ident, kind: str) -> None:
         if name.text in RESERVED:
             self.rep.error(
-                "E202", f"'{name.text}' cannot name a {kind}: it is reserved in PRISM or Storm",
+                "E202", f"'{name.text}' cannot name {_a(kind)}: it is reserved in PRISM or Storm",
                 name.span, hint=f"choose another name, e.g. '{name.text}_{kind.split()[0]}'")
 
     def _undefined(self, name: ast.Ident, ctx: Ctx) -> None:
@@ -215,7 +215,7 @@ class _Resolver:
                 return int(text)
             return float(text)
         except ValueError:
-            self.rep.error("E208", f"--const {name}={text}: not a valid {t.value}", span)
+            self.rep.error("E208", f"--const {name}={text}: not {_a(t.value)}", span)
             return {Type.INT: 0, Type.DOUBLE: 0.0, Type.BOOL: False}[t]
 
     def _check_overrides(self) -> None:
@@ -234,7 +234,7 @@ class _Resolver:
     def _const_value(self, e: ast.Expr, want: Type) -> Any:
         x = self._expr(e, CONST_CTX)
         if (want.numeric and not x.type.numeric) or (want is Type.BOOL and x.type is not Type.BOOL):
-            self.rep.error("E210", f"expected a {want.value} value, found a {x.type.value}", e.span)
+            self.rep.error("E210", f"expected {_a(want.value)} value, found {_a(x.type.value)}", e.span)
         if want is Type.INT and x.type is Type.DOUBLE:
             self.rep.error("E210", "expected an int value, found a double", e.span,
                            hint="use floor(...) or ceil(...)")
@@ -279,7 +279,9 @@ class _Resolver:
                            hint="add e.g. 'mode Idle = 0 initial;'")
         elif not initial:
             self.rep.error("E213", "no mode is marked initial", decls[0].span,
-                           hint=f"write 'mode {decls[0].name.text} initial;'")
+                           hint=f"write 'mode {decls[0].name.text}"
+                           + (f" = {decls[0].number}" if decls[0].number is not None else "")
+                           + " initial;'")
         elif len(initial) > 1:
             self.rep.error("E214", "more than one mode is marked initial", initial[1].span,
                            related=[Related("also initial", initial[0].span)])
@@ -395,7 +397,7 @@ class _Resolver:
     def _bool(self, e: ast.Expr, ctx: Ctx) -> E.Expr:
         x = self._expr(e, ctx)
         if x.type is not Type.BOOL:
-            self.rep.error("E222", f"{ctx.what} must be true or false, not a {x.type.value}", e.span,
+            self.rep.error("E222", f"{ctx.what} must be true or false, not {_a(x.type.value)}", e.span,
                            hint="compare it, e.g. 'x > 0'")
             return E.TRUE
         return x
@@ -403,7 +405,7 @@ class _Resolver:
     def _num(self, e: ast.Expr, ctx: Ctx) -> E.Expr:
         x = self._expr(e, ctx)
         if not x.type.numeric:
-            self.rep.error("E222", f"{ctx.what} must be a number, not a {x.type.value}", e.span)
+            self.rep.error("E222", f"{ctx.what} must be a number, not {_a(x.type.value)}", e.span)
             return E.Lit(0, Type.INT, e.span)
         return x
 
@@ -473,13 +475,13 @@ class _Resolver:
         b = self._expr(e.right, ctx)
         if op in ("==", "!="):
             if a.type.numeric != b.type.numeric or (not a.type.numeric and a.type is not b.type):
-                self.rep.error("E226", f"cannot compare a {a.type.value} with a {b.type.value}", s,
+                self.rep.error("E226", f"cannot compare {_a(a.type.value)} with {_a(b.type.value)}", s,
                                hint="modes compare with modes: 'mode == Search'"
                                if Type.MODE in (a.type, b.type) else None)
             return E.Binary(op, a, b, Type.BOOL, s)
         if not (a.type.numeric and b.type.numeric):
             bad = a if not a.type.numeric else b
-            self.rep.error("E226", f"'{op}' compares numbers, not a {bad.type.value}", bad.span or s)
+            self.rep.error("E226", f"'{op}' compares numbers, not {_a(bad.type.value)}", bad.span or s)
         return E.Binary(op, a, b, Type.BOOL, s)
 
     def _unify(self, a: E.Expr, b: E.Expr, e: Any, what: str) -> Type:
@@ -682,7 +684,7 @@ class _Resolver:
                     self.rep.error("E223", f"'{t.name.text}' has no field '{t.field.text}'",
                                    t.field.span)
                 elif kind != "variable":
-                    self.rep.error("E238", f"'{t.text}' is a {kind}; only variables can be assigned",
+                    self.rep.error("E238", f"'{t.text}' is {_a(kind)}; only variables can be assigned",
                                    t.span)
                 continue
             var = self.vars[flat]
@@ -704,14 +706,14 @@ class _Resolver:
                     vspan: Span) -> None:
         var = self.vars[flat]
         if var.type is Type.BOOL and value.type is not Type.BOOL:
-            self.rep.error("E239", f"'{display}' is a bool; cannot assign a {value.type.value}", vspan)
+            self.rep.error("E239", f"'{display}' is a bool; cannot assign {_a(value.type.value)}", vspan)
             return
         if var.type is Type.INT and value.type is Type.DOUBLE:
             self.rep.error("E239", f"'{display}' is an int; cannot assign a double", vspan,
                            hint="round it with floor(...) or ceil(...)")
             return
         if var.type is Type.INT and not value.type.numeric:
-            self.rep.error("E239", f"'{display}' is an int; cannot assign a {value.type.value}", vspan)
+            self.rep.error("E239", f"'{display}' is an int; cannot assign {_a(value.type.value)}", vspan)
             return
         add(flat, value, span, display)
 
@@ -804,6 +806,11 @@ class _Resolver:
         else:
             path = ir.RewardPath("I", bound=bound(rp.at))
         return ir.Property(d.name.text, "R", q.opt, path, reward, d.span)
+
+
+def _a(word: str) -> str:
+    """'a bool', 'an int', 'an action'."""
+    return ("an " if word[:1] in "aeiou" else "a ") + word
 
 
 def _stem(path: str) -> str:

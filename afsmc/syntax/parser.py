@@ -111,11 +111,7 @@ def _report_syntax_error(exc: UnexpectedInput, source: Source, reporter: Reporte
         end = max(exc.token.end_pos, pos + 1)
     span = Span.at_offset(source, pos, end)
 
-    matched = None
-    try:
-        matched = exc.match_examples(_parser().parse, cast(Any, _EXAMPLES), use_accepts=True)
-    except Exception:  # match_examples re-parses the examples; never let it mask the error
-        matched = None
+    matched = _match_example(exc)
 
     if isinstance(exc, UnexpectedCharacters):
         char = source.text[pos] if pos < len(source.text) else "?"
@@ -137,10 +133,45 @@ def _report_syntax_error(exc: UnexpectedInput, source: Source, reporter: Reporte
             # previous token, where the ';' belongs.
             prev_end = source.text.rstrip()[:pos].rstrip()
             at = len(prev_end)
-            span = Span.at_offset(source, max(0, at - 1), at)
+            span = Span.at_offset(source, at, at + 1)
+            reporter.error(code, message, span, hint=f"add ';' here; the next line starts with {found}")
+            return
         reporter.error(code, message, span, hint=f"found {found}")
         return
     reporter.error("E101", f"unexpected {found}", span, hint=_expected_hint(exc.accepts or exc.expected))
+
+
+def _state_of(exc: UnexpectedInput) -> object:
+    state = getattr(exc, "state", None)
+    return getattr(state, "position", state)
+
+
+@cache
+def _example_states() -> list[tuple[object, str, tuple[str, str]]]:
+    """(LALR state, token type, mistake) of every example, computed once."""
+    out = []
+    for mistake, examples in _EXAMPLES.items():
+        for text in examples:
+            try:
+                _parser().parse(text)
+            except UnexpectedToken as exc:
+                out.append((_state_of(exc), exc.token.type, mistake))
+            except UnexpectedInput:
+                continue
+    return out
+
+
+def _match_example(exc: UnexpectedInput) -> tuple[str, str] | None:
+    """The mistake whose example fails in the same parser state (lark's match_examples
+    idea; its own implementation trips over lark 1.3's parser-state objects)."""
+    if not isinstance(exc, UnexpectedToken):
+        return None
+    state = _state_of(exc)
+    candidates = [(tok, mistake) for st, tok, mistake in _example_states() if st == state]
+    for tok, mistake in candidates:
+        if tok == exc.token.type:
+            return mistake
+    return candidates[0][1] if candidates else None
 
 
 def _expected_hint(expected: set[str] | frozenset[str]) -> str:
