@@ -1,0 +1,48 @@
+"""`afsmc fmt FILE... [--check]`: rewrite .afsm files in the canonical layout.
+
+Files are rewritten in place, atomically; `-` reads standard input and prints the result.
+A file that does not parse is left untouched and its syntax error is reported.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+
+from afsmc.commands.common import report
+from afsmc.compiler import read_source, write_atomic
+from afsmc.diagnostics import CompileError
+from afsmc.syntax.fmt import format_text
+
+
+def add_arguments(p: argparse.ArgumentParser) -> None:
+    p.add_argument("files", nargs="+", metavar="FILE", help="the .afsm files ('-': standard input)")
+    p.add_argument("--check", action="store_true",
+                   help="change nothing; list the files that are not formatted and exit 1 if any")
+
+
+def run(args: argparse.Namespace) -> int:
+    status = 0
+    for path in args.files:
+        try:
+            text = sys.stdin.read() if path == "-" else read_source(path)
+            out = format_text(text, "<stdin>" if path == "-" else path)
+        except CompileError as exc:
+            report(exc.diagnostics)
+            status = 1
+            continue
+        if args.check:
+            if out != text:
+                print(path)
+                status = 1
+        elif path == "-":
+            sys.stdout.write(out)
+        elif out != text:
+            try:
+                write_atomic(path, out)
+            except CompileError as exc:
+                report(exc.diagnostics)
+                status = 1
+                continue
+            print(f"reformatted {path}", file=sys.stderr)
+    return status

@@ -1,0 +1,1 @@
+"""The language server for .afsm files (`afsmc lsp`); see afsmc/lsp/server.py."""

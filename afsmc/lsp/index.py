@@ -1,0 +1,250 @@
+"""What the language server knows about one document, computed from the compiler's own AST
+and IR: where every name is declared and used, and what to say about it on hover.
+
+Independent of LSP types (offsets, not line/character), so it is tested directly too.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import re
+from bisect import bisect_right
+from dataclasses import dataclass, field
+from typing import Any
+
+from afsmc.diagnostics import Span
+from afsmc.model import ir
+from afsmc.model.expr import Type
+from afsmc.model.pretty import number, show
+from afsmc.syntax import ast
+
+# Namespaces, as the resolver keeps them: constants, variables, modes and formulas share one.
+VALUE, ACTION, LABEL, REWARD, PROPERTY, FIELD = "value", "action", "label", "reward", \
+    "property", "field"
+
+NAME_RE = re.compile(r"[A-Za-z_][A-Za-z0-9_]*\Z")
+
+KEYWORDS = (
+    "machine", "const", "param", "int", "double", "prob", "bool", "var", "init", "clamp", "mode",
+    "initial", "final", "action", "in", "when", "weight", "goto", "skip", "hazard", "from",
+    "with", "probability", "sim", "formula", "label", "rewards", "property", "except", "true",
+    "false", "P", "Pmin", "Pmax", "R", "min", "max", "F", "G", "U", "X", "C", "I",
+)
+
+
+@dataclass(frozen=True)
+class Occurrence:
+    ns: str
+    name: str
+    start: int
+    end: int
+    is_def: bool
+
+
+@dataclass
+class Definition:
+    ns: str
+    name: str
+    kind: str  # constant, variable, mode, formula, action, hazard, label, rewards, property, field
+    ident: Span
+    decl: Any  # the AST declaration
+
+
+@dataclass
+class Index:
+    text: str
+    module: ast.Module
+    defs: dict[tuple[str, str], Definition] = field(default_factory=dict)
+    occurrences: list[Occurrence] = field(default_factory=list)
+
+    def at(self, offset: int) -> Occurrence | None:
+        """The name at `offset` (a cursor just after a name is still on it)."""
+        starts = [o.start for o in self.occurrences]
+        i = bisect_right(starts, offset) - 1
+        for o in self.occurrences[max(0, i - 1): i + 1]:
+            if o.start <= offset <= o.end:
+                return o
+        return None
+
+    def definition(self, occ: Occurrence) -> Definition | None:
+        return self.defs.get((occ.ns, occ.name))
+
+    def references(self, ns: str, name: str, include_def: bool = True) -> list[Occurrence]:
+        return [o for o in self.occurrences
+                if o.ns == ns and o.name == name and (include_def or not o.is_def)]
+
+    def names(self, ns: str, kinds: tuple[str, ...] = ()) -> list[Definition]:
+        return sorted((d for d in self.defs.values() if d.ns == ns and (not kinds or d.kind in kinds)),
+                      key=lambda d: d.ident.start)
+
+
+def build(module: ast.Module, text: str) -> Index:
+    idx = Index(text, module)
+    occ: list[Occurrence] = []
+
+    def define(ns: str, ident: ast.Ident, kind: str, decl: Any) -> None:
+        idx.defs.setdefault((ns, ident.text), Definition(ns, ident.text, kind, ident.span, decl))
+        occ.append(Occurrence(ns, ident.text, ident.span.start, ident.span.end, True))
+
+    def use(ns: str, name: str, span: Span, start: int | None = None, end: int | None = None) -> None:
+        occ.append(Occurrence(ns, name, span.start if start is None else start,
+                              span.end if end is None else end, False))
+
+    def walk(node: Any) -> None:
+        if isinstance(node, ast.Name):
+            use(VALUE, node.name.text, node.name.span)
+        elif isinstance(node, ast.Call):
+            if node.func.text == "w" and len(node.args) == 1 and isinstance(node.args[0], ast.Name):
+                use(ACTION, node.args[0].name.text, node.args[0].name.span)
+            else:
+                walk(node.args)
+        elif isinstance(node, ast.FieldRef):
+            use(VALUE, node.base.text, node.base.span)
+            use(FIELD, f"{node.base.text}.{node.field.text}", node.field.span)
+        elif isinstance(node, ast.LValue):
+            use(VALUE, node.name.text, node.name.span)
+            if node.field is not None:
+                use(FIELD, f"{node.name.text}.{node.field.text}", node.field.span)
+        elif isinstance(node, ast.LabelRef):  # inside the quotes
+            use(LABEL, node.name, node.span, node.span.start + 1, node.span.end - 1)
+        elif isinstance(node, ast.ModeName):
+            use(VALUE, node.name.text, node.name.span)
+        elif isinstance(node, ast.Goto):
+            use(VALUE, node.mode.text, node.mode.span)
+        elif isinstance(node, ast.RewardItem):
+            if node.action is not None:
+                use(ACTION, node.action.text, node.action.span)
+            walk(node.guard)
+            walk(node.value)
+        elif isinstance(node, ast.RQuery):
+            if node.reward is not None and node.reward_span is not None:
+                s = node.reward_span
+                use(REWARD, node.reward, s, s.start + 1, s.end - 1)
+            walk(node.path)
+        elif isinstance(node, tuple):
+            for x in node:
+                walk(x)
+        elif dataclasses.is_dataclass(node) and not isinstance(node, (type, ast.Ident, Span)):
+            for f in dataclasses.fields(node):
+                walk(getattr(node, f.name))
+
+    for d in module.decls:
+        if isinstance(d, (ast.ConstDecl, ast.ParamDecl)):
+            define(VALUE, d.name, "constant", d)
+            walk(d.value if isinstance(d, ast.ConstDecl) else d.default)
+        elif isinstance(d, ast.VarDecl):
+            define(VALUE, d.name, "variable", d)
+            if isinstance(d.type, ast.TupleType):
+                for f in d.type.fields:
+                    idx.defs.setdefault((FIELD, f"{d.name.text}.{f.name.text}"), Definition(
+                        FIELD, f"{d.name.text}.{f.name.text}", "field", f.name.span, d))
+                    occ.append(Occurrence(FIELD, f"{d.name.text}.{f.name.text}", f.name.span.start,
+                                          f.name.span.end, True))
+                    walk(f.type)
+            else:
+                walk(d.type)
+            walk(d.init)
+        elif isinstance(d, ast.ModeDecl):
+            define(VALUE, d.name, "mode", d)
+        elif isinstance(d, ast.FormulaDecl):
+            define(VALUE, d.name, "formula", d)
+            walk(d.value)
+        elif isinstance(d, (ast.ActionDecl, ast.HazardDecl)):
+            define(ACTION, d.name, "action" if isinstance(d, ast.ActionDecl) else "hazard", d)
+            walk(d.modes)
+            walk(d.guard if isinstance(d, ast.ActionDecl) else d.trigger)
+            walk(d.weight)
+            walk(d.body)
+        elif isinstance(d, ast.LabelDecl):
+            define(LABEL, d.name, "label", d)
+            walk(d.value)
+        elif isinstance(d, ast.RewardsDecl):
+            define(REWARD, d.name, "rewards", d)
+            walk(d.items)
+        elif isinstance(d, ast.PropertyDecl):
+            define(PROPERTY, d.name, "property", d)
+            walk(d.query)
+    idx.occurrences = sorted(occ, key=lambda o: (o.start, o.end))
+    return idx
+
+
+# ---- hover ---------------------------------------------------------------------------
+
+
+def declaration_text(d: Definition, text: str) -> str:
+    """The declaration as written, up to its body: `action Search in Search when ...`."""
+    decl = d.decl
+    if d.kind == "field":
+        f = next(f for f in decl.type.fields if f.name.span == d.ident)
+        return f"var {decl.name.text} : (... {text[f.span.start:f.span.end]} ...)"
+    end = decl.span.end
+    if isinstance(decl, (ast.ActionDecl, ast.HazardDecl)):
+        end = decl.body.span.start
+    elif isinstance(decl, ast.RewardsDecl):
+        end = text.find("{", decl.name.span.end)
+    snippet = " ".join(text[decl.span.start:end].split())
+    return snippet if len(snippet) <= 300 else snippet[:297] + "..."
+
+
+def hover(d: Definition, text: str, model: ir.Model | None) -> str:
+    """Markdown for a name: its declaration and what the compiler made of it."""
+    lines = ["```afsm", declaration_text(d, text), "```"]
+    facts = _facts(d, model) if model is not None else []
+    lines.extend(f"- {f}" for f in facts)
+    return "\n".join(lines)
+
+
+def _facts(d: Definition, model: ir.Model) -> list[str]:
+    try:
+        if d.kind == "constant":
+            c = model.constant(d.name)
+            out = []
+            if c.interval is not None and c.interval[0] != c.interval[1]:
+                out.append(f"value: an interval, {c.interval[0]} to {c.interval[1]} "
+                           "(the model checker takes both ends)")
+            else:
+                out.append(f"value: `{number(c.value)}` ({c.declared_type})")
+            if c.is_param:
+                out.append(f"open constant: `--const {c.name}=VALUE` overrides it")
+            if c.source is not None:
+                policy = ", ".join(f"{k} = {number(v)}" for k, v in c.source.policy)
+                out.append(f"source: simulation `{c.source.ref}`" + (f" with {policy}" if policy
+                                                                    else ""))
+            return out
+        if d.kind == "variable":
+            out = []
+            for v in model.variables:
+                if v.name == d.name or v.display.startswith(d.name + "."):
+                    kind = "bool" if v.type is Type.BOOL else f"[{v.lo}..{v.hi}]"
+                    out.append(f"`{v.display}`: range {kind}, initially `{number(v.init)}`"
+                               + (", clamped to its range" if v.clamp else ""))
+            return out
+        if d.kind == "field":
+            return [f"range [{v.lo}..{v.hi}], initially `{number(v.init)}`"
+                    for v in model.variables if v.display == d.name]
+        if d.kind == "mode":
+            m = model.mode(d.name)
+            flags = [x for x, on in (("initial", m.initial), ("final", m.final)) if on]
+            return [f"mode number {m.number}" + (f" ({', '.join(flags)})" if flags else "")]
+        if d.kind in ("action", "hazard"):
+            names = model.mode_names
+            acts = [a for a in model.actions if a.name == d.name]
+            if acts:
+                a = acts[0]
+                return [f"modes: {', '.join(names.get(n, str(n)) for n in a.modes)}",
+                        f"guard: `{show(a.guard)}`", f"weight: `{show(a.weight)}`"] + (
+                    ["a preemptive hazard: it fires before the mode's actions"]
+                    if a.kind == "preemptive" else [])
+            hz = [h for h in model.hazards if h.name == d.name]
+            if hz:
+                h = hz[0]
+                return [f"modes: {', '.join(names.get(n, str(n)) for n in h.modes)}",
+                        f"probability: `{show(h.prob)}`, woven into every action of these modes"]
+            return []
+        if d.kind == "formula":
+            return [f"`{show(model.formula(d.name).value)}`"]
+        if d.kind == "label":
+            return [f"`{show(model.label(d.name).value)}`"]
+    except StopIteration:  # the model is from an older version of the text
+        return []
+    return []

@@ -1,0 +1,428 @@
+"""`afsmc lsp`: a Language Server Protocol server (pygls 2) for .afsm files.
+
+It reuses the compiler: the parser and the resolver run on every change (a few tens of
+milliseconds on examples/uav.afsm), so syntax and name errors appear as the author types
+and navigation follows the text. The semantic checks (weights, distributions, ranges, the
+mode graph: about a second and a half on uav.afsm, they enumerate states) run in a worker
+thread once typing pauses (DEBOUNCE), exactly as `afsmc check` runs them, and replace the
+diagnostics when they finish if the text has not changed meanwhile.
+
+A file that does not parse keeps the navigation of its last good parse; nothing a client
+sends makes the server exit (every handler turns a failure into a log message).
+"""
+
+from __future__ import annotations
+
+import asyncio
+import functools
+import re
+import traceback
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from typing import Any, TypeVar
+
+from lsprotocol import types as T
+from pygls.lsp.server import LanguageServer
+from pygls.uris import to_fs_path
+from pygls.workspace import TextDocument
+
+from afsmc import __version__
+from afsmc.compiler import load
+from afsmc.diagnostics import CompileError, Diagnostic, Severity
+from afsmc.lsp import index as I
+from afsmc.model import ir
+from afsmc.model.expr import FUNCTIONS
+from afsmc.model.resolve import resolve
+from afsmc.syntax import ast
+from afsmc.syntax.fmt import format_text
+from afsmc.syntax.parser import parse
+
+DEBOUNCE = 0.3  # seconds of quiet before the full checks run
+
+F = TypeVar("F", bound=Callable[..., Any])
+
+
+@dataclass
+class DocState:
+    version: int | None = None
+    text: str = ""
+    index: I.Index | None = None  # from the last text that parsed
+    model: ir.Model | None = None  # from the last text that resolved
+    task: asyncio.Task[None] | None = None
+
+
+@dataclass
+class Fast:
+    """What parsing and resolving found, before the slow checks."""
+
+    module: ast.Module | None
+    model: ir.Model | None
+    diagnostics: list[Diagnostic] = field(default_factory=list)
+
+
+def analyse_fast(text: str, path: str) -> Fast:
+    try:
+        module = parse(text, path)
+    except CompileError as exc:
+        return Fast(None, None, exc.diagnostics)
+    try:
+        model = resolve(module)
+    except CompileError as exc:
+        return Fast(module, None, exc.diagnostics)
+    return Fast(module, model, [])
+
+
+def analyse_full(text: str, path: str) -> list[Diagnostic]:
+    """Every diagnostic `afsmc check` reports for this text."""
+    try:
+        return load(path, text=text).diagnostics
+    except CompileError as exc:
+        return exc.diagnostics
+
+
+class AfsmServer(LanguageServer):
+    def __init__(self) -> None:
+        super().__init__("afsmc", __version__)
+        self.docs: dict[str, DocState] = {}
+        self.check_lock = asyncio.Lock()
+
+
+server = AfsmServer()
+
+
+def guarded(fn: F) -> F:
+    """A handler that fails logs why and answers nothing, instead of failing the request."""
+
+    @functools.wraps(fn)
+    async def wrapper(ls: AfsmServer, params: Any) -> Any:
+        try:
+            result = fn(ls, params)
+            if asyncio.iscoroutine(result):
+                result = await result
+            return result
+        except Exception:
+            ls.window_log_message(T.LogMessageParams(
+                type=T.MessageType.Error, message=f"afsmc: internal error in {fn.__name__}:\n"
+                + traceback.format_exc()))
+            return None
+
+    return wrapper  # type: ignore[return-value]
+
+
+# ---- positions -------------------------------------------------------------------
+
+
+def _snapshot(ls: AfsmServer, uri: str, text: str) -> TextDocument:
+    return TextDocument(uri, text, position_codec=ls.workspace.position_codec)
+
+
+def _range(doc: TextDocument, start: int, end: int) -> T.Range:
+    return T.Range(start=doc.client_position_at_offset(start),
+                   end=doc.client_position_at_offset(end))
+
+
+def _to_lsp(d: Diagnostic, doc: TextDocument, uri: str) -> T.Diagnostic:
+    rng = _range(doc, d.span.start, d.span.end) if d.span is not None else _range(doc, 0, 0)
+    message = d.message + (f"\nhint: {d.hint}" if d.hint else "")
+    related = [T.DiagnosticRelatedInformation(
+        location=T.Location(uri=uri, range=_range(doc, r.span.start, r.span.end)),
+        message=r.message)
+               for r in d.related]
+    severity = {Severity.ERROR: T.DiagnosticSeverity.Error,
+                Severity.WARNING: T.DiagnosticSeverity.Warning,
+                Severity.NOTE: T.DiagnosticSeverity.Information}[d.severity]
+    return T.Diagnostic(range=rng, message=message, severity=severity, code=d.code, source="afsmc",
+                        related_information=related or None)
+
+
+def _publish(ls: AfsmServer, uri: str, version: int | None, text: str,
+             diags: list[Diagnostic]) -> None:
+    doc = _snapshot(ls, uri, text)
+    ls.text_document_publish_diagnostics(T.PublishDiagnosticsParams(
+        uri=uri, diagnostics=[_to_lsp(d, doc, uri) for d in diags], version=version))
+
+
+def _internal_diag(what: str) -> Diagnostic:
+    return Diagnostic("E999", Severity.ERROR, f"afsmc could not {what} this file (an internal "
+                      "error; see the language server's log)", None)
+
+
+# ---- document sync -----------------------------------------------------------------
+
+
+def _changed(ls: AfsmServer, uri: str) -> None:
+    doc = ls.workspace.get_text_document(uri)
+    st = ls.docs.setdefault(uri, DocState())
+    st.version, st.text = doc.version, doc.source
+    path = to_fs_path(uri) or uri
+    try:
+        fast = analyse_fast(st.text, path)
+    except Exception:
+        ls.window_log_message(T.LogMessageParams(type=T.MessageType.Error, message=traceback.format_exc()))
+        fast = Fast(None, None, [_internal_diag("parse")])
+    if fast.module is not None:
+        st.index = I.build(fast.module, st.text)
+    if fast.model is not None:
+        st.model = fast.model
+    if st.task is not None:
+        st.task.cancel()
+        st.task = None
+    if fast.diagnostics:  # syntax or name errors: the checks would stop at them too
+        _publish(ls, uri, st.version, st.text, fast.diagnostics)
+        return
+    st.task = asyncio.get_running_loop().create_task(_check_later(ls, uri, st.version, st.text))
+
+
+async def _check_later(ls: AfsmServer, uri: str, version: int | None, text: str) -> None:
+    await asyncio.sleep(DEBOUNCE)
+    async with ls.check_lock:  # one check at a time: the machine is shared
+        st = ls.docs.get(uri)
+        if st is None or st.version != version:
+            return
+        try:
+            diags = await asyncio.to_thread(analyse_full, text, to_fs_path(uri) or uri)
+        except Exception:
+            ls.window_log_message(T.LogMessageParams(type=T.MessageType.Error, message=traceback.format_exc()))
+            diags = [_internal_diag("check")]
+    st = ls.docs.get(uri)
+    if st is not None and st.version == version:
+        _publish(ls, uri, version, text, diags)
+
+
+@server.feature(T.TEXT_DOCUMENT_DID_OPEN)
+@guarded
+async def did_open(ls: AfsmServer, params: T.DidOpenTextDocumentParams) -> None:
+    _changed(ls, params.text_document.uri)
+
+
+@server.feature(T.TEXT_DOCUMENT_DID_CHANGE)
+@guarded
+async def did_change(ls: AfsmServer, params: T.DidChangeTextDocumentParams) -> None:
+    _changed(ls, params.text_document.uri)
+
+
+@server.feature(T.TEXT_DOCUMENT_DID_CLOSE)
+@guarded
+async def did_close(ls: AfsmServer, params: T.DidCloseTextDocumentParams) -> None:
+    st = ls.docs.pop(params.text_document.uri, None)
+    if st is not None and st.task is not None:
+        st.task.cancel()
+    ls.text_document_publish_diagnostics(T.PublishDiagnosticsParams(uri=params.text_document.uri, diagnostics=[]))
+
+
+# ---- navigation ---------------------------------------------------------------------
+
+
+def _lookup(ls: AfsmServer, uri: str, pos: T.Position) -> tuple[I.Index, I.Occurrence] | None:
+    st = ls.docs.get(uri)
+    if st is None or st.index is None:
+        return None
+    doc = ls.workspace.get_text_document(uri)
+    offset = _snapshot(ls, uri, st.index.text).offset_at_position(pos) \
+        if st.index.text != doc.source else doc.offset_at_position(pos)
+    occ = st.index.at(offset)
+    return (st.index, occ) if occ is not None else None
+
+
+@server.feature(T.TEXT_DOCUMENT_HOVER)
+@guarded
+def hover(ls: AfsmServer, params: T.HoverParams) -> T.Hover | None:
+    found = _lookup(ls, params.text_document.uri, params.position)
+    if found is None:
+        return None
+    idx, occ = found
+    d = idx.definition(occ)
+    if d is None:
+        return None
+    text = I.hover(d, idx.text, ls.docs[params.text_document.uri].model)
+    doc = _snapshot(ls, params.text_document.uri, idx.text)
+    return T.Hover(contents=T.MarkupContent(kind=T.MarkupKind.Markdown, value=text),
+                   range=_range(doc, occ.start, occ.end))
+
+
+@server.feature(T.TEXT_DOCUMENT_DEFINITION)
+@guarded
+def definition(ls: AfsmServer, params: T.DefinitionParams) -> T.Location | None:
+    uri = params.text_document.uri
+    found = _lookup(ls, uri, params.position)
+    if found is None:
+        return None
+    idx, occ = found
+    d = idx.definition(occ)
+    if d is None:
+        return None
+    return T.Location(uri=uri, range=_range(_snapshot(ls, uri, idx.text), d.ident.start, d.ident.end))
+
+
+@server.feature(T.TEXT_DOCUMENT_REFERENCES)
+@guarded
+def references(ls: AfsmServer, params: T.ReferenceParams) -> list[T.Location] | None:
+    uri = params.text_document.uri
+    found = _lookup(ls, uri, params.position)
+    if found is None:
+        return None
+    idx, occ = found
+    doc = _snapshot(ls, uri, idx.text)
+    return [T.Location(uri=uri, range=_range(doc, o.start, o.end))
+            for o in idx.references(occ.ns, occ.name, params.context.include_declaration)]
+
+
+_SYMBOL_KINDS = {
+    "constant": T.SymbolKind.Constant, "variable": T.SymbolKind.Variable,
+    "mode": T.SymbolKind.EnumMember, "formula": T.SymbolKind.Function,
+    "action": T.SymbolKind.Method, "hazard": T.SymbolKind.Event, "label": T.SymbolKind.Boolean,
+    "rewards": T.SymbolKind.Struct, "property": T.SymbolKind.Property,
+    "field": T.SymbolKind.Field,
+}
+
+
+@server.feature(T.TEXT_DOCUMENT_DOCUMENT_SYMBOL)
+@guarded
+def document_symbols(ls: AfsmServer, params: T.DocumentSymbolParams) -> list[T.DocumentSymbol]:
+    uri = params.text_document.uri
+    st = ls.docs.get(uri)
+    if st is None or st.index is None:
+        return []
+    idx = st.index
+    doc = _snapshot(ls, uri, idx.text)
+    by_decl: dict[int, I.Definition] = {
+        id(d.decl): d for d in idx.defs.values() if d.kind != "field"}
+    out = []
+    for decl in idx.module.decls:
+        d = by_decl.get(id(decl))
+        if d is None:
+            continue
+        children = [
+            T.DocumentSymbol(name=f.name.text, kind=T.SymbolKind.Field,
+                             range=_range(doc, f.span.start, f.span.end),
+                             selection_range=_range(doc, f.name.span.start, f.name.span.end))
+            for f in (decl.type.fields if isinstance(decl, ast.VarDecl)
+                      and isinstance(decl.type, ast.TupleType) else ())]
+        detail = d.kind
+        if isinstance(decl, (ast.ActionDecl, ast.HazardDecl)):
+            detail = f"{d.kind} in {idx.text[decl.modes.span.start:decl.modes.span.end]}"
+        out.append(T.DocumentSymbol(
+            name=d.name, kind=_SYMBOL_KINDS[d.kind], range=_range(doc, decl.span.start, decl.span.end),
+            selection_range=_range(doc, d.ident.start, d.ident.end), detail=detail, children=children or None))
+    return out
+
+
+# ---- completion ---------------------------------------------------------------------
+
+_ITEM_KINDS = {
+    "constant": T.CompletionItemKind.Constant, "variable": T.CompletionItemKind.Variable,
+    "mode": T.CompletionItemKind.EnumMember, "formula": T.CompletionItemKind.Function,
+    "action": T.CompletionItemKind.Method, "hazard": T.CompletionItemKind.Event,
+    "label": T.CompletionItemKind.Value, "rewards": T.CompletionItemKind.Struct,
+}
+
+
+def _items(defs: list[I.Definition]) -> list[T.CompletionItem]:
+    return [T.CompletionItem(d.name, kind=_ITEM_KINDS.get(d.kind), detail=d.kind) for d in defs]
+
+
+def completions(idx: I.Index | None, before: str) -> list[T.CompletionItem]:
+    """Names that fit where the cursor is; `before` is the line up to the cursor."""
+    if idx is None:
+        return [T.CompletionItem(k, kind=T.CompletionItemKind.Keyword) for k in I.KEYWORDS]
+    if re.search(r'R\{"\w*$', before):
+        return _items(idx.names(I.REWARD))
+    if before.count('"') % 2 == 1:
+        return _items(idx.names(I.LABEL))
+    if re.search(r"\bw\(\s*\w*$", before) or re.search(r"^\s*\[\s*\w*$", before):
+        return _items(idx.names(I.ACTION))
+    if re.search(r"\bgoto\s+\w*$", before) or (re.search(
+            r"\b(in|from|except)\s+\{?[\w\s,.]*$", before) and not re.search(r"\bwhen\b", before)):
+        return _items(idx.names(I.VALUE, ("mode",)))
+    if m := re.search(r"\b(\w+)\.\w*$", before):
+        return [T.CompletionItem(d.name.split(".", 1)[1], kind=T.CompletionItemKind.Field)
+                for d in idx.names(I.FIELD) if d.name.startswith(m.group(1) + ".")]
+    return (_items(idx.names(I.VALUE))
+            + [T.CompletionItem(f, kind=T.CompletionItemKind.Function, detail="function")
+               for f in (*sorted(FUNCTIONS), "w")]
+            + [T.CompletionItem(k, kind=T.CompletionItemKind.Keyword) for k in I.KEYWORDS])
+
+
+@server.feature(T.TEXT_DOCUMENT_COMPLETION, T.CompletionOptions(trigger_characters=['"', "(", "."]))
+@guarded
+def completion(ls: AfsmServer, params: T.CompletionParams) -> T.CompletionList:
+    uri = params.text_document.uri
+    doc = ls.workspace.get_text_document(uri)
+    offset = doc.offset_at_position(params.position)
+    line_start = doc.source.rfind("\n", 0, offset) + 1
+    st = ls.docs.get(uri)
+    items = completions(st.index if st else None, doc.source[line_start:offset])
+    return T.CompletionList(is_incomplete=False, items=items)
+
+
+# ---- editing -------------------------------------------------------------------------
+
+
+@server.feature(T.TEXT_DOCUMENT_FORMATTING)
+@guarded
+def formatting(ls: AfsmServer, params: T.DocumentFormattingParams) -> list[T.TextEdit] | None:
+    uri = params.text_document.uri
+    doc = ls.workspace.get_text_document(uri)
+    try:
+        out = format_text(doc.source, to_fs_path(uri) or uri)
+    except CompileError:
+        return None  # a syntax error: it is already shown as a diagnostic
+    if out == doc.source:
+        return []
+    return [T.TextEdit(range=_range(doc, 0, len(doc.source)), new_text=out)]
+
+
+RENAMEABLE = {"mode", "constant", "variable", "action", "hazard", "formula", "label", "rewards",
+              "property"}
+
+
+def _rename_target(ls: AfsmServer, uri: str, pos: T.Position) -> tuple[I.Index, I.Definition,
+                                                                       I.Occurrence] | None:
+    st = ls.docs.get(uri)
+    doc = ls.workspace.get_text_document(uri)
+    if st is None or st.index is None or st.index.text != doc.source:
+        return None  # only on text that parses: the spans must be current
+    found = _lookup(ls, uri, pos)
+    if found is None:
+        return None
+    idx, occ = found
+    d = idx.definition(occ)
+    if d is None or d.kind not in RENAMEABLE:
+        return None
+    return idx, d, occ
+
+
+@server.feature(T.TEXT_DOCUMENT_PREPARE_RENAME)
+@guarded
+def prepare_rename(ls: AfsmServer, params: T.PrepareRenameParams) -> T.Range | None:
+    target = _rename_target(ls, params.text_document.uri, params.position)
+    if target is None:
+        return None
+    idx, _, occ = target
+    return _range(_snapshot(ls, params.text_document.uri, idx.text), occ.start, occ.end)
+
+
+class RenameError(Exception):
+    pass
+
+
+@server.feature(T.TEXT_DOCUMENT_RENAME)
+def rename(ls: AfsmServer, params: T.RenameParams) -> T.WorkspaceEdit | None:
+    uri = params.text_document.uri
+    target = _rename_target(ls, uri, params.position)
+    if target is None:
+        return None
+    idx, d, _ = target
+    new = params.new_name
+    # errors here are answers the user should read, so they are raised to the client
+    if not I.NAME_RE.match(new) or new in I.KEYWORDS or new in FUNCTIONS or new == "w":
+        raise RenameError(f"'{new}' is not a name that can be declared")
+    if (d.ns, new) in idx.defs and new != d.name:
+        raise RenameError(f"'{new}' is already declared")
+    doc = _snapshot(ls, uri, idx.text)
+    edits = [T.TextEdit(range=_range(doc, o.start, o.end), new_text=new) for o in idx.references(d.ns, d.name)]
+    return T.WorkspaceEdit(changes={uri: edits})
+
+
+def serve() -> None:
+    server.start_io()

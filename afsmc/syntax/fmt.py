@@ -1,0 +1,543 @@
+"""The canonical layout of an .afsm file (`afsmc fmt`, and formatting in the language server).
+
+The layout is printed from the AST, so it is the same whatever spacing the author used:
+one declaration per line, blocks indented by four spaces, single spaces around binary
+operators, at most one blank line kept where the author left one. Parentheses the
+author wrote are kept (they are often there for the reader); none are added or dropped.
+
+Comments are not in the AST (the grammar ignores them), so they are found by lexing the
+text again with the grammar's own terminals and placed back by position: a comment at the
+end of a line stays at the end of that line (aligned with its neighbours), a comment on
+its own line stays before what follows it, and a comment in the middle of a statement
+moves onto its own line just before that statement.
+
+Safety net: the result is parsed again and must give the same AST (spans aside) and the
+same comments; otherwise the file is reported, not rewritten.
+"""
+
+from __future__ import annotations
+
+import bisect
+import dataclasses
+from dataclasses import dataclass, field
+from functools import cache
+from typing import Any
+
+import lark
+from lark.exceptions import LarkError
+
+from afsmc.diagnostics import CompileError, Diagnostic, Severity, Span
+from afsmc.syntax import ast
+from afsmc.syntax.parser import grammar_text, parse
+
+WIDTH = 100
+INDENT = "    "
+
+# Binding strength, as in the grammar: larger binds tighter.
+_ITE, _IMPLIES, _OR, _AND, _NOT, _CMP, _SUM, _PRODUCT, _NEG, _ATOM = range(1, 11)
+_BINARY = {"=>": _IMPLIES, "||": _OR, "&&": _AND, "+": _SUM, "-": _SUM, "*": _PRODUCT,
+           "/": _PRODUCT, "==": _CMP, "!=": _CMP, "<": _CMP, "<=": _CMP, ">": _CMP, ">=": _CMP}
+
+
+@cache
+def _lexer() -> lark.Lark:
+    # The grammar's own terminals (COMMENT, ESCAPED_STRING, ...), lexed without parsing.
+    return lark.Lark(grammar_text(), parser="lalr", lexer="basic")
+
+
+def tokens(text: str) -> list[lark.Token]:
+    """Every token of `text` but whitespace, comments included (raises LarkError)."""
+    return [t for t in _lexer().lex(text, dont_ignore=True) if t.type != "WS"]
+
+
+def format_text(text: str, path: str = "<input>") -> str:
+    """The canonical layout of `text`. Raises CompileError if it does not parse."""
+    module = parse(text, path)
+    try:
+        toks = tokens(text)
+    except LarkError:  # the parser accepted it, so this would be a lexer disagreement
+        raise CompileError([_internal(path, "cannot find the comments of this file")]) from None
+    out = _Formatter(text, module, toks).run()
+    _verify(text, out, module, toks, path)
+    return out
+
+
+def _internal(path: str, why: str) -> Diagnostic:
+    return Diagnostic("E190", Severity.ERROR, f"{path}: the formatter {why}; the file is left "
+                      "unchanged", None, hint="please report this with the file")
+
+
+def _verify(text: str, out: str, module: ast.Module, toks: list[lark.Token], path: str) -> None:
+    try:
+        again = parse(out, path)
+        comments_after = [str(t).rstrip() for t in tokens(out) if t.type == "COMMENT"]
+    except (CompileError, LarkError):
+        raise CompileError([_internal(path, "produced text that does not parse")]) from None
+    if _shape(again) != _shape(module):
+        raise CompileError([_internal(path, "would change the meaning of this file")])
+    if comments_after != [str(t).rstrip() for t in toks if t.type == "COMMENT"]:
+        raise CompileError([_internal(path, "would lose or reorder a comment")])
+
+
+def _shape(node: Any) -> Any:
+    """The AST without positions, for comparing meaning."""
+    if isinstance(node, ast.Ident):
+        return node.text
+    if dataclasses.is_dataclass(node) and not isinstance(node, type):
+        return (type(node).__name__, *(
+            _shape(getattr(node, f.name)) for f in dataclasses.fields(node)
+            if not isinstance(getattr(node, f.name), Span)))
+    if isinstance(node, tuple):
+        return tuple(_shape(x) for x in node)
+    return node
+
+
+# ---- layout units ----------------------------------------------------------------
+
+
+@dataclass
+class _Unit:
+    """Source text [start, end) printed as `lines` (indentation included)."""
+
+    start: int
+    end: int
+    depth: int
+    lines: list[str]
+    kind: str = "item"  # "open" (a block header ending in '{'), "close" ('}'), "item"
+    leading: list[tuple[lark.Token, bool]] = field(default_factory=list)  # (comment, blank before)
+    trailing: list[lark.Token] = field(default_factory=list)
+    blank: bool = False
+    cols: list[str] | None = None  # a one-line declaration in columns, aligned with neighbours
+    group: str = ""  # which declarations align together
+    cont: list[lark.Token] = field(default_factory=list)  # lines continuing `trailing`
+
+
+@dataclass
+class _Line:
+    code: str
+    comment: str | None = None
+    blank: bool = False  # a blank line before this one
+    is_comment: bool = False
+    cont: bool = False  # continues the trailing comment of the line above, in its column
+    col: int = 0
+
+    @property
+    def indent(self) -> int:
+        return len(self.code) - len(self.code.lstrip(" "))
+
+
+class _Formatter:
+    def __init__(self, text: str, module: ast.Module, toks: list[lark.Token]):
+        self.text = text
+        self.module = module
+        self.toks = toks
+        self.code = [t for t in toks if t.type != "COMMENT"]
+        self.code_starts = [t.start_pos or 0 for t in self.code]
+        self.ends = sorted(t.end_pos or 0 for t in toks)
+
+    # -- tokens
+    def _index_at(self, offset: int) -> int:
+        """Index of the first code token starting at or after `offset`."""
+        return bisect.bisect_left(self.code_starts, offset)
+
+    def _next(self, offset: int, kind: str) -> lark.Token:
+        for t in self.code[self._index_at(offset):]:
+            if t.type == kind:
+                return t
+        raise CompileError([_internal(self.module.span.source.path, f"found no {kind}")])
+
+    def _wrapped(self, span: Span) -> bool:
+        """Did the author put this expression in its own parentheses?"""
+        i = self._index_at(span.start)
+        j = self._index_at(span.end)  # the first token after the expression
+        if i == 0 or j >= len(self.code):
+            return False
+        before, after = self.code[i - 1], self.code[j]
+        if before.type != "LPAR" or after.type != "RPAR":
+            return False
+        if i >= 2 and self.code[i - 2].type in ("NAME", "MIN", "MAX"):
+            return False  # the parentheses of a call
+        depth = 0
+        for t in self.code[i:j]:
+            depth += {"LPAR": 1, "RPAR": -1}.get(t.type, 0)
+            if depth < 0:
+                return False
+        return depth == 0
+
+    def _src(self, span: Span) -> str:
+        return self.text[span.start:span.end]
+
+    # -- expressions
+    def expr(self, e: ast.Expr, ctx: int = 0) -> str:
+        text, prec = self._core(e)
+        if prec < ctx or self._wrapped(e.span):
+            return f"({text})"
+        return text
+
+    def _core(self, e: ast.Expr) -> tuple[str, int]:
+        if isinstance(e, ast.Num):
+            return e.text, _NEG if e.text.startswith("-") else _ATOM
+        if isinstance(e, ast.BoolLit):
+            return ("true" if e.value else "false"), _ATOM
+        if isinstance(e, ast.Name):
+            return e.name.text, _ATOM
+        if isinstance(e, ast.FieldRef):
+            return f"{e.base.text}.{e.field.text}", _ATOM
+        if isinstance(e, ast.ModeRef):
+            return "mode", _ATOM
+        if isinstance(e, ast.LabelRef):
+            return f'"{e.name}"', _ATOM
+        if isinstance(e, ast.Call):
+            return f"{e.func.text}({', '.join(self.expr(a) for a in e.args)})", _ATOM
+        if isinstance(e, ast.Unary):
+            if e.op == "!":
+                return "!" + self.expr(e.operand, _NOT), _NOT
+            return "-" + self.expr(e.operand, _NEG), _NEG
+        if isinstance(e, ast.Binary):
+            p = _BINARY[e.op]
+            if e.op == "=>":  # right-associative
+                left, right = self.expr(e.left, p + 1), self.expr(e.right, p)
+            elif p == _CMP:  # not associative
+                left, right = self.expr(e.left, p + 1), self.expr(e.right, p + 1)
+            else:
+                left, right = self.expr(e.left, p), self.expr(e.right, p + 1)
+            return f"{left} {e.op} {right}", p
+        if isinstance(e, ast.Ite):
+            return (f"{self.expr(e.cond, _IMPLIES)} ? {self.expr(e.then)} : "
+                    f"{self.expr(e.other)}"), _ITE
+        if isinstance(e, ast.ModeIn):
+            return "mode in " + self.mode_set(e.modes), _CMP
+        raise TypeError(type(e).__name__)
+
+    def bound(self, e: ast.Expr) -> str:
+        if isinstance(e, (ast.Num, ast.Name)) and not self._wrapped(e.span):
+            return self._core(e)[0]
+        return f"({self._core(e)[0]})"
+
+    def mode_set(self, ms: ast.ModeSet) -> str:
+        items = ", ".join(self._mode_item(i) for i in ms.items)
+        if ms.every:
+            return f"* except {{{items}}}" if ms.items else "*"
+        if self.text[ms.span.start:ms.span.start + 1] == "{" or len(ms.items) != 1:
+            return f"{{{items}}}"
+        return items
+
+    @staticmethod
+    def _mode_item(item: ast.ModeItem) -> str:
+        if isinstance(item, ast.ModeName):
+            return item.name.text
+        if isinstance(item, ast.ModeNumber):
+            return str(item.number)
+        return f"{item.lo}..{item.hi}"
+
+    def value(self, v: ast.Expr | ast.TupleLit) -> str:
+        if isinstance(v, ast.TupleLit):
+            return "(" + ", ".join(self.expr(x) for x in v.items) + ")"
+        return self.expr(v)
+
+    def update(self, u: ast.Update) -> str:
+        if isinstance(u, ast.Goto):
+            return f"goto {u.mode.text}"
+        return f"{u.target.text} {u.op} {self.value(u.value)}"
+
+    # -- declarations
+    def simple(self, d: Any) -> list[str]:
+        """The declaration as columns (joined by spaces; neighbours align them)."""
+        if isinstance(d, ast.MachineDecl):
+            return [f"machine {d.name.text};"]
+        if isinstance(d, ast.ConstDecl):
+            if isinstance(d.value, ast.Interval):
+                value = f"= [{self.expr(d.value.lo)}, {self.expr(d.value.hi)}]"
+            else:
+                value = "= " + self.expr(d.value)
+            head = f"const {d.type} {d.name.text}"
+            if d.source is None:
+                return [head, value + ";"]
+            src = f"from sim {d.source.ref.text}"
+            if d.source.policy:
+                src += " with " + ", ".join(f"{name.text} = {self._signed_after(name.span.end)}"
+                                            for name, _ in d.source.policy)
+            return [head, value, src + ";"]
+        if isinstance(d, ast.ParamDecl):
+            head = f"param {d.type} {d.name.text}"
+            return [head + ";"] if d.default is None else [head, f"= {self.expr(d.default)};"]
+        if isinstance(d, ast.VarDecl):
+            text = f": {self.var_type(d.type)}"
+            if d.init is not None:
+                text += f" init {self.value(d.init)}"
+            return [f"var {d.name.text}", text + (" clamp;" if d.clamp else ";")]
+        if isinstance(d, ast.ModeDecl):
+            attrs = " initial" * d.initial + " final" * d.final + ";"
+            if d.number_span is None:
+                return [f"mode {d.name.text}{attrs}"]
+            return [f"mode {d.name.text}", f"= {self._src(d.number_span)}{attrs}"]
+        if isinstance(d, ast.FormulaDecl):
+            return [f"formula {d.name.text}", f"= {self.expr(d.value)};"]
+        if isinstance(d, ast.LabelDecl):
+            return [f"label {d.name.text}", f"= {self.expr(d.value)};"]
+        if isinstance(d, ast.PropertyDecl):
+            return [f"property {d.name.text}", f"= {self.query(d.query)};"]
+        raise TypeError(type(d).__name__)
+
+    def _signed_after(self, offset: int) -> str:
+        i = self._index_at(offset)
+        out = ""
+        for t in self.code[i + 1:]:  # skip '='
+            out += str(t)
+            if t.type == "NUMBER":
+                break
+        return out
+
+    def var_type(self, t: ast.RangeType | ast.BoolType | ast.TupleType) -> str:
+        if isinstance(t, ast.BoolType):
+            return "bool"
+        if isinstance(t, ast.RangeType):
+            return f"[{self.expr(t.lo)}..{self.expr(t.hi)}]"
+        return "(" + ", ".join(f"{f.name.text}: {self.var_type(f.type)}" for f in t.fields) + ")"
+
+    def query(self, q: ast.PQuery | ast.RQuery) -> str:
+        if isinstance(q, ast.PQuery):
+            return f"{q.op}=? [ {self.path(q.path)} ]"
+        head = "R"
+        if q.reward_span is not None:
+            head += "{" + self._src(q.reward_span) + "}"
+        return f"{head}{q.opt}=? [ {self.path(q.path)} ]"
+
+    def path(self, p: Any) -> str:
+        def b(x: ast.Expr | None) -> str:
+            return "" if x is None else "<=" + self.bound(x)
+
+        if isinstance(p, ast.Eventually):
+            return f"F{b(p.bound)} {self.expr(p.target)}"
+        if isinstance(p, ast.Globally):
+            return f"G{b(p.bound)} {self.expr(p.target)}"
+        if isinstance(p, ast.Until):
+            return f"{self.expr(p.left)} U{b(p.bound)} {self.expr(p.right)}"
+        if isinstance(p, ast.Next):
+            return f"X {self.expr(p.target)}"
+        if isinstance(p, ast.ReachReward):
+            return f"F {self.expr(p.target)}"
+        if isinstance(p, ast.CumulativeReward):
+            return f"C{b(p.bound)}"
+        if isinstance(p, ast.InstantReward):
+            return f"I={self.bound(p.at)}"
+        raise TypeError(type(p).__name__)
+
+    # -- blocks
+    def header(self, d: ast.ActionDecl | ast.HazardDecl, depth: int) -> list[str]:
+        pad = INDENT * depth
+        if isinstance(d, ast.ActionDecl):
+            base = f"action {d.name.text} in {self.mode_set(d.modes)}"
+            extras = []
+            if d.guard is not None:
+                extras.append(f"when {self.expr(d.guard)}")
+        else:
+            base = f"hazard {d.name.text} from {self.mode_set(d.modes)}"
+            trigger = "with probability" if d.kind == "probabilistic" else "when"
+            extras = [f"{trigger} {self.expr(d.trigger)}"]
+        if d.weight is not None:
+            extras.append(f"weight {self.expr(d.weight)}")
+        one = " ".join([pad + base, *extras, "{"])
+        if len(one) <= WIDTH:
+            return [one]
+        lines = [pad + base] + [pad + INDENT + x for x in extras]
+        lines[-1] += " {"
+        return lines
+
+    def fill(self, prefix: str, parts: list[str], depth: int) -> list[str]:
+        """`prefix` then `parts` joined by ', ' and a ';', wrapped at commas past WIDTH."""
+        first = INDENT * depth + prefix
+        if not parts:
+            return [first + "skip;"]
+        one = first + ", ".join(parts) + ";"
+        if len(one) <= WIDTH:
+            return [one]
+        cont = " " * len(first)
+        lines, cur = [], first + parts[0]
+        for p in parts[1:]:
+            if len(cur) + 2 + len(p) + 1 > WIDTH:
+                lines.append(cur + ",")
+                cur = cont + p
+            else:
+                cur += ", " + p
+        return [*lines, cur + ";"]
+
+    def body_units(self, body: ast.Body, depth: int) -> list[_Unit]:
+        units = []
+        # the updates of a body's outcomes start in one column
+        width = max((len(self.expr(o.prob)) + 1 for o in body.outcomes if o.prob is not None),
+                    default=0)
+        for o in body.outcomes:
+            if o.prob is not None:
+                prefix = f"{self.expr(o.prob)}:".ljust(width) + " "
+                lines = self.fill(prefix, [self.update(u) for u in o.updates], depth)
+                units.append(_Unit(o.span.start, o.span.end, depth, lines))
+                continue
+            # A plain body: the parser merged its statements; keep the author's grouping.
+            groups: list[list[ast.Update]] = []
+            for u in o.updates:
+                if groups and (self._next(groups[-1][-1].span.end, "SEMICOLON").start_pos
+                               or 0) > u.span.start:
+                    groups[-1].append(u)
+                else:
+                    groups.append([u])
+            if not groups:  # `skip;`
+                skip = self._next(body.span.start, "SKIP")
+                end = self._next(skip.end_pos or 0, "SEMICOLON").end_pos or 0
+                units.append(_Unit(skip.start_pos or 0, end, depth, [INDENT * depth + "skip;"]))
+            for g in groups:
+                end = self._next(g[-1].span.end, "SEMICOLON").end_pos or g[-1].span.end
+                units.append(_Unit(g[0].span.start, end, depth,
+                                   self.fill("", [self.update(u) for u in g], depth)))
+        return units
+
+    def units(self) -> list[_Unit]:
+        out: list[_Unit] = []
+        m = self.module
+        if m.machine is not None:
+            out.append(_Unit(m.machine.span.start, m.machine.span.end, 0,
+                             [" ".join(self.simple(m.machine))]))
+        for d in m.decls:
+            if isinstance(d, (ast.ActionDecl, ast.HazardDecl)):
+                out.append(_Unit(d.span.start, d.body.span.start + 1, 0, self.header(d, 0), "open"))
+                out.extend(self.body_units(d.body, 1))
+                out.append(_Unit(d.span.end - 1, d.span.end, 0, ["}"], "close"))
+            elif isinstance(d, ast.RewardsDecl):
+                brace = self._next(d.name.span.end, "LBRACE")
+                out.append(_Unit(d.span.start, brace.end_pos or 0, 0,
+                                 [f"rewards {d.name.text} {{"], "open"))
+                for item in d.items:
+                    head = f"[{item.action.text}] " if item.action is not None else ""
+                    out.append(_Unit(item.span.start, item.span.end, 1, [
+                        f"{INDENT}{head}{self.expr(item.guard)} : {self.expr(item.value)};"]))
+                out.append(_Unit(d.span.end - 1, d.span.end, 0, ["}"], "close"))
+            else:
+                cols = self.simple(d)
+                kind = "const" if isinstance(d, ast.ParamDecl) else type(d).__name__
+                out.append(_Unit(d.span.start, d.span.end, 0, [" ".join(cols)], cols=cols,
+                                 group=kind))
+        return out
+
+    # -- comments and blank lines
+    def _blank_before(self, offset: int) -> bool:
+        i = bisect.bisect_right(self.ends, offset) - 1
+        prev = self.ends[i] if i >= 0 else None
+        return prev is not None and self.text.count("\n", prev, offset) >= 2
+
+    def _continues(self, u: _Unit, c: lark.Token) -> bool:
+        """A `//` comment right under the trailing `//` comment of `u`, in its column, goes on
+        with it (a trailing comment too long for one line)."""
+        if not u.trailing or not str(c).startswith("//"):
+            return False
+        first, last = u.trailing[-1], (u.cont or u.trailing)[-1]
+        pos, at = c.start_pos or 0, first.start_pos or 0
+        return (str(first).startswith("//")
+                and self._line(pos) == self._line(last.start_pos or 0) + 1
+                and self._column(pos) == self._column(at))
+
+    def _column(self, offset: int) -> int:
+        return offset - (self.text.rfind("\n", 0, offset) + 1)
+
+    def _line(self, offset: int) -> int:
+        return self.text.count("\n", 0, offset)
+
+    def run(self) -> str:
+        units = self.units()
+        for u in units:
+            u.blank = self._blank_before(u.start)
+        tail: list[tuple[lark.Token, bool]] = []
+        starts = [u.start for u in units]
+        for c in (t for t in self.toks if t.type == "COMMENT"):
+            pos = c.start_pos or 0
+            k = bisect.bisect_right(starts, pos) - 1  # the last unit starting before c
+            if k >= 0 and pos < units[k].end:
+                units[k].leading.append((c, False))  # inside a statement: move it before
+            elif k >= 0 and self._line(pos) == self._line(units[k].end):
+                units[k].trailing.append(c)
+            elif k >= 0 and self._continues(units[k], c):
+                units[k].cont.append(c)
+            elif k + 1 < len(units):
+                units[k + 1].leading.append((c, self._blank_before(pos)))
+            else:
+                tail.append((c, self._blank_before(pos)))
+
+        _align_columns(units)
+        lines: list[_Line] = []
+        for i, u in enumerate(units):
+            # no blank line just after a '{', nor just before a '}'
+            allow = not (i > 0 and units[i - 1].kind == "open")
+            depth = u.depth + 1 if u.kind == "close" else u.depth
+            blank = u.blank
+            for c, cblank in sorted(u.leading, key=lambda x: x[0].start_pos or 0):
+                if (c.start_pos or 0) >= u.start:  # a hoisted comment takes the unit's blank
+                    cblank, blank = blank, False
+                self._comment(lines, c, depth, cblank and allow)
+                allow = True
+            first = len(lines)
+            lines.extend(_Line(text) for text in u.lines)
+            lines[first].blank = blank and allow and u.kind != "close"
+            if u.trailing:
+                lines[-1].comment = " ".join(str(t).rstrip() for t in u.trailing)
+            lines.extend(_Line("", str(c).rstrip(), cont=True) for c in u.cont)
+        for c, cblank in tail:
+            self._comment(lines, c, 0, cblank)
+        if lines:
+            lines[0].blank = False
+        return _render(lines)
+
+    def _comment(self, lines: list[_Line], c: lark.Token, depth: int, blank: bool) -> None:
+        text = str(c).rstrip().split("\n")
+        lines.append(_Line(INDENT * depth + text[0], blank=blank and bool(lines), is_comment=True))
+        for rest in text[1:]:  # inside a block comment: kept as written
+            lines.append(_Line(rest.rstrip(), is_comment=True))
+
+
+def _align_columns(units: list[_Unit]) -> None:
+    """Neighbouring declarations of one kind (no blank line or comment line between them)
+    line up their columns: `const int T_MOVE = [5, 6]   from sim ...`."""
+    i = 0
+    while i < len(units):
+        j = i + 1
+        if units[i].cols is not None:
+            while (j < len(units) and units[j].cols is not None and units[j].group == units[i].group
+                   and not units[j].blank and not units[j].leading):
+                j += 1
+            run = [u.cols for u in units[i:j] if u.cols is not None]
+            for c in range(max(len(cols) for cols in run) - 1):
+                width = max((len(cols[c]) for cols in run if len(cols) > c + 1), default=0)
+                for cols in run:
+                    if len(cols) > c + 1:
+                        cols[c] = cols[c].ljust(width)
+            for u in units[i:j]:
+                u.lines = [" ".join(u.cols or [])]
+        i = j
+
+
+def _render(lines: list[_Line]) -> str:
+    # Trailing comments of neighbouring lines (same indentation, no blank line or comment line
+    # between) start in one column.
+    main = [ln for ln in lines if not ln.cont]
+    i = 0
+    while i < len(main):
+        j = i + 1
+        while (j < len(main) and not main[j].blank and not main[j].is_comment
+               and not main[i].is_comment and main[j].indent == main[i].indent):
+            j += 1
+        group = [ln for ln in main[i:j] if ln.comment is not None]
+        col = max((len(ln.code) for ln in group), default=0) + 2
+        for ln in group:
+            ln.col = col
+        i = j
+    out = []
+    col = 0
+    for ln in lines:
+        if ln.blank:
+            out.append("")
+        if ln.cont:
+            out.append(" " * col + (ln.comment or ""))
+        elif ln.comment is not None:
+            col = ln.col
+            out.append(ln.code.ljust(col) + ln.comment)
+        else:
+            out.append(ln.code.rstrip())
+    return "\n".join(out) + "\n" if out else ""

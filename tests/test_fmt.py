@@ -1,0 +1,110 @@
+"""`afsmc fmt`: canonical, idempotent, keeps every comment, never changes meaning.
+
+Meaning is checked against the compiler: the PRISM text compiled from the formatted file
+equals the one compiled from the original, once the `// file:line` comments (which cite
+source lines, and lines move) are stripped.
+"""
+
+from __future__ import annotations
+
+import io
+import re
+import sys
+from pathlib import Path
+
+import pytest
+
+from afsmc.diagnostics import CompileError
+from afsmc.syntax.fmt import format_text
+from tests.conftest import CASES, EXAMPLES, run_cli
+
+CASE_DIRS = sorted(p for p in CASES.glob("fmt_*") if (p / "input.afsm").exists())
+SPECS = sorted(EXAMPLES.glob("*.afsm")) + [p / "input.afsm" for p in CASE_DIRS]
+
+
+def comments(text: str) -> list[str]:
+    """The comments of a text, found with a regular expression (not the formatter's lexer)."""
+    found = re.findall(r'"(?:\\.|[^"\\])*"|(//[^\n]*|/\*[\s\S]*?\*/)', text)
+    return [c.rstrip() for c in found if c]
+
+
+def prism(path: Path) -> str:
+    res = run_cli("compile", str(path), "-o", "-")
+    assert res.code == 0, res.err
+    return "\n".join(line.split("//")[0].rstrip() for line in res.out.splitlines())
+
+
+@pytest.mark.parametrize("case", CASE_DIRS, ids=lambda p: p.name)
+def test_golden(case: Path, update_golden: bool) -> None:
+    out = format_text((case / "input.afsm").read_text(), "input.afsm")
+    expected = case / "expected.afsm"
+    if update_golden:
+        expected.write_text(out)
+    assert out == expected.read_text()
+
+
+@pytest.mark.parametrize("spec", SPECS, ids=lambda p: f"{p.parent.name}/{p.name}")
+def test_idempotent_and_keeps_comments(spec: Path) -> None:
+    text = spec.read_text()
+    once = format_text(text)
+    assert format_text(once) == once
+    assert comments(once) == comments(text)
+    assert all(len(line) <= 100 or "//" in line or "when" in line or "=" in line
+               for line in once.splitlines())
+
+
+@pytest.mark.parametrize("spec", SPECS, ids=lambda p: f"{p.parent.name}/{p.name}")
+def test_meaning_preserved(spec: Path, tmp_path: Path) -> None:
+    formatted = tmp_path / spec.name
+    formatted.write_text(format_text(spec.read_text()))
+    assert prism(formatted) == prism(spec)
+
+
+def test_layout_does_not_depend_on_spacing() -> None:
+    text = (EXAMPLES / "patrol.afsm").read_text()
+
+    def spread(line: str) -> str:  # more spaces in the code part of a line
+        code, sep, comment = line.partition("//")
+        code = re.sub(r"([;,(){}\[\]])", r" \1 ", code)
+        return code.replace(" ", "   ") + sep + comment
+
+    spread_text = "\n".join(spread(line) for line in text.splitlines())
+    assert spread_text != text
+    assert format_text(spread_text) == format_text(text)
+
+
+def test_cli_in_place_check_and_stdin(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    messy = tmp_path / "messy.afsm"
+    original = "machine m;\nvar x:[0..2] init 0;\nmode A=0 initial;\naction Go in A when x<2 " \
+               "{ x:=x+1; }  // count\naction Stay in A when x==2 { skip; }\n"
+    messy.write_text(original)
+    res = run_cli("fmt", "--check", str(messy))
+    assert res.code == 1 and res.out.strip() == str(messy)
+    assert messy.read_text() == original  # --check changes nothing
+
+    res = run_cli("fmt", str(messy))
+    assert res.code == 0
+    assert messy.read_text() == format_text(original)
+    assert "action Go in A when x < 2 {\n    x := x + 1;\n}  // count\n" in messy.read_text()
+    assert run_cli("fmt", "--check", str(messy)).code == 0
+    assert list(tmp_path.iterdir()) == [messy]  # no temporary file left behind
+
+    monkeypatch.setattr(sys, "stdin", io.StringIO(original))
+    res = run_cli("fmt", "-")
+    assert res.code == 0 and res.out == format_text(original)
+
+
+def test_syntax_error_leaves_the_file_alone(tmp_path: Path) -> None:
+    bad = tmp_path / "bad.afsm"
+    bad.write_text("var x : [0..2] init 0\nmode A;\n")
+    res = run_cli("fmt", str(bad))
+    assert res.code == 1
+    assert "E102" in res.err and "bad.afsm:1" in res.err
+    assert bad.read_text() == "var x : [0..2] init 0\nmode A;\n"
+    with pytest.raises(CompileError):
+        format_text(bad.read_text())
+
+
+def test_examples_are_formatted() -> None:
+    res = run_cli("fmt", "--check", *map(str, sorted(EXAMPLES.glob("*.afsm"))))
+    assert res.code == 0, f"not formatted:\n{res.out}"

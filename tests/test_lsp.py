@@ -1,0 +1,255 @@
+"""End-to-end tests of `afsmc lsp`: a real LSP client (pytest-lsp) drives the server in a
+subprocess (`python -m afsmc.cli lsp`, i.e. what `afsmc lsp` runs) over stdio.
+
+One server serves the whole module (starting it costs about a second). Expected positions
+are found in the text with plain string searches, not taken from the compiler.
+"""
+
+from __future__ import annotations
+
+import re
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+import pytest_lsp
+from lsprotocol import types as T
+from pytest_lsp import ClientServerConfig, LanguageClient
+
+from afsmc.compiler import load
+from afsmc.syntax.fmt import format_text
+
+ROOT = Path(__file__).resolve().parent.parent
+UAV = ROOT / "examples" / "uav.afsm"
+VSCODE = ROOT / "editors" / "vscode"
+
+pytestmark = pytest.mark.skipif(not UAV.exists(), reason="examples/uav.afsm is not there yet")
+
+MODULE = pytest.mark.asyncio(loop_scope="module")
+
+
+@pytest_lsp.fixture(scope="module", config=ClientServerConfig(
+    server_command=[sys.executable, "-m", "afsmc.cli", "lsp"]))
+async def client(lsp_client: LanguageClient):  # type: ignore[no-untyped-def]
+    await lsp_client.initialize_session(T.InitializeParams(
+        capabilities=T.ClientCapabilities(), root_uri=ROOT.as_uri()))
+    yield
+    await lsp_client.shutdown_session()
+
+
+# ---- helpers ------------------------------------------------------------------------
+
+
+def offset(text: str, pos: T.Position) -> int:  # the test texts are ASCII: UTF-16 = chars
+    lines = text.split("\n")
+    return sum(len(x) + 1 for x in lines[:pos.line]) + pos.character
+
+
+def position(text: str, off: int) -> T.Position:
+    line = text.count("\n", 0, off)
+    return T.Position(line=line, character=off - (text.rfind("\n", 0, off) + 1))
+
+
+def apply(text: str, edits: list[T.TextEdit]) -> str:
+    for e in sorted(edits, key=lambda e: offset(text, e.range.start), reverse=True):
+        text = text[:offset(text, e.range.start)] + e.new_text + text[offset(text, e.range.end):]
+    return text
+
+
+def slice_of(text: str, rng: T.Range) -> str:
+    return text[offset(text, rng.start):offset(text, rng.end)]
+
+
+def code_only(text: str) -> str:
+    """The text with comments blanked out (offsets kept)."""
+    return re.sub(r"//[^\n]*|/\*[\s\S]*?\*/", lambda m: " " * len(m.group()), text)
+
+
+_version = 1
+
+
+async def open_doc(client: LanguageClient, uri: str, text: str) -> list[T.Diagnostic]:
+    client.text_document_did_open(T.DidOpenTextDocumentParams(
+        text_document=T.TextDocumentItem(uri=uri, language_id="afsm", version=_version, text=text)))
+    await client.wait_for_notification("textDocument/publishDiagnostics")
+    return client.diagnostics[uri]
+
+
+async def change(client: LanguageClient, uri: str, text: str) -> list[T.Diagnostic]:
+    global _version
+    _version += 1
+    client.text_document_did_change(T.DidChangeTextDocumentParams(
+        text_document=T.VersionedTextDocumentIdentifier(uri=uri, version=_version),
+        content_changes=[T.TextDocumentContentChangeWholeDocument(text=text)]))
+    await client.wait_for_notification("textDocument/publishDiagnostics")
+    return client.diagnostics[uri]
+
+
+async def hover_at(client: LanguageClient, doc: T.TextDocumentIdentifier,
+                   pos: T.Position) -> T.Hover | None:
+    return await client.text_document_hover_async(T.HoverParams(text_document=doc, position=pos))
+
+
+# ---- the tests ----------------------------------------------------------------------
+
+
+@MODULE
+async def test_weight_tie_diagnostic_with_witness(client: LanguageClient) -> None:
+    text = UAV.read_text()
+    uri = (ROOT / "examples" / "tie_uav.afsm").as_uri()
+    assert [d for d in await open_doc(client, uri, text)
+            if d.severity == T.DiagnosticSeverity.Error] == []
+
+    # HeadHome's weight 0.5 becomes 0.9: it ties with Resume's (battery_ok ? 0.9 : 0.1)
+    # whenever the battery is fine and an object is left.
+    head = "action HeadHome in AscendFromDeposit weight 0.5 {"
+    assert head in text
+    tied = text.replace(head, head.replace("0.5", "0.9"))
+    diags = await change(client, uri, tied)
+    ties = [d for d in diags if d.code == "E301"]
+    assert len(ties) == 1, diags
+    tie = ties[0]
+    assert tie.severity == T.DiagnosticSeverity.Error
+    assert slice_of(tied, tie.range).strip("()") == "battery_ok ? 0.9 : 0.1"
+    assert "Resume" in tie.message and "HeadHome" in tie.message
+    # the witness is a state where both weights are 0.9: an object left, battery above B_LOW
+    wit = dict(re.findall(r"(\w+) = (\w+)", tie.message.split("in the state", 1)[1]))
+    b_low = int(re.search(r"param int B_LOW\s*=\s*(\d+)", text).group(1))  # type: ignore[union-attr]
+    assert wit["mode"] == "AscendFromDeposit"
+    assert int(wit["obj"]) > 0 and int(wit["b"]) > b_low
+    assert tie.related_information is not None
+    (rel,) = tie.related_information
+    assert rel.location.uri == uri
+    assert slice_of(tied, rel.location.range) == "0.9"
+    assert rel.location.range.start.line == text[:text.index(head)].count("\n")
+
+    # fixing it clears the error
+    assert [d for d in await change(client, uri, text) if d.code == "E301"] == []
+
+
+@MODULE
+async def test_half_typed_file_gives_a_syntax_diagnostic_and_keeps_navigation(
+        client: LanguageClient) -> None:
+    text = UAV.read_text()
+    uri = (ROOT / "examples" / "half_uav.afsm").as_uri()
+    await open_doc(client, uri, text)
+    cut = text.index("action Descend in DescendToGrab")
+    half = text[:cut] + "action Descend in Desc"  # typing stopped mid-declaration
+    diags = await change(client, uri, half)
+    assert diags and all(d.code.startswith("E1") for d in diags)  # type: ignore[union-attr]
+    # still alive, and hover works from the last good parse
+    use = code_only(text).index("T_MOVE", text.index("action Search in Search"))
+    hover = await client.text_document_hover_async(T.HoverParams(
+        text_document=T.TextDocumentIdentifier(uri=uri), position=position(text, use + 1)))
+    assert hover is not None and "uav.search.duration" in str(hover.contents)
+
+
+@MODULE
+async def test_hover_definition_references(client: LanguageClient) -> None:
+    text = UAV.read_text()
+    code = code_only(text)
+    uri = (ROOT / "examples" / "nav_uav.afsm").as_uri()
+    await open_doc(client, uri, text)
+    doc = T.TextDocumentIdentifier(uri=uri)
+
+    # a constant: its interval and its simulation source
+    decl = re.search(r"const int T_MOVE\s*=\s*\[(\d+), (\d+)\]\s*from sim ([\w.]+)", text)
+    assert decl is not None
+    use = code.index("T_MOVE", text.index("action Search in Search"))
+    hover = await hover_at(client, doc, position(text, use))
+    assert hover is not None
+    shown = hover.contents.value  # type: ignore[union-attr]
+    assert f"{decl.group(1)} to {decl.group(2)}" in shown and decl.group(3) in shown
+
+    # a mode: its number
+    num = re.search(r"mode Transport\s*=\s*(\d+)", text)
+    assert num is not None
+    goto = code.index("goto Transport") + len("goto ")
+    hover = await hover_at(client, doc, position(text, goto))
+    assert hover is not None and f"mode number {num.group(1)}" in hover.contents.value  # type: ignore[union-attr]
+
+    # an action: its modes, guard and weight
+    at = code.index("action Carry in") + len("action ")
+    hover = await hover_at(client, doc, position(text, at))
+    assert hover is not None
+    shown = hover.contents.value  # type: ignore[union-attr]
+    assert "modes: Transport" in shown and "guard: `to_base > 0`" in shown and "battery_ok" in shown
+
+    # a variable: range and initial value
+    at = code.index("b -= B_MOVE")
+    hover = await hover_at(client, doc, position(text, at))
+    assert hover is not None and "initially" in hover.contents.value  # type: ignore[union-attr]
+
+    # go to definition: from `goto Transport` to `mode Transport`
+    loc = await client.text_document_definition_async(T.DefinitionParams(
+        text_document=doc, position=position(text, goto)))
+    assert isinstance(loc, T.Location)
+    assert loc.range.start == position(text, num.start() + len("mode "))
+
+    # references of the mode Transport: every use outside comments
+    refs = await client.text_document_references_async(T.ReferenceParams(
+        text_document=doc, position=position(text, goto),
+        context=T.ReferenceContext(include_declaration=True)))
+    assert refs is not None
+    expected = [m.start() for m in re.finditer(r"\bTransport\b", code)]
+    assert sorted(offset(text, r.range.start) for r in refs) == expected
+
+    # document outline: modes, actions and properties are there
+    symbols = await client.text_document_document_symbol_async(T.DocumentSymbolParams(
+        text_document=doc))
+    names = {s.name for s in symbols or []}
+    assert {"Transport", "Carry", "Emergency", "success", "T_MOVE", "pos"} <= names
+
+    # completion after `goto `: the modes
+    line_end = code.index("goto Transport")
+    items = await client.text_document_completion_async(T.CompletionParams(
+        text_document=doc, position=position(text, line_end + len("goto "))))
+    assert isinstance(items, T.CompletionList)
+    modes = set(re.findall(r"^mode (\w+)", text, re.M))
+    assert {i.label for i in items.items} == modes
+
+
+@MODULE
+async def test_formatting_and_rename_round_trip(client: LanguageClient) -> None:
+    text = UAV.read_text()
+    uri = (ROOT / "examples" / "edit_uav.afsm").as_uri()
+    doc = T.TextDocumentIdentifier(uri=uri)
+    messy = text.replace("action Fly in Return {", "action   Fly in Return{").replace(
+        "goto Idle, t += T_LAND", "goto Idle,t+=T_LAND")
+    assert messy != text
+    await open_doc(client, uri, messy)
+    edits = await client.text_document_formatting_async(T.DocumentFormattingParams(
+        text_document=doc, options=T.FormattingOptions(tab_size=4, insert_spaces=True)))
+    assert edits
+    formatted = apply(messy, edits)
+    assert formatted == format_text(text)
+
+    # rename the mode Transport everywhere; the machine is the same, with the new name
+    await change(client, uri, formatted)
+    at = code_only(formatted).index("goto Transport") + len("goto ")
+    edit = await client.text_document_rename_async(T.RenameParams(
+        text_document=doc, position=position(formatted, at), new_name="Carrying"))
+    assert edit is not None and edit.changes is not None
+    renamed = apply(formatted, edit.changes[uri])
+    assert not re.search(r"\bTransport\b", code_only(renamed))
+    before = load("x.afsm", text=formatted, run_checks=False).model
+    after = load("x.afsm", text=renamed, run_checks=False).model
+    assert after.mode("Carrying").number == before.mode("Transport").number
+    assert len(after.actions) == len(before.actions)
+
+
+@pytest.mark.slow
+def test_vscode_grammar() -> None:
+    """The TextMate grammar's tests (editors/vscode: `npm test`), when node and npm are here."""
+    npm = shutil.which("npm")
+    if npm is None or shutil.which("node") is None:
+        pytest.skip("node/npm are not installed")
+    if not (VSCODE / "node_modules").exists():
+        ci = subprocess.run([npm, "ci", "--no-audit", "--no-fund"], cwd=VSCODE,
+                            capture_output=True, text=True, timeout=300)
+        if ci.returncode != 0:
+            pytest.skip(f"npm ci failed (offline?): {ci.stderr[-300:]}")
+    run = subprocess.run([npm, "test"], cwd=VSCODE, capture_output=True, text=True, timeout=300)
+    assert run.returncode == 0, run.stdout[-3000:] + run.stderr[-3000:]
