@@ -780,6 +780,10 @@ class _Resolver:
             if isinstance(p, ast.Eventually):
                 path = ir.Path("F", self._bool(p.target, ctx), bound=bound(p.bound))
             elif isinstance(p, ast.Globally):
+                if p.bound is not None:
+                    self.rep.error("E243", "Storm cannot check a step-bounded G", p.span,
+                                   hint="P=? [ G<=k phi ] is 1 - P=? [ F<=k !phi ]: ask the "
+                                        "latter (min and max swap)")
                 path = ir.Path("G", self._bool(p.target, ctx), bound=bound(p.bound))
             elif isinstance(p, ast.Until):
                 path = ir.Path("U", self._bool(p.right, ctx), self._bool(p.left, ctx), bound(p.bound))
