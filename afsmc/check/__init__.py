@@ -11,6 +11,7 @@ from collections.abc import Callable
 from afsmc.check import distributions, ranges, unused, weights
 from afsmc.diagnostics import Diagnostic, Reporter
 from afsmc.model import ir
+from afsmc.sim.check_sources import check_sim_sources
 
 Rule = Callable[[ir.Model, Reporter], None]
 
@@ -21,6 +22,7 @@ RULES: tuple[Rule, ...] = (
     distributions.check_distributions,
     ranges.check_update_ranges,
     unused.check_unused,
+    check_sim_sources,
 )
 
 

@@ -1,0 +1,149 @@
+"""`afsmc sim-check FILE`: re-run the simulation behind every `from sim ...` constant and
+report whether the value in the file still agrees with it; `--update` rewrites the
+drifted ones in place (see docs/monte-carlo.md for the rules)."""
+
+from __future__ import annotations
+
+import argparse
+import datetime
+import os
+import sys
+import time
+
+from afsmc.commands.common import add_consts, fail, overrides, print_json, report
+from afsmc.compiler import load
+from afsmc.diagnostics import CompileError, Diagnostic, Severity
+from afsmc.sim.evidence import Evidence, judge, rewrite
+from afsmc.simlib import registry
+
+
+def add_arguments(p: argparse.ArgumentParser) -> None:
+    p.add_argument("file", metavar="FILE", nargs="?", help="the .afsm file")
+    add_consts(p)
+    p.add_argument("--runs", type=int, default=10_000, metavar="N",
+                   help="simulation runs per simulator (default 10000)")
+    p.add_argument("--seed", type=int, default=0, metavar="S", help="random seed (default 0)")
+    p.add_argument("--update", action="store_true",
+                   help="rewrite drifted constants in FILE in place, with a provenance comment")
+    p.add_argument("--json", action="store_true", help="print the evidence as JSON")
+    p.add_argument("--list", action="store_true",
+                   help="list the registered simulator outputs and exit")
+
+
+def run(args: argparse.Namespace) -> int:
+    if args.list:
+        for ref in registry.available():
+            print(f"{ref}  ({registry.kind(ref)})")
+        return 0
+    if args.file is None:
+        print("afsmc sim-check: error: FILE is required (or --list)", file=sys.stderr)
+        return 2
+    if args.runs < 2:
+        print("afsmc sim-check: error: --runs must be at least 2", file=sys.stderr)
+        return 2
+    try:
+        with open(args.file, encoding="utf-8", newline="") as f:
+            text = f.read()  # newline="": --update must keep every other byte
+    except (OSError, UnicodeDecodeError):
+        text = None
+    try:
+        checked = load(args.file, overrides(args), text=text)
+    except CompileError as exc:
+        return fail(exc, args.json)
+    model = checked.model
+    sourced = [c for c in model.constants if c.source is not None]
+    results: list[Evidence] = []
+    started = time.monotonic()
+    for i, c in enumerate(sourced, 1):
+        assert c.source is not None
+        print(f"sim-check: [{i}/{len(sourced)}] {c.name} <- {c.source.ref} "
+              f"({args.runs} runs, {time.monotonic() - started:.1f} s)", file=sys.stderr)
+        try:
+            results.append(judge(c, args.runs, args.seed))
+        except Exception as exc:  # a broken third-party simulator: report, don't crash
+            return fail(CompileError([Diagnostic(
+                "E505", Severity.ERROR, f"simulator '{c.source.ref}' failed: {exc}",
+                c.source.span)]), args.json)
+    by_name = {c.name: c for c in sourced}
+    drifted = [e for e in results if not e.consistent]
+    updated = False
+    if args.update and drifted:
+        assert text is not None
+        date = _today()
+        changes = {e.name: (e.suggestion, f"{e.ref}, {e.runs} runs, seed {e.seed}, {date}")
+                   for e in drifted}
+        _write_in_place(args.file, rewrite(text, args.file, changes))
+        updated = True
+    if args.json:
+        print_json({"file": args.file, "runs": args.runs, "seed": args.seed,
+                    "updated": [e.name for e in drifted] if updated else [],
+                    "constants": [e.to_json() for e in results]})
+    else:
+        _table(results)
+    if not sourced:
+        print(f"{args.file}: no constant is backed by a simulation ('from sim ...')",
+              file=sys.stderr)
+    if updated:
+        print(f"sim-check: updated {len(drifted)} constant(s) in {args.file}: "
+              + ", ".join(f"{e.name} = {e.suggestion}" for e in drifted), file=sys.stderr)
+        return 0
+    if drifted:
+        diags = [Diagnostic(
+            "E502", Severity.ERROR,
+            f"constant '{e.name}' = {e.declared} has drifted from simulation '{e.ref}' "
+            f"(mean {e.mean:.4g}; the rule accepts {e.accept})", by_name[e.name].span,
+            hint=f"the simulation suggests {e.suggestion}; `afsmc sim-check --update` rewrites it")
+            for e in drifted]
+        if not args.json:
+            report(diags)
+        return 1
+    return 0
+
+
+def _today() -> str:
+    # SOURCE_DATE_EPOCH (reproducible builds) pins the date in the provenance comment.
+    epoch = os.environ.get("SOURCE_DATE_EPOCH")
+    when = (datetime.datetime.fromtimestamp(int(epoch), datetime.UTC) if epoch and epoch.isdigit()
+            else datetime.datetime.now(datetime.UTC))
+    return when.date().isoformat()
+
+
+def _write_in_place(path: str, text: str) -> None:
+    """Overwrite the input atomically (temp file in the same directory + os.replace)."""
+    real = os.path.realpath(path)
+    tmp = os.path.join(os.path.dirname(real), f".{os.path.basename(real)}.simcheck{os.getpid()}")
+    try:
+        mode = os.stat(real).st_mode & 0o7777
+        with open(tmp, "w", encoding="utf-8", newline="") as f:
+            f.write(text)
+            f.flush()
+            os.fsync(f.fileno())
+        os.chmod(tmp, mode)
+        os.replace(tmp, real)
+    except OSError as exc:
+        if os.path.exists(tmp):
+            os.unlink(tmp)
+        raise CompileError([Diagnostic("E003", Severity.ERROR,
+                                       f"cannot write {path}: {exc.strerror or exc}", None)]) from None
+
+
+def _table(results: list[Evidence]) -> None:
+    if not results:
+        return
+    head = ("constant", "simulation", "declared", "mean", "CI of mean", "F(lo), F(hi)",
+            "hull", "verdict")
+    rows = [head]
+    for e in results:
+        cdf = f"{e.cdf_lo:.4f}, {e.cdf_hi:.4f}" if e.cdf_lo is not None and e.cdf_hi is not None \
+            else "-"
+        hull = f"[{e.hull[0]}, {e.hull[1]}]" if e.hull else "-"
+        rows.append((e.name, e.ref, e.declared, f"{e.mean:.4g}",
+                     f"[{e.mean_low:.4g}, {e.mean_high:.4g}]", cdf, hull,
+                     "consistent" if e.consistent else "DRIFTED"))
+    widths = [max(len(r[i]) for r in rows) for i in range(len(head))]
+    for r in rows:
+        print("  ".join(cell.ljust(w) for cell, w in zip(r, widths, strict=True)).rstrip())
+    conf = {e.confidence for e in results}
+    print(f"\n{len(results)} constant(s), {sum(not e.consistent for e in results)} drifted; "
+          f"{results[0].runs} runs, seed {results[0].seed}, confidence "
+          + ", ".join(f"{c:g}" for c in sorted(conf)))

@@ -1,0 +1,139 @@
+"""`afsmc simulate FILE --runs N`: Monte Carlo simulation of the machine itself (the
+lowered guarded commands, vectorised with numpy), estimating every declared property
+with a confidence interval. See docs/monte-carlo.md."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import os
+import sys
+from typing import Any
+
+from afsmc.commands.common import add_consts, add_file, fail, overrides, print_json
+from afsmc.compiler import read_source, write_atomic
+from afsmc.diagnostics import CompileError, Diagnostic, Severity
+from afsmc.sim.compile import SimError
+from afsmc.sim.run import BATCH, STRATEGIES, Outcome, job_for, simulate
+
+
+def add_arguments(p: argparse.ArgumentParser) -> None:
+    add_file(p)
+    add_consts(p)
+    p.add_argument("--runs", type=int, default=100_000, metavar="N",
+                   help="number of runs (default 100000)")
+    p.add_argument("--seed", type=int, default=0, metavar="S", help="random seed (default 0)")
+    p.add_argument("--resolve", choices=STRATEGIES, default="uniform",
+                   help="interval constants: uniform floor/ceil choice (default), always floor "
+                        "or ceil; min/max = floor/ceil (a fixed strategy, not the MDP optimum)")
+    p.add_argument("--confidence", type=float, default=0.999, metavar="C",
+                   help="confidence level of the intervals (default 0.999)")
+    p.add_argument("--max-steps", type=int, default=100_000, metavar="K",
+                   help="stop a run after K steps; undecided runs widen the interval "
+                        "(default 100000)")
+    p.add_argument("--jobs", "-j", type=int, default=1, metavar="J",
+                   help="worker processes (default 1); the estimate does not depend on it")
+    p.add_argument("--dask", metavar="ADDRESS",
+                   help="spread the batches over the Dask cluster at ADDRESS")
+    p.add_argument("--batch-size", type=int, default=BATCH, metavar="B",
+                   help=f"runs per batch, each with its own seed (default {BATCH})")
+    p.add_argument("--traces", type=int, default=0, metavar="K",
+                   help="print K sample runs in mission terms (modes, actions, variables)")
+    p.add_argument("--traces-out", metavar="PATH", help="save the traces as JSON to PATH")
+    p.add_argument("--json", action="store_true", help="print the estimates as JSON")
+
+
+def run(args: argparse.Namespace) -> int:
+    if args.runs < 1 or args.jobs < 1 or args.max_steps < 1 or args.batch_size < 1 \
+            or args.traces < 0:
+        print("afsmc simulate: error: --runs, --jobs, --max-steps and --batch-size must be "
+              "positive", file=sys.stderr)
+        return 2
+    if not 0.0 < args.confidence < 1.0:
+        print("afsmc simulate: error: --confidence must be in (0, 1)", file=sys.stderr)
+        return 2
+    try:
+        text = read_source(args.file)
+        job = job_for(args.file, text, overrides(args), args.resolve, args.max_steps)
+        last = [-1]
+
+        def progress(done: int, total: int) -> None:
+            pct = 100 * done // total
+            if total >= 4 * args.batch_size and pct // 10 != last[0]:
+                last[0] = pct // 10
+                print(f"simulate: {done}/{total} runs ({pct}%)", file=sys.stderr)
+
+        out = simulate(job, args.runs, args.seed, confidence=args.confidence, jobs=args.jobs,
+                       dask=args.dask, trace=args.traces, batch_size=args.batch_size,
+                       progress=progress)
+        if args.traces_out:
+            write_atomic(args.traces_out, json.dumps(out.traces, indent=1) + "\n",
+                         protect=(args.file,))
+    except CompileError as exc:
+        return fail(exc, args.json)
+    except SimError as exc:
+        return fail(CompileError([Diagnostic("E506", Severity.ERROR,
+                                             f"cannot simulate {args.file}: {exc}", None)]))
+    except OSError as exc:  # e.g. the Dask scheduler is unreachable
+        return fail(CompileError([Diagnostic("E507", Severity.ERROR,
+                                             f"simulation failed: {exc}", None)]))
+    if args.json:
+        print_json(_json(out, args))
+    else:
+        _print(out, args)
+    return 0
+
+
+def _num(v: float) -> Any:
+    return v if math.isfinite(v) else ("inf" if v > 0 else "-inf")
+
+
+def _json(out: Outcome, args: argparse.Namespace) -> dict[str, Any]:
+    return {
+        "runs": out.runs,
+        "seed": args.seed,
+        "resolve": args.resolve,
+        "confidence": args.confidence,
+        "properties": [{"name": e.name, "estimate": _num(e.estimate), "low": _num(e.low),
+                        "high": _num(e.high), "undecided": e.undecided}
+                       for e in out.estimates],
+    }
+
+
+def _print(out: Outcome, args: argparse.Namespace) -> None:
+    if args.traces:
+        print(_traces_text(out.traces))
+    name = os.path.basename(args.file)
+    print(f"{name}: {out.runs} runs, interval constants {args.resolve}, seed {args.seed}, "
+          f"{args.confidence:g} confidence")
+    width = max([len(e.name) for e in out.estimates] + [8])
+    for e in out.estimates:
+        und = f"  ({e.undecided} undecided at --max-steps)" if e.undecided else ""
+        print(f"  {e.name.ljust(width)}  {e.estimate:.6g}  [{e.low:.6g}, {e.high:.6g}]{und}")
+    if not out.estimates:
+        print("  (no properties declared)")
+    rate = out.runs / out.seconds * 60 if out.seconds > 0 else 0.0
+    print(f"simulate: {out.steps} steps in {out.seconds:.2f} s ({rate:,.0f} runs/min)",
+          file=sys.stderr)
+
+
+def _traces_text(traces: list[list[dict[str, Any]]]) -> str:
+    lines = []
+    for i, tr in enumerate(traces, 1):
+        lines.append(f"trace {i} ({len(tr) - 1} steps):")
+        prev: dict[str, Any] = {}
+        for st in tr:
+            changed = {k: v for k, v in st["vars"].items() if prev.get(k) != v} if prev \
+                else st["vars"]
+            vals = " ".join(f"{k}={_val(v)}" for k, v in changed.items())
+            act = st.get("action")
+            how = f"--{act}" + (f" [hazard {st['hazard']}]" if "hazard" in st else "") + "--> " \
+                if act else ""
+            lines.append(f"  {st['step']:>4}  {how}{st['mode']}  {vals}".rstrip())
+            prev = st["vars"]
+    return "\n".join(lines)
+
+
+def _val(v: Any) -> str:
+    return ("true" if v else "false") if isinstance(v, bool) else str(v)

@@ -1,0 +1,457 @@
+"""Monte Carlo simulation of the lowered machine: a batch of runs advanced together.
+
+Each step partitions the live runs by mode and evaluates only that mode's commands
+(their guards already encode the weight semantics), folded for that mode. A run stops
+once every property is decided for it, when it is absorbed (a final mode, a
+deterministic self-loop, or no enabled command), or at `max_steps`.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+import numpy.typing as npt
+
+from afsmc.model import expr as E
+from afsmc.model import ir
+from afsmc.model.evaluate import scalar
+from afsmc.model.lower import Lowered
+from afsmc.sim.compile import Fn, Frame, Scope, SimError, compile_expr, fold, reads, static
+
+UNDECIDED, TRUE, FALSE = 0, 1, 2
+
+
+@dataclass
+class CBranch:
+    prob: Fn
+    prob_static: float | None
+    updates: list[tuple[str, Fn]]
+    hazard: str | None
+
+
+@dataclass
+class CCommand:
+    index: int  # in Lowered.commands
+    action: str  # "" for a final mode's self-loop
+    guard: Fn
+    guard_static: bool | None
+    branches: list[CBranch]
+    reads: list[str]  # variables to gather for this command
+    selfloop: bool  # one branch with probability 1: unchanged state = absorbed
+    rewards: list[tuple[int, Fn]]  # (reward structure index, value) for this action
+
+
+@dataclass
+class Monitor:
+    """One property: P (status per run) or R (accumulated reward per run)."""
+
+    name: str
+    kind: str  # "P" or "R"
+    path: str  # F G U X (P); F C I (R)
+    bound: float  # math.inf if unbounded
+    target: Fn | None
+    left: Fn | None = None
+    reward: int = -1  # reward structure index
+
+
+@dataclass
+class Program:
+    model: ir.Model
+    variables: list[str]
+    displays: list[str]
+    init: dict[str, Any]
+    dtypes: dict[str, Any]
+    modes: dict[int, list[CCommand]]
+    mode_span: int  # modes are 0..mode_span-1 after shifting by mode_base
+    mode_base: int
+    monitors: list[Monitor]
+    state_rewards: list[list[tuple[Fn, Fn]]]  # per structure: (guard, value)
+    commands: list[Any]  # Lowered.commands
+
+
+def build(low: Lowered) -> Program:
+    model = low.model
+    consts: dict[str, Any] = dict(model.const_values)
+    for gen, (_, value) in low.bounds.items():
+        consts[gen] = value
+    formulas = {f.name: f.value for f in model.formulas}
+    labels = {lb.name: lb.value for lb in model.labels}
+    base = Scope(consts, formulas, labels, low.weights)
+    reward_index = {r.name: i for i, r in enumerate(model.rewards)}
+    modes: dict[int, list[CCommand]] = {}
+    for m in model.modes:
+        sc = Scope(consts, formulas, labels, low.weights, m.number)
+        cmds: list[CCommand] = []
+        for i, cmd in enumerate(low.commands):
+            if m.number not in cmd.modes:
+                continue
+            g = fold(cmd.guard, sc)
+            if static(g) is False:
+                continue
+            branches = []
+            read: set[str] = set(reads(g))
+            for b in cmd.branches:
+                p = fold(b.prob, sc)
+                read |= reads(p)
+                ups = []
+                for var, val in b.updates:
+                    fv = fold(val, sc)
+                    read |= reads(fv)
+                    read.add(var)
+                    ups.append((var, compile_expr(fv)))
+                ps = static(p)
+                branches.append(CBranch(compile_expr(p), None if ps is None else float(ps),
+                                        ups, b.hazard))
+            rws: list[tuple[int, Fn]] = []
+            if cmd.kind != "final":
+                for r in model.rewards:
+                    for it in r.items:
+                        if it.action == cmd.action:
+                            v = fold(E.Ite(it.guard, it.value, E.Lit(0, E.Type.INT), it.value.type), sc)
+                            read |= reads(v)
+                            rws.append((reward_index[r.name], compile_expr(v)))
+            gs = static(g)
+            selfloop = len(branches) == 1 and branches[0].prob_static == 1.0
+            cmds.append(CCommand(i, "" if cmd.kind == "final" else cmd.action, compile_expr(g),
+                                 None if gs is None else bool(gs), branches,
+                                 sorted(read - {"mode"}), selfloop, rws))
+        modes[m.number] = cmds
+    numbers = [m.number for m in model.modes]
+    state_rewards = [[(compile_expr(fold(it.guard, base)), compile_expr(fold(it.value, base)))
+                      for it in r.items if it.action is None] for r in model.rewards]
+    monitors = [_monitor(p, base, model, reward_index) for p in model.properties]
+    dtypes = {v.name: (np.bool_ if v.type is E.Type.BOOL else np.int64) for v in model.variables}
+    return Program(model, [v.name for v in model.variables], [v.display for v in model.variables],
+                   {v.name: v.init for v in model.variables}, dtypes, modes,
+                   max(numbers) - min(numbers) + 1, min(numbers), monitors, state_rewards,
+                   list(low.commands))
+
+
+
+def _monitor(p: ir.Property, sc: Scope, model: ir.Model, rindex: dict[str, int]) -> Monitor:
+    def bound(b: E.Expr | None) -> float:
+        if b is None:
+            return math.inf
+        return float(scalar(fold(b, sc), {}))
+
+    path = p.path
+    if isinstance(path, ir.Path):
+        left = compile_expr(fold(path.left, sc)) if path.left is not None else None
+        return Monitor(p.name, "P", path.kind, bound(path.bound),
+                       compile_expr(fold(path.target, sc)), left)
+    target = compile_expr(fold(path.target, sc)) if path.target is not None else None
+    rname = p.reward if p.reward is not None else (model.rewards[0].name if model.rewards else "")
+    return Monitor(p.name, "R", path.kind, bound(path.bound), target, None, rindex.get(rname, -1))
+
+
+@dataclass
+class BatchResult:
+    runs: int
+    true: list[int]  # per monitor: runs where the property holds (P)
+    undecided: list[int]
+    total: list[float]  # per monitor: sum of rewards (R) over decided runs
+    total_sq: list[float]
+    infinite: list[int]  # R: runs with an infinite reward
+    steps: int  # run-steps simulated
+    max_steps_hit: int
+    traces: list[list[dict[str, Any]]] = field(default_factory=list)
+
+
+def _as_bool(v: Any, n: int) -> npt.NDArray[np.bool_]:
+    a = np.asarray(v, dtype=bool)
+    return np.broadcast_to(a, (n,)) if a.ndim == 0 else a
+
+
+def _as_arr(v: Any, n: int) -> npt.NDArray[Any]:
+    a = np.asarray(v)
+    return np.broadcast_to(a, (n,)) if a.ndim == 0 else a
+
+
+def simulate_batch(prog: Program, runs: int, rng: np.random.Generator, max_steps: int,
+                   trace: int = 0) -> BatchResult:
+    n = runs
+    state: dict[str, npt.NDArray[Any]] = {v: np.full(n, prog.init[v], dtype=prog.dtypes[v])
+                                          for v in prog.variables}
+    state["mode"] = np.full(n, prog.model.initial_mode.number, dtype=np.int64)
+    ids = np.arange(n)
+    mons = prog.monitors
+    nm = len(mons)
+    status = np.zeros((nm, n), dtype=np.int8)
+    acc = np.zeros((nm, n), dtype=np.float64)
+    # outcome collectors
+    n_true = [0] * nm
+    n_und = [0] * nm
+    tot = [0.0] * nm
+    tot_sq = [0.0] * nm
+    n_inf = [0] * nm
+    absorbed = np.zeros(n, dtype=bool)
+    traces: list[list[dict[str, Any]]] = [[] for _ in range(min(trace, n))]
+    fired = np.full(n, -1, dtype=np.int64)
+    branch = np.full(n, -1, dtype=np.int64)
+    steps_done = 0
+    t = 0
+
+    def record(t: int) -> None:
+        sel = np.flatnonzero(ids < len(traces))
+        for j in sel:
+            rid = int(ids[j])
+            cmd_i, br = int(fired[j]), int(branch[j])
+            entry: dict[str, Any] = {"step": t,
+                                     "mode": prog.model.mode_by_number(int(state["mode"][j])).name}
+            if t > 0 and cmd_i >= 0:
+                c = prog.commands[cmd_i]
+                entry["action"] = c.action if c.kind != "final" else "(final)"
+                hz = c.branches[br].hazard if 0 <= br < len(c.branches) else None
+                if hz:
+                    entry["hazard"] = hz
+            elif t > 0:
+                entry["action"] = "(no enabled action)"
+            entry["vars"] = {d: _py(state[v][j]) for v, d in zip(prog.variables, prog.displays,
+                                                                    strict=True)}
+            traces[rid].append(entry)
+
+    def state_reward(k: int, fr: Frame, size: int) -> npt.NDArray[np.float64]:
+        out = np.zeros(size)
+        if k < 0:
+            return out
+        for g, v in prog.state_rewards[k]:
+            out = out + np.where(_as_bool(g(fr), size), _as_arr(v(fr), size), 0.0)
+        return out
+
+    def observe(t: int, act_rw: npt.NDArray[np.float64] | None) -> npt.NDArray[np.bool_]:
+        """Decide properties at step t (state s_t); return the runs that are finished."""
+        size = len(ids)
+        done = absorbed.copy() if t >= 1 else np.zeros(size, dtype=bool)
+        all_decided = np.ones(size, dtype=bool)
+        for k, mo in enumerate(mons):
+            st = status[k]
+            und = st == UNDECIDED
+            if not und.any():
+                continue
+            if mo.kind == "P":
+                tgt = _as_bool(mo.target(state), size) if mo.target else None
+                assert tgt is not None
+                if mo.path == "F" or mo.path == "U":
+                    st[und & tgt] = TRUE
+                    if mo.path == "U":
+                        assert mo.left is not None
+                        st[und & ~tgt & ~_as_bool(mo.left(state), size)] = FALSE
+                    st[(st == UNDECIDED) & ((t >= mo.bound) | absorbed)] = FALSE
+                elif mo.path == "G":
+                    st[und & ~tgt] = FALSE
+                    st[(st == UNDECIDED) & ((t >= mo.bound) | absorbed)] = TRUE
+                elif mo.path == "X" and t == 1:
+                    st[und] = np.where(tgt[und], TRUE, FALSE)
+            else:
+                rho = state_reward(mo.reward, state, size)
+                if mo.path == "I":
+                    hit = und & ((t >= mo.bound) | absorbed)
+                    acc[k][hit] = rho[hit]
+                    st[hit] = TRUE
+                elif mo.path == "F":
+                    assert mo.target is not None
+                    tgt = _as_bool(mo.target(state), size)
+                    st[und & tgt] = TRUE
+                    inf = (st == UNDECIDED) & absorbed
+                    acc[k][inf] = math.inf
+                    st[inf] = TRUE
+                else:  # C, C<=k
+                    per = rho + (act_rw[k] if act_rw is not None else 0.0)
+                    hit = und & (t >= mo.bound)
+                    st[hit] = TRUE
+                    ab = (st == UNDECIDED) & absorbed
+                    if ab.any():
+                        if math.isinf(mo.bound):
+                            acc[k][ab] = np.where(per[ab] > 0, math.inf, acc[k][ab])
+                        else:
+                            acc[k][ab] += per[ab] * (mo.bound - t)
+                        st[ab] = TRUE
+            all_decided &= st != UNDECIDED
+        if nm:
+            done |= all_decided
+        return done
+
+    def accumulate_rewards(fr_rho: list[npt.NDArray[np.float64]],
+                           act_rw: npt.NDArray[np.float64], t: int) -> None:
+        for k, mo in enumerate(mons):
+            if mo.kind != "R" or mo.path == "I":
+                continue
+            und = status[k] == UNDECIDED
+            if mo.path == "C" and not t < mo.bound:
+                continue
+            acc[k][und] += fr_rho[k][und] + act_rw[k][und]
+
+    def retire(done: npt.NDArray[np.bool_]) -> None:
+        nonlocal ids, status, acc, absorbed, fired, branch, state
+        if not done.any():
+            return
+        for k, mo in enumerate(mons):
+            st = status[k][done]
+            n_und[k] += int(np.count_nonzero(st == UNDECIDED))
+            if mo.kind == "P":
+                n_true[k] += int(np.count_nonzero(st == TRUE))
+            else:
+                vals = acc[k][done][st != UNDECIDED]
+                inf = np.isinf(vals)
+                n_inf[k] += int(np.count_nonzero(inf))
+                fin = vals[~inf]
+                tot[k] += float(np.sum(fin))
+                tot_sq[k] += float(np.sum(fin * fin))
+        keep = ~done
+        ids = ids[keep]
+        status = status[:, keep]
+        acc = acc[:, keep]
+        absorbed = absorbed[keep]
+        fired = fired[keep]
+        branch = branch[keep]
+        state = {k: v[keep] for k, v in state.items()}
+
+    if traces:
+        record(0)
+    retire(observe(0, None))
+    while len(ids) and t < max_steps:
+        size = len(ids)
+        rhos = [state_reward(mo.reward, state, size) if mo.kind == "R" else np.zeros(0)
+                for mo in mons]
+        act_rw = np.zeros((nm, size))
+        new_absorbed = np.zeros(size, dtype=bool)
+        mode = state["mode"]
+        counts = np.bincount(mode - prog.mode_base, minlength=prog.mode_span)
+        present = np.flatnonzero(counts) + prog.mode_base
+        updates: list[tuple[npt.NDArray[np.intp] | None, str, npt.NDArray[Any]]] = []
+        for m_np in present:
+            m = int(m_np)
+            idx: npt.NDArray[np.intp] | None = None if counts[m - prog.mode_base] == size \
+                else np.flatnonzero(mode == m)
+            nmode = size if idx is None else len(idx)
+            cmds = prog.modes.get(m, [])
+            which: npt.NDArray[np.int64] | None = None
+            plan: list[tuple[CCommand, npt.NDArray[np.intp] | None]]
+            if len(cmds) == 1 and cmds[0].guard_static is True:
+                plan = [(cmds[0], None)]  # everyone fires cmds[0]
+            else:
+                sub = _gather(state, idx, set().union(*[c.reads for c in cmds]) if cmds else set())
+                sub["mode"] = m
+                which = np.full(nmode, -1, dtype=np.int64)
+                for ci in range(len(cmds) - 1, -1, -1):
+                    g = cmds[ci].guard(sub)
+                    if np.ndim(g) == 0:
+                        if g:
+                            which[:] = ci
+                    else:
+                        which[g] = ci
+                stuck = which < 0
+                if stuck.any():  # no enabled action: the run stays put (absorbed)
+                    where_stuck = np.flatnonzero(stuck) if idx is None else idx[stuck]
+                    new_absorbed[where_stuck] = True
+                    if traces:
+                        fired[where_stuck] = -1
+                plan = []
+                for ci, c in enumerate(cmds):
+                    sel = which == ci
+                    cnt = int(np.count_nonzero(sel))
+                    if cnt == 0:
+                        continue
+                    plan.append((c, None if cnt == nmode else np.flatnonzero(sel)))
+            for c, local in plan:
+                gidx = idx if local is None else (local if idx is None else idx[local])
+                cnt = size if gidx is None else len(gidx)
+                fr = _gather(state, gidx, c.reads)
+                fr["mode"] = m
+                if traces:
+                    if gidx is None:
+                        fired[:] = c.index
+                    else:
+                        fired[gidx] = c.index
+                for k, v in c.rewards:
+                    for j, mo in enumerate(mons):
+                        if mo.reward == k and mo.kind == "R":
+                            if gidx is None:
+                                act_rw[j] += _as_arr(v(fr), cnt)
+                            else:
+                                act_rw[j][gidx] += _as_arr(v(fr), cnt)
+                nb = len(c.branches)
+                if nb == 1:
+                    choice: npt.NDArray[np.int64] | None = None
+                else:
+                    u = rng.random(cnt)
+                    choice = np.zeros(cnt, dtype=np.int64)
+                    cum: Any = 0.0
+                    for b in c.branches[:-1]:
+                        cum = cum + b.prob(fr)
+                        choice += u >= cum
+                if traces:
+                    if gidx is None:
+                        branch[:] = 0 if choice is None else choice
+                    else:
+                        branch[gidx] = 0 if choice is None else choice
+                new: dict[str, Any] = {}
+                for bi, b in enumerate(c.branches):
+                    for var, f in b.updates:
+                        val = f(fr)
+                        if choice is None:
+                            new[var] = val
+                        else:
+                            old = new.get(var)
+                            if old is None:
+                                old = fr["mode"] if var == "mode" else fr[var]
+                            new[var] = np.where(choice == bi, val, old)
+                if c.selfloop:
+                    same = np.ones(cnt, dtype=bool)
+                    for var, val in new.items():
+                        old = m if var == "mode" else fr[var]
+                        same &= np.asarray(np.equal(val, old), dtype=bool)
+                    if gidx is None:
+                        new_absorbed |= same
+                    else:
+                        new_absorbed[gidx] |= same
+                for var, val in new.items():
+                    updates.append((gidx, var, val))
+        # Updates are applied after every partition was evaluated on the old state.
+        for gidx, var, val in updates:
+            if gidx is None:
+                state[var] = np.array(np.broadcast_to(val, (size,)), dtype=state[var].dtype)
+            else:
+                state[var][gidx] = val
+        if any(mo.kind == "R" for mo in mons):
+            accumulate_rewards(rhos, act_rw, t)
+        steps_done += size
+        t += 1
+        absorbed |= new_absorbed
+        for fm in prog.model.modes:
+            if fm.final:
+                absorbed |= state["mode"] == fm.number
+        if traces:
+            record(t)
+        # Once absorbed by a self-loop, its action reward recurs every step.
+        retire(observe(t, act_rw * new_absorbed))
+    hit = len(ids)
+    for k in range(nm):
+        und = status[k] == UNDECIDED
+        n_und[k] += int(np.count_nonzero(und))
+        if mons[k].kind == "P":
+            n_true[k] += int(np.count_nonzero(status[k] == TRUE))
+        else:
+            vals = acc[k][~und]
+            inf = np.isinf(vals)
+            n_inf[k] += int(np.count_nonzero(inf))
+            tot[k] += float(np.sum(vals[~inf]))
+            tot_sq[k] += float(np.sum(vals[~inf] ** 2))
+    return BatchResult(runs, n_true, n_und, tot, tot_sq, n_inf, steps_done, hit, traces)
+
+
+def _gather(state: dict[str, npt.NDArray[Any]], idx: npt.NDArray[np.intp] | None,
+            names: Any) -> dict[str, Any]:
+    if idx is None:
+        return {v: state[v] for v in names}
+    return {v: state[v][idx] for v in names}
+
+
+def _py(v: Any) -> Any:
+    return v.item() if isinstance(v, np.generic) else v
+
+
+__all__ = ["BatchResult", "Program", "SimError", "build", "simulate_batch"]

@@ -1,0 +1,149 @@
+"""`sim-check`: re-run the simulation behind each `from sim ...` constant and judge
+whether the number in the spec still agrees with it (rules in docs/monte-carlo.md).
+
+Also rewrites drifted constants in the source text, touching only the value and the
+`// sim-check: ...` provenance comment at the end of the constant's line.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+from dataclasses import dataclass
+
+import numpy as np
+
+from afsmc.model import ir
+from afsmc.sim import stats
+from afsmc.sim.check_sources import INTERVAL, NUMBER, PROBABILITY, policy_of
+from afsmc.simlib import registry
+from afsmc.syntax import ast
+from afsmc.syntax.parser import parse
+
+
+@dataclass(frozen=True)
+class Evidence:
+    name: str
+    ref: str
+    kind: str  # the simulator output's kind
+    shape: str  # interval | number | probability
+    declared: str  # as the spec states it, e.g. "[12, 13]"
+    runs: int
+    seed: int
+    mean: float
+    mean_low: float  # confidence interval of the mean (Clopper-Pearson for probabilities)
+    mean_high: float
+    cdf_lo: float | None  # empirical CDF at the declared floor / ceiling (intervals)
+    cdf_hi: float | None
+    hull: tuple[int, int] | None  # integer hull of the central `coverage` of the samples
+    accept: str  # what the rule accepts, e.g. "lo in [11, 12], hi in [13, 13]"
+    consistent: bool
+    suggestion: str  # the value --update writes
+    confidence: float
+    coverage: float | None
+
+    def to_json(self) -> dict[str, object]:
+        return {
+            "name": self.name, "ref": self.ref, "kind": self.kind, "shape": self.shape,
+            "declared": self.declared, "runs": self.runs, "seed": self.seed,
+            "mean": self.mean, "mean_low": self.mean_low, "mean_high": self.mean_high,
+            "cdf_lo": self.cdf_lo, "cdf_hi": self.cdf_hi,
+            "hull": list(self.hull) if self.hull else None, "accept": self.accept,
+            "verdict": "consistent" if self.consistent else "drifted",
+            "suggestion": self.suggestion, "confidence": self.confidence,
+            "coverage": self.coverage,
+        }
+
+
+def _num(v: float) -> str:
+    return f"{v:.6g}"
+
+
+def judge(const: ir.Constant, runs: int, seed: int) -> Evidence:
+    """Sample the constant's simulator output and apply the rule for its shape."""
+    assert const.source is not None
+    ref = const.source.ref
+    pol = policy_of(const)
+    kind = registry.kind(ref)
+    x = np.asarray(registry.sample(ref, runs, seed), dtype=np.float64)
+    n = len(x)
+    mean = float(np.mean(x))
+    conf = pol.confidence
+    if pol.shape == PROBABILITY:
+        k = int(np.count_nonzero(x))
+        low, high = stats.clopper_pearson(k, n, conf)
+        p = float(const.value)
+        return Evidence(const.name, ref, kind, pol.shape, _num(p), runs, seed, mean, low, high,
+                        None, None, None, f"p in [{_num(low)}, {_num(high)}] (Clopper-Pearson)",
+                        low <= p <= high, stats.shortest_decimal(mean, low, high), conf, None)
+    low, high = stats.mean_interval(x, conf)
+    if pol.shape == NUMBER:
+        is_int = const.type.value == "int"
+        tol = pol.tolerance if pol.tolerance is not None else (0.5 if is_int else 0.01 * abs(mean))
+        v = float(const.value)
+        ok = low - tol <= v <= high + tol
+        sugg = str(round(mean)) if is_int else stats.shortest_decimal(mean, low, high)
+        return Evidence(const.name, ref, kind, pol.shape, _num(v), runs, seed, mean, low, high,
+                        None, None, None, f"value in [{_num(low - tol)}, {_num(high + tol)}] "
+                        f"(mean interval +- tolerance {_num(tol)})", ok, sugg, conf, None)
+    assert pol.shape == INTERVAL and const.interval is not None
+    lo, hi = const.interval
+    c = pol.coverage
+    xs = np.sort(x)
+    q_lo, q_hi = (1 - c) / 2, (1 + c) / 2
+    a_lo, b_lo = stats.quantile_interval(xs, q_lo, conf)
+    a_hi, b_hi = stats.quantile_interval(xs, q_hi, conf)
+    hull = (math.floor(float(np.quantile(xs, q_lo))), math.ceil(float(np.quantile(xs, q_hi))))
+    lo_ok = (math.floor(a_lo), math.floor(b_lo))
+    hi_ok = (math.ceil(a_hi), math.ceil(b_hi))
+    ok = lo_ok[0] <= lo <= lo_ok[1] and hi_ok[0] <= hi <= hi_ok[1]
+    accept = (f"floor in [{lo_ok[0]}, {lo_ok[1]}], ceil in [{hi_ok[0]}, {hi_ok[1]}] "
+              f"(hull of the central {_num(c * 100)}% at confidence {_num(conf)})")
+    cdf_lo = float(np.searchsorted(xs, lo, side="right")) / n
+    cdf_hi = float(np.searchsorted(xs, hi, side="right")) / n
+    return Evidence(const.name, ref, kind, pol.shape, f"[{lo}, {hi}]", runs, seed, mean, low,
+                    high, cdf_lo, cdf_hi, hull, accept, ok, f"[{hull[0]}, {hull[1]}]", conf, c)
+
+
+# ---- rewriting the file ------------------------------------------------------------
+
+_PROVENANCE = re.compile(r"[ \t]*// sim-check:[^\r\n]*$")
+
+
+def value_spans(text: str, path: str) -> dict[str, tuple[int, int]]:
+    """Constant name -> (start, end) offsets of its value as written (re-parsed)."""
+    module = parse(text, path)
+    out: dict[str, tuple[int, int]] = {}
+    for d in module.decls:
+        if isinstance(d, ast.ConstDecl):
+            out[d.name.text] = (d.value.span.start, d.value.span.end)
+            out[d.name.text + "\0decl"] = (d.span.start, d.span.end)
+    return out
+
+
+def rewrite(text: str, path: str, changes: dict[str, tuple[str, str]]) -> str:
+    """Replace the values of `changes` (name -> (new value text, provenance)) in `text`.
+
+    Every other byte stays as it was; the provenance becomes (or replaces) a
+    `// sim-check: ...` comment at the end of the line on which the declaration ends."""
+    spans = value_spans(text, path)
+    edits: list[tuple[int, int, str]] = []
+    for name, (value, note) in changes.items():
+        start, end = spans[name]
+        edits.append((start, end, value))
+        decl_end = spans[name + "\0decl"][1]
+        eol = len(text)
+        for stop in ("\n", "\r"):
+            i = text.find(stop, decl_end)
+            if i != -1:
+                eol = min(eol, i)
+        tail = text[decl_end:eol]
+        m = _PROVENANCE.search(tail)
+        if m:
+            edits.append((decl_end + m.start(), eol, f" // sim-check: {note}"))
+        else:
+            edits.append((eol, eol, f" // sim-check: {note}"))
+    out = text
+    for start, end, new in sorted(edits, reverse=True):
+        out = out[:start] + new + out[end:]
+    return out

@@ -1,0 +1,168 @@
+"""Split a simulation into fixed-size batches, run them (here, in worker processes or on
+a Dask cluster) and combine the counts into estimates with confidence intervals.
+
+The batches and their seeds (`numpy.random.SeedSequence(seed).spawn`) depend only on
+the seed, the number of runs and the batch size, and results are combined in batch
+order, so an estimate never depends on how many workers computed it.
+"""
+
+from __future__ import annotations
+
+import math
+import sys
+import time
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, field
+from typing import Any, Literal
+
+import numpy as np
+
+from afsmc.compiler import load
+from afsmc.model.lower import lower
+from afsmc.sim import stats
+from afsmc.sim.engine import BatchResult, Program, build, simulate_batch
+
+Strategy = Literal["uniform", "floor", "ceil", "min", "max"]
+STRATEGIES: tuple[Strategy, ...] = ("uniform", "floor", "ceil", "min", "max")
+# min/max are a fixed strategy (always the floor / always the ceiling), not the MDP's optimum.
+LOWERING = {"uniform": "uniform", "floor": "lo", "ceil": "hi", "min": "lo", "max": "hi"}
+BATCH = 65_536
+
+
+@dataclass(frozen=True)
+class Job:
+    """Everything a worker needs: the source text travels, not the path."""
+
+    path: str
+    text: str
+    overrides: tuple[tuple[str, str], ...]
+    strategy: str
+    max_steps: int
+
+
+@dataclass
+class Estimate:
+    name: str
+    kind: str  # P or R
+    estimate: float
+    low: float
+    high: float
+    undecided: int
+
+
+@dataclass
+class Outcome:
+    runs: int
+    estimates: list[Estimate]
+    steps: int
+    seconds: float
+    traces: list[list[dict[str, Any]]] = field(default_factory=list)
+    batches: int = 0
+
+
+_PROGRAMS: dict[Job, Program] = {}
+
+
+def program(job: Job) -> Program:
+    """Compile once per process (workers keep it between batches)."""
+    prog = _PROGRAMS.get(job)
+    if prog is None:
+        checked = load(job.path, dict(job.overrides), text=job.text)
+        prog = build(lower(checked.model, LOWERING[job.strategy]))  # type: ignore[arg-type]
+        _PROGRAMS.clear()
+        _PROGRAMS[job] = prog
+    return prog
+
+
+def run_batch(job: Job, runs: int, seed: np.random.SeedSequence, trace: int) -> BatchResult:
+    return simulate_batch(program(job), runs, np.random.default_rng(seed), job.max_steps, trace)
+
+
+def batches(runs: int, seed: int, size: int = BATCH) -> list[tuple[int, np.random.SeedSequence]]:
+    count = max(1, math.ceil(runs / size))
+    seeds = np.random.SeedSequence(seed).spawn(count)
+    return [(min(size, runs - i * size), seeds[i]) for i in range(count)]
+
+
+def simulate(job: Job, runs: int, seed: int, *, confidence: float = 0.999, jobs: int = 1,
+             dask: str | Any | None = None, trace: int = 0, batch_size: int = BATCH,
+             progress: Callable[[int, int], None] | None = None) -> Outcome:
+    prog = program(job)  # compile errors surface here, before any worker starts
+    plan = batches(runs, seed, batch_size)
+    started = time.monotonic()
+    results: list[BatchResult | None] = [None] * len(plan)
+    done = 0
+
+    def finished(i: int, r: BatchResult) -> None:
+        nonlocal done
+        results[i] = r
+        done += r.runs
+        if progress:
+            progress(done, runs)
+
+    if dask is not None:
+        from distributed import Client  # optional: only when --dask is used
+
+        client = dask if isinstance(dask, Client) else Client(dask)  # type: ignore[no-untyped-call]
+        try:
+            futures = [client.submit(run_batch, job, n, s, trace if i == 0 else 0, pure=False)
+                       for i, (n, s) in enumerate(plan)]
+            index = {f.key: i for i, f in enumerate(futures)}
+            from distributed import as_completed
+
+            for fut in as_completed(futures):  # type: ignore[no-untyped-call]
+                finished(index[fut.key], fut.result())
+        finally:
+            if not isinstance(dask, Client):
+                client.close()  # type: ignore[no-untyped-call]
+    elif jobs > 1 and len(plan) > 1:
+        import multiprocessing
+        from concurrent.futures import ProcessPoolExecutor
+        from concurrent.futures import as_completed as cf_completed
+
+        ctx = multiprocessing.get_context("fork" if sys.platform == "linux" else "spawn")
+        with ProcessPoolExecutor(max_workers=jobs, mp_context=ctx) as pool:
+            futs = {pool.submit(run_batch, job, n, s, trace if i == 0 else 0): i
+                    for i, (n, s) in enumerate(plan)}
+            for f in cf_completed(futs):
+                finished(futs[f], f.result())
+    else:
+        for i, (n, s) in enumerate(plan):
+            finished(i, simulate_batch(prog, n, np.random.default_rng(s), job.max_steps,
+                                       trace if i == 0 else 0))
+    res = [r for r in results if r is not None]
+    return Outcome(runs, combine(prog, res, confidence), sum(r.steps for r in res),
+                   time.monotonic() - started, res[0].traces if res else [], len(plan))
+
+
+def combine(prog: Program, results: list[BatchResult], confidence: float) -> list[Estimate]:
+    n = sum(r.runs for r in results)
+    out = []
+    for k, mo in enumerate(prog.monitors):
+        und = sum(r.undecided[k] for r in results)
+        if mo.kind == "P":
+            s = sum(r.true[k] for r in results)
+            low, _ = stats.clopper_pearson(s, n, confidence)
+            # Undecided runs may go either way: the interval covers both outcomes.
+            _, high = stats.clopper_pearson(s + und, n, confidence)
+            out.append(Estimate(mo.name, "P", s / n if n else 0.0, low, high, und))
+            continue
+        inf = sum(r.infinite[k] for r in results)
+        m = n - und - inf
+        total = sum(r.total[k] for r in results)
+        sq = sum(r.total_sq[k] for r in results)
+        if inf:
+            out.append(Estimate(mo.name, "R", math.inf, math.inf, math.inf, und))
+            continue
+        mean = total / m if m else 0.0
+        var = max(sq / m - mean * mean, 0.0) * m / (m - 1) if m > 1 else 0.0
+        z = stats.normal_quantile(0.5 + confidence / 2)
+        half = z * math.sqrt(var / m) if m else math.inf
+        # An undecided run's reward is only known to be at least its partial sum.
+        out.append(Estimate(mo.name, "R", mean, mean - half, math.inf if und else mean + half, und))
+    return out
+
+
+def job_for(path: str, text: str, overrides: Mapping[str, str], strategy: str,
+            max_steps: int) -> Job:
+    return Job(path, text, tuple(sorted(overrides.items())), strategy, max_steps)

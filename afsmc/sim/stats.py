@@ -1,0 +1,56 @@
+"""Confidence intervals used by `sim-check` and `simulate` (see docs/monte-carlo.md)."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import numpy.typing as npt
+from scipy import stats
+
+
+def clopper_pearson(k: int, n: int, confidence: float) -> tuple[float, float]:
+    """The exact (conservative) binomial interval for k successes out of n."""
+    if n <= 0:
+        return 0.0, 1.0
+    a = 1.0 - confidence
+    low = 0.0 if k <= 0 else float(stats.beta.ppf(a / 2, k, n - k + 1))
+    high = 1.0 if k >= n else float(stats.beta.ppf(1 - a / 2, k + 1, n - k))
+    return low, high
+
+
+def mean_interval(x: npt.NDArray[np.float64], confidence: float) -> tuple[float, float]:
+    """Normal-approximation interval of the mean (the samples are many and independent)."""
+    n = len(x)
+    m = float(np.mean(x))
+    if n < 2:
+        return m, m
+    half = float(stats.norm.ppf(0.5 + confidence / 2)) * float(np.std(x, ddof=1)) / math.sqrt(n)
+    return m - half, m + half
+
+
+def quantile_interval(sorted_x: npt.NDArray[np.float64], q: float,
+                      confidence: float) -> tuple[float, float]:
+    """Distribution-free interval of the q-quantile from order statistics.
+
+    The number of samples below the true quantile is Binomial(n, q), so
+    [x_(l), x_(u+1)] with l, u its (1-conf)/2 and (1+conf)/2 quantiles covers the
+    quantile with probability >= confidence, whatever the distribution."""
+    n = len(sorted_x)
+    a = 1.0 - confidence
+    lo_rank = int(stats.binom.ppf(a / 2, n, q))  # 1-based order statistic x_(l)
+    hi_rank = int(stats.binom.ppf(1 - a / 2, n, q)) + 1  # x_(u+1)
+    return float(sorted_x[max(lo_rank - 1, 0)]), float(sorted_x[min(hi_rank - 1, n - 1)])
+
+
+def shortest_decimal(target: float, low: float, high: float) -> str:
+    """The decimal with the fewest digits in [low, high], nearest `target` at that precision."""
+    for digits in range(1, 12):
+        v = round(target, digits)
+        if low <= v <= high:
+            return f"{v:.{digits}f}"
+    return repr(target)
+
+
+def normal_quantile(p: float) -> float:
+    return float(stats.norm.ppf(p))
