@@ -1,0 +1,113 @@
+"""How long `afsmc lsp` takes to react to a change of examples/uav.afsm.
+
+Drives the real server (`python -m afsmc.cli lsp`, a subprocess) with pygls's client and
+measures, from sending `didChange` to receiving `publishDiagnostics`:
+
+- a syntax error (published at once: parse only),
+- a name error (published at once: parse + resolve),
+- a weight tie (published after the debounce and the full semantic checks).
+
+It also times the in-process stages, parse + resolve (what runs on every keystroke) and
+the full checks (what runs once typing pauses), and one hover round trip.
+
+    .venv/bin/python benchmarks/lsp_latency.py [--repeat N]
+"""
+
+from __future__ import annotations
+
+import argparse
+import asyncio
+import statistics
+import sys
+import time
+from pathlib import Path
+
+from lsprotocol import types as T
+from pygls.lsp.client import LanguageClient
+
+ROOT = Path(__file__).resolve().parent.parent
+UAV = ROOT / "examples" / "uav.afsm"
+
+
+def stages(text: str, repeat: int) -> None:
+    from afsmc.compiler import load
+    from afsmc.lsp.server import analyse_fast
+
+    fast, full = [], []
+    for _ in range(repeat):
+        t = time.perf_counter()
+        analyse_fast(text, str(UAV))
+        fast.append(time.perf_counter() - t)
+        t = time.perf_counter()
+        load(str(UAV), text=text)
+        full.append(time.perf_counter() - t)
+    print(f"in process: parse + resolve {_ms(fast)}, full check {_ms(full)}")
+
+
+def _ms(xs: list[float]) -> str:
+    return f"median {statistics.median(xs) * 1000:.0f} ms (max {max(xs) * 1000:.0f} ms)"
+
+
+async def server(text: str, repeat: int) -> None:
+    client = LanguageClient("afsmc-bench", "0")
+    got: asyncio.Queue[T.PublishDiagnosticsParams] = asyncio.Queue()
+
+    @client.feature(T.TEXT_DOCUMENT_PUBLISH_DIAGNOSTICS)
+    def _diags(params: T.PublishDiagnosticsParams) -> None:
+        got.put_nowait(params)
+
+    await client.start_io(sys.executable, "-m", "afsmc.cli", "lsp")
+    await client.initialize_async(T.InitializeParams(capabilities=T.ClientCapabilities()))
+    client.initialized(T.InitializedParams())
+    uri = UAV.as_uri()
+    client.text_document_did_open(T.DidOpenTextDocumentParams(
+        text_document=T.TextDocumentItem(uri=uri, language_id="afsm", version=0, text=text)))
+    await got.get()
+
+    head = "action HeadHome in AscendFromDeposit weight 0.5 {"
+    variants = {
+        "syntax error (immediate)": text.replace(head, head[:-2]),
+        "name error (immediate)": text.replace("goto Land,", "goto Lnd,", 1),
+        "weight tie (debounced full check)": text.replace(head, head.replace("0.5", "0.9")),
+    }
+    version = 0
+    for name, changed in variants.items():
+        times = []
+        for _ in range(repeat):
+            for body in (changed, text):
+                version += 1
+                t = time.perf_counter()
+                client.text_document_did_change(T.DidChangeTextDocumentParams(
+                    text_document=T.VersionedTextDocumentIdentifier(uri=uri, version=version),
+                    content_changes=[T.TextDocumentContentChangeWholeDocument(text=body)]))
+                while (await got.get()).version != version:
+                    pass
+                if body is changed:
+                    times.append(time.perf_counter() - t)
+        print(f"change -> diagnostics, {name}: {_ms(times)}")
+
+    line = text[:text.index("T_MOVE,")].count("\n")
+    col = len(text[:text.index("T_MOVE,")].rsplit("\n", 1)[-1])
+    times = []
+    for _ in range(repeat):
+        t = time.perf_counter()
+        await client.text_document_hover_async(T.HoverParams(
+            text_document=T.TextDocumentIdentifier(uri=uri), position=T.Position(line, col)))
+        times.append(time.perf_counter() - t)
+    print(f"hover round trip: {_ms(times)}")
+    await client.shutdown_async(None)
+    client.exit(None)
+    await client.stop()
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawTextHelpFormatter)
+    ap.add_argument("--repeat", type=int, default=5)
+    args = ap.parse_args()
+    text = UAV.read_text()
+    stages(text, args.repeat)
+    asyncio.run(server(text, args.repeat))
+
+
+if __name__ == "__main__":
+    main()
