@@ -413,9 +413,8 @@ class _Formatter:
                 out.append(_Unit(d.span.end - 1, d.span.end, 0, ["}"], "close"))
             else:
                 cols = self.simple(d)
-                kind = "const" if isinstance(d, ast.ParamDecl) else type(d).__name__
                 out.append(_Unit(d.span.start, d.span.end, 0, [" ".join(cols)], cols=cols,
-                                 group=kind))
+                                 group=type(d).__name__))
         return out
 
     # -- comments and blank lines
