@@ -16,6 +16,7 @@ from afsmc.model.lower import Lowered, lower
 # -t NAME -> "module:function"; the function maps a Lowered model to {suffix: text}.
 TARGETS: dict[str, str] = {
     "prism": "afsmc.backends.prism:files",
+    "jani": "afsmc.backends.jani:files",
 }
 
 
