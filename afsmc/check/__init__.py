@@ -8,7 +8,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 
-from afsmc.check import distributions, ranges, unused, weights
+from afsmc.check import distributions, modegraph, ranges, unused, weights
 from afsmc.diagnostics import Diagnostic, Reporter
 from afsmc.model import ir
 from afsmc.sim.check_sources import check_sim_sources
@@ -23,6 +23,7 @@ RULES: tuple[Rule, ...] = (
     ranges.check_update_ranges,
     unused.check_unused,
     check_sim_sources,
+    modegraph.check_unreachable, modegraph.check_cannot_end, modegraph.check_never_fires,
 )
 
 

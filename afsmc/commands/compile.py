@@ -17,6 +17,7 @@ from afsmc.model.lower import Lowered, lower
 TARGETS: dict[str, str] = {
     "prism": "afsmc.backends.prism:files",
     "jani": "afsmc.backends.jani:files",
+    "dot": "afsmc.backends.dot:files",
 }
 
 

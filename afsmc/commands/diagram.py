@@ -1,0 +1,243 @@
+"""`afsmc diagram FILE [-o out.svg|.png|.pdf] [--reach] [--results results.json]`.
+
+Builds the mission diagram (afsmc.backends.dot) and renders it with the Graphviz `dot`
+program. `--reach` asks Storm, for every mode, the probability of ever reaching it
+(`P=? [F mode=N]`; Pmin and Pmax when interval constants make the model an MDP) and
+writes it into the mode's box. `--results` draws the numbers of `afsmc verify --json`.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import os
+import sys
+import tempfile
+import time
+from typing import Any
+
+import graphviz
+
+from afsmc.backends.dot import Overlay, diagram
+from afsmc.backends.prism import emit
+from afsmc.check.modegraph import analyse
+from afsmc.commands.common import (
+    add_consts,
+    add_file,
+    add_resolve,
+    fail,
+    overrides,
+    report,
+    usage_error,
+)
+from afsmc.compiler import load, write_atomic
+from afsmc.diagnostics import CompileError, Diagnostic, Severity
+from afsmc.model import ir
+from afsmc.model.lower import Resolution, lower
+
+FORMATS = ("svg", "png", "pdf")
+
+
+def add_arguments(p: argparse.ArgumentParser) -> None:
+    add_file(p)
+    p.add_argument("-o", "--output", metavar="FILE",
+                   help="the picture: .svg, .png or .pdf (default: <stem>.svg in the current "
+                        "directory)")
+    add_consts(p)
+    p.add_argument("--reach", action="store_true",
+                   help="compute with Storm the probability of ever reaching each mode and "
+                        "write it into the mode's box")
+    add_resolve(p)
+    p.add_argument("--results", metavar="JSON",
+                   help="overlay the results of `afsmc verify --json` (a box of property values; "
+                        "per-mode numbers from its \"modes\" list, if any)")
+
+
+def _error(code: str, message: str, hint: str | None = None) -> CompileError:
+    return CompileError([Diagnostic(code, Severity.ERROR, message, None, hint=hint)])
+
+
+def _fmt(v: object) -> str:
+    if isinstance(v, bool) or not isinstance(v, (int, float)):
+        return "n/a"
+    if math.isnan(v):
+        return "n/a"
+    return f"{v:.4g}"
+
+
+def _range(lo: object, hi: object) -> str:
+    a, b = _fmt(lo), _fmt(hi)
+    return a if a == b else f"{a} – {b}"
+
+
+def _value(entry: dict[str, Any]) -> str:
+    """min – max, or the value; `afsmc verify --json` writes null for what it did not ask
+    and lists infinite values under "infinite"."""
+    inf = entry.get("infinite") or []
+
+    def get(key: str) -> object:
+        return math.inf if key in inf else entry.get(key)
+
+    if get("min") is not None or get("max") is not None:
+        text = _range(get("min"), get("max"))
+    else:
+        text = _fmt(get("value"))
+    if get("uniform") is not None:
+        text += f" (uniform {_fmt(get('uniform'))})"
+    return text
+
+
+def read_results(path: str, model: ir.Model) -> Overlay:
+    """The overlay of an `afsmc verify --json` file (see docs/diagrams.md)."""
+    try:
+        with open(path, encoding="utf-8") as f:
+            data = json.load(f)
+    except OSError as exc:
+        raise _error("E611", f"cannot read {path}: {exc.strerror or exc}") from None
+    except (json.JSONDecodeError, UnicodeDecodeError) as exc:
+        raise _error("E611", f"{path} is not JSON: {exc}",
+                     hint="pass the output of `afsmc verify --json`") from None
+    if not isinstance(data, dict) or not isinstance(data.get("properties", []), list):
+        raise _error("E611", f"{path}: expected an object with a \"properties\" list",
+                     hint="pass the output of `afsmc verify --json`")
+    notes: list[str] = []
+    for entry in data.get("properties", []):
+        if isinstance(entry, dict) and "name" in entry:
+            notes.append(f"{entry['name']}: {_value(entry)}")
+    by_name = {m.name: m.number for m in model.modes}
+    modes: dict[int, str] = {}
+    for entry in data.get("modes", []) or []:
+        if not isinstance(entry, dict):
+            continue
+        number = entry.get("number", by_name.get(str(entry.get("mode"))))
+        if isinstance(number, int) and number in model.mode_names:
+            modes[number] = f"P(reach) {_value(entry)}"
+    return Overlay(modes=modes, notes=notes)
+
+
+def mode_reachability(model: ir.Model, resolution: Resolution
+                      ) -> tuple[dict[int, tuple[float, float]], bool]:
+    """Storm: (min, max) probability of ever reaching each mode (equal for a DTMC), and
+    whether the model is an MDP."""
+    import stormpy
+
+    low = lower(model, resolution)
+    text = emit(low).model
+    mdp = low.kind == "mdp"
+    unreachable = set(analyse(model).unreachable)
+    numbers = [m.number for m in sorted(model.modes, key=lambda m: m.number)
+               if m.number not in unreachable]
+    ops = ("Pmin", "Pmax") if mdp else ("P",)
+    formulas = [f"{op}=? [ F mode={n} ]" for n in numbers for op in ops]
+    with tempfile.TemporaryDirectory(prefix="afsmc-reach-") as tmp:
+        path = os.path.join(tmp, f"{model.name}.prism")
+        with open(path, "w", encoding="utf-8") as f:
+            f.write(text)
+        try:
+            t0 = time.monotonic()
+            print(f"reach: building the {low.kind.upper()} with Storm ...", file=sys.stderr)
+            prog = stormpy.parse_prism_program(path)
+            props = stormpy.parse_properties("; ".join(formulas), prog)
+            built = stormpy.build_model(prog, props)
+            print(f"reach: {built.nr_states} states, {built.nr_transitions} transitions "
+                  f"({time.monotonic() - t0:.1f} s); checking {len(numbers)} modes",
+                  file=sys.stderr)
+            init = built.initial_states[0]
+            values = []
+            for i, prop in enumerate(props):
+                if built.nr_states >= 100_000 and i % len(ops) == 0:
+                    n = numbers[i // len(ops)]
+                    print(f"reach: mode {model.mode_by_number(n).name} ({i // len(ops) + 1}/"
+                          f"{len(numbers)})", file=sys.stderr)
+                # only_initial_states: Storm may skip work for states we never read
+                res = stormpy.model_checking(built, prop, only_initial_states=True)
+                values.append(float(res.get_value(init)))
+        except Exception as exc:  # stormpy raises RuntimeError and its own types
+            raise _error("E612", f"Storm could not compute the reachability of the modes: {exc}",
+                         hint="check the model with `afsmc compile -t prism`") from None
+    out: dict[int, tuple[float, float]] = {n: (0.0, 0.0) for n in unreachable}
+    for i, n in enumerate(numbers):
+        vs = values[i * len(ops):(i + 1) * len(ops)]
+        out[n] = (min(vs), max(vs))
+    return out, mdp
+
+
+def reach_overlay(reach: dict[int, tuple[float, float]], mdp: bool) -> Overlay:
+    modes = {n: f"P(reach) {_range(lo, hi)}" for n, (lo, hi) in sorted(reach.items())}
+    caption = ("P(reach): probability of ever reaching the mode" +
+               (", min – max over interval choices" if mdp else ""))
+    return Overlay(modes=modes, caption=caption)
+
+
+def output_path(args: argparse.Namespace) -> tuple[str, str]:
+    if args.output is None:
+        stem = os.path.splitext(os.path.basename(args.file))[0]
+        return stem + ".svg", "svg"
+    fmt = os.path.splitext(args.output)[1].lstrip(".").lower()
+    if fmt not in FORMATS:
+        usage_error(f"-o {args.output}: the picture must end in .svg, .png or .pdf")
+    return args.output, fmt
+
+
+def _write_bytes(path: str, data: bytes, protect: str) -> None:
+    """Atomic like write_atomic, for binary pictures."""
+    real = os.path.realpath(path)
+    if os.path.exists(protect) and os.path.realpath(protect) == real:
+        raise _error("E002", f"refusing to overwrite the input {protect}",
+                     hint="choose another output with -o")
+    directory = os.path.dirname(real) or "."
+    tmp = os.path.join(directory, f".{os.path.basename(real)}.tmp{os.getpid()}")
+    try:
+        os.makedirs(directory, exist_ok=True)
+        with open(tmp, "wb") as f:
+            f.write(data)
+            f.flush()
+            os.fsync(f.fileno())
+        os.replace(tmp, real)
+    except OSError as exc:
+        if os.path.exists(tmp):
+            os.unlink(tmp)
+        raise _error("E003", f"cannot write {path}: {exc.strerror or exc}") from None
+
+
+def render(g: graphviz.Digraph, fmt: str) -> bytes:
+    try:
+        data: bytes = g.pipe(format=fmt, engine="dot")
+    except graphviz.ExecutableNotFound:
+        raise _error("E610", "the Graphviz program `dot` was not found on PATH",
+                     hint="install Graphviz (e.g. `apt-get install graphviz`), or write the "
+                          "DOT source with `afsmc compile FILE -t dot` and render it elsewhere"
+                     ) from None
+    except graphviz.CalledProcessError as exc:
+        stderr = exc.stderr.decode("utf-8", "replace").strip() if exc.stderr else ""
+        raise _error("E613", f"Graphviz `dot` failed: {stderr or exc}") from None
+    return data
+
+
+def run(args: argparse.Namespace) -> int:
+    path, fmt = output_path(args)
+    try:
+        checked = load(args.file, overrides(args))
+        report(checked.diagnostics)
+        model = checked.model
+        modes: dict[int, str] = {}
+        notes: list[str] = []
+        caption = ""
+        if args.results:
+            ov = read_results(args.results, model)
+            modes.update(ov.modes)
+            notes += ov.notes
+        if args.reach:
+            ov = reach_overlay(*mode_reachability(model, args.resolve))
+            modes.update(ov.modes)
+            caption = ov.caption
+        data = render(diagram(model, Overlay(modes, notes, caption)), fmt)
+        if fmt == "svg":
+            write_atomic(path, data.decode("utf-8"), protect=(args.file,))
+        else:
+            _write_bytes(path, data, args.file)
+        print(f"wrote {path}", file=sys.stderr)
+    except CompileError as exc:
+        return fail(exc)
+    return 0
