@@ -1,1 +1,74 @@
+"""Verification with Storm (through stormpy): the library behind `afsmc verify` and `afsmc sweep`.
 
+Other tools (benchmarks, Monte Carlo cross-checks) call these functions directly. Every
+function raises :class:`afsmc.diagnostics.CompileError` carrying diagnostics (codes E4xx for
+Storm's side) instead of letting a Storm exception escape.
+
+``run(path, *, consts=None, properties=(), formulas=(), via="prism", engine="sparse",
+max_states=None, uniform=True, isolate=None, progress=None, text=None) -> VerifyResult``
+    Load, check and lower the file, build it with Storm and check the properties: the ones
+    named in `properties` (default: every declared one) plus each ad-hoc formula in
+    `formulas` (afsm property syntax, e.g. ``'P=? [ F "done" ]'``, named ``adhoc``,
+    ``adhoc2``...). `consts` gives open constants (``{"CELLS": "5"}``). For a machine with
+    interval constants the floor/ceil MDP gives ``min``/``max`` and, unless
+    ``uniform=False``, the uniform DTMC gives ``uniform``; otherwise ``value`` is set.
+    `max_states` (default: derived from free memory) stops larger models with E405;
+    `isolate` forces (True) or forbids (False) the watched child process (default: only
+    when the upper bound exceeds 200,000 states). `progress(text)` receives progress lines.
+
+``VerifyResult``: ``.model`` / ``.uniform_model`` (:class:`ModelStats`: type, states,
+transitions, choices, parse/build/check times), ``.properties`` (list of
+:class:`PropertyResult`: name, formula, kind, min, max, uniform, value), ``.property(name)``,
+``.kind``, ``.upper_bound``, ``.to_json()`` (the ``afsmc verify --json`` object).
+
+``check(model, props, *, via, engine, max_states, uniform, isolate, progress) -> Checks``
+    The same on an already loaded :class:`afsmc.model.ir.Model` and a list of
+    :class:`afsmc.model.ir.Property` (uniquely named), for callers that build properties.
+
+``sweep(path, variable, values, *, kind="const", consts=None, properties=(), formulas=(),
+via="prism", engine="sparse", max_states=None, jobs=None, dask=None, uniform=True,
+progress=None) -> SweepResult``
+    Evaluate the properties for each value of one open constant (``kind="const"``) or of
+    the step bound of the properties (``kind="bound"``: ``F<=k``, ``C<=k``, ``I=k``; the model is
+    built once per chunk of bounds). Points run in `jobs` local processes (default: the
+    number of cores; 1 runs in this process) or, with ``dask="tcp://host:8786"``, on that
+    Dask cluster (a ``distributed.Client`` or an address). ``SweepResult.points`` is a list
+    of :class:`SweepPoint` (x, properties, states, transitions) in the order of `values`;
+    ``to_csv()``, ``to_json()``, ``plot(path)`` write the outputs; ``curve(name, key)``
+    gives one curve.
+
+``parse_values(text) -> list[int | float]``: ``"0:900:25"`` (inclusive) or ``"1,2,5"``.
+``upper_bound(model) -> int``: modes × the product of the variables' ranges.
+"""
+
+from afsmc.verify.core import (
+    Checks,
+    Loaded,
+    ModelStats,
+    PropertyResult,
+    VerifyResult,
+    check,
+    load_with_formulas,
+    run,
+    select,
+)
+from afsmc.verify.guard import default_max_states, upper_bound
+from afsmc.verify.sweep import SweepPoint, SweepResult, parse_values, sweep
+
+__all__ = [
+    "Checks",
+    "Loaded",
+    "ModelStats",
+    "PropertyResult",
+    "SweepPoint",
+    "SweepResult",
+    "VerifyResult",
+    "check",
+    "default_max_states",
+    "load_with_formulas",
+    "parse_values",
+    "run",
+    "select",
+    "sweep",
+    "upper_bound",
+]

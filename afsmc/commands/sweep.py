@@ -1,0 +1,123 @@
+"""`afsmc sweep FILE --const T=0:900:25 --property success [--plot fig.png] [-o out.csv]`.
+
+One open constant takes a range (`start:stop:step`, stop included) or a list (`a,b,c`);
+or `--bound 0:40:5` sweeps the step bound of the properties (F<=k, C<=k, I=k).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import sys
+
+from afsmc import verify as lib
+from afsmc.commands.common import add_file, fail, usage_error
+from afsmc.commands.verify import add_storm_options, positive, progress_printer
+from afsmc.compiler import write_atomic
+from afsmc.diagnostics import CompileError
+from afsmc.diagnostics import to_json as diags_to_json
+from afsmc.verify.sweep import Number, parse_values
+
+
+def add_arguments(p: argparse.ArgumentParser) -> None:
+    add_file(p)
+    p.add_argument("--const", "-c", action="append", default=[], metavar="NAME=VALUES",
+                   help="an open constant's value; exactly one may take a range "
+                        "start:stop:step (stop included) or a list a,b,c: the sweep's x axis")
+    p.add_argument("--bound", metavar="RANGE",
+                   help="sweep the step bound k of the properties (F<=k, C<=k, I=k) instead")
+    add_storm_options(p)
+    p.add_argument("-o", "--output", metavar="FILE.csv", help="write the points as CSV")
+    p.add_argument("--json", action="store_true", help="print the points as one JSON object")
+    p.add_argument("--plot", metavar="FILE.png|FILE.svg",
+                   help="draw min, max and uniform curves (matplotlib)")
+    p.add_argument("--jobs", "-j", type=positive, metavar="N",
+                   help="parallel processes on this machine (default: the number of cores)")
+    p.add_argument("--dask", metavar="ADDRESS",
+                   help="run the points on this Dask scheduler (e.g. tcp://10.0.0.5:8786); "
+                        "its workers need afsmc installed")
+
+
+def split_consts(items: list[str]) -> tuple[dict[str, str], dict[str, list[Number]]]:
+    """`N=2,T=0:900:25` and `T=100,200,300` -> fixed constants and the swept ones."""
+    raw: dict[str, list[str]] = {}
+    current = None
+    for item in items:
+        for part in item.split(","):
+            part = part.strip()
+            if not part:
+                continue
+            if "=" in part:
+                name, value = (s.strip() for s in part.split("=", 1))
+                if not name:
+                    usage_error(f"--const {item}: expected NAME=VALUES")
+                raw[name] = [value]
+                current = name
+            elif current is None:
+                usage_error(f"--const {item}: expected NAME=VALUES")
+            else:
+                raw[current].append(part)
+    fixed: dict[str, str] = {}
+    swept: dict[str, list[Number]] = {}
+    for name, values in raw.items():
+        if len(values) == 1 and ":" not in values[0]:
+            fixed[name] = values[0]
+            continue
+        try:
+            swept[name] = parse_values(",".join(values))
+        except ValueError as exc:
+            usage_error(f"--const {name}: {exc}")
+    return fixed, swept
+
+
+def run(args: argparse.Namespace) -> int:
+    fixed, swept = split_consts(args.const)
+    if args.bound is not None:
+        if swept:
+            usage_error("sweep either one constant or --bound, not both")
+        try:
+            values = parse_values(args.bound)
+        except ValueError as exc:
+            usage_error(f"--bound: {exc}")
+        variable, kind = "bound", "bound"
+    else:
+        if len(swept) != 1:
+            usage_error("give exactly one constant a range (--const T=0:900:25) or use --bound"
+                        if not swept else "only one constant can take a range: "
+                        + ", ".join(sorted(swept)))
+        ((variable, values),) = swept.items()
+        kind = "const"
+    for out in (args.output, args.plot):
+        if out and os.path.abspath(out) == os.path.abspath(args.file):
+            usage_error(f"refusing to overwrite the input {args.file}")
+    if args.plot and os.path.splitext(args.plot)[1].lower() not in (".png", ".svg"):
+        usage_error(f"--plot {args.plot}: the name must end in .png or .svg")
+    progress = progress_printer(args)
+    try:
+        res = lib.sweep(args.file, variable, values, kind=kind,  # type: ignore[arg-type]
+                        consts=fixed, properties=args.property, formulas=args.formula,
+                        via=args.via, engine=args.engine, max_states=args.max_states,
+                        jobs=args.jobs, dask=args.dask, uniform=args.uniform,
+                        progress=progress)
+        if args.output:
+            write_atomic(args.output, res.to_csv(), protect=(args.file,))
+            if progress:
+                progress(f"wrote {args.output}")
+        if args.plot:
+            res.plot(args.plot, protect=(args.file,))
+            if progress:
+                progress(f"wrote {args.plot}")
+    except CompileError as exc:
+        if args.json:
+            print(json.dumps({"diagnostics": json.loads(diags_to_json(exc.diagnostics))},
+                             indent=2))
+            return 1
+        return fail(exc)
+    if args.json:
+        print(json.dumps(res.to_json(), indent=2))
+    elif not args.output and not args.plot:
+        sys.stdout.write(res.to_csv())
+    if progress:
+        progress(f"{len(res.points)} points in {res.seconds:.1f} s")
+    return 0

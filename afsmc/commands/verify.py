@@ -1,0 +1,137 @@
+"""`afsmc verify FILE`: check the file's properties with Storm; min/max/uniform for an MDP."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from collections.abc import Callable
+
+from afsmc import verify as lib
+from afsmc.commands.common import add_consts, add_file, fail, overrides, report
+from afsmc.diagnostics import CompileError
+from afsmc.diagnostics import to_json as diags_to_json
+from afsmc.verify import VerifyResult
+from afsmc.verify.storm import ENGINES, VIAS
+
+
+def positive(text: str) -> int:
+    try:
+        n = int(text.replace("_", ""))
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a positive integer, got {text!r}") from None
+    if n <= 0:
+        raise argparse.ArgumentTypeError(f"expected a positive integer, got {text!r}")
+    return n
+
+
+def add_storm_options(p: argparse.ArgumentParser) -> None:
+    """Options `verify` and `sweep` share."""
+    p.add_argument("--property", "-p", action="append", default=[], metavar="NAME",
+                   help="check only this declared property; repeatable (default: all)")
+    p.add_argument("--formula", "-f", action="append", default=[], metavar="PROPERTY",
+                   help="also check an ad-hoc property in .afsm syntax, e.g. "
+                        "'P=? [ F \"done\" ]'; repeatable")
+    p.add_argument("--via", choices=VIAS, default="prism",
+                   help="Storm's input language: PRISM text (default) or JANI JSON")
+    p.add_argument("--engine", choices=ENGINES, default="sparse",
+                   help="Storm's engine: sparse (explicit matrices; default), dd (decision "
+                        "diagrams throughout) or hybrid (symbolic model, explicit vectors)")
+    p.add_argument("--max-states", type=positive, metavar="N",
+                   help="stop (exit 1) if the model has more states than N (default: what "
+                        "70%% of the free memory holds, at most 50 M)")
+    p.add_argument("--no-uniform", dest="uniform", action="store_false",
+                   help="for an MDP, skip the uniform resolution of the interval constants")
+    p.add_argument("--progress", action="store_true",
+                   help="show progress on stderr even with --json")
+
+
+def progress_printer(args: argparse.Namespace) -> Callable[[str], None] | None:
+    if args.json and not args.progress:
+        return None
+
+    def say(text: str) -> None:
+        print(f"afsmc: {text}", file=sys.stderr, flush=True)
+
+    return say
+
+
+def add_arguments(p: argparse.ArgumentParser) -> None:
+    add_file(p)
+    add_consts(p)
+    add_storm_options(p)
+    p.add_argument("--json", action="store_true",
+                   help="print one JSON object: model, properties, timings")
+
+
+def num(v: float | None) -> str:
+    if v is None:
+        return "-"
+    if v != v or v in (float("inf"), float("-inf")):
+        return str(v)
+    return f"{v:.6g}"
+
+
+def table(rows: list[list[str]], right: set[int]) -> list[str]:
+    widths = [max(len(r[i]) for r in rows) for i in range(len(rows[0]))]
+    out = []
+    for r in rows:
+        cells = [c.rjust(w) if i in right else c.ljust(w)
+                 for i, (c, w) in enumerate(zip(r, widths, strict=True))]
+        out.append("  ".join(cells).rstrip())
+    return out
+
+
+def render(res: VerifyResult) -> str:
+    lines = []
+    u = res.uniform_model
+    if res.kind == "mdp":
+        lines.append(f"{res.path}: an MDP (interval constants as floor/ceil choices): min and max "
+                     "bound every property" + ("; uniform picks floor or ceil at random"
+                                              if u is not None else ""))
+        head = ["property", "formula", "min", "max"] + (["uniform"] if u is not None else [])
+        rows = [head] + [[p.name, p.formula, num(p.min), num(p.max)]
+                         + ([num(p.uniform)] if u is not None else []) for p in res.properties]
+    else:
+        lines.append(f"{res.path}: a DTMC")
+        rows = [["property", "formula", "value"]] + [
+            [p.name, p.formula, num(p.value)] for p in res.properties]
+    lines.append("")
+    lines += table(rows, set(range(2, len(rows[0]))))
+    lines.append("")
+    models = [("floor/ceil MDP" if res.kind == "mdp" else "DTMC", res.model)]
+    if u is not None:
+        models.append(("uniform DTMC", u))
+    mrows = [["model", "states", "transitions", "choices", "build", "check"]]
+    for name, m in models:
+        mrows.append([name, f"{m.states:,}", f"{m.transitions:,}",
+                      f"{m.choices:,}" if m.choices else "-",
+                      f"{m.build_time:.3f} s", f"{m.check_time:.3f} s"])
+    lines += table(mrows, {1, 2, 3, 4, 5})
+    consts = ", ".join(f"{k}={v}" for k, v in res.constants.items())
+    lines.append("")
+    lines.append(f"engine {res.engine}, via {res.via}"
+                 + (f", constants {consts}" if consts else "")
+                 + f"; total {res.total_time:.2f} s")
+    return "\n".join(lines)
+
+
+def run(args: argparse.Namespace) -> int:
+    try:
+        res = lib.run(args.file, consts=overrides(args), properties=args.property,
+                  formulas=args.formula, via=args.via, engine=args.engine,
+                  max_states=args.max_states, uniform=args.uniform,
+                  progress=progress_printer(args))
+    except CompileError as exc:
+        if args.json:
+            print(json.dumps({"diagnostics": json.loads(diags_to_json(exc.diagnostics))},
+                             indent=2))
+            return 1
+        return fail(exc)
+    if args.json:
+        print(json.dumps(res.to_json(), indent=2))
+    else:
+        report(res.warnings)
+        print(render(res))
+    return 0
+

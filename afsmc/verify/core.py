@@ -1,0 +1,380 @@
+"""`run`: load an .afsm file, lower it, let Storm check its properties, explain the results.
+
+See the package docstring (afsmc/verify/__init__.py) for the API.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import importlib
+import os
+import re
+import time
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+from afsmc.backends.prism import emit as prism_emit
+from afsmc.backends.prism import formula_text, property_variants
+from afsmc.compiler import load
+from afsmc.diagnostics import CompileError, Diagnostic, Related, Severity, Source, Span
+from afsmc.model import ir
+from afsmc.model.lower import Lowered, lower
+from afsmc.model.names import did_you_mean
+from afsmc.model.pretty import show
+from afsmc.verify.guard import Progress, default_max_states, human, run_job, upper_bound
+from afsmc.verify.storm import Engine, Job, JobResult, StormFailure, Via, finite
+
+
+@dataclass
+class ModelStats:
+    """One model Storm built: the min/max MDP, the uniform DTMC, or the only DTMC."""
+
+    type: str  # "dtmc" | "mdp"
+    resolution: str  # "nondet" | "uniform" (how interval constants were lowered)
+    states: int
+    transitions: int
+    choices: int
+    parse_time: float
+    build_time: float
+    check_time: float
+
+    def to_json(self) -> dict[str, object]:
+        return {"states": self.states, "transitions": self.transitions, "choices": self.choices,
+                "type": self.type, "resolution": self.resolution}
+
+
+@dataclass
+class PropertyResult:
+    """min/max (an MDP: the interval constants' floor/ceil chosen adversarially or
+    cooperatively), uniform (chosen at random), or value (a DTMC). None where not asked."""
+
+    name: str
+    formula: str  # in .afsm syntax
+    kind: str  # "P" | "R"
+    min: float | None = None
+    max: float | None = None
+    uniform: float | None = None
+    value: float | None = None
+
+    def to_json(self) -> dict[str, object]:
+        out: dict[str, object] = {"name": self.name, "formula": self.formula}
+        infinite = []
+        for key in ("min", "max", "uniform", "value"):
+            v = getattr(self, key)
+            out[key] = finite(v)
+            if v is not None and finite(v) is None:
+                infinite.append(key)
+        if infinite:
+            out["infinite"] = infinite  # JSON has no infinity: these are null above
+        return out
+
+
+@dataclass
+class Checks:
+    """What :func:`check` returns: the models built and one result per property."""
+
+    model: ModelStats
+    uniform_model: ModelStats | None
+    properties: list[PropertyResult]
+
+
+@dataclass
+class VerifyResult:
+    path: str
+    machine: str
+    constants: dict[str, object]  # the open constants' values used
+    via: str
+    engine: str
+    upper_bound: int  # modes × product of variable ranges
+    max_states: int
+    model: ModelStats
+    uniform_model: ModelStats | None
+    properties: list[PropertyResult]
+    load_time: float
+    total_time: float
+    warnings: list[Diagnostic] = field(default_factory=list)
+
+    @property
+    def kind(self) -> str:
+        return self.model.type
+
+    def property(self, name: str) -> PropertyResult:
+        return next(p for p in self.properties if p.name == name)
+
+    def to_json(self) -> dict[str, object]:
+        u = self.uniform_model
+        timings: dict[str, float] = {
+            "load": self.load_time, "parse": self.model.parse_time,
+            "build": self.model.build_time, "check": self.model.check_time}
+        if u is not None:
+            timings |= {"uniform_build": u.build_time, "uniform_check": u.check_time}
+        timings["total"] = self.total_time
+        return {
+            "file": self.path,
+            "machine": self.machine,
+            "model": self.model.to_json(),
+            "uniform_model": u.to_json() if u is not None else None,
+            "properties": [p.to_json() for p in self.properties],
+            "timings": {k: round(v, 6) for k, v in timings.items()},
+            "via": self.via,
+            "engine": self.engine,
+            "constants": self.constants,
+            "state_space": {"upper_bound": self.upper_bound, "max_states": self.max_states},
+            "warnings": [d.to_json() for d in self.warnings],
+        }
+
+
+# ---- loading with ad-hoc formulas --------------------------------------------------
+
+
+def _fresh_name(text: str, base: str, taken: set[str]) -> str:
+    n, name = 1, base
+    while name in taken or re.search(rf"\b{name}\b", text):
+        n += 1
+        name = f"{base}{n}"
+    taken.add(name)
+    return name
+
+
+@dataclass
+class Loaded:
+    """A model loaded with ad-hoc formulas; `remap` moves a diagnostic about a formula
+    from the end of the (extended) file into the formula itself (file `--formula`)."""
+
+    model: ir.Model
+    warnings: list[Diagnostic]
+    adhoc: list[str]  # the generated property names, in the order of the formulas
+    limit: int = 0
+    where: list[tuple[int, int, int, str]] = field(default_factory=list)
+
+    def remap(self, d: Diagnostic) -> Diagnostic:
+        return _remap(d, self.limit, self.where)
+
+    def remap_error(self, exc: CompileError) -> CompileError:
+        return CompileError([self.remap(d) for d in exc.diagnostics])
+
+
+def load_with_formulas(path: str, overrides: Mapping[str, str] | None = None,
+                       formulas: Sequence[str] = (), *, text: str | None = None,
+                       run_checks: bool = True) -> Loaded:
+    """Load `path` with each formula appended as `property adhocN = <formula>;`."""
+    from afsmc.compiler import read_source
+
+    base = read_source(path) if text is None else text
+    full = base if base.endswith("\n") else base + "\n"
+    where: list[tuple[int, int, int, str]] = []  # (head, start, end, formula) offsets in `full`
+    names: list[str] = []
+    taken: set[str] = set()
+    for f in formulas:
+        if ";" in f:
+            raise CompileError([Diagnostic(
+                "E409", Severity.ERROR, f"--formula {f!r}: one property, without ';'", None,
+                hint="repeat --formula for several properties")])
+        name = _fresh_name(base, "adhoc", taken)
+        names.append(name)
+        head = f"property {name} = "
+        where.append((len(full), len(full) + len(head), len(full) + len(head) + len(f), f))
+        full += f"{head}{f};\n"
+    try:
+        checked = load(path, overrides, text=full, run_checks=run_checks)
+    except CompileError as exc:
+        raise CompileError([_remap(d, len(base), where) for d in exc.diagnostics]) from None
+    return Loaded(checked.model, [_remap(d, len(base), where) for d in checked.diagnostics],
+                  names, len(base), where)
+
+
+def _remap(d: Diagnostic, limit: int, where: list[tuple[int, int, int, str]]) -> Diagnostic:
+    def span(s: Span | None) -> Span | None:
+        if s is None or s.start < limit:
+            return s
+        for head, start, end, f in where:
+            if head <= s.start <= end:  # the formula, its `property NAME =` head, or ';'
+                src = Source("--formula", f)
+                if s.start < start:  # the whole declaration: the whole formula
+                    return Span.at_offset(src, 0, len(f))
+                a = min(s.start - start, len(f))
+                return Span.at_offset(src, a, min(max(a + 1, s.end - start), max(len(f), a + 1)))
+        return None
+
+    related = tuple(Related(r.message, span(r.span) or r.span) for r in d.related)
+    return dataclasses.replace(d, span=span(d.span), related=related)
+
+
+def select(model: ir.Model, names: Sequence[str], adhoc: Sequence[str] = ()) -> list[ir.Property]:
+    """The properties to check: those named (else every declared one) and the ad-hoc ones."""
+    declared = [p for p in model.properties if p.name not in adhoc]
+    if not names and not adhoc:
+        if not declared:
+            raise CompileError([Diagnostic(
+                "E407", Severity.ERROR, f"{model.source.path} declares no properties", None,
+                hint="declare one ('property ok = P=? [ F \"done\" ];') or pass --formula")])
+        return declared
+    by_name = {p.name: p for p in declared}
+    diags = []
+    out = []
+    for n in names:
+        if n in by_name:
+            if by_name[n] not in out:
+                out.append(by_name[n])
+        else:
+            diags.append(Diagnostic("E407", Severity.ERROR, f"--property {n}: no property named "
+                                    f"'{n}' in {model.source.path}", None,
+                                    hint=did_you_mean(n, by_name) or (
+                                        "properties: " + ", ".join(by_name) if by_name else None)))
+    if diags:
+        raise CompileError(diags)
+    out += [p for p in model.properties if p.name in adhoc]
+    return out
+
+
+# ---- Storm jobs and their failures -------------------------------------------------
+
+
+def make_job(low: Lowered, props: Sequence[ir.Property], via: Via, engine: Engine,
+             max_states: int | None, what: str) -> Job:
+    """The Storm input for a lowered model whose `properties` are exactly `props`."""
+    names = tuple(n for p in props for n, _ in property_variants(low, p))
+    if via == "prism":
+        out = prism_emit(low)
+        return Job("prism", out.model, out.properties, names, engine, max_states, what)
+    try:
+        jani: Any = importlib.import_module("afsmc.backends.jani")
+    except ImportError:
+        raise CompileError([Diagnostic("E408", Severity.ERROR,
+                                       "the JANI backend (afsmc.backends.jani) is not available",
+                                       None, hint="use --via prism")]) from None
+    return Job("jani", jani.dumps(jani.emit(low)), "", names, engine, max_states, what)
+
+
+def _source_line_span(model: ir.Model, generated: str, line: int) -> Span | None:
+    """The .afsm line a line of generated PRISM comes from (its `// file.afsm:N` comment)."""
+    lines = generated.splitlines()
+    base = re.escape(os.path.basename(model.source.path))
+    for i in range(min(line, len(lines)) - 1, -1, -1):
+        m = re.search(rf"// (?:.*, )?{base}:(\d+)", lines[i])
+        if m:
+            n = int(m.group(1))
+            text = model.source.text
+            start = 0
+            for _ in range(n - 1):
+                start = text.find("\n", start) + 1
+            end = text.find("\n", start)
+            return Span.at_offset(model.source, start, end if end >= 0 else len(text))
+    return None
+
+
+def failure_diagnostic(f: StormFailure, model: ir.Model, low: Lowered,
+                       props: Sequence[ir.Property], job: Job) -> Diagnostic:
+    """A Storm failure as an afsmc diagnostic, pointing at the .afsm source if possible."""
+    prop = None
+    if f.prop is not None:
+        prop = next((p for p in props if f.prop in
+                     [n for n, _ in property_variants(low, p)]), None)
+    route = "PRISM" if job.via == "prism" else "JANI"
+    first = " ".join(line.strip() for line in f.message.splitlines()
+                     if line.strip() and set(line.strip()) != {"^"}) or "no message"
+    engine_hint = (f"the {job.engine} engine supports fewer properties: try --engine sparse"
+                   if job.engine != "sparse" else None)
+
+    def diag(code: str, msg: str, span: Span | None, hint: str | None = None) -> Diagnostic:
+        return Diagnostic(code, Severity.ERROR, msg, span, hint)
+
+    if f.stage == "parse":
+        span = (_source_line_span(model, job.model_text, f.line)
+                if f.line is not None and job.via == "prism" else None)
+        return diag("E411", f"Storm cannot read the generated {route} model: {first}", span,
+                    f"this is a bug in afsmc's {route} backend; --via "
+                    f"{'jani' if job.via == 'prism' else 'prism'} may work meanwhile")
+    if f.stage == "property":
+        return diag("E402", f"Storm cannot check property '{prop.name if prop else f.prop}': "
+                    f"{first}", prop.span if prop else None, engine_hint)
+    if f.stage == "build":
+        span = None
+        for v in model.variables:
+            if re.search(rf"\b{re.escape(v.name)}\b", f.message):
+                span = v.span
+                break
+        return diag("E403", f"Storm cannot build the {job.what}: {first}", span, engine_hint)
+    if f.stage == "check":
+        return diag("E404", f"Storm failed to check '{prop.name if prop else f.prop}' on the "
+                    f"{job.what}: {first}", prop.span if prop else None, engine_hint)
+    if f.stage == "too-big":
+        return diag("E405", first, None,
+                    "raise --max-states if the machine has the memory (the sparse engine needs "
+                    "about 250 bytes per state), or check a smaller instance with --const")
+    if f.stage == "memory":
+        return diag("E406", first, None, "check a smaller instance with --const, or try "
+                    "--engine hybrid, which stores the model symbolically")
+    return diag("E406", f"internal error while running Storm: {first}", None)
+
+
+# ---- checking ----------------------------------------------------------------------
+
+
+def _stats(res: JobResult, resolution: str) -> ModelStats:
+    return ModelStats(res.kind, resolution, res.states, res.transitions, res.choices,
+                      res.parse_time, res.build_time, res.check_time)
+
+
+def check(model: ir.Model, props: Sequence[ir.Property], *, via: Via = "prism",
+          engine: Engine = "sparse", max_states: int | None = None, uniform: bool = True,
+          isolate: bool | None = None, progress: Progress | None = None) -> Checks:
+    """Check `props` (uniquely named) on a loaded model; raises CompileError on failure."""
+    model = dataclasses.replace(model, properties=tuple(props))
+    bound = upper_bound(model)
+    lows: list[tuple[str, Lowered, str]] = []
+    if model.is_nondeterministic:
+        lows.append(("nondet", lower(model, "nondet"), "MDP"))
+        if uniform:
+            lows.append(("uniform", lower(model, "uniform"), "uniform DTMC"))
+    else:
+        lows.append(("nondet", lower(model, "nondet"), "DTMC"))
+    stats: list[ModelStats] = []
+    values: list[dict[str, float]] = []
+    for resolution, low, what in lows:
+        job = make_job(low, props, via, engine, max_states, what)
+        res = run_job(job, bound, isolate=isolate, progress=progress)
+        if res.failure is not None:
+            raise CompileError([failure_diagnostic(res.failure, model, low, props, job)])
+        stats.append(_stats(res, resolution))
+        values.append(res.values)
+    results = []
+    for p in props:
+        r = PropertyResult(p.name, formula_text(p, p.opt, show), p.kind)
+        low = lows[0][1]
+        if low.kind == "mdp":
+            for name, opt in property_variants(low, p):
+                setattr(r, opt, values[0][name])
+            if len(values) > 1:
+                r.uniform = values[1][p.name]
+        else:
+            r.value = values[0][p.name]
+        results.append(r)
+    return Checks(stats[0], stats[1] if len(stats) > 1 else None, results)
+
+
+def run(path: str, *, consts: Mapping[str, str] | None = None, properties: Sequence[str] = (),
+        formulas: Sequence[str] = (), via: Via = "prism", engine: Engine = "sparse",
+        max_states: int | None = None, uniform: bool = True, isolate: bool | None = None,
+        progress: Progress | None = None, text: str | None = None) -> VerifyResult:
+    """Verify one .afsm file; see the package docstring. Raises CompileError."""
+    t0 = time.perf_counter()
+    loaded = load_with_formulas(path, consts, formulas, text=text)
+    model = loaded.model
+    props = select(model, properties, loaded.adhoc)
+    load_time = time.perf_counter() - t0
+    limit = default_max_states() if max_states is None else max_states
+    bound = upper_bound(model)
+    if progress is not None:
+        progress(f"state space: at most {human(bound)} states (modes × variable ranges); "
+                 f"--max-states {limit:,}")
+    try:
+        checks = check(model, props, via=via, engine=engine, max_states=limit, uniform=uniform,
+                       isolate=isolate, progress=progress)
+    except CompileError as exc:
+        raise loaded.remap_error(exc) from None
+    consts_used: dict[str, object] = {c.name: c.value for c in model.constants if c.is_param}
+    return VerifyResult(path, model.name, consts_used, via, engine, bound, limit, checks.model,
+                        checks.uniform_model, checks.properties, load_time,
+                        time.perf_counter() - t0, loaded.warnings)

@@ -1,0 +1,216 @@
+"""The state-space guard: an estimate before building, and builds in a watched child.
+
+Storm has neither a state limit nor a progress callback. So a build that might be big
+runs in a child process (spawned, so it is safe from a threaded parent) that this process
+watches: its memory use gives an estimate of the states explored so far (the sparse
+builder needs about 110-260 bytes per state, /work/shared/notes/performance.md), which is
+shown as progress and compared with --max-states; the child is killed when it exceeds the
+budget, and RLIMIT_AS backs this up inside the child. After the build the exact number of
+states is compared with --max-states before anything is checked.
+"""
+
+from __future__ import annotations
+
+import multiprocessing
+import os
+import time
+from collections.abc import Callable
+from typing import Any
+
+from afsmc.model import ir
+from afsmc.verify.storm import Job, JobResult, StormFailure, execute
+
+# Below this upper bound a build takes well under a second: no child process needed.
+IN_PROCESS_STATES = 200_000
+# Bytes per state of a sparse build as it runs: the low end of the measured range, so the
+# estimate of states explored errs on the high side.
+BYTES_PER_STATE = 150
+# The child is stopped when its memory grows past max_states states at a generous rate.
+BUDGET_BYTES_PER_STATE = 400
+BUDGET_SLACK = 128 << 20
+# Default --max-states: a sparse build plus one check at ~250 bytes per state in 70% of the
+# memory available now, capped so a default run cannot occupy a shared machine for hours.
+DEFAULT_CAP = 50_000_000
+
+Progress = Callable[[str], None]
+
+
+def upper_bound(model: ir.Model) -> int:
+    """A cheap upper bound on the reachable states: modes × the product of variable ranges."""
+    n = len(model.modes)
+    for v in model.variables:
+        n *= v.size
+    return n
+
+
+def mem_available() -> int | None:
+    try:
+        with open("/proc/meminfo", encoding="ascii") as f:
+            for line in f:
+                if line.startswith("MemAvailable:"):
+                    return int(line.split()[1]) * 1024
+    except OSError:
+        return None
+    return None
+
+
+def default_max_states() -> int:
+    avail = mem_available()
+    if avail is None:
+        return 10_000_000
+    n = int(avail * 0.7 / 250)
+    return max(100_000, min(DEFAULT_CAP, n - n % 100_000))
+
+
+def human(n: float) -> str:
+    """12_345_678 -> '12.3 M'."""
+    if n >= 1e9:
+        return f"{n / 1e9:.1f} G"
+    if n >= 1e6:
+        return f"{n / 1e6:.1f} M"
+    if n >= 1e4:
+        return f"{n / 1e3:.0f} k"
+    return f"{int(n):,}"
+
+
+def _rss(pid: int) -> int | None:
+    try:
+        with open(f"/proc/{pid}/status", encoding="ascii") as f:
+            for line in f:
+                if line.startswith("VmRSS:"):
+                    return int(line.split()[1]) * 1024
+    except OSError:
+        return None
+    return None
+
+
+def _vmsize() -> int | None:
+    try:
+        with open("/proc/self/status", encoding="ascii") as f:
+            for line in f:
+                if line.startswith("VmSize:"):
+                    return int(line.split()[1]) * 1024
+    except OSError:
+        return None
+    return None
+
+
+def _child(conn: Any, job: Job, address_limit: int | None) -> None:
+    """Runs in the child: report readiness and memory baseline, then the job's events."""
+    import resource
+
+    import stormpy  # noqa: F401  (imported before the baseline is measured)
+
+    if address_limit is not None:
+        size = _vmsize()
+        if size is not None:
+            # A backstop: an allocation past this fails in the child, not in the machine.
+            limit = size + address_limit
+            resource.setrlimit(resource.RLIMIT_AS, (limit, limit))
+    conn.send(("ready", _rss(os.getpid())))
+    result = execute(job, lambda event, data: conn.send((event, data)))
+    conn.send(("result", result))
+    conn.close()
+
+
+def run_isolated(job: Job, progress: Progress | None, *, every: float = 5.0,
+                 first: float = 3.0) -> JobResult:
+    """Run `job` in a watched child process; see the module docstring."""
+    ctx = multiprocessing.get_context("spawn")
+    parent, child_end = ctx.Pipe(duplex=False)
+    avail = mem_available()
+    # Never let the child take more than 85% of what is free now.
+    cap = int(avail * 0.85) if avail is not None else None
+    budget = None
+    if job.max_states is not None and job.engine == "sparse":
+        budget = job.max_states * BUDGET_BYTES_PER_STATE + BUDGET_SLACK
+    address_limit = None
+    if job.engine == "sparse":
+        # Symbolic engines reserve large address ranges up front (Sylvan), so only sparse.
+        address_limit = max(2 << 30, 3 * (budget or 0), cap or 0)
+    proc = ctx.Process(target=_child, args=(child_end, job, address_limit), daemon=True)
+    proc.start()
+    child_end.close()
+    start = time.monotonic()
+    next_report = start + first
+    baseline: int | None = None
+    phase = "start"
+    peak = 0
+    result: JobResult | None = None
+
+    def say(text: str) -> None:
+        if progress is not None:
+            progress(text)
+
+    try:
+        while result is None:
+            if parent.poll(0.2):
+                try:
+                    event, data = parent.recv()
+                except EOFError:
+                    break
+                if event == "ready":
+                    baseline = data
+                elif event == "phase":
+                    phase = data
+                elif event == "built":
+                    states, transitions, secs = data
+                    say(f"built the {job.what}: {states:,} states, {transitions:,} transitions "
+                        f"in {secs:.1f} s")
+                elif event == "result":
+                    result = data
+                continue
+            if not proc.is_alive():
+                break
+            rss = _rss(proc.pid or 0)
+            if rss is None or baseline is None:
+                continue
+            peak = max(peak, rss)
+            grown = max(0, rss - baseline)
+            explored = grown / BYTES_PER_STATE
+            now = time.monotonic()
+            if phase == "build" and budget is not None and grown > budget:
+                proc.kill()
+                proc.join()
+                assert job.max_states is not None
+                return JobResult(failure=StormFailure(
+                    "too-big", f"stopped building the {job.what} after {now - start:.0f} s: about "
+                    f"{human(explored)} states explored (estimated from memory use), more than "
+                    f"--max-states {job.max_states:,}", states=int(explored)))
+            if cap is not None and rss > cap:
+                proc.kill()
+                proc.join()
+                return JobResult(failure=StormFailure(
+                    "memory", f"stopped the {job.what} after {now - start:.0f} s: it used "
+                    f"{rss / 2**30:.1f} GB, 85% of the memory that was available"))
+            if now >= next_report:
+                next_report = now + every
+                if phase == "build":
+                    est = (f", about {human(explored)} states so far (estimated from memory use)"
+                           if job.engine == "sparse" else f", {rss / 2**30:.1f} GB")
+                    say(f"building the {job.what}: {now - start:.0f} s{est}")
+                elif phase.startswith("check "):
+                    say(f"checking {phase[6:]} on the {job.what}: {now - start:.0f} s")
+    finally:
+        if proc.is_alive() and result is None:
+            proc.kill()
+        proc.join()
+        parent.close()
+    if result is not None:
+        return result
+    code = proc.exitcode
+    why = (f"was killed by signal {-code}" if code is not None and code < 0
+           else f"exited with code {code}")
+    gb = f"; it had used {peak / 2**30:.1f} GB" if peak else ""
+    return JobResult(failure=StormFailure(
+        "memory" if code is not None and code < 0 else "internal",
+        f"the Storm process building the {job.what} {why}{gb}"))
+
+
+def run_job(job: Job, bound: int, *, isolate: bool | None, progress: Progress | None) -> JobResult:
+    """Run in this process when the model is surely small, else in a watched child."""
+    if isolate is None:
+        isolate = bound > IN_PROCESS_STATES
+    if not isolate:
+        return execute(job)
+    return run_isolated(job, progress)

@@ -1,0 +1,210 @@
+"""The only module that talks to Storm: parse a generated model, build it, check properties.
+
+A :class:`Job` is plain picklable data (the model text, the property names to check, the
+engine), so it runs the same in this process, in a watched child process (see
+:mod:`afsmc.verify.guard`), in a process pool or on a Dask worker. Failures come back as
+:class:`StormFailure` data, never as exceptions, and are turned into diagnostics by the
+caller, which knows the .afsm source.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import tempfile
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from typing import Any, Literal
+
+Engine = Literal["sparse", "dd", "hybrid"]
+ENGINES: tuple[Engine, ...] = ("sparse", "dd", "hybrid")
+Via = Literal["prism", "jani"]
+VIAS: tuple[Via, ...] = ("prism", "jani")
+
+# Storm stages a failure can come from; the caller picks the diagnostic code from it.
+Stage = Literal["parse", "property", "build", "check", "too-big", "memory", "internal"]
+
+Notify = Callable[[str, Any], None]
+
+
+@dataclass(frozen=True)
+class Job:
+    via: Via
+    model_text: str  # PRISM model or JANI JSON
+    props_text: str  # PRISM properties file ("name": formula; per line); unused for JANI
+    names: tuple[str, ...]  # the properties to check, in order
+    engine: Engine = "sparse"
+    max_states: int | None = None
+    what: str = "model"  # for messages: "MDP", "uniform DTMC"
+
+
+@dataclass(frozen=True)
+class StormFailure:
+    stage: Stage
+    message: str
+    prop: str | None = None  # the property it concerns
+    line: int | None = None  # line of the generated PRISM text (parse errors)
+    states: int | None = None  # for too-big: the (estimated) number of states
+
+
+@dataclass
+class JobResult:
+    states: int = 0
+    transitions: int = 0
+    choices: int = 0
+    kind: str = ""  # "dtmc" | "mdp" as Storm built it
+    parse_time: float = 0.0
+    build_time: float = 0.0
+    check_time: float = 0.0
+    values: dict[str, float] = field(default_factory=dict)
+    failure: StormFailure | None = None
+
+
+def _quiet() -> None:
+    # Storm logs to stdout, which must stay clean for --json; its errors reach us as exceptions.
+    from stormpy import developer
+
+    developer.set_log_level(developer.LogLevel.OFF)
+
+
+def _message(exc: BaseException) -> str:
+    """Storm's message without the C++ exception class and trailing whitespace."""
+    text = str(exc).strip()
+    for prefix in ("WrongFormatException: ", "InvalidArgumentException: ",
+                   "InvalidPropertyException: ", "NotSupportedException: ",
+                   "InvalidOperationException: ", "InvalidStateException: ",
+                   "OutOfRangeException: ", "FileIoException: ", "InvalidJaniException: ",
+                   "IllegalArgumentException: "):
+        if text.startswith(prefix):
+            return text[len(prefix):]
+    return text
+
+
+def _parse_line(message: str) -> int | None:
+    """`Parsing error at 5:1: ...` -> 5."""
+    import re
+
+    m = re.search(r"[Pp]arsing error at (\d+):(\d+)", message)
+    return int(m.group(1)) if m else None
+
+
+def execute(job: Job, notify: Notify | None = None) -> JobResult:
+    """Parse, build and check `job` with Storm. Never raises for Storm's errors."""
+    try:
+        return _execute(job, notify or (lambda _e, _d: None))
+    except MemoryError:
+        return JobResult(failure=StormFailure("memory", f"ran out of memory building the {job.what}"))
+    except Exception as exc:  # stormpy raises more than RuntimeError; never a traceback
+        return JobResult(failure=StormFailure("internal", f"{type(exc).__name__}: {exc}"))
+
+
+def _execute(job: Job, notify: Notify) -> JobResult:
+    import stormpy
+
+    _quiet()
+    res = JobResult()
+    t0 = time.perf_counter()
+    notify("phase", "parse")
+    if job.via == "prism":
+        with tempfile.TemporaryDirectory(prefix="afsmc-") as tmp:
+            path = os.path.join(tmp, "model.prism")
+            with open(path, "w", encoding="utf-8") as f:
+                f.write(job.model_text)
+            try:
+                program: Any = stormpy.parse_prism_program(path)
+            except RuntimeError as exc:
+                msg = _message(exc)
+                res.failure = StormFailure("parse", msg, line=_parse_line(msg))
+                return res
+        props, failure = _prism_properties(stormpy, program, job)
+    else:
+        try:
+            program, all_props = stormpy.parse_jani_model_from_string(job.model_text)
+        except RuntimeError as exc:
+            res.failure = StormFailure("parse", _message(exc))
+            return res
+        by_name = {p.get_name(): p for p in all_props}
+        missing = [n for n in job.names if n not in by_name]
+        failure = StormFailure("property", "the JANI model has no property named "
+                               + ", ".join(missing), prop=missing[0]) if missing else None
+        props = [by_name[n] for n in job.names if n in by_name]
+    if failure is not None:
+        res.failure = failure
+        return res
+    res.parse_time = time.perf_counter() - t0
+
+    notify("phase", "build")
+    t0 = time.perf_counter()
+    symbolic = job.engine != "sparse"
+    try:
+        if symbolic:
+            # Labels and guards that mention constants fail in the symbolic builder otherwise.
+            sprog = program.substitute_constants()
+            if hasattr(sprog, "substitute_functions"):
+                sprog.substitute_functions()  # JANI: in place
+            model: Any = stormpy.build_symbolic_model(sprog, props)
+        else:
+            model = stormpy.build_model(program, props)
+    except RuntimeError as exc:
+        res.failure = StormFailure("build", _message(exc))
+        return res
+    res.build_time = time.perf_counter() - t0
+    res.states, res.transitions = int(model.nr_states), int(model.nr_transitions)
+    res.choices = int(getattr(model, "nr_choices", res.transitions) or 0) if not symbolic else 0
+    res.kind = "mdp" if str(model.model_type).upper().endswith("MDP") else "dtmc"
+    notify("built", (res.states, res.transitions, res.build_time))
+    if job.max_states is not None and res.states > job.max_states:
+        res.failure = StormFailure("too-big", f"the {job.what} has {res.states:,} states, more "
+                                   f"than --max-states {job.max_states:,}", states=res.states)
+        return res
+
+    t0 = time.perf_counter()
+    engine = {"dd": stormpy.Engine.DD, "hybrid": stormpy.Engine.HYBRID}.get(job.engine)
+    for name, prop in zip(job.names, props, strict=True):
+        notify("phase", f"check {name}")
+        try:
+            if symbolic:
+                r = stormpy.model_checking(model, prop, only_initial_states=True, engine=engine)
+                # The value of the initial state, not the maximum over all states.
+                value = None if r is None else stormpy.filter_initial_states(r, model).get_max()
+            else:
+                r = stormpy.model_checking(model, prop)
+                value = r.get_value(model.initial_states[0])
+        except RuntimeError as exc:
+            res.failure = StormFailure("check", _message(exc), prop=name)
+            return res
+        if value is None:
+            res.failure = StormFailure("check", f"the {job.engine} engine does not support "
+                                       "this property (Storm returned no result)", prop=name)
+            return res
+        res.values[name] = float(value)
+    res.check_time = time.perf_counter() - t0
+    return res
+
+
+def _prism_properties(stormpy: Any, program: Any, job: Job) -> tuple[list[Any], StormFailure | None]:
+    try:
+        parsed = stormpy.parse_properties(job.props_text, program)
+    except RuntimeError:
+        parsed = None
+    if parsed is not None:
+        by_name = {p.get_name(): p for p in parsed}
+        if all(n in by_name for n in job.names):
+            return [by_name[n] for n in job.names], None
+    # Find the property Storm rejects, so the diagnostic can point at it.
+    lines = {n: line for line in job.props_text.splitlines()
+             for n in [line.split('"', 2)[1] if line.startswith('"') else ""] if n}
+    out = []
+    for n in job.names:
+        try:
+            out.append(stormpy.parse_properties(lines.get(n, ""), program)[0])
+        except (RuntimeError, IndexError) as exc:
+            return [], StormFailure("property", _message(exc) if isinstance(exc, RuntimeError)
+                                    else "Storm did not parse this property", prop=n)
+    return out, None
+
+
+def finite(v: float | None) -> float | None:
+    """JSON has no infinity: an infinite expected reward is reported as null."""
+    return v if v is not None and math.isfinite(v) else None

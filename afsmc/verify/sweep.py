@@ -1,0 +1,476 @@
+"""Sweeps: a property over a range of one open constant or of the properties' step bound.
+
+The paper's Figure 2 is such a sweep: the probability of completing the mission by the
+deadline T, with min and max over the floor/ceil choices and the uniform resolution.
+Points are independent :class:`Task` values (plain data, source text included), so they run
+the same in this process, in a local process pool or on a Dask cluster.
+"""
+
+from __future__ import annotations
+
+import csv
+import dataclasses
+import io
+import os
+import time
+from collections.abc import Sequence
+from concurrent.futures import ProcessPoolExecutor, as_completed
+from dataclasses import dataclass, field
+from decimal import Decimal, InvalidOperation
+from typing import Any, Literal
+
+from afsmc.backends.prism import emit as prism_emit
+from afsmc.backends.prism import formula_text
+from afsmc.compiler import read_source
+from afsmc.diagnostics import CompileError, Diagnostic, Severity
+from afsmc.model import expr as E
+from afsmc.model import ir
+from afsmc.model.lower import lower
+from afsmc.model.pretty import show
+from afsmc.verify.core import PropertyResult, check, load_with_formulas, select
+from afsmc.verify.guard import Progress, default_max_states
+from afsmc.verify.storm import Engine, Via, finite
+
+Kind = Literal["const", "bound"]
+Number = int | float
+MAX_POINTS = 10_000
+
+
+def parse_values(text: str) -> list[Number]:
+    """`start:stop:step` (stop included when the steps reach it) or `a,b,c`.
+
+    Integers stay integers; decimals are stepped exactly (0:1:0.1 has 11 points)."""
+    text = text.strip()
+    if not text:
+        raise ValueError("no values")
+    if ":" in text:
+        parts = text.split(":")
+        if len(parts) not in (2, 3):
+            raise ValueError(f"expected start:stop:step, got {text!r}")
+        try:
+            start, stop = Decimal(parts[0]), Decimal(parts[1])
+            step = Decimal(parts[2]) if len(parts) == 3 else Decimal(1)
+        except InvalidOperation:
+            raise ValueError(f"expected numbers in start:stop:step, got {text!r}") from None
+        if step <= 0:
+            raise ValueError(f"the step of {text!r} must be positive")
+        if stop < start:
+            raise ValueError(f"{text!r} is empty: stop is below start")
+        count = int((stop - start) / step) + 1
+        if count > MAX_POINTS:
+            raise ValueError(f"{text!r} has {count:,} points; at most {MAX_POINTS:,}")
+        return [_number(start + i * step) for i in range(count)]
+    out = []
+    for part in text.split(","):
+        try:
+            out.append(_number(Decimal(part.strip())))
+        except InvalidOperation:
+            raise ValueError(f"not a number: {part.strip()!r}") from None
+    return out
+
+
+def _number(d: Decimal) -> Number:
+    return int(d) if d == d.to_integral_value() else float(d)
+
+
+def fmt(x: Number) -> str:
+    return str(x) if isinstance(x, int) else repr(x)
+
+
+@dataclass
+class SweepPoint:
+    x: Number
+    properties: list[PropertyResult]
+    states: int
+    transitions: int
+    uniform_states: int | None = None
+    uniform_transitions: int | None = None
+    seconds: float = 0.0  # wall time of the point (not written to the outputs)
+
+    def property(self, name: str) -> PropertyResult:
+        return next(p for p in self.properties if p.name == name)
+
+
+@dataclass(frozen=True)
+class Task:
+    """One unit of work: a constant's value, or a chunk of step bounds on one model."""
+
+    path: str
+    text: str
+    consts: tuple[tuple[str, str], ...]
+    properties: tuple[str, ...]
+    formulas: tuple[str, ...]
+    variable: str
+    kind: Kind
+    xs: tuple[Number, ...]
+    via: Via
+    engine: Engine
+    max_states: int
+    uniform: bool
+    isolate: bool | None
+    shared: bool = False  # const sweep whose constant only the properties read: one build
+
+
+def _with_bound(p: ir.Property, k: int, name: str) -> ir.Property:
+    path = p.path
+    lit = E.Lit(k, E.Type.INT)
+    if isinstance(path, ir.Path) and path.kind != "X":
+        return dataclasses.replace(p, name=name, path=dataclasses.replace(path, bound=lit))
+    if isinstance(path, ir.RewardPath) and path.kind in ("C", "I"):
+        return dataclasses.replace(p, name=name, path=dataclasses.replace(path, bound=lit))
+    raise CompileError([Diagnostic(
+        "E410", Severity.ERROR, f"property '{p.name}' has no step bound to sweep", p.span,
+        hint="--bound sweeps F<=k, G<=k, U<=k, C<=k and I=k")])
+
+
+def evaluate(task: Task) -> tuple[list[SweepPoint], list[Diagnostic]]:
+    """Run one task; failures are returned (diagnostics pickle, CompileError does not)."""
+    try:
+        return _evaluate(task), []
+    except CompileError as exc:
+        return [], exc.diagnostics
+
+
+def _evaluate(task: Task) -> list[SweepPoint]:
+    t0 = time.perf_counter()
+    if task.kind == "const" and task.shared:
+        return _shared_points(task, t0)
+    consts = dict(task.consts)
+    if task.kind == "const":
+        (x,) = task.xs
+        consts[task.variable] = fmt(x)
+    loaded = load_with_formulas(task.path, consts, task.formulas, text=task.text)
+    model = loaded.model
+    props = select(model, task.properties, loaded.adhoc)
+    try:
+        return _points(model, props, task, t0)
+    except CompileError as exc:
+        raise loaded.remap_error(exc) from None
+
+
+def _points(model: ir.Model, props: list[ir.Property], task: Task, t0: float) -> list[SweepPoint]:
+    if task.kind == "const":
+        c = _checks(model, props, task)
+        return [SweepPoint(task.xs[0], c.properties, c.model.states, c.model.transitions,
+                           c.uniform_model.states if c.uniform_model else None,
+                           c.uniform_model.transitions if c.uniform_model else None,
+                           time.perf_counter() - t0)]
+    bounded = []
+    for i, x in enumerate(task.xs):
+        if not isinstance(x, int) or x < 0:
+            raise CompileError([Diagnostic("E410", Severity.ERROR,
+                                           f"--bound {fmt(x)}: step bounds are integers >= 0",
+                                           None)])
+        bounded += [(i, p.name, "", _with_bound(p, x, f"{p.name}__at{i}")) for p in props]
+    return _regroup(model, bounded, task, t0)
+
+
+def _regroup(model: ir.Model, bounded: list[tuple[int, str, str, ir.Property]], task: Task,
+             t0: float) -> list[SweepPoint]:
+    """Check every (point, property) on one model and split the results by point."""
+    c = _checks(model, [b for _, _, _, b in bounded], task)
+    per_point: dict[int, list[PropertyResult]] = {}
+    for (i, name, formula, _), r in zip(bounded, c.properties, strict=True):
+        per_point.setdefault(i, []).append(
+            dataclasses.replace(r, name=name, formula=formula or r.formula))
+    secs = (time.perf_counter() - t0) / max(1, len(task.xs))
+    return [SweepPoint(x, per_point[i], c.model.states, c.model.transitions,
+                       c.uniform_model.states if c.uniform_model else None,
+                       c.uniform_model.transitions if c.uniform_model else None, secs)
+            for i, x in enumerate(task.xs)]
+
+
+def _inline_consts(p: ir.Property, model: ir.Model, name: str) -> ir.Property:
+    """The property with every constant replaced by its value in `model`."""
+    def lit(n: E.Expr) -> E.Expr | None:
+        if isinstance(n, E.ConstRef):
+            return E.Lit(model.constant(n.name).value, n.type)
+        return None
+
+    def sub(e: E.Expr | None) -> E.Expr | None:
+        return None if e is None else E.transform(e, lit)
+
+    path = p.path
+    if isinstance(path, ir.Path):
+        target = sub(path.target)
+        assert target is not None
+        new: ir.Path | ir.RewardPath = dataclasses.replace(
+            path, target=target, left=sub(path.left), bound=sub(path.bound))
+    else:
+        new = dataclasses.replace(path, target=sub(path.target), bound=sub(path.bound))
+    return dataclasses.replace(p, name=name, path=new)
+
+
+def _shared_points(task: Task, t0: float) -> list[SweepPoint]:
+    bounded = []
+    first: Any = None
+    for i, x in enumerate(task.xs):
+        consts = dict(task.consts) | {task.variable: fmt(x)}
+        # The model is the same at every point (sweep() checked): check it once.
+        loaded = load_with_formulas(task.path, consts, task.formulas, text=task.text,
+                                    run_checks=first is None)
+        first = first or loaded
+        for p in select(loaded.model, task.properties, loaded.adhoc):
+            bounded.append((i, p.name, formula_text(p, p.opt, show),
+                            _inline_consts(p, loaded.model, f"{p.name}__at{i}")))
+    try:
+        return _regroup(first.model, bounded, task, t0)
+    except CompileError as exc:
+        raise first.remap_error(exc) from None
+
+
+def model_text(path: str, text: str, consts: dict[str, str]) -> str:
+    """The PRISM model without properties and without unused constants' declarations."""
+    import re
+
+    model = load_with_formulas(path, consts, text=text, run_checks=False).model
+    lines = prism_emit(lower(model, "nondet")).model.splitlines()
+    body = "\n".join(line.split("//")[0] for line in lines if not line.startswith("const "))
+    used = set(re.findall(r"[A-Za-z_][A-Za-z0-9_]*", body))
+    return "\n".join(line for line in lines if not line.startswith("const ")
+                     or line.split()[2] in used)
+
+
+def independent(path: str, text: str, consts: dict[str, str], variable: str,
+                values: Sequence[Number]) -> bool:
+    """Whether the model (not its properties) is the same at the first and last value."""
+    if len(values) < 2:
+        return False
+    try:
+        a = model_text(path, text, consts | {variable: fmt(values[0])})
+        b = model_text(path, text, consts | {variable: fmt(values[-1])})
+    except CompileError:
+        return False  # the points report it
+    return a == b
+
+
+def _checks(model: ir.Model, props: list[ir.Property], task: Task) -> Any:
+    return check(model, props, via=task.via, engine=task.engine, max_states=task.max_states,
+                 uniform=task.uniform, isolate=task.isolate)
+
+
+@dataclass
+class SweepResult:
+    path: str
+    variable: str  # the constant's name, or "bound"
+    kind: Kind
+    type: str  # "mdp" | "dtmc"
+    points: list[SweepPoint]
+    names: list[str] = field(default_factory=list)  # the properties, in order
+    seconds: float = 0.0
+
+    def curve(self, name: str, key: str) -> list[float | None]:
+        """The values of one property: key is "min", "max", "uniform" or "value"."""
+        out: list[float | None] = [getattr(pt.property(name), key) for pt in self.points]
+        return out
+
+    @property
+    def xs(self) -> list[Number]:
+        return [pt.x for pt in self.points]
+
+    def to_csv(self) -> str:
+        buf = io.StringIO()
+        w = csv.writer(buf, lineterminator="\n")
+        w.writerow([self.variable, "property", "min", "max", "uniform", "value", "states",
+                    "transitions", "uniform_states", "uniform_transitions"])
+
+        def cell(v: float | int | None) -> str:
+            return "" if v is None else str(v) if isinstance(v, int) else repr(float(v))
+
+        for pt in self.points:
+            for r in pt.properties:
+                w.writerow([fmt(pt.x), r.name, cell(r.min), cell(r.max), cell(r.uniform),
+                            cell(r.value), pt.states, pt.transitions, cell(pt.uniform_states),
+                            cell(pt.uniform_transitions)])
+        return buf.getvalue()
+
+    def to_json(self) -> dict[str, object]:
+        first = self.points[0].properties if self.points else []
+        return {
+            "file": self.path,
+            "variable": self.variable,
+            "kind": self.kind,
+            "type": self.type,
+            "properties": [{"name": r.name, "formula": r.formula} for r in first]
+            if self.kind == "const" else [{"name": r.name} for r in first],
+            "points": [{
+                "x": pt.x,
+                "states": pt.states,
+                "transitions": pt.transitions,
+                "uniform_states": pt.uniform_states,
+                "uniform_transitions": pt.uniform_transitions,
+                "properties": [{k: v for k, v in r.to_json().items()
+                                if k not in ("formula",) or self.kind == "bound"}
+                               for r in pt.properties],
+            } for pt in self.points],
+        }
+
+    def plot(self, path: str, *, protect: tuple[str, ...] = ()) -> None:
+        """Min, max and uniform curves (or the value) per property, as PNG or SVG."""
+        from matplotlib import rc_context
+        from matplotlib.backends.backend_agg import FigureCanvasAgg
+        from matplotlib.figure import Figure
+
+        ext = os.path.splitext(path)[1].lower()
+        if ext not in (".png", ".svg"):
+            raise CompileError([Diagnostic("E003", Severity.ERROR,
+                                           f"--plot {path}: the name must end in .png or .svg",
+                                           None)])
+        n = max(1, len(self.names))
+        with rc_context({"svg.hashsalt": "afsmc", "font.size": 9}):
+            fig = Figure(figsize=(6.4, 3.6 * n), layout="constrained")
+            FigureCanvasAgg(fig)
+            xs = [float(x) for x in self.xs]
+            for i, name in enumerate(self.names):
+                ax = fig.add_subplot(n, 1, i + 1)
+                first = self.points[0].property(name) if self.points else None
+                if self.type == "mdp":
+                    lo = [_nan(v) for v in self.curve(name, "min")]
+                    hi = [_nan(v) for v in self.curve(name, "max")]
+                    ax.fill_between(xs, lo, hi, color="tab:blue", alpha=0.12, linewidth=0)
+                    ax.plot(xs, hi, color="tab:blue", label="max", linewidth=1.6)
+                    ax.plot(xs, lo, color="tab:red", label="min", linewidth=1.6)
+                    un = self.curve(name, "uniform")
+                    if any(v is not None for v in un):
+                        ax.plot(xs, [_nan(v) for v in un], color="black", linestyle="--",
+                                label="uniform", linewidth=1.2)
+                else:
+                    ax.plot(xs, [_nan(v) for v in self.curve(name, "value")],
+                            color="tab:blue", label="value", linewidth=1.6)
+                what = "probability" if first is None or first.kind == "P" else "expected reward"
+                title = name if first is None or self.kind == "bound" else \
+                    f"{name}: {first.formula}"
+                ax.set_title(title)
+                ax.set_xlabel(self.variable if self.kind == "const" else "step bound k")
+                ax.set_ylabel(what)
+                if what == "probability":
+                    ax.set_ylim(-0.02, 1.02)
+                ax.grid(True, alpha=0.3)
+                ax.legend(loc="best")
+            buf = io.BytesIO()
+            if ext == ".png":
+                fig.savefig(buf, format="png", dpi=120, metadata={"Software": None})
+            else:
+                fig.savefig(buf, format="svg", metadata={"Date": None, "Creator": None})
+        write_bytes_atomic(path, buf.getvalue(), protect=protect)
+
+
+def _nan(v: float | None) -> float:
+    return float("nan") if v is None or finite(v) is None else v
+
+
+def write_bytes_atomic(path: str, data: bytes, *, protect: tuple[str, ...] = ()) -> None:
+    """Like afsmc.compiler.write_atomic, for binary files (PNG)."""
+    real = os.path.realpath(path)
+    for p in protect:
+        if os.path.exists(p) and os.path.realpath(p) == real:
+            raise CompileError([Diagnostic("E002", Severity.ERROR,
+                                           f"refusing to overwrite the input {p}", None)])
+    directory = os.path.dirname(real) or "."
+    tmp = os.path.join(directory, f".{os.path.basename(real)}.tmp{os.getpid()}")
+    try:
+        os.makedirs(directory, exist_ok=True)
+        with open(tmp, "wb") as f:
+            f.write(data)
+            f.flush()
+            os.fsync(f.fileno())
+        os.replace(tmp, real)
+    except OSError as exc:
+        if os.path.exists(tmp):
+            os.unlink(tmp)
+        raise CompileError([Diagnostic("E003", Severity.ERROR,
+                                       f"cannot write {path}: {exc.strerror or exc}", None)]) from None
+
+
+def _chunks(xs: Sequence[Number], n: int) -> list[tuple[Number, ...]]:
+    n = max(1, min(n, len(xs)))
+    size = -(-len(xs) // n)
+    return [tuple(xs[i:i + size]) for i in range(0, len(xs), size)]
+
+
+def sweep(path: str, variable: str, values: Sequence[Number], *, kind: Kind = "const",
+          consts: dict[str, str] | None = None, properties: Sequence[str] = (),
+          formulas: Sequence[str] = (), via: Via = "prism", engine: Engine = "sparse",
+          max_states: int | None = None, jobs: int | None = None, dask: Any = None,
+          uniform: bool = True, progress: Progress | None = None,
+          text: str | None = None) -> SweepResult:
+    """Evaluate the properties at every value; see the package docstring. Raises CompileError."""
+    t0 = time.perf_counter()
+    if not values:
+        raise CompileError([Diagnostic("E410", Severity.ERROR, "the sweep has no values", None)])
+    source = read_source(path) if text is None else text
+    consts = dict(consts or {})
+    if kind == "const":
+        consts.pop(variable, None)
+    jobs = jobs or os.cpu_count() or 1
+    limit = default_max_states() if max_states is None else max_states
+    # Dask workers are daemon processes, which cannot start the guard's child process.
+    isolate: bool | None = False if dask is not None else None
+    base = dict(path=path, text=source, consts=tuple(sorted(consts.items())),
+                properties=tuple(properties), formulas=tuple(formulas), variable=variable,
+                kind=kind, via=via, engine=engine, max_states=limit, uniform=uniform,
+                isolate=isolate)
+    if kind == "const" and independent(path, source, consts, variable, values):
+        # Only the properties read the constant (a deadline): one build per chunk.
+        chunks = _chunks(values, 1 if dask is None and jobs == 1 else jobs)
+        tasks = [Task(xs=c, shared=True, **base) for c in chunks]  # type: ignore[arg-type]
+    elif kind == "const":
+        tasks = [Task(xs=(x,), **base) for x in values]  # type: ignore[arg-type]
+    else:
+        parallel = 1 if dask is None and jobs == 1 else (jobs if dask is None else 4 * jobs)
+        tasks = [Task(xs=c, **base) for c in _chunks(values, parallel)]  # type: ignore[arg-type]
+    outcomes = _run(tasks, jobs, dask, progress, len(values))
+    points: list[SweepPoint] = []
+    for task, (pts, diags) in zip(tasks, outcomes, strict=True):
+        if diags:
+            where = f"{variable}={fmt(task.xs[0])}" if kind == "const" else \
+                f"bounds {fmt(task.xs[0])}..{fmt(task.xs[-1])}"
+            raise CompileError([dataclasses.replace(d, message=f"at {where}: {d.message}")
+                                if d.is_error else d for d in diags])
+        points += pts
+    first = points[0]
+    typ = "mdp" if any(r.min is not None or r.max is not None for r in first.properties) \
+        else "dtmc"
+    return SweepResult(path, variable if kind == "const" else "bound", kind, typ, points,
+                       [r.name for r in first.properties], time.perf_counter() - t0)
+
+
+def _run(tasks: list[Task], jobs: int, dask: Any, progress: Progress | None,
+         total: int) -> list[tuple[list[SweepPoint], list[Diagnostic]]]:
+    results: dict[int, tuple[list[SweepPoint], list[Diagnostic]]] = {}
+    start = time.monotonic()
+    last = [0.0]
+
+    def done(i: int, r: tuple[list[SweepPoint], list[Diagnostic]]) -> None:
+        results[i] = r
+        now = time.monotonic()
+        if progress is not None and (now - last[0] >= 2.0 or len(results) == len(tasks)):
+            last[0] = now
+            finished = sum(len(t.xs) for j, t in enumerate(tasks) if j in results)
+            progress(f"sweep: {finished}/{total} points in {now - start:.0f} s")
+
+    if dask is not None:
+        import distributed
+
+        dd: Any = distributed  # untyped
+        client = dask if isinstance(dask, dd.Client) else dd.Client(dask)
+        try:
+            futures = client.map(evaluate, tasks, pure=False)
+            index = {f.key: i for i, f in enumerate(futures)}
+            for fut in dd.as_completed(futures):
+                done(index[fut.key], fut.result())
+        finally:
+            if client is not dask:
+                client.close()
+    elif jobs <= 1 or len(tasks) == 1:
+        for i, t in enumerate(tasks):
+            done(i, evaluate(t))
+    else:
+        import multiprocessing
+
+        ctx = multiprocessing.get_context("spawn")  # safe even if the caller has threads
+        with ProcessPoolExecutor(max_workers=min(jobs, len(tasks)), mp_context=ctx) as pool:
+            futs = {pool.submit(evaluate, t): i for i, t in enumerate(tasks)}
+            for f in as_completed(futs):
+                done(futs[f], f.result())
+    return [results[i] for i in range(len(tasks))]

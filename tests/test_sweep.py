@@ -1,0 +1,134 @@
+"""`afsmc sweep` and `afsmc.verify.sweep`: deadline curves (Figure 2 of the paper), CSV and
+plots, closed forms, and local processes / Dask giving the same numbers as one process."""
+
+from __future__ import annotations
+
+import csv
+import io
+import itertools
+import json
+from pathlib import Path
+
+import pytest
+
+from afsmc.verify import parse_values, sweep
+from tests.conftest import EXAMPLES, run_cli
+from tests.test_verify import DEADLINE, GEO
+
+TOL = 1e-6  # Storm's value iteration stops at a relative precision of 1e-6
+
+
+@pytest.fixture
+def deadline(tmp_path: Path) -> str:
+    p = tmp_path / "deadline.afsm"
+    p.write_text(DEADLINE)
+    return str(p)
+
+
+def rows(text: str) -> list[dict[str, str]]:
+    return list(csv.DictReader(io.StringIO(text)))
+
+
+def assert_deadline_curves(lo: list[float], hi: list[float], uni: list[float]) -> None:
+    for curve in (lo, hi, uni):
+        assert all(b >= a - TOL for a, b in itertools.pairwise(curve)), curve
+    for a, b, c in zip(lo, uni, hi, strict=True):
+        assert a - TOL <= b <= c + TOL
+
+
+def test_parse_values() -> None:
+    assert parse_values("0:900:300") == [0, 300, 600, 900]
+    assert parse_values("0:10:4") == [0, 4, 8]  # stop is included only when reached
+    assert parse_values("0:1:0.25") == [0, 0.25, 0.5, 0.75, 1]
+    assert parse_values("3") == [3]
+    assert parse_values("1, 2,5") == [1, 2, 5]
+    for bad in ("0:10:0", "5:1", "a:b", "1,x", "", "0:1000000"):
+        with pytest.raises(ValueError):
+            parse_values(bad)
+
+
+def test_deadline_sweep_writes_csv_and_png(deadline: str, tmp_path: Path) -> None:
+    out, png = tmp_path / "out.csv", tmp_path / "fig.png"
+    r = run_cli("sweep", deadline, "--const", "D=0:14", "-p", "by_deadline", "-o", str(out),
+                "--plot", str(png), "--jobs", "1")
+    assert r.code == 0, r.err
+    assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    data = rows(out.read_text())
+    assert [int(d["D"]) for d in data] == list(range(15))
+    lo, hi, uni = ([float(d[k]) for d in data] for k in ("min", "max", "uniform"))
+    assert_deadline_curves(lo, hi, uni)
+    assert lo[0] == hi[0] == 0.0 and hi[-1] > 0.9  # from nothing to almost surely
+    assert any(b < c - 0.01 for b, c in zip(uni, hi, strict=True))  # the bounds differ
+    # Without failures the hand computation of test_verify holds at D=4, 5.
+    r = run_cli("sweep", deadline, "--const", "D=4,5", "-c", "P_FAIL=0", "-p", "by_deadline",
+                "--jobs", "1")
+    assert r.code == 0, r.err
+    got = [(float(d["min"]), float(d["max"]), float(d["uniform"])) for d in rows(r.out)]
+    assert got == [pytest.approx((0, 1, 0.25)), pytest.approx((0, 1, 0.75))]
+
+
+def test_parallel_local_and_dask_equal_one_process(deadline: str) -> None:
+    distributed = pytest.importorskip("distributed")
+    args = dict(properties=["by_deadline", "steps"], consts={"P_FAIL": "0.1"})
+    one = sweep(deadline, "D", [3, 5, 7, 9], jobs=1, **args)  # type: ignore[arg-type]
+    two = sweep(deadline, "D", [3, 5, 7, 9], jobs=2, **args)  # type: ignore[arg-type]
+    assert two.to_csv() == one.to_csv()
+    with distributed.LocalCluster(n_workers=1, threads_per_worker=1, processes=False,
+                                  dashboard_address=None) as cluster:
+        remote = sweep(deadline, "D", [3, 5, 7, 9], dask=cluster.scheduler_address,
+                       **args)  # type: ignore[arg-type]
+    assert remote.to_csv() == one.to_csv()
+    assert remote.to_json() == one.to_json()
+
+
+def test_constant_in_the_model_rebuilds_per_point(deadline: str) -> None:
+    # Each job takes a geometric number of attempts: E[steps] = 2 / (1 - P_FAIL).
+    res = sweep(deadline, "P_FAIL", parse_values("0:0.5:0.25"), properties=["steps"], jobs=1)
+    for pt in res.points:
+        r = pt.property("steps")
+        want = 2 / (1 - pt.x)
+        assert r.min == pytest.approx(want, rel=1e-5)
+        assert r.max == pytest.approx(want, rel=1e-5)
+        assert r.uniform == pytest.approx(want, rel=1e-5)
+
+
+def test_bound_sweep_matches_closed_form(tmp_path: Path) -> None:
+    p = tmp_path / "geo.afsm"
+    p.write_text(GEO)
+    r = run_cli("sweep", str(p), "--bound", "0:8:2", "-p", "soon", "--json", "--jobs", "2")
+    assert r.code == 0, r.err
+    obj = json.loads(r.out)
+    assert obj["kind"] == "bound" and obj["type"] == "dtmc"
+    for pt in obj["points"]:
+        (prop,) = pt["properties"]
+        assert prop["value"] == pytest.approx(1 - 0.7 ** pt["x"], abs=1e-9)
+        assert prop["formula"] == f'P=? [ F<={pt["x"]} "done" ]'
+
+
+def test_usage_errors(deadline: str) -> None:
+    assert run_cli("sweep", deadline, "--const", "D=1:3", "--const", "P_FAIL=0,0.1").code == 2
+    assert run_cli("sweep", deadline).code == 2
+    assert run_cli("sweep", deadline, "--const", "D=5:1").code == 2
+    assert run_cli("sweep", deadline, "--const", "D=1:3", "--plot", "x.gif").code == 2
+    r = run_cli("sweep", deadline, "--const", "D=1:3", "--bound", "1:3")
+    assert r.code == 2
+
+
+def test_failure_at_a_point_is_a_diagnostic(deadline: str) -> None:
+    r = run_cli("sweep", deadline, "--const", "D=1:2", "-p", "nope", "--jobs", "1")
+    assert r.code == 1 and "E407" in r.err and "Traceback" not in r.err
+
+
+def test_uav_deadline_sweep(tmp_path: Path) -> None:
+    """The paper's Figure 2 on a small UAV instance: one build, checked per deadline."""
+    out, png = tmp_path / "uav.csv", tmp_path / "uav.png"
+    r = run_cli("sweep", str(EXAMPLES / "uav.afsm"), "-c", "WIDTH=2,HEIGHT=2,T_LIMIT=100",
+                "--const", "DEADLINE=40:100:15", "-p", "success_by", "-o", str(out),
+                "--plot", str(png), "--jobs", "1")
+    assert r.code == 0, r.err
+    assert png.read_bytes()[:4] == b"\x89PNG"
+    data = rows(out.read_text())
+    assert [int(d["DEADLINE"]) for d in data] == [40, 55, 70, 85, 100]
+    lo, hi, uni = ([float(d[k]) for d in data] for k in ("min", "max", "uniform"))
+    assert_deadline_curves(lo, hi, uni)
+    assert hi[-1] > lo[-1] + 0.05  # timing uncertainty matters at the limit

@@ -1,0 +1,250 @@
+"""`afsmc verify` and `afsmc.verify.run`: real Storm, values checked against closed forms
+derived by hand, the PRISM route against the JANI route, and the engines against each other."""
+
+from __future__ import annotations
+
+import json
+import time
+from collections.abc import Callable
+from pathlib import Path
+
+import pytest
+
+from afsmc.diagnostics import CompileError
+from afsmc.verify import run, upper_bound
+from tests.conftest import EXAMPLES, run_cli
+
+PATROL = str(EXAMPLES / "patrol.afsm")
+
+# A DTMC: each attempt succeeds with probability P_OK. So P(F<=k done) = 1 - (1-P_OK)^k
+# and the expected number of attempts is 1 / P_OK (geometric distribution).
+GEO = """
+machine geo;
+param prob P_OK = 0.3;
+mode Try = 0 initial;
+mode Done = 1 final;
+action Attempt in Try {
+    P_OK: goto Done;
+    1 - P_OK: skip;
+}
+label done = mode == Done;
+rewards tries { [Attempt] true : 1; }
+property soon = P=? [ F<=5 "done" ];
+property tries = R{"tries"}=? [ F "done" ];
+"""
+
+# An MDP: two jobs of duration [2, 3] each (P_FAIL = 0: no retries). The total time is
+# 4, 5 or 6; min/max pick the ends, uniform picks each end with probability 1/2, so the
+# total is 4, 5, 6 with probabilities 1/4, 1/2, 1/4.
+DEADLINE = """
+machine deadline;
+param int D = 5;
+param prob P_FAIL = 0.2;
+const int DUR = [2, 3];
+var t : [0..20] init 0 clamp;
+var left : [0..2] init 2;
+mode Work = 0 initial;
+mode Done = 1 final;
+action Step in Work when left > 0 {
+    1 - P_FAIL: left -= 1, t += DUR;
+    P_FAIL: t += DUR;
+}
+action Finish in Work when left == 0 {
+    goto Done;
+}
+label done = mode == Done;
+rewards steps { [Step] true : 1; }
+property by_deadline = P=? [ F "done" && t <= D ];
+property steps = R{"steps"}=? [ F "done" ];
+"""
+
+# About 2.25 M reachable states: too big for a small --max-states, built in a child.
+BIG = """
+machine big;
+var a : [0..1500] init 0;
+var b : [0..1500] init 0;
+mode Run = 0 initial;
+action Go in Run when a < 1500 {
+    0.5: a += 1;
+    0.5: b := min(b + 1, 1500);
+}
+action Stay in Run when a == 1500 {
+    skip;
+}
+label top = a == 1500;
+property top = P=? [ F "top" ];
+"""
+
+
+Spec = Callable[[str, str], str]
+
+
+@pytest.fixture
+def spec(tmp_path: Path) -> Spec:
+    def write(name: str, text: str) -> str:
+        p = tmp_path / f"{name}.afsm"
+        p.write_text(text)
+        return str(p)
+
+    return write
+
+
+def test_dtmc_matches_closed_forms(spec: Spec) -> None:
+    path = spec("geo", GEO)
+    for p_ok in (0.3, 0.55):
+        res = run(path, consts={"P_OK": str(p_ok)})
+        assert res.kind == "dtmc" and res.uniform_model is None
+        soon, tries = res.property("soon"), res.property("tries")
+        assert soon.min is None and soon.max is None and soon.uniform is None
+        assert soon.value == pytest.approx(1 - (1 - p_ok) ** 5, abs=1e-9)  # time-bounded
+        assert tries.value == pytest.approx(1 / p_ok, rel=1e-5)  # expected reward
+        assert res.model.states == 2
+
+
+@pytest.mark.parametrize(("d", "lo", "hi", "uni"), [
+    (3, 0.0, 0.0, 0.0), (4, 0.0, 1.0, 0.25), (5, 0.0, 1.0, 0.75), (6, 1.0, 1.0, 1.0)])
+def test_mdp_min_max_uniform_match_hand_computation(spec: Spec, d: int, lo: float, hi: float,
+                                                     uni: float) -> None:
+    res = run(spec("deadline", DEADLINE), consts={"D": str(d), "P_FAIL": "0"})
+    assert res.kind == "mdp" and res.uniform_model is not None
+    r = res.property("by_deadline")
+    assert r.min == pytest.approx(lo, abs=1e-9) and r.max == pytest.approx(hi, abs=1e-9)
+    assert r.uniform == pytest.approx(uni, abs=1e-9)
+    assert r.value is None
+    steps = res.property("steps")  # exactly two Step actions, whatever is chosen
+    assert steps.min == steps.max == steps.uniform == pytest.approx(2.0)
+
+
+def test_time_bounded_and_reward_on_patrol_route_agreement() -> None:
+    """Both routes into Storm give the same model and values (JANI is an independent
+    backend written from the same IR)."""
+    pytest.importorskip("afsmc.backends.jani")
+    try:
+        a = run(PATROL, via="prism")
+        b = run(PATROL, via="jani")
+    except CompileError as exc:  # a property the JANI backend cannot express
+        pytest.skip(str(exc))
+    for ma, mb in ((a.model, b.model), (a.uniform_model, b.uniform_model)):
+        assert ma is not None and mb is not None
+        assert (ma.states, ma.transitions, ma.choices) == (mb.states, mb.transitions, mb.choices)
+    kinds = set()
+    for pa, pb in zip(a.properties, b.properties, strict=True):
+        assert pa.name == pb.name
+        kinds.add(pa.formula.split("[")[1].split()[0])
+        for key in ("min", "max", "uniform"):
+            assert getattr(pa, key) == pytest.approx(getattr(pb, key), abs=1e-9)
+        assert pa.min is not None and pa.max is not None and pa.uniform is not None
+        assert pa.min - 1e-6 <= pa.uniform <= pa.max + 1e-6
+
+
+def test_jani_route_on_small_specs(spec: Spec) -> None:
+    pytest.importorskip("afsmc.backends.jani")
+    for name, text in (("geo", GEO), ("deadline", DEADLINE)):
+        path = spec(name, text)
+        a, b = run(path, via="prism"), run(path, via="jani")
+        assert (a.model.states, a.model.transitions) == (b.model.states, b.model.transitions)
+        for pa, pb in zip(a.properties, b.properties, strict=True):
+            for key in ("min", "max", "uniform", "value"):
+                va, vb = getattr(pa, key), getattr(pb, key)
+                assert (va is None) == (vb is None)
+                if va is not None:
+                    assert va == pytest.approx(vb, abs=1e-9)
+
+
+@pytest.mark.parametrize("engine", ["hybrid", "dd"])
+def test_symbolic_engines_agree_with_sparse(spec: Spec, engine: str) -> None:
+    path = spec("deadline", DEADLINE)
+    sparse = run(path, consts={"D": "7"})
+    sym = run(path, consts={"D": "7"}, engine=engine)  # type: ignore[arg-type]
+    assert (sym.model.states, sym.model.transitions) == (sparse.model.states,
+                                                          sparse.model.transitions)
+    for a, b in zip(sparse.properties, sym.properties, strict=True):
+        for key in ("min", "max", "uniform"):
+            assert getattr(a, key) == pytest.approx(getattr(b, key), abs=1e-5)
+
+
+def test_json_shape(spec: Spec) -> None:
+    r = run_cli("verify", spec("deadline", DEADLINE), "--json", "--engine", "hybrid")
+    assert r.code == 0, r.err
+    obj = json.loads(r.out)  # stdout is exactly one JSON object (Storm's logs silenced)
+    assert isinstance(obj, dict)
+    assert obj["model"]["type"] == "mdp"
+    assert isinstance(obj["model"]["states"], int) and isinstance(obj["model"]["transitions"], int)
+    assert obj["uniform_model"]["type"] == "dtmc"
+    assert [p["name"] for p in obj["properties"]] == ["by_deadline", "steps"]
+    for p in obj["properties"]:
+        assert set(p) >= {"name", "formula", "min", "max", "uniform", "value"}
+        assert p["value"] is None and isinstance(p["min"], float)
+    assert {"build", "check", "total"} <= set(obj["timings"])
+    assert obj["engine"] == "hybrid" and obj["via"] == "prism"
+    assert r.err == ""  # silent under --json
+
+
+def test_table_and_ad_hoc_formula(spec: Spec) -> None:
+    path = spec("deadline", DEADLINE)
+    r = run_cli("verify", path, "-c", "P_FAIL=0", "-p", "steps", "--formula",
+                'Pmax=? [ F<=2 "done" ]', "--formula", 'P=? [ F "done" && t <= 5 ]')
+    assert r.code == 0, r.err
+    assert "min" in r.out and "max" in r.out and "uniform" in r.out
+    lines = {line.split()[0]: line.split() for line in r.out.splitlines() if line.strip()}
+    assert "by_deadline" not in lines  # only what was asked
+    assert lines["steps"][-3:] == ["2", "2", "2"]
+    # the time needs two Step actions and a Finish: 3 steps, so nothing by step 2
+    assert lines["adhoc"][-3:] == ["-", "0", "0"]
+    assert lines["adhoc2"][-3:] == ["0", "1", "0.75"]
+    assert "states" in r.out and "transitions" in r.out and "build" in r.out
+
+
+def test_formula_errors_point_into_the_formula(spec: Spec) -> None:
+    r = run_cli("verify", spec("geo", GEO), "--formula", 'P=? [ F "don" ]')
+    assert r.code == 1
+    assert "--formula:1:9: error[E203]" in r.err and "did you mean 'done'" in r.err
+    assert "Traceback" not in r.err
+
+
+def test_storm_rejection_is_a_diagnostic_at_the_property(spec: Spec) -> None:
+    # Storm's symbolic engines have no total reward R[C] (it returns no result).
+    path = spec("geo", GEO + 'property total = R{"tries"}=? [ C ];\n')
+    r = run_cli("verify", path, "-p", "total", "--engine", "hybrid")
+    assert r.code == 1
+    assert "error[E404]" in r.err and "geo.afsm:14:1" in r.err and "--engine sparse" in r.err
+    assert "Traceback" not in r.err and "Error:" not in r.err
+    ok = run_cli("verify", path, "-p", "total")  # the sparse engine has it: E[attempts]
+    assert ok.code == 0 and "3.33333" in ok.out
+
+
+def test_unknown_property(spec: Spec) -> None:
+    r = run_cli("verify", spec("geo", GEO), "-p", "tires")
+    assert r.code == 1 and "E407" in r.err and "did you mean 'tries'" in r.err
+
+
+def test_max_states_stops_patrol() -> None:
+    r = run_cli("verify", PATROL, "--max-states", "10")
+    assert r.code == 1
+    assert "error[E405]" in r.err and "more than --max-states 10" in r.err
+
+
+def test_max_states_stops_a_big_build_early(spec: Spec) -> None:
+    """The child process is stopped while Storm explores, long before 2.25 M states."""
+    from afsmc.compiler import load
+
+    path = spec("big", BIG)
+    assert upper_bound(load(path).model) > 2_000_000
+    t0 = time.monotonic()
+    r = run_cli("verify", path, "--max-states", "1000")
+    assert r.code == 1, r.out
+    assert "error[E405]" in r.err and "--max-states 1,000" in r.err
+    assert "at most" in r.err  # the estimate shown before building
+    assert time.monotonic() - t0 < 60
+
+
+def test_isolated_build_reports_progress(spec: Spec) -> None:
+    lines: list[str] = []
+    res = run(spec("geo", GEO), isolate=True, progress=lines.append)
+    assert res.property("tries").value == pytest.approx(1 / 0.3, rel=1e-5)
+    assert any(line.startswith("built the DTMC: 2 states") for line in lines), lines
+
+
+def test_open_constant_required_value(spec: Spec) -> None:
+    r = run_cli("verify", spec("geo", GEO), "-c", "NOPE=3")
+    assert r.code == 1 and "E209" in r.err
