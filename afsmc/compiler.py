@@ -14,6 +14,7 @@ from afsmc import check
 from afsmc.diagnostics import CompileError, Diagnostic, Reporter, Severity
 from afsmc.model import ir
 from afsmc.model.lower import Lowered, Resolution, lower
+from afsmc.model.reduce import Reductions, reduce
 from afsmc.model.resolve import resolve
 from afsmc.syntax import ast
 from afsmc.syntax.parser import parse
@@ -62,8 +63,10 @@ def load(path: str, overrides: Mapping[str, str] | None = None, *, text: str | N
     return Checked(model, warnings)
 
 
-def lowered(model: ir.Model, resolution: Resolution = "nondet") -> Lowered:
-    return lower(model, resolution)
+def lowered(model: ir.Model, resolution: Resolution = "nondet",
+            reductions: Reductions | None = None) -> Lowered:
+    """The lowered model with the exact reductions applied (all of them by default)."""
+    return reduce(lower(model, resolution), Reductions() if reductions is None else reductions)
 
 
 def write_atomic(path: str, content: str, *, protect: tuple[str, ...] = ()) -> None:

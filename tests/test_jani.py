@@ -20,10 +20,11 @@ import stormpy
 
 from afsmc.backends import jani, prism
 from afsmc.compiler import load
+from afsmc.compiler import lowered as compiler_lowered
 from afsmc.diagnostics import CompileError
 from afsmc.model import expr as E
 from afsmc.model import ir
-from afsmc.model.lower import RESOLUTIONS, Lowered, lower
+from afsmc.model.lower import RESOLUTIONS, Lowered
 from tests.conftest import CASES, EXAMPLES, ROOT, run_cli
 
 # `--const`-style overrides that keep an example's instance small enough for a test.
@@ -162,7 +163,8 @@ SPECS = {"grid": GRID, "rewards": REWARDS, "edges": EDGES}
 def lowered(path: str, resolution: str = "nondet", text: str | None = None,
             overrides: Mapping[str, str] | None = None) -> Lowered:
     model = load(path, overrides or {}, text=text).model
-    return lower(model, resolution)  # type: ignore[arg-type]
+    # as `afsmc compile` does: with the exact reductions (PRISM and JANI share them)
+    return compiler_lowered(model, resolution)  # type: ignore[arg-type]
 
 
 def storm_prism(low: Lowered, directory: Path) -> tuple[object, list[object]]:

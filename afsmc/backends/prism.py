@@ -76,6 +76,8 @@ def emit(low: Lowered) -> PrismOutput:
                "uniform": "a uniform random floor/ceil choice",
                "lo": "their floor", "hi": "their ceiling"}[low.resolution]
         w(f"// Interval constants are resolved by {how}.")
+    if low.reductions:
+        w(f"// Exact reductions: {', '.join(low.reductions)} (afsmc compile --no-reduce: none).")
     w(low.kind)
     w("")
 

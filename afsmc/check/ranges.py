@@ -8,13 +8,13 @@ from __future__ import annotations
 
 import itertools
 
-from afsmc.check.search import Witness, find, inline
+from afsmc.check.search import Witness, find
 from afsmc.diagnostics import Reporter
 from afsmc.model import expr as E
 from afsmc.model import ir
 from afsmc.model.evaluate import Env, EvalError, evaluate
 from afsmc.model.expr import Type
-from afsmc.model.lower import enabled, fire_condition
+from afsmc.model.lower import enabled, fire_condition, inline
 from afsmc.model.pretty import number, show
 
 

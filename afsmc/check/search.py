@@ -18,7 +18,7 @@ import numpy as np
 from afsmc.model import expr as E
 from afsmc.model import ir
 from afsmc.model.evaluate import Env, EvalError, evaluate
-from afsmc.model.lower import effective_weight
+from afsmc.model.lower import inline
 from afsmc.model.pretty import number
 
 ENUMERATION_LIMIT = 4_000_000  # states enumerated at once before switching to Z3
@@ -35,25 +35,6 @@ class Witness:
 
     def as_dict(self) -> dict[str, int | bool | str]:
         return {"mode": self.mode} | dict(self.values)
-
-
-def inline(e: E.Expr, model: ir.Model) -> E.Expr:
-    """Replace formulas and weight references by what they stand for."""
-    memo: dict[str, E.Expr] = {}
-
-    def fn(n: E.Expr) -> E.Expr | None:
-        if isinstance(n, E.FormulaRef):
-            if n.name not in memo:
-                memo[n.name] = inline(model.formula(n.name).value, model)
-            return memo[n.name]
-        if isinstance(n, E.WeightRef):
-            key = "w:" + n.action
-            if key not in memo:
-                memo[key] = inline(effective_weight(model, model.action(n.action)), model)
-            return memo[key]
-        return None
-
-    return E.transform(e, fn)
 
 
 def find(model: ir.Model, mode: int, pred: E.Expr,

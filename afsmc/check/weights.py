@@ -5,13 +5,13 @@ from __future__ import annotations
 
 import itertools
 
-from afsmc.check.search import Witness, find, inline
+from afsmc.check.search import Witness, find
 from afsmc.diagnostics import Related, Reporter
 from afsmc.model import expr as E
 from afsmc.model import ir
 from afsmc.model.evaluate import Env, EvalError, evaluate
 from afsmc.model.expr import Type
-from afsmc.model.lower import competitors, enabled
+from afsmc.model.lower import competitors, enabled, inline
 from afsmc.model.pretty import number
 
 

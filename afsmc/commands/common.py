@@ -10,6 +10,7 @@ from collections.abc import Iterable
 from afsmc.diagnostics import CompileError, Diagnostic, render_all
 from afsmc.diagnostics import to_json as diags_to_json
 from afsmc.model.lower import RESOLUTIONS
+from afsmc.model.reduce import Reductions
 from afsmc.model.resolve import parse_override
 
 
@@ -26,6 +27,22 @@ def add_resolve(p: argparse.ArgumentParser) -> None:
     p.add_argument("--resolve", choices=RESOLUTIONS, default="nondet",
                    help="interval constants [lo, hi]: nondeterministic choice (MDP, min/max "
                         "bounds; default), uniform random choice (DTMC), or always lo / hi")
+
+
+def add_reductions(p: argparse.ArgumentParser) -> None:
+    g = p.add_argument_group("exact state-space reductions (all on by default)")
+    g.add_argument("--no-reduce", action="store_true", help="turn every reduction off")
+    g.add_argument("--no-dead-reset", action="store_true",
+                   help="keep dead variables (no live-variable reset)")
+    g.add_argument("--no-reorder", action="store_true",
+                   help="keep the declaration order of variables")
+
+
+def reductions(args: argparse.Namespace) -> Reductions:
+    if getattr(args, "no_reduce", False):
+        return Reductions.none()
+    return Reductions(dead_reset=not getattr(args, "no_dead_reset", False),
+                      reorder=not getattr(args, "no_reorder", False))
 
 
 def overrides(args: argparse.Namespace) -> dict[str, str]:

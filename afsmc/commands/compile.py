@@ -8,10 +8,19 @@ import os
 import sys
 from collections.abc import Callable
 
-from afsmc.commands.common import add_consts, add_file, add_resolve, fail, overrides, report
-from afsmc.compiler import load, write_atomic
+from afsmc.commands.common import (
+    add_consts,
+    add_file,
+    add_reductions,
+    add_resolve,
+    fail,
+    overrides,
+    reductions,
+    report,
+)
+from afsmc.compiler import load, lowered, write_atomic
 from afsmc.diagnostics import CompileError
-from afsmc.model.lower import Lowered, lower
+from afsmc.model.lower import Lowered
 
 # -t NAME -> "module:function"; the function maps a Lowered model to {suffix: text}.
 TARGETS: dict[str, str] = {
@@ -41,6 +50,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                         "default: the current directory; '-' prints to stdout")
     add_consts(p)
     add_resolve(p)
+    add_reductions(p)
 
 
 def outputs_for(path: str, output: str | None, suffixes: list[str]) -> dict[str, str]:
@@ -56,7 +66,8 @@ def run(args: argparse.Namespace) -> int:
     try:
         checked = load(args.file, overrides(args))
         report(checked.diagnostics)
-        files = available_targets()[args.target](lower(checked.model, args.resolve))
+        files = available_targets()[args.target](
+            lowered(checked.model, args.resolve, reductions(args)))
         if args.output == "-":
             for text in files.values():
                 sys.stdout.write(text)

@@ -55,6 +55,7 @@ class Lowered:
     resolution: Resolution
     weights: dict[str, E.Expr]  # action -> effective weight w(s, a) (0 where not enabled)
     bounds: dict[str, tuple[str, int]] = field(default_factory=dict)  # generated const -> (interval const, value)
+    reductions: tuple[str, ...] = ()  # exact reductions applied (afsmc.model.reduce)
 
     @property
     def kind(self) -> Literal["dtmc", "mdp"]:
@@ -81,6 +82,33 @@ def effective_weight(model: ir.Model, action: ir.Action) -> E.Expr:
         return action.weight
     return E.Ite(when, action.weight, E.Lit(0, Type.INT), Type.DOUBLE
                  if action.weight.type is Type.DOUBLE else Type.INT)
+
+
+def inline(e: E.Expr, model: ir.Model) -> E.Expr:
+    """Replace formulas and weight references by what they stand for."""
+    memo: dict[str, E.Expr] = {}
+
+    def fn(n: E.Expr) -> E.Expr | None:
+        if isinstance(n, E.FormulaRef):
+            if n.name not in memo:
+                memo[n.name] = inline(model.formula(n.name).value, model)
+            return memo[n.name]
+        if isinstance(n, E.WeightRef):
+            key = "w:" + n.action
+            if key not in memo:
+                memo[key] = inline(effective_weight(model, model.action(n.action)), model)
+            return memo[key]
+        if isinstance(n, E.LabelRef):
+            if key_label(n.name) not in memo:
+                memo[key_label(n.name)] = inline(model.label(n.name).value, model)
+            return memo[key_label(n.name)]
+        return None
+
+    return E.transform(e, fn)
+
+
+def key_label(name: str) -> str:
+    return "label:" + name
 
 
 def static_value(e: E.Expr, model: ir.Model) -> float | None:

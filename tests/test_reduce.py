@@ -1,0 +1,73 @@
+"""The exact reductions: reduced and unreduced models give equal values for every
+property (to 1e-9) and the reduced model has no more states."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from afsmc.compiler import load
+from afsmc.model.lower import lower
+from afsmc.model.reduce import Reductions, live_variables, observable, reduce
+from tests.conftest import EXAMPLES
+from tests.storm_util import storm_prism
+from tests.test_prism import CLIMB, GEOMETRIC, SMALL
+
+EXAMPLE_FILES = sorted(EXAMPLES.glob("*.afsm"))
+OPTIONS = [Reductions(dead_reset=True, reorder=False), Reductions(dead_reset=False, reorder=True),
+           Reductions()]
+
+
+def _cases(tmp: Path) -> list[tuple[str, object]]:
+    out = []
+    for path in EXAMPLE_FILES:
+        out.append((path.stem, load(str(path), SMALL.get(path.stem, {})).model))
+    for name, text in (("geometric", GEOMETRIC), ("climb", CLIMB)):
+        p = tmp / f"{name}.afsm"
+        p.write_text(text)
+        out.append((name, load(str(p)).model))
+    return out
+
+
+@pytest.mark.parametrize("resolution", ["nondet", "uniform"])
+def test_reductions_are_exact_and_never_grow_the_state_space(resolution: str, tmp_path: Path) -> None:
+    for name, model in _cases(tmp_path):
+        base = lower(model, resolution)  # type: ignore[arg-type]
+        plain, plain_values = storm_prism(base, tmp_path, f"{name}_plain")
+        for opt in OPTIONS:
+            reduced, values = storm_prism(reduce(base, opt), tmp_path, f"{name}_red")
+            assert reduced.nr_states <= plain.nr_states, (name, opt)
+            assert values.keys() == plain_values.keys()
+            for prop, value in plain_values.items():
+                assert values[prop] == pytest.approx(value, abs=1e-9), (name, opt, prop)
+            if not opt.dead_reset:  # reordering alone keeps the state space
+                assert reduced.nr_states == plain.nr_states
+
+
+def test_dead_reset_shrinks_the_uav_state_space(tmp_path: Path) -> None:
+    model = load(str(EXAMPLES / "uav.afsm"), SMALL["uav"]).model
+    plain, _ = storm_prism(lower(model, "lo"), tmp_path, "p")
+    reduced, _ = storm_prism(reduce(lower(model, "lo")), tmp_path, "r")
+    assert reduced.nr_states < 0.9 * plain.nr_states
+
+
+def test_live_variables_of_the_uav() -> None:
+    """ret is dead while searching (it is always rewritten before it is read), and
+    observable variables are live everywhere."""
+    model = load(str(EXAMPLES / "uav.afsm"), SMALL["uav"]).model
+    live = live_variables(lower(model))
+    search = model.mode("Search").number
+    assert "ret_x" not in live[search] and "ret_y" not in live[search]
+    assert "ret_x" in live[model.mode("GoToSearch").number]
+    for var in observable(model):
+        assert all(var in live[m.number] for m in model.modes)
+    assert {"obj", "t", "exhausted", "aborted"} <= observable(model)
+
+
+def test_reorder_puts_wide_counters_last_and_interleaves_tuples() -> None:
+    model = load(str(EXAMPLES / "uav.afsm"), SMALL["uav"]).model
+    names = [v.name for v in reduce(lower(model), Reductions(False, True)).model.variables]
+    assert names.index("pos_x") < names.index("ret_x") < names.index("pos_y") < names.index("ret_y")
+    assert names[-2:] == ["b", "t"]
+    assert names.index("obj") < names.index("pos_x")
