@@ -12,7 +12,7 @@ import os
 import sys
 
 from afsmc import verify as lib
-from afsmc.commands.common import add_file, fail, usage_error
+from afsmc.commands.common import add_file, fail, reductions, usage_error
 from afsmc.commands.verify import add_storm_options, positive, progress_printer
 from afsmc.compiler import write_atomic
 from afsmc.diagnostics import CompileError
@@ -99,7 +99,8 @@ def run(args: argparse.Namespace) -> int:
                         consts=fixed, properties=args.property, formulas=args.formula,
                         via=args.via, engine=args.engine, max_states=args.max_states,
                         jobs=args.jobs, dask=args.dask, uniform=args.uniform,
-                        progress=progress)
+                        progress=progress, reductions=reductions(args),
+                        bisimulation=args.bisim)
         if args.output:
             write_atomic(args.output, res.to_csv(), protect=(args.file,))
             if progress:

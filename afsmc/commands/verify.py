@@ -8,7 +8,15 @@ import sys
 from collections.abc import Callable
 
 from afsmc import verify as lib
-from afsmc.commands.common import add_consts, add_file, fail, overrides, report
+from afsmc.commands.common import (
+    add_consts,
+    add_file,
+    add_reductions,
+    fail,
+    overrides,
+    reductions,
+    report,
+)
 from afsmc.diagnostics import CompileError
 from afsmc.diagnostics import to_json as diags_to_json
 from afsmc.verify import VerifyResult
@@ -34,9 +42,15 @@ def add_storm_options(p: argparse.ArgumentParser) -> None:
                         "'P=? [ F \"done\" ]'; repeatable")
     p.add_argument("--via", choices=VIAS, default="prism",
                    help="Storm's input language: PRISM text (default) or JANI JSON")
-    p.add_argument("--engine", choices=ENGINES, default="sparse",
-                   help="Storm's engine: sparse (explicit matrices; default), dd (decision "
+    p.add_argument("--engine", choices=ENGINES, default="auto",
+                   help="Storm's engine: auto (default: sparse when the model fits in memory "
+                        "as sparse matrices, else hybrid; counts the states symbolically first "
+                        "when they may be many), sparse (explicit matrices), dd (decision "
                         "diagrams throughout) or hybrid (symbolic model, explicit vectors)")
+    p.add_argument("--bisim", action="store_true",
+                   help="minimise the sparse model by strong bisimulation before checking "
+                        "(exact; faster checks, more memory while building)")
+    add_reductions(p)
     p.add_argument("--max-states", type=positive, metavar="N",
                    help="stop (exit 1) if the model has more states than N (default: what "
                         "70%% of the free memory holds, at most 50 M)")
@@ -102,12 +116,20 @@ def render(res: VerifyResult) -> str:
     models = [("floor/ceil MDP" if res.kind == "mdp" else "DTMC", res.model)]
     if u is not None:
         models.append(("uniform DTMC", u))
-    mrows = [["model", "states", "transitions", "choices", "build", "check"]]
+    bisim = any(m.quotient_states is not None for _, m in models)
+    mrows = [["model", "states", "transitions", "choices"] + (["quotient"] if bisim else [])
+             + ["build", "check", "engine"]]
     for name, m in models:
         mrows.append([name, f"{m.states:,}", f"{m.transitions:,}",
-                      f"{m.choices:,}" if m.choices else "-",
-                      f"{m.build_time:.3f} s", f"{m.check_time:.3f} s"])
-    lines += table(mrows, {1, 2, 3, 4, 5})
+                      f"{m.choices:,}" if m.choices else "-"]
+                     + ([f"{m.quotient_states:,}" if m.quotient_states is not None else "-"]
+                        if bisim else [])
+                     + [f"{m.build_time + m.bisimulation_time:.3f} s", f"{m.check_time:.3f} s",
+                        m.engine])
+    lines += table(mrows, set(range(1, len(mrows[0]) - 1)))
+    for name, m in models:
+        if m.engine_reason and res.engine == "auto":
+            lines.append(f"{name}: engine {m.engine} ({m.engine_reason})")
     consts = ", ".join(f"{k}={v}" for k, v in res.constants.items())
     lines.append("")
     lines.append(f"engine {res.engine}, via {res.via}"
@@ -121,7 +143,8 @@ def run(args: argparse.Namespace) -> int:
         res = lib.run(args.file, consts=overrides(args), properties=args.property,
                   formulas=args.formula, via=args.via, engine=args.engine,
                   max_states=args.max_states, uniform=args.uniform,
-                  progress=progress_printer(args))
+                  progress=progress_printer(args), reductions=reductions(args),
+                  bisimulation=args.bisim)
     except CompileError as exc:
         if args.json:
             print(json.dumps({"diagnostics": json.loads(diags_to_json(exc.diagnostics))},

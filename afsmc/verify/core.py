@@ -16,13 +16,21 @@ from typing import Any
 
 from afsmc.backends.prism import emit as prism_emit
 from afsmc.backends.prism import formula_text, property_variants
-from afsmc.compiler import load
+from afsmc.compiler import load, lowered
 from afsmc.diagnostics import CompileError, Diagnostic, Related, Severity, Source, Span
 from afsmc.model import ir
-from afsmc.model.lower import Lowered, lower
+from afsmc.model.lower import Lowered
 from afsmc.model.names import did_you_mean
 from afsmc.model.pretty import show
-from afsmc.verify.guard import Progress, default_max_states, human, run_job, upper_bound
+from afsmc.model.reduce import Reductions
+from afsmc.verify.guard import (
+    Progress,
+    default_max_states,
+    human,
+    mem_available,
+    run_job,
+    upper_bound,
+)
 from afsmc.verify.storm import Engine, Job, JobResult, StormFailure, Via, finite
 
 
@@ -38,10 +46,22 @@ class ModelStats:
     parse_time: float
     build_time: float
     check_time: float
+    engine: str = ""  # the engine that checked (what "auto" chose)
+    engine_reason: str = ""
+    quotient_states: int | None = None  # after --bisim
+    quotient_transitions: int | None = None
+    bisimulation_time: float = 0.0
 
     def to_json(self) -> dict[str, object]:
-        return {"states": self.states, "transitions": self.transitions, "choices": self.choices,
-                "type": self.type, "resolution": self.resolution}
+        out: dict[str, object] = {
+            "states": self.states, "transitions": self.transitions, "choices": self.choices,
+            "type": self.type, "resolution": self.resolution, "engine": self.engine}
+        if self.engine_reason:
+            out["engine_reason"] = self.engine_reason
+        if self.quotient_states is not None:
+            out["quotient_states"] = self.quotient_states
+            out["quotient_transitions"] = self.quotient_transitions
+        return out
 
 
 @dataclass
@@ -232,19 +252,23 @@ def select(model: ir.Model, names: Sequence[str], adhoc: Sequence[str] = ()) -> 
 
 
 def make_job(low: Lowered, props: Sequence[ir.Property], via: Via, engine: Engine,
-             max_states: int | None, what: str) -> Job:
+             max_states: int | None, what: str, bisimulation: bool = False) -> Job:
     """The Storm input for a lowered model whose `properties` are exactly `props`."""
     names = tuple(n for p in props for n, _ in property_variants(low, p))
+    avail = mem_available()
+    budget = int(avail * 0.7) if avail is not None else None
     if via == "prism":
         out = prism_emit(low)
-        return Job("prism", out.model, out.properties, names, engine, max_states, what)
+        return Job("prism", out.model, out.properties, names, engine, max_states, what,
+                   bisimulation, budget)
     try:
         jani: Any = importlib.import_module("afsmc.backends.jani")
     except ImportError:
         raise CompileError([Diagnostic("E408", Severity.ERROR,
                                        "the JANI backend (afsmc.backends.jani) is not available",
                                        None, hint="use --via prism")]) from None
-    return Job("jani", jani.dumps(jani.emit(low)), "", names, engine, max_states, what)
+    return Job("jani", jani.dumps(jani.emit(low)), "", names, engine, max_states, what,
+               bisimulation, budget)
 
 
 def _source_line_span(model: ir.Model, generated: str, line: int) -> Span | None:
@@ -314,29 +338,48 @@ def failure_diagnostic(f: StormFailure, model: ir.Model, low: Lowered,
 
 def _stats(res: JobResult, resolution: str) -> ModelStats:
     return ModelStats(res.kind, resolution, res.states, res.transitions, res.choices,
-                      res.parse_time, res.build_time, res.check_time)
+                      res.parse_time, res.build_time, res.check_time, res.engine,
+                      res.engine_reason, res.quotient_states, res.quotient_transitions,
+                      res.bisimulation_time)
+
+
+# Below this many states (an upper bound) "auto" uses the sparse engine without asking.
+AUTO_SPARSE_BOUND = 2_000_000
+
+
+def choose_engine(engine: Engine, bound: int) -> tuple[Engine, str]:
+    """`auto` with a small upper bound is simply sparse; otherwise the job decides."""
+    if engine == "auto" and bound <= AUTO_SPARSE_BOUND:
+        return "sparse", f"at most {human(bound)} states: the sparse engine is fastest"
+    return engine, ""
 
 
 def check(model: ir.Model, props: Sequence[ir.Property], *, via: Via = "prism",
           engine: Engine = "sparse", max_states: int | None = None, uniform: bool = True,
-          isolate: bool | None = None, progress: Progress | None = None) -> Checks:
+          isolate: bool | None = None, progress: Progress | None = None,
+          reductions: Reductions | None = None, bisimulation: bool = False) -> Checks:
     """Check `props` (uniquely named) on a loaded model; raises CompileError on failure."""
     model = dataclasses.replace(model, properties=tuple(props))
     bound = upper_bound(model)
+    engine, reason = choose_engine(engine, bound)
     lows: list[tuple[str, Lowered, str]] = []
     if model.is_nondeterministic:
-        lows.append(("nondet", lower(model, "nondet"), "MDP"))
+        lows.append(("nondet", lowered(model, "nondet", reductions), "MDP"))
         if uniform:
-            lows.append(("uniform", lower(model, "uniform"), "uniform DTMC"))
+            lows.append(("uniform", lowered(model, "uniform", reductions), "uniform DTMC"))
     else:
-        lows.append(("nondet", lower(model, "nondet"), "DTMC"))
+        lows.append(("nondet", lowered(model, "nondet", reductions), "DTMC"))
     stats: list[ModelStats] = []
     values: list[dict[str, float]] = []
     for resolution, low, what in lows:
-        job = make_job(low, props, via, engine, max_states, what)
+        job = make_job(low, props, via, engine, max_states, what, bisimulation)
         res = run_job(job, bound, isolate=isolate, progress=progress)
         if res.failure is not None:
             raise CompileError([failure_diagnostic(res.failure, model, low, props, job)])
+        if reason and not res.engine_reason:
+            res.engine_reason = reason
+        if res.engine_reason and progress is not None:
+            progress(f"engine {res.engine} for the {what}: {res.engine_reason}")
         stats.append(_stats(res, resolution))
         values.append(res.values)
     results = []
@@ -357,7 +400,8 @@ def check(model: ir.Model, props: Sequence[ir.Property], *, via: Via = "prism",
 def run(path: str, *, consts: Mapping[str, str] | None = None, properties: Sequence[str] = (),
         formulas: Sequence[str] = (), via: Via = "prism", engine: Engine = "sparse",
         max_states: int | None = None, uniform: bool = True, isolate: bool | None = None,
-        progress: Progress | None = None, text: str | None = None) -> VerifyResult:
+        progress: Progress | None = None, text: str | None = None,
+        reductions: Reductions | None = None, bisimulation: bool = False) -> VerifyResult:
     """Verify one .afsm file; see the package docstring. Raises CompileError."""
     t0 = time.perf_counter()
     loaded = load_with_formulas(path, consts, formulas, text=text)
@@ -371,7 +415,8 @@ def run(path: str, *, consts: Mapping[str, str] | None = None, properties: Seque
                  f"--max-states {limit:,}")
     try:
         checks = check(model, props, via=via, engine=engine, max_states=limit, uniform=uniform,
-                       isolate=isolate, progress=progress)
+                       isolate=isolate, progress=progress, reductions=reductions,
+                       bisimulation=bisimulation)
     except CompileError as exc:
         raise loaded.remap_error(exc) from None
     consts_used: dict[str, object] = {c.name: c.value for c in model.constants if c.is_param}

@@ -17,8 +17,11 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any, Literal
 
-Engine = Literal["sparse", "dd", "hybrid"]
-ENGINES: tuple[Engine, ...] = ("sparse", "dd", "hybrid")
+Engine = Literal["sparse", "dd", "hybrid", "auto"]
+ENGINES: tuple[Engine, ...] = ("auto", "sparse", "dd", "hybrid")
+# The sparse engine needs about this much per state (model plus one property's vectors),
+# measured on UAV-like models (shared/notes/performance.md: 200-260 bytes per state).
+SPARSE_BYTES_PER_STATE = 260
 Via = Literal["prism", "jani"]
 VIAS: tuple[Via, ...] = ("prism", "jani")
 
@@ -37,6 +40,8 @@ class Job:
     engine: Engine = "sparse"
     max_states: int | None = None
     what: str = "model"  # for messages: "MDP", "uniform DTMC"
+    bisimulation: bool = False  # minimise the sparse model (strong bisimulation) before checking
+    memory_budget: int | None = None  # bytes the sparse engine may use ("auto" decides with it)
 
 
 @dataclass(frozen=True)
@@ -58,6 +63,11 @@ class JobResult:
     build_time: float = 0.0
     check_time: float = 0.0
     values: dict[str, float] = field(default_factory=dict)
+    engine: str = ""  # the engine that checked ("auto" resolves to sparse or hybrid)
+    engine_reason: str = ""  # why "auto" chose it
+    quotient_states: int | None = None  # states after bisimulation
+    quotient_transitions: int | None = None
+    bisimulation_time: float = 0.0
     failure: StormFailure | None = None
 
 
@@ -136,7 +146,8 @@ def _execute(job: Job, notify: Notify) -> JobResult:
 
     notify("phase", "build")
     t0 = time.perf_counter()
-    symbolic = job.engine != "sparse"
+    engine_name: str = job.engine
+    symbolic = engine_name != "sparse"
     try:
         if symbolic:
             # Labels and guards that mention constants fail in the symbolic builder otherwise.
@@ -144,11 +155,32 @@ def _execute(job: Job, notify: Notify) -> JobResult:
             if hasattr(sprog, "substitute_functions"):
                 sprog.substitute_functions()  # JANI: in place
             model: Any = stormpy.build_symbolic_model(sprog, props)
+            if engine_name == "auto":
+                # The symbolic build counts the states exactly at little memory; the sparse
+                # engine is much faster to check but needs ~260 bytes per state.
+                need = int(model.nr_states) * SPARSE_BYTES_PER_STATE
+                budget = job.memory_budget
+                if budget is None or need <= budget:
+                    engine_name = "sparse"
+                    res.engine_reason = (f"{int(model.nr_states):,} states need about "
+                                         f"{need / 1e9:.1f} GB as sparse matrices"
+                                         + (f", within the {budget / 1e9:.1f} GB available"
+                                            if budget else ""))
+                    notify("phase", "build")
+                    del model
+                    model = stormpy.build_model(program, props)
+                    symbolic = False
+                else:
+                    engine_name = "hybrid"
+                    res.engine_reason = (f"{int(model.nr_states):,} states would need about "
+                                         f"{need / 1e9:.1f} GB as sparse matrices, more than "
+                                         f"the {budget / 1e9:.1f} GB available")
         else:
             model = stormpy.build_model(program, props)
     except RuntimeError as exc:
         res.failure = StormFailure("build", _message(exc))
         return res
+    res.engine = engine_name
     res.build_time = time.perf_counter() - t0
     res.states, res.transitions = int(model.nr_states), int(model.nr_transitions)
     res.choices = int(getattr(model, "nr_choices", res.transitions) or 0) if not symbolic else 0
@@ -159,8 +191,23 @@ def _execute(job: Job, notify: Notify) -> JobResult:
                                    f"than --max-states {job.max_states:,}", states=res.states)
         return res
 
+    if job.bisimulation and not symbolic:
+        notify("phase", "bisimulation")
+        t0 = time.perf_counter()
+        try:
+            import stormpy.transformations as transformations
+
+            model = transformations.perform_bisimulation(
+                model, props, bisimulation_type=transformations.BisimulationType.STRONG)
+        except RuntimeError as exc:
+            res.failure = StormFailure("build", "bisimulation failed: " + _message(exc))
+            return res
+        res.bisimulation_time = time.perf_counter() - t0
+        res.quotient_states = int(model.nr_states)
+        res.quotient_transitions = int(model.nr_transitions)
+
     t0 = time.perf_counter()
-    engine = {"dd": stormpy.Engine.DD, "hybrid": stormpy.Engine.HYBRID}.get(job.engine)
+    engine = {"dd": stormpy.Engine.DD, "hybrid": stormpy.Engine.HYBRID}.get(engine_name)
     for name, prop in zip(job.names, props, strict=True):
         notify("phase", f"check {name}")
         try:
@@ -175,7 +222,7 @@ def _execute(job: Job, notify: Notify) -> JobResult:
             res.failure = StormFailure("check", _message(exc), prop=name)
             return res
         if value is None:
-            res.failure = StormFailure("check", f"the {job.engine} engine does not support "
+            res.failure = StormFailure("check", f"the {engine_name} engine does not support "
                                        "this property (Storm returned no result)", prop=name)
             return res
         res.values[name] = float(value)

@@ -27,6 +27,7 @@ from afsmc.model import expr as E
 from afsmc.model import ir
 from afsmc.model.lower import lower
 from afsmc.model.pretty import show
+from afsmc.model.reduce import Reductions
 from afsmc.verify.core import PropertyResult, check, load_with_formulas, select
 from afsmc.verify.guard import Progress, default_max_states
 from afsmc.verify.storm import Engine, Via, finite
@@ -109,6 +110,8 @@ class Task:
     uniform: bool
     isolate: bool | None
     shared: bool = False  # const sweep whose constant only the properties read: one build
+    reductions: Reductions | None = None
+    bisimulation: bool = False
 
 
 def _with_bound(p: ir.Property, k: int, name: str) -> ir.Property:
@@ -246,7 +249,8 @@ def independent(path: str, text: str, consts: dict[str, str], variable: str,
 
 def _checks(model: ir.Model, props: list[ir.Property], task: Task) -> Any:
     return check(model, props, via=task.via, engine=task.engine, max_states=task.max_states,
-                 uniform=task.uniform, isolate=task.isolate)
+                 uniform=task.uniform, isolate=task.isolate, reductions=task.reductions,
+                 bisimulation=task.bisimulation)
 
 
 @dataclass
@@ -393,7 +397,8 @@ def sweep(path: str, variable: str, values: Sequence[Number], *, kind: Kind = "c
           formulas: Sequence[str] = (), via: Via = "prism", engine: Engine = "sparse",
           max_states: int | None = None, jobs: int | None = None, dask: Any = None,
           uniform: bool = True, progress: Progress | None = None,
-          text: str | None = None) -> SweepResult:
+          text: str | None = None, reductions: Reductions | None = None,
+          bisimulation: bool = False) -> SweepResult:
     """Evaluate the properties at every value; see the package docstring. Raises CompileError."""
     t0 = time.perf_counter()
     if not values:
@@ -409,7 +414,7 @@ def sweep(path: str, variable: str, values: Sequence[Number], *, kind: Kind = "c
     base = dict(path=path, text=source, consts=tuple(sorted(consts.items())),
                 properties=tuple(properties), formulas=tuple(formulas), variable=variable,
                 kind=kind, via=via, engine=engine, max_states=limit, uniform=uniform,
-                isolate=isolate)
+                isolate=isolate, reductions=reductions, bisimulation=bisimulation)
     if kind == "const" and independent(path, source, consts, variable, values):
         # Only the properties read the constant (a deadline): one build per chunk.
         chunks = _chunks(values, 1 if dask is None and jobs == 1 else jobs)

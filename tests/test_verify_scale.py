@@ -1,0 +1,80 @@
+"""Verification at scale: the automatic engine choice, bisimulation and the reductions
+through `afsmc verify` give the same values as the plain sparse route."""
+
+from __future__ import annotations
+
+import json
+
+import pytest
+
+from afsmc.backends.prism import emit, property_variants
+from afsmc.compiler import load, lowered
+from afsmc.model.reduce import Reductions
+from afsmc.verify import run
+from afsmc.verify.storm import Job, execute
+from tests.conftest import EXAMPLES, run_cli
+from tests.test_prism import SMALL
+
+UAV = str(EXAMPLES / "uav.afsm")
+
+
+def _values(res: object) -> dict[str, tuple[float | None, ...]]:
+    return {p.name: (p.min, p.max, p.uniform, p.value) for p in res.properties}  # type: ignore[attr-defined]
+
+
+def _close(a: dict[str, tuple[float | None, ...]], b: dict[str, tuple[float | None, ...]],
+           tol: float) -> None:
+    assert a.keys() == b.keys()
+    for name in a:
+        for x, y in zip(a[name], b[name], strict=True):
+            assert (x is None) == (y is None), name
+            if x is not None and y is not None:
+                assert x == pytest.approx(y, abs=tol), name
+
+
+@pytest.mark.parametrize("path,consts", [(str(EXAMPLES / "patrol.afsm"), {}), (UAV, SMALL["uav"])])
+def test_bisimulation_and_reductions_keep_every_value(path: str, consts: dict[str, str]) -> None:
+    plain = run(path, consts=consts, engine="sparse", isolate=False)  # default reductions
+    unreduced = run(path, consts=consts, engine="sparse", isolate=False,
+                    reductions=Reductions.none())
+    bisim = run(path, consts=consts, engine="sparse", isolate=False, bisimulation=True)
+    _close(_values(plain), _values(unreduced), 1e-9)
+    _close(_values(plain), _values(bisim), 1e-9)
+    assert plain.model.states <= unreduced.model.states
+    assert bisim.model.quotient_states is not None
+    assert bisim.model.quotient_states <= plain.model.states
+
+
+def test_auto_picks_sparse_for_small_models_and_says_why() -> None:
+    res = run(str(EXAMPLES / "patrol.afsm"), engine="auto", isolate=False)
+    assert res.model.engine == "sparse"
+    assert "sparse engine is fastest" in res.model.engine_reason
+
+
+def test_auto_falls_back_to_hybrid_when_sparse_would_not_fit() -> None:
+    model = load(UAV, SMALL["uav"]).model
+    low = lowered(model, "nondet")
+    out = emit(low)
+    names = tuple(n for p in model.properties if p.kind == "P"
+                  for n, _ in property_variants(low, p))
+    sparse = execute(Job("prism", out.model, out.properties, names, "sparse"))
+    tiny = execute(Job("prism", out.model, out.properties, names, "auto", memory_budget=1))
+    roomy = execute(Job("prism", out.model, out.properties, names, "auto",
+                        memory_budget=1 << 40))
+    assert sparse.failure is None and tiny.failure is None and roomy.failure is None
+    assert tiny.engine == "hybrid" and "more than" in tiny.engine_reason
+    assert roomy.engine == "sparse"
+    assert tiny.states == roomy.states == sparse.states
+    for name in names:
+        assert tiny.values[name] == pytest.approx(sparse.values[name], abs=1e-6)
+        assert roomy.values[name] == pytest.approx(sparse.values[name], abs=1e-9)
+
+
+def test_verify_cli_reports_the_engine_and_quotient() -> None:
+    r = run_cli("verify", str(EXAMPLES / "patrol.afsm"), "--bisim", "--json")
+    assert r.code == 0, r.err
+    data = json.loads(r.out)
+    assert data["model"]["engine"] == "sparse"
+    assert data["model"]["quotient_states"] <= data["model"]["states"]
+    r = run_cli("verify", str(EXAMPLES / "patrol.afsm"), "--no-reduce", "--json")
+    assert json.loads(r.out)["model"]["states"] > data["model"]["states"]
