@@ -27,9 +27,17 @@ COMMANDS: dict[str, str] = {
 }
 
 
+class _Parser(argparse.ArgumentParser):
+    """`afsmc verify uav.afsm @scenario1.args`: arguments from a file, one or more per
+    line, `#` starts a comment (used for the scenario presets in examples/)."""
+
+    def convert_arg_line_to_args(self, arg_line: str) -> list[str]:
+        return arg_line.split("#", 1)[0].split()
+
+
 def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(
-        prog="afsmc",
+    parser = _Parser(
+        prog="afsmc", fromfile_prefix_chars="@",
         description="Compiler for autonomous probabilistic finite-state machines (.afsm).")
     parser.add_argument("--version", action="version", version=f"afsmc {__version__}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
@@ -41,7 +49,8 @@ def build_parser() -> argparse.ArgumentParser:
             if exc.name != module:
                 raise
             continue  # a command whose module is not there (yet) is not offered
-        p = sub.add_parser(name, help=help_text, description=help_text)
+        p = sub.add_parser(name, help=help_text, description=help_text,
+                           fromfile_prefix_chars="@")
         mod.add_arguments(p)
         p.set_defaults(_run=mod.run)
     return parser
