@@ -54,31 +54,25 @@ def find(model: ir.Model, mode: int, pred: E.Expr,
 
 def _enumerate(model: ir.Model, mode: int, pred: E.Expr, variables: list[ir.Variable],
                consts: Mapping[str, Any]) -> Witness | None:
-    if variables:
-        axes = [np.arange(v.lo, v.hi + 1) if v.type is E.Type.INT else np.array([False, True])
-                for v in variables]
-        grids = np.meshgrid(*axes, indexing="ij")
-        env_vars = {v.name: g.ravel() for v, g in zip(variables, grids, strict=True)}
-    else:
-        env_vars = {}
+    axes = [np.arange(v.lo, v.hi + 1) if v.type is E.Type.INT else np.array([False, True])
+            for v in variables]
+    # Open grids broadcast against each other: no copy of the full product per variable.
+    grids = np.meshgrid(*axes, indexing="ij", sparse=True) if axes else []
+    env_vars = {v.name: g for v, g in zip(variables, grids, strict=True)}
     env = Env(vars=env_vars, mode=mode, consts=consts)
     with np.errstate(all="ignore"):
         try:
             hit = np.asarray(evaluate(pred, env), dtype=bool)
         except EvalError:
             return None
-    if hit.ndim == 0:
-        if not hit:
-            return None
-        idx = 0
-    else:
-        where = np.flatnonzero(hit)
-        if where.size == 0:
-            return None
-        idx = int(where[0])
+    shape = tuple(len(a) for a in axes)
+    hit = np.broadcast_to(hit, shape)
+    if not hit.any():
+        return None
+    index = np.unravel_index(int(np.argmax(hit)), shape) if shape else ()
     vals = []
-    for v in variables:
-        raw = env_vars[v.name][idx]
+    for v, axis, i in zip(variables, axes, index, strict=True):
+        raw = axis[i]
         vals.append((v.display, bool(raw) if v.type is E.Type.BOOL else int(raw)))
     return Witness(model.mode_by_number(mode).name, tuple(vals))
 

@@ -1,0 +1,210 @@
+"""The UAV case study at growing scale: compile time, states, transitions, build and check
+times and peak memory, per engine and with/without the exact reductions.
+
+    .venv/bin/python benchmarks/run.py [--instances small,default,...] [--configs ...]
+                                       [--timeout S] [--memory GB] [--out benchmarks/results.csv]
+                                       [--markdown docs/benchmarks.md]
+
+Each configuration runs `afsmc verify --json` in its own process under a time cap and a
+memory cap (the process group is killed when its resident memory passes the cap), so a
+configuration that does not fit is recorded as "timeout" or "memory" rather than taking
+the machine down. Compile time (parse, check, lower, emit PRISM) is measured in this
+process. Results are appended to a CSV as they come and summarised as a markdown table;
+compare configurations as ratios within one run (the machine is shared and noisy).
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+from dataclasses import dataclass
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+sys.path.insert(0, ROOT)
+
+from afsmc.backends.prism import emit  # noqa: E402
+from afsmc.compiler import load, lowered  # noqa: E402
+from afsmc.model.reduce import Reductions  # noqa: E402
+
+UAV = os.path.join(ROOT, "examples", "uav.afsm")
+AFSMC = [sys.executable, "-m", "afsmc.cli"]
+
+# name -> (--const values or an @file); growing towards the paper's scenarios
+INSTANCES: dict[str, list[str]] = {
+    "small": ["--const", "WIDTH=2", "--const", "HEIGHT=2", "--const", "T_LIMIT=100"],
+    "default": [],
+    "obj2-t300": ["--const", "OBJECTS=2", "--const", "T_LIMIT=300"],
+    "scenario2": ["@" + os.path.join(ROOT, "examples", "uav-scenario2.args")],
+    "scenario1": ["@" + os.path.join(ROOT, "examples", "uav-scenario1.args")],
+}
+
+# name -> extra verify arguments
+CONFIGS: dict[str, list[str]] = {
+    "sparse": ["--engine", "sparse"],
+    "sparse-noreduce": ["--engine", "sparse", "--no-reduce"],
+    "sparse-bisim": ["--engine", "sparse", "--bisim"],
+    "hybrid": ["--engine", "hybrid"],
+    "hybrid-noreduce": ["--engine", "hybrid", "--no-reduce"],
+    "auto": ["--engine", "auto"],
+}
+
+FIELDS = ["instance", "config", "status", "compile_s", "states", "transitions", "choices",
+          "quotient_states", "build_s", "check_s", "uniform_states", "uniform_build_s",
+          "uniform_check_s", "total_s", "peak_gb", "engine", "properties", "when"]
+
+
+@dataclass
+class Row:
+    data: dict[str, object]
+
+
+def _consts(args: list[str]) -> dict[str, str]:
+    """The --const values of an instance (expanding an @file as afsmc does)."""
+    out: dict[str, str] = {}
+    flat: list[str] = []
+    for a in args:
+        if a.startswith("@"):
+            with open(a[1:], encoding="utf-8") as f:
+                for line in f:
+                    flat += line.split("#", 1)[0].split()
+        else:
+            flat.append(a)
+    it = iter(flat)
+    for a in it:
+        if a in ("--const", "-c"):
+            k, v = next(it).split("=", 1)
+            out[k] = v
+        elif a.startswith("--const="):
+            k, v = a[len("--const="):].split("=", 1)
+            out[k] = v
+    return out
+
+
+def compile_time(consts: dict[str, str]) -> float:
+    t0 = time.perf_counter()
+    model = load(UAV, consts).model
+    emit(lowered(model, "nondet", Reductions()))
+    emit(lowered(model, "uniform", Reductions()))
+    return time.perf_counter() - t0
+
+
+def _tree_rss(pid: int) -> int:
+    """Resident memory of a process and all its descendants, bytes."""
+    total = 0
+    try:
+        children = subprocess.run(["ps", "-o", "pid=,rss=", "--ppid", str(pid)],
+                                  capture_output=True, text=True, check=False).stdout
+        with open(f"/proc/{pid}/statm", encoding="ascii") as f:
+            total += int(f.read().split()[1]) * os.sysconf("SC_PAGE_SIZE")
+    except (OSError, ValueError):
+        return total
+    for line in children.splitlines():
+        parts = line.split()
+        if len(parts) == 2:
+            total += _tree_rss(int(parts[0]))
+    return total
+
+
+def run_one(instance: str, config: str, timeout: float, memory_gb: float) -> dict[str, object]:
+    args = [*AFSMC, "verify", UAV, *INSTANCES[instance], *CONFIGS[config], "--json",
+            "--max-states", "400000000"]
+    start = time.perf_counter()
+    proc = subprocess.Popen(args, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                            cwd=ROOT, start_new_session=True)
+    peak = 0
+    status = "ok"
+    while proc.poll() is None:
+        time.sleep(0.5)
+        peak = max(peak, _tree_rss(proc.pid))
+        elapsed = time.perf_counter() - start
+        if elapsed > timeout or peak > memory_gb * 2**30:
+            status = "timeout" if elapsed > timeout else "memory"
+            os.killpg(proc.pid, signal.SIGKILL)
+            break
+    out, err = proc.communicate()
+    total = time.perf_counter() - start
+    row: dict[str, object] = {"instance": instance, "config": config, "status": status,
+                              "total_s": round(total, 1), "peak_gb": round(peak / 2**30, 2),
+                              "when": time.strftime("%Y-%m-%d %H:%M")}
+    if status != "ok":
+        return row
+    try:
+        data = json.loads(out)
+    except json.JSONDecodeError:
+        row["status"] = "error: " + (err.strip().splitlines() or ["no output"])[-1][:80]
+        return row
+    if "diagnostics" in data:
+        row["status"] = "error: " + data["diagnostics"][0]["message"][:80]
+        return row
+    m, u, t = data["model"], data.get("uniform_model"), data["timings"]
+    row.update(states=m["states"], transitions=m["transitions"], choices=m.get("choices"),
+               quotient_states=m.get("quotient_states"), build_s=round(t["build"], 2),
+               check_s=round(t["check"], 2), engine=m.get("engine"))
+    if u:
+        row.update(uniform_states=u["states"], uniform_build_s=round(t.get("uniform_build", 0), 2),
+                   uniform_check_s=round(t.get("uniform_check", 0), 2))
+    row["properties"] = json.dumps({p["name"]: [p["min"], p["max"], p["uniform"], p["value"]]
+                                    for p in data["properties"]}, separators=(",", ":"))
+    return row
+
+
+def markdown(rows: list[dict[str, object]]) -> str:
+    head = ["instance", "config", "status", "compile s", "states", "transitions", "quotient",
+            "build s", "check s", "uniform build+check s", "total s", "peak GB", "engine"]
+    lines = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
+    for r in rows:
+        ub = r.get("uniform_build_s")
+        uc = r.get("uniform_check_s")
+        uni = f"{float(ub) + float(uc):.1f}" if ub not in (None, "") and uc not in (None, "") else ""  # type: ignore[arg-type]
+        cells = [r.get("instance"), r.get("config"), r.get("status"), r.get("compile_s"),
+                 _n(r.get("states")), _n(r.get("transitions")), _n(r.get("quotient_states")),
+                 r.get("build_s"), r.get("check_s"), uni, r.get("total_s"), r.get("peak_gb"),
+                 r.get("engine")]
+        lines.append("| " + " | ".join("" if c in (None, "") else str(c) for c in cells) + " |")
+    return "\n".join(lines)
+
+
+def _n(v: object) -> str:
+    try:
+        return f"{int(v):,}"  # type: ignore[call-overload]
+    except (TypeError, ValueError):
+        return ""
+
+
+def main() -> int:
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--instances", default="small,default,obj2-t300,scenario2")
+    ap.add_argument("--configs", default=",".join(CONFIGS))
+    ap.add_argument("--timeout", type=float, default=1800, help="seconds per configuration")
+    ap.add_argument("--memory", type=float, default=20, help="GB per configuration")
+    ap.add_argument("--out", default=os.path.join(ROOT, "benchmarks", "results.csv"))
+    args = ap.parse_args()
+    rows: list[dict[str, object]] = []
+    new = not os.path.exists(args.out)
+    with open(args.out, "a", newline="", encoding="utf-8") as f:
+        writer = csv.DictWriter(f, fieldnames=FIELDS)
+        if new:
+            writer.writeheader()
+        for instance in args.instances.split(","):
+            ctime = round(compile_time(_consts(INSTANCES[instance])), 3)
+            for config in args.configs.split(","):
+                print(f"{instance} / {config} ...", file=sys.stderr, flush=True)
+                row = run_one(instance, config, args.timeout, args.memory)
+                row["compile_s"] = ctime
+                rows.append(row)
+                writer.writerow({k: row.get(k, "") for k in FIELDS})
+                f.flush()
+                print(f"  {row['status']}: {_n(row.get('states'))} states, "
+                      f"{row.get('total_s')} s, {row.get('peak_gb')} GB", file=sys.stderr, flush=True)
+    print(markdown(rows))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
