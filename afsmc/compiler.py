@@ -69,10 +69,13 @@ def lowered(model: ir.Model, resolution: Resolution = "nondet",
     return reduce(lower(model, resolution), Reductions() if reductions is None else reductions)
 
 
-def write_atomic(path: str, content: str, *, protect: tuple[str, ...] = ()) -> None:
+def write_atomic(path: str, content: str | bytes, *, protect: tuple[str, ...] = (),
+                 newline: str | None = "\n", keep_mode: bool = False) -> None:
     """Write via a temporary file and rename, so a reader never sees half a file.
 
-    Refuses to overwrite any of `protect` (the inputs)."""
+    Refuses to overwrite any of `protect` (the inputs). Text is written with `newline`
+    (None: as given); `keep_mode` keeps the permission bits of the file it replaces
+    (rewriting an input in place, as `sim-check --update` and `fmt` do)."""
     real = os.path.realpath(path)
     for p in protect:
         if os.path.exists(p) and os.path.realpath(p) == real:
@@ -80,13 +83,22 @@ def write_atomic(path: str, content: str, *, protect: tuple[str, ...] = ()) -> N
                                            f"refusing to overwrite the input {p}", None,
                                            hint="choose another output with -o")])
     directory = os.path.dirname(real) or "."
-    os.makedirs(directory, exist_ok=True)
     tmp = os.path.join(directory, f".{os.path.basename(real)}.tmp{os.getpid()}")
     try:
-        with open(tmp, "w", encoding="utf-8", newline="\n") as f:
-            f.write(content)
-            f.flush()
-            os.fsync(f.fileno())
+        os.makedirs(directory, exist_ok=True)
+        mode = os.stat(real).st_mode & 0o7777 if keep_mode and os.path.exists(real) else None
+        if isinstance(content, bytes):
+            with open(tmp, "wb") as fb:
+                fb.write(content)
+                fb.flush()
+                os.fsync(fb.fileno())
+        else:
+            with open(tmp, "w", encoding="utf-8", newline="" if newline is None else newline) as f:
+                f.write(content)
+                f.flush()
+                os.fsync(f.fileno())
+        if mode is not None:
+            os.chmod(tmp, mode)
         os.replace(tmp, real)
     except OSError as exc:
         if os.path.exists(tmp):

@@ -180,27 +180,6 @@ def output_path(args: argparse.Namespace) -> tuple[str, str]:
     return args.output, fmt
 
 
-def _write_bytes(path: str, data: bytes, protect: str) -> None:
-    """Atomic like write_atomic, for binary pictures."""
-    real = os.path.realpath(path)
-    if os.path.exists(protect) and os.path.realpath(protect) == real:
-        raise _error("E002", f"refusing to overwrite the input {protect}",
-                     hint="choose another output with -o")
-    directory = os.path.dirname(real) or "."
-    tmp = os.path.join(directory, f".{os.path.basename(real)}.tmp{os.getpid()}")
-    try:
-        os.makedirs(directory, exist_ok=True)
-        with open(tmp, "wb") as f:
-            f.write(data)
-            f.flush()
-            os.fsync(f.fileno())
-        os.replace(tmp, real)
-    except OSError as exc:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
-        raise _error("E003", f"cannot write {path}: {exc.strerror or exc}") from None
-
-
 def render(g: graphviz.Digraph, fmt: str) -> bytes:
     try:
         data: bytes = g.pipe(format=fmt, engine="dot")
@@ -233,10 +212,7 @@ def run(args: argparse.Namespace) -> int:
             modes.update(ov.modes)
             caption = ov.caption
         data = render(diagram(model, Overlay(modes, notes, caption)), fmt)
-        if fmt == "svg":
-            write_atomic(path, data.decode("utf-8"), protect=(args.file,))
-        else:
-            _write_bytes(path, data, args.file)
+        write_atomic(path, data, protect=(args.file,))
         print(f"wrote {path}", file=sys.stderr)
     except CompileError as exc:
         return fail(exc)

@@ -11,7 +11,7 @@ import sys
 import time
 
 from afsmc.commands.common import add_consts, fail, overrides, print_json, report
-from afsmc.compiler import load
+from afsmc.compiler import load, write_atomic
 from afsmc.diagnostics import CompileError, Diagnostic, Severity
 from afsmc.sim.evidence import Evidence, judge, rewrite
 from afsmc.simlib import registry
@@ -72,7 +72,8 @@ def run(args: argparse.Namespace) -> int:
         date = _today()
         changes = {e.name: (e.suggestion, f"{e.ref}, {e.runs} runs, seed {e.seed}, {date}")
                    for e in drifted}
-        _write_in_place(args.file, rewrite(text, args.file, changes))
+        # Rewriting the input is the point here: no `protect`; keep its line endings and mode.
+        write_atomic(args.file, rewrite(text, args.file, changes), newline=None, keep_mode=True)
         updated = True
     if args.json:
         print_json({"file": args.file, "runs": args.runs, "seed": args.seed,
@@ -106,25 +107,6 @@ def _today() -> str:
     when = (datetime.datetime.fromtimestamp(int(epoch), datetime.UTC) if epoch and epoch.isdigit()
             else datetime.datetime.now(datetime.UTC))
     return when.date().isoformat()
-
-
-def _write_in_place(path: str, text: str) -> None:
-    """Overwrite the input atomically (temp file in the same directory + os.replace)."""
-    real = os.path.realpath(path)
-    tmp = os.path.join(os.path.dirname(real), f".{os.path.basename(real)}.simcheck{os.getpid()}")
-    try:
-        mode = os.stat(real).st_mode & 0o7777
-        with open(tmp, "w", encoding="utf-8", newline="") as f:
-            f.write(text)
-            f.flush()
-            os.fsync(f.fileno())
-        os.chmod(tmp, mode)
-        os.replace(tmp, real)
-    except OSError as exc:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
-        raise CompileError([Diagnostic("E003", Severity.ERROR,
-                                       f"cannot write {path}: {exc.strerror or exc}", None)]) from None
 
 
 def _table(results: list[Evidence]) -> None:

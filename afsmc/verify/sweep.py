@@ -21,7 +21,7 @@ from typing import Any, Literal
 
 from afsmc.backends.prism import emit as prism_emit
 from afsmc.backends.prism import formula_text
-from afsmc.compiler import read_source
+from afsmc.compiler import read_source, write_atomic
 from afsmc.diagnostics import CompileError, Diagnostic, Severity
 from afsmc.model import expr as E
 from afsmc.model import ir
@@ -356,34 +356,11 @@ class SweepResult:
                 fig.savefig(buf, format="png", dpi=120, metadata={"Software": None})
             else:
                 fig.savefig(buf, format="svg", metadata={"Date": None, "Creator": None})
-        write_bytes_atomic(path, buf.getvalue(), protect=protect)
+        write_atomic(path, buf.getvalue(), protect=protect)
 
 
 def _nan(v: float | None) -> float:
     return float("nan") if v is None or finite(v) is None else v
-
-
-def write_bytes_atomic(path: str, data: bytes, *, protect: tuple[str, ...] = ()) -> None:
-    """Like afsmc.compiler.write_atomic, for binary files (PNG)."""
-    real = os.path.realpath(path)
-    for p in protect:
-        if os.path.exists(p) and os.path.realpath(p) == real:
-            raise CompileError([Diagnostic("E002", Severity.ERROR,
-                                           f"refusing to overwrite the input {p}", None)])
-    directory = os.path.dirname(real) or "."
-    tmp = os.path.join(directory, f".{os.path.basename(real)}.tmp{os.getpid()}")
-    try:
-        os.makedirs(directory, exist_ok=True)
-        with open(tmp, "wb") as f:
-            f.write(data)
-            f.flush()
-            os.fsync(f.fileno())
-        os.replace(tmp, real)
-    except OSError as exc:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
-        raise CompileError([Diagnostic("E003", Severity.ERROR,
-                                       f"cannot write {path}: {exc.strerror or exc}", None)]) from None
 
 
 def _chunks(xs: Sequence[Number], n: int) -> list[tuple[Number, ...]]:
