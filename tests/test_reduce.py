@@ -15,7 +15,9 @@ from tests.storm_util import storm_prism
 from tests.test_prism import CLIMB, GEOMETRIC, SMALL
 
 EXAMPLE_FILES = sorted(EXAMPLES.glob("*.afsm"))
-OPTIONS = [Reductions(dead_reset=True, reorder=False), Reductions(dead_reset=False, reorder=True),
+OPTIONS = [Reductions(dead_reset=True, reorder=False, saturate=False),
+           Reductions(dead_reset=False, reorder=True, saturate=False),
+           Reductions(dead_reset=False, reorder=False, saturate=True),
            Reductions()]
 
 
@@ -41,7 +43,7 @@ def test_reductions_are_exact_and_never_grow_the_state_space(resolution: str, tm
             assert values.keys() == plain_values.keys()
             for prop, value in plain_values.items():
                 assert values[prop] == pytest.approx(value, abs=1e-9), (name, opt, prop)
-            if not opt.dead_reset:  # reordering alone keeps the state space
+            if not opt.dead_reset and not opt.saturate:  # reordering keeps the state space
                 assert reduced.nr_states == plain.nr_states
 
 
@@ -67,7 +69,19 @@ def test_live_variables_of_the_uav() -> None:
 
 def test_reorder_puts_wide_counters_last_and_interleaves_tuples() -> None:
     model = load(str(EXAMPLES / "uav.afsm"), SMALL["uav"]).model
-    names = [v.name for v in reduce(lower(model), Reductions(False, True)).model.variables]
+    names = [v.name for v in reduce(lower(model), Reductions(False, True, False)).model.variables]
     assert names.index("pos_x") < names.index("ret_x") < names.index("pos_y") < names.index("ret_y")
     assert names[-2:] == ["b", "t"]
     assert names.index("obj") < names.index("pos_x")
+
+
+def test_mission_time_saturates_above_the_largest_constant_it_is_compared_with() -> None:
+    """t is only compared with T_LIMIT and DEADLINE and only grows: it saturates at
+    max(T_LIMIT, DEADLINE + 1), and the PRISM output says so."""
+    model = load(str(EXAMPLES / "uav.afsm"), {"T_LIMIT": "100", "DEADLINE": "120"}).model
+    low = reduce(lower(model), Reductions(dead_reset=False, reorder=False, saturate=True))
+    t = next(v for v in low.model.variables if v.name == "t")
+    assert t.hi == 121
+    assert any("saturated t at 121" in r for r in low.reductions)
+    # b is compared with constants too, but it decreases: never saturated
+    assert next(v for v in low.model.variables if v.name == "b").hi == 100

@@ -36,13 +36,16 @@ def add_reductions(p: argparse.ArgumentParser) -> None:
                    help="keep dead variables (no live-variable reset)")
     g.add_argument("--no-reorder", action="store_true",
                    help="keep the declaration order of variables")
+    g.add_argument("--no-saturate", action="store_true",
+                   help="keep the full range of growing counters (e.g. mission time)")
 
 
 def reductions(args: argparse.Namespace) -> Reductions:
     if getattr(args, "no_reduce", False):
         return Reductions.none()
     return Reductions(dead_reset=not getattr(args, "no_dead_reset", False),
-                      reorder=not getattr(args, "no_reorder", False))
+                      reorder=not getattr(args, "no_reorder", False),
+                      saturate=not getattr(args, "no_saturate", False))
 
 
 def overrides(args: argparse.Namespace) -> dict[str, str]:

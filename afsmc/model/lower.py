@@ -22,6 +22,7 @@ from typing import Literal
 from afsmc.diagnostics import Span
 from afsmc.model import expr as E
 from afsmc.model import ir
+from afsmc.model.bounds import bounds
 from afsmc.model.evaluate import EvalError, scalar
 from afsmc.model.expr import Type
 
@@ -199,38 +200,15 @@ def _updates(model: ir.Model, updates: tuple[ir.Update, ...]) -> tuple[tuple[str
 
 
 def _clamp(value: E.Expr, var: ir.Variable, model: ir.Model) -> E.Expr:
-    """Saturate at the range's ends; only the end an update can reach is emitted."""
-    static = static_value(value, model)
-    if static is not None and var.lo <= static <= var.hi:
+    """Saturate at the range's ends; only an end the update can pass is emitted."""
+    lo, hi = bounds(value, model)
+    if value.type is E.Type.INT and var.lo <= lo and hi <= var.hi:
         return value
-    up = down = True
-    if isinstance(value, E.Binary) and isinstance(value.left, E.VarRef) and \
-            value.left.name == var.name and value.op in "+-":
-        k = _min_static(value.right, model)
-        if k is not None and k >= 0:
-            up, down = value.op == "+", value.op == "-"
-    if up:
+    if hi > var.hi:
         value = E.Call("min", (value, E.Lit(var.hi, Type.INT)), Type.INT)
-    if down:
+    if lo < var.lo:
         value = E.Call("max", (value, E.Lit(var.lo, Type.INT)), Type.INT)
     return value
-
-
-def _min_static(e: E.Expr, model: ir.Model) -> float | None:
-    """The smallest value a state-free expression takes over interval choices."""
-    lows = {c.name: c.interval[0] for c in model.interval_constants if c.interval}
-    vals = []
-    for consts in (model.const_values | lows,
-                   model.const_values | {c.name: c.interval[1] for c in model.interval_constants
-                                          if c.interval}):
-        if any(isinstance(n, (E.VarRef, E.CurrentMode, E.FormulaRef, E.WeightRef))
-               for n in E.walk(e)):
-            return None
-        try:
-            vals.append(float(scalar(e, consts)))
-        except EvalError:
-            return None
-    return min(vals)
 
 
 def _weave(model: ir.Model, branches: tuple[Branch, ...],

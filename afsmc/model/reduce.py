@@ -6,6 +6,10 @@
   no property can tell, because variables read by labels, rewards or properties are
   live everywhere. (Measured on UAV-like models: about half the states, see
   docs/benchmarks.md.)
+* ``saturate`` -- a counter that only grows and is only ever compared with constants (the
+  mission time) is saturated just above the largest constant it is compared with: all
+  larger values satisfy the same comparisons and stay larger, so they are one state
+  (bisimilar). Its range shrinks accordingly.
 * ``reorder`` -- the declaration order of the variables, which Storm's decision
   diagrams (dd and hybrid engines) follow: control variables first, the fields of tuples
   interleaved (pos.x, ret.x, pos.y, ret.y), wide counters (time, battery) last. The
@@ -18,6 +22,7 @@ from dataclasses import dataclass, replace
 
 from afsmc.model import expr as E
 from afsmc.model import ir
+from afsmc.model.bounds import bounds, static
 from afsmc.model.lower import Branch, Command, Lowered, inline
 
 
@@ -25,17 +30,23 @@ from afsmc.model.lower import Branch, Command, Lowered, inline
 class Reductions:
     dead_reset: bool = True
     reorder: bool = True
+    saturate: bool = True
 
     @staticmethod
     def none() -> Reductions:
-        return Reductions(dead_reset=False, reorder=False)
+        return Reductions(dead_reset=False, reorder=False, saturate=False)
 
     def describe(self) -> str:
-        on = [n for n, v in (("dead-reset", self.dead_reset), ("reorder", self.reorder)) if v]
+        on = [n for n, v in (("dead-reset", self.dead_reset), ("saturate", self.saturate),
+                             ("reorder", self.reorder)) if v]
         return ", ".join(on) if on else "none"
 
 
 def reduce(low: Lowered, options: Reductions = Reductions()) -> Lowered:
+    if options.saturate:
+        low, done = saturate(low)
+        if done:
+            low = replace(low, reductions=(*low.reductions, "saturated " + ", ".join(done)))
     if options.dead_reset:
         low = dead_reset(low)
         low = replace(low, reductions=(*low.reductions, "dead-variable reset"))
@@ -166,3 +177,118 @@ def reorder(low: Lowered) -> Lowered:
             for b in cmd.branches))
         for cmd in low.commands)
     return replace(low, model=new_model, commands=commands)
+
+
+# ---- saturating counters -------------------------------------------------------------
+
+def _increment(var: str, value: E.Expr, model: ir.Model,
+               generated: dict[str, tuple[str, int]]) -> E.Expr | None:
+    """`k` if `value` is `var + k` (possibly clamped from above by the lowering)."""
+    if isinstance(value, E.Call) and value.func == "min" and len(value.args) == 2 and \
+            static(value.args[1], model, generated) is not None:
+        value = value.args[0]
+    if isinstance(value, E.Binary) and value.op == "+" and isinstance(value.left, E.VarRef) \
+            and value.left.name == var:
+        return value.right
+    return None
+
+
+def _thresholds(var: str, exprs: list[E.Expr], model: ir.Model) -> float | None:
+    """The saturation point of `var`: above every boundary of its comparisons with
+    constants; None if it is read in any other way."""
+    point = float(model.variable(var).lo)
+    flip = {"<": ">", "<=": ">=", ">": "<", ">=": "<=", "==": "==", "!=": "!="}
+    ok = True
+
+    def visit(e: E.Expr) -> None:
+        nonlocal point, ok
+        if isinstance(e, E.Binary) and e.op in flip:
+            left, right, op = e.left, e.right, e.op
+            if isinstance(right, E.VarRef) and right.name == var:
+                left, right, op = right, left, flip[op]
+            if isinstance(left, E.VarRef) and left.name == var:
+                c = static(right, model)
+                if c is None or c != int(c):
+                    ok = False
+                    return
+                # the smallest value from which the comparison no longer changes
+                point = max(point, c + 1 if op in ("<=", ">", "==", "!=") else c)
+                visit(right)
+                return
+        if isinstance(e, E.VarRef) and e.name == var:
+            ok = False
+            return
+        for child in E.children(e):
+            visit(child)
+
+    for e in exprs:
+        visit(e)
+        if not ok:
+            return None
+    return point
+
+
+def saturate(low: Lowered) -> tuple[Lowered, list[str]]:
+    model = low.model
+    reads: dict[str, list[E.Expr]] = {v.name: [] for v in model.variables}
+    exprs: list[E.Expr] = [inline(lb.value, model) for lb in model.labels]
+    for r in model.rewards:
+        exprs += [inline(x, model) for it in r.items for x in (it.guard, it.value)]
+    for p in model.properties:
+        exprs += [inline(x, model) for x in (getattr(p.path, "target", None),
+                                             getattr(p.path, "left", None),
+                                             getattr(p.path, "bound", None)) if x is not None]
+    self_updates: dict[str, list[E.Expr]] = {v.name: [] for v in model.variables}
+    for cmd in low.commands:
+        exprs.append(inline(cmd.guard, model))
+        for b in cmd.branches:
+            exprs.append(inline(b.prob, model))
+            for var, value in b.updates:
+                if var != "mode":
+                    self_updates[var].append(value)
+                v_in = inline(value, model)
+                for other in E.vars_read(v_in):
+                    if other != var:
+                        reads[other].append(v_in)
+    done: list[str] = []
+    saturated: dict[str, int] = {}
+    for v in model.variables:
+        if v.type is not E.Type.INT:
+            continue
+        # Only growth: every update is v + k with k >= 0, or a constant.
+        grows = True
+        gen = low.bounds
+        for value in self_updates[v.name]:
+            k = _increment(v.name, value, model, gen)
+            if k is not None:
+                k = inline(k, model)
+                if bounds(k, model, None, gen)[0] < 0 or v.name in E.vars_read(k):
+                    grows = False
+            elif static(value, model, gen) is None:
+                grows = False
+        if not grows or reads[v.name]:
+            continue  # other variables' updates read it: its exact value matters
+        point = _thresholds(v.name, exprs, model)
+        if point is None or point >= v.hi or point < v.init:
+            continue
+        saturated[v.name] = int(point)
+        done.append(f"{v.display} at {int(point)}")
+    if not saturated:
+        return low, []
+
+    def cap(var: str, value: E.Expr) -> E.Expr:
+        if var not in saturated:
+            return value
+        k = static(value, model, low.bounds)
+        if k is not None:
+            return E.lit(int(min(k, saturated[var])))
+        if isinstance(value, E.Call) and value.func == "min":
+            value = value.args[0]  # the clamp at the old upper end is subsumed
+        return E.Call("min", (value, E.lit(saturated[var])), E.Type.INT)
+
+    commands = tuple(replace(cmd, branches=tuple(
+        replace(b, updates=tuple((var, cap(var, val)) for var, val in b.updates))
+        for b in cmd.branches)) for cmd in low.commands)
+    variables = tuple(replace(v, hi=saturated[v.name]) if v.name in saturated else v
+                      for v in model.variables)
+    return replace(low, model=replace(model, variables=variables), commands=commands), done
