@@ -132,3 +132,20 @@ def test_uav_deadline_sweep(tmp_path: Path) -> None:
     lo, hi, uni = ([float(d[k]) for d in data] for k in ("min", "max", "uniform"))
     assert_deadline_curves(lo, hi, uni)
     assert hi[-1] > lo[-1] + 0.05  # timing uncertainty matters at the limit
+
+
+def test_uav_deadline_sweep_equals_verify_at_each_point() -> None:
+    """The shared build of a deadline sweep gives exactly what `verify` gives per point
+    (the model must not be saturated at the first deadline it was built with)."""
+    from afsmc.verify import run, sweep
+
+    uav = str(Path(__file__).resolve().parent.parent / "examples" / "uav.afsm")
+    consts = {"WIDTH": "2", "HEIGHT": "2", "T_LIMIT": "60"}
+    xs = [40, 70, 110]
+    res = sweep(uav, "DEADLINE", xs, consts=consts, properties=["success_by"], jobs=1)
+    for point in res.points:
+        one = run(uav, consts=consts | {"DEADLINE": str(point.x)}, properties=["success_by"],
+                  isolate=False).property("success_by")
+        got = point.properties[0]
+        for key in ("min", "max", "uniform"):
+            assert getattr(got, key) == pytest.approx(getattr(one, key), abs=1e-9), (point.x, key)

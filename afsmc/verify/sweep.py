@@ -248,8 +248,13 @@ def independent(path: str, text: str, consts: dict[str, str], variable: str,
 
 
 def _checks(model: ir.Model, props: list[ir.Property], task: Task) -> Any:
+    reductions = task.reductions
+    if task.shared:
+        # One model serves every value of the constant: it must not be saturated at a
+        # threshold that depends on the value it was built with (e.g. a deadline).
+        reductions = dataclasses.replace(reductions or Reductions(), saturate=False)
     return check(model, props, via=task.via, engine=task.engine, max_states=task.max_states,
-                 uniform=task.uniform, isolate=task.isolate, reductions=task.reductions,
+                 uniform=task.uniform, isolate=task.isolate, reductions=reductions,
                  bisimulation=task.bisimulation)
 
 
