@@ -12,5 +12,5 @@ $afsmc compile examples/uav.afsm -t prism -o out/
 $afsmc compile examples/uav.afsm -t jani -o out/
 echo "== afsmc diagram -> out/uav.svg"
 $afsmc diagram examples/uav.afsm -o out/uav.svg
-echo "== afsmc verify examples/uav.afsm (default instance; about a minute)"
+echo "== afsmc verify examples/uav.afsm (default instance)"
 $afsmc verify examples/uav.afsm --progress
