@@ -9,6 +9,7 @@ from __future__ import annotations
 from collections.abc import Callable
 
 from afsmc.check import distributions, modegraph, ranges, unused, weights
+from afsmc.check.search import Undecided
 from afsmc.diagnostics import Diagnostic, Reporter
 from afsmc.model import ir
 from afsmc.sim.check_sources import check_sim_sources
@@ -37,5 +38,11 @@ def register(rule: Rule) -> None:
 def run(model: ir.Model) -> list[Diagnostic]:
     rep = Reporter()
     for rule in RULES:
-        rule(model, rep)
+        try:
+            rule(model, rep)
+        except Undecided as exc:
+            # An unproven property is said, never passed over in silence.
+            name = rule.__name__.removeprefix("check_").replace("_", " ")
+            rep.warning("W309", f"the {name} check could not be completed: {exc}", None,
+                        hint="the model may still violate it; simplify the expressions involved")
     return rep.sorted()

@@ -116,8 +116,8 @@ def analyse(model: ir.Model) -> ModeGraph:
         if static_value(h.prob, model) == 0:
             continue
         for mode in h.modes:
-            if any(fires.get((a.name, mode), False) for a in model.actions_in(mode)
-                   if a.kind == "action"):
+            # woven into every command of the mode, preemptive hazards' included
+            if any(fires.get((a.name, mode), False) for a in model.actions_in(mode)):
                 edges += _outcome_edges(model, mode, h.name, "hazard", h.outcomes, h.name_span,
                                         h.prob)
     order = {"action": 0, "preemptive": 1, "hazard": 2}

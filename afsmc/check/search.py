@@ -24,6 +24,10 @@ from afsmc.model.pretty import number
 ENUMERATION_LIMIT = 4_000_000  # states enumerated at once before switching to Z3
 
 
+class Undecided(Exception):
+    """Neither enumeration nor the SMT solver could decide a question."""
+
+
 @dataclass(frozen=True)
 class Witness:
     mode: str
@@ -63,8 +67,9 @@ def _enumerate(model: ir.Model, mode: int, pred: E.Expr, variables: list[ir.Vari
     with np.errstate(all="ignore"):
         try:
             hit = np.asarray(evaluate(pred, env), dtype=bool)
-        except EvalError:
-            return None
+        except (EvalError, ArithmeticError, ValueError):
+            # never "no witness" by accident: let the solver decide instead
+            return _smt(model, mode, pred, variables, consts)
     shape = tuple(len(a) for a in axes)
     hit = np.broadcast_to(hit, shape)
     if not hit.any():
@@ -90,8 +95,14 @@ def _smt(model: ir.Model, mode: int, pred: E.Expr, variables: list[ir.Variable],
         else:
             zvars[v.name] = z3.Int(v.name)
             solver.add(zvars[v.name] >= v.lo, zvars[v.name] <= v.hi)
-    solver.add(_z3(pred, zvars, mode, consts))
-    if solver.check() != z3.sat:
+    try:
+        solver.add(_z3(pred, zvars, mode, consts))
+    except EvalError as exc:
+        raise Undecided(str(exc)) from None
+    answer = solver.check()
+    if answer == z3.unknown:
+        raise Undecided(f"the SMT solver gave up ({solver.reason_unknown()})")
+    if answer != z3.sat:
         return None
     model_z3 = solver.model()
     vals = []

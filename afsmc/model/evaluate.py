@@ -114,9 +114,7 @@ def _binary(e: Binary, env: Env) -> Array:
     if op == "*":
         return left * right
     if op == "/":
-        if np.any(np.asarray(right) == 0):
-            raise EvalError("division by zero")
-        return np.true_divide(left, right)
+        return _masked(np.true_divide, left, right, "division by zero")
     if op == "==":
         return _eq(left, right)
     if op == "!=":
@@ -157,20 +155,40 @@ def _call(e: Call, env: Env) -> Array:
     if f == "ceil":
         return _to_int(np.ceil(args[0]))
     if f == "pow":
-        if e.type is Type.INT:
-            return np.power(np.asarray(args[0], dtype=np.int64), np.asarray(args[1], dtype=np.int64))
-        return np.power(np.asarray(args[0], dtype=float), args[1])
+        exp = np.asarray(args[1])
+        if e.type is Type.INT and not np.any(exp < 0):
+            return np.power(np.asarray(args[0], dtype=np.int64), exp.astype(np.int64))
+        return np.power(np.asarray(args[0], dtype=float), exp)
     if f == "mod":
-        if np.any(np.asarray(args[1]) == 0):
-            raise EvalError("mod by zero")
-        return np.mod(args[0], args[1])
+        return _masked(np.mod, args[0], args[1], "mod by zero")
     raise EvalError(f"unknown function {f}")
+
+
+def _masked(fn: Any, left: Array, right: Array, what: str) -> Array:
+    """`fn(left, right)`; over arrays of states, NaN where `right` is 0, so that one such
+    state (often excluded by a guard or an untaken `?:` branch) does not stop the others."""
+    r = np.asarray(right)
+    if r.ndim == 0 and np.ndim(left) == 0:
+        if r == 0:
+            raise EvalError(what)
+        return fn(left, right)
+    zero = r == 0
+    if not np.any(zero):
+        return fn(left, right)
+    out = np.full(np.broadcast(np.asarray(left), r).shape, np.nan)
+    fn(left, r, out=out, where=~zero)
+    return out
 
 
 def _to_int(v: Array) -> Array:
     if np.ndim(v) == 0:
+        if not np.isfinite(v):
+            raise EvalError("not a number")
         return int(v)
-    return np.asarray(v).astype(np.int64)
+    arr = np.asarray(v)
+    if np.issubdtype(arr.dtype, np.floating) and not np.all(np.isfinite(arr)):
+        return arr  # keeps NaN where a division by zero was (see _masked)
+    return arr.astype(np.int64)
 
 
 def scalar(e: Expr, consts: Mapping[str, Any], formulas: Mapping[str, Expr] | None = None) -> Any:

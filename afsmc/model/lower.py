@@ -78,7 +78,13 @@ def competitors(model: ir.Model, action: ir.Action, mode: int) -> tuple[ir.Actio
 def effective_weight(model: ir.Model, action: ir.Action) -> E.Expr:
     """w(s, a): the weight where `a` is enabled, else 0 (Definition 2: w > 0 => enabled)."""
     names = model.mode_names
-    when = E.conj(E.mode_in(set(action.modes), names), action.guard)
+    if action.kind == "action" and any(h.kind == "preemptive" for m in action.modes
+                                       for h in model.actions_in(m)):
+        # enabled also needs no preemptive hazard of the mode to hold: per mode
+        when = E.disj(*(E.conj(E.mode_in({m}, names), enabled(model, action, m))
+                        for m in action.modes))
+    else:
+        when = E.conj(E.mode_in(set(action.modes), names), action.guard)
     if isinstance(when, E.Lit) and when.value is True:
         return action.weight
     return E.Ite(when, action.weight, E.Lit(0, Type.INT), Type.DOUBLE

@@ -67,8 +67,9 @@ class Printer:
             # left-associative: the right operand needs parentheses at equal strength
             right_ctx = p + 1 if e.op in ("-", "/", "+", "*", "=>") or p == 6 else p
             if e.op == "=>":
-                left, right_ctx = self.show(e.left, p + 1), p
-                return self.wrap(f"{left} {op} {self.show(e.right, right_ctx)}", p, ctx)
+                # afsm groups `=>` to the right, Storm to the left: parenthesise both sides.
+                left, right = self.show(e.left, p + 1), self.show(e.right, p + 1)
+                return self.wrap(f"{left} {op} {right}", p, ctx)
             left = self.show(e.left, p if p != 6 else p + 1)
             return self.wrap(f"{left} {op} {self.show(e.right, right_ctx)}", p, ctx)
         if isinstance(e, E.Ite):

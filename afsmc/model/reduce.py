@@ -183,14 +183,23 @@ def reorder(low: Lowered) -> Lowered:
 
 def _increment(var: str, value: E.Expr, model: ir.Model,
                generated: dict[str, tuple[str, int]]) -> E.Expr | None:
-    """`k` if `value` is `var + k` (possibly clamped from above by the lowering)."""
-    if isinstance(value, E.Call) and value.func == "min" and len(value.args) == 2 and \
-            static(value.args[1], model, generated) is not None:
+    """`k` if `value` is `var + k` (possibly clamped from above by the lowering: only a
+    `min` at the variable's own upper end of a `clamp` variable; an author's `min` is kept
+    and makes the variable not a plain counter)."""
+    if _clamped_at_hi(var, value, model, generated):
+        assert isinstance(value, E.Call)
         value = value.args[0]
     if isinstance(value, E.Binary) and value.op == "+" and isinstance(value.left, E.VarRef) \
             and value.left.name == var:
         return value.right
     return None
+
+
+def _clamped_at_hi(var: str, value: E.Expr, model: ir.Model,
+                   generated: dict[str, tuple[str, int]]) -> bool:
+    v = model.variable(var)
+    return (v.clamp and isinstance(value, E.Call) and value.func == "min"
+            and len(value.args) == 2 and static(value.args[1], model, generated) == v.hi)
 
 
 def _thresholds(var: str, exprs: list[E.Expr], model: ir.Model) -> float | None:
@@ -282,7 +291,8 @@ def saturate(low: Lowered) -> tuple[Lowered, list[str]]:
         k = static(value, model, low.bounds)
         if k is not None:
             return E.lit(int(min(k, saturated[var])))
-        if isinstance(value, E.Call) and value.func == "min":
+        if _clamped_at_hi(var, value, model, low.bounds):
+            assert isinstance(value, E.Call)
             value = value.args[0]  # the clamp at the old upper end is subsumed
         return E.Call("min", (value, E.lit(saturated[var])), E.Type.INT)
 

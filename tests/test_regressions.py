@@ -1,0 +1,110 @@
+"""Regressions found by review: each spec once gave a wrong answer or a crash."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from afsmc.compiler import load
+from afsmc.model.lower import lower
+from afsmc.model.reduce import Reductions, reduce
+from tests.storm_util import storm_prism
+
+
+def _model(tmp: Path, text: str) -> object:
+    path = tmp / "spec.afsm"
+    path.write_text(text)
+    return load(str(path)).model
+
+
+def test_saturation_keeps_an_authors_own_cap(tmp_path: Path) -> None:
+    """`t := min(t + 1, 3)` is not a plain counter: t never passes 3."""
+    model = _model(tmp_path, """
+machine sat1;
+var t : [0..10] init 0;
+mode A = 0 initial;
+mode B = 1 final;
+action Tick in A when t < 8 { t := min(t + 1, 3); }
+action Stop in A when t >= 8 { goto B; }
+label late = t >= 5;
+property p = P=? [ F<=20 "late" ];
+""")
+    _, plain = storm_prism(lower(model), tmp_path, "plain")  # type: ignore[arg-type]
+    _, reduced = storm_prism(reduce(lower(model), Reductions()), tmp_path, "red")  # type: ignore[arg-type]
+    assert plain["p"] == 0.0 and reduced["p"] == 0.0
+
+
+def test_nested_implication_means_the_same_to_storm(tmp_path: Path) -> None:
+    """afsm reads `a => b => c` as `a => (b => c)`; Storm's PRISM parser groups to the
+    left, so the output must carry parentheses. With a, b, c false it is true."""
+    model = _model(tmp_path, """
+machine imp;
+var a : bool init false;
+var b : bool init false;
+var c : bool init false;
+mode A = 0 initial;
+mode B = 1 final;
+action Go in A { goto B; }
+label L = a => b => c;
+property p = P=? [ F<=0 "L" ];
+""")
+    _, values = storm_prism(lower(model), tmp_path)  # type: ignore[arg-type]
+    assert values["p"] == 1.0
+
+
+def test_a_negative_power_in_an_excluded_state_does_not_crash_the_checks(tmp_path: Path) -> None:
+    model = _model(tmp_path, """
+machine pw;
+var x : [0..3] init 2;
+var y : [0..8] init 0;
+mode M = 0 initial;
+mode D = 1 final;
+action Go in M when x > 0 { goto D, y := pow(2, x - 1); }
+action St in M when x == 0 { x := 1; }
+label L = y == 2;
+property p = P=? [ F "L" ];
+""")
+    _, values = storm_prism(lower(model), tmp_path)  # type: ignore[arg-type]
+    assert values["p"] == pytest.approx(1.0)
+
+
+def test_hazards_woven_into_a_preemptive_hazard_make_their_target_reachable(tmp_path: Path) -> None:
+    """Only the preemptive Stop fires in A, but Crash is woven into it: D is reachable."""
+    path = tmp_path / "mg.afsm"
+    path.write_text("""
+machine mg;
+var x : [0..3] init 0;
+mode A = 0 initial;
+mode C = 2 final;
+mode D = 3 final;
+action Wait in A when x > 0 && x < 1 { x := 0; }
+hazard Stop from {A} when x >= 0 { goto C; }
+hazard Crash from {A} with probability 0.5 { goto D; }
+label L = mode == D;
+property p = P=? [ F "L" ];
+""")
+    checked = load(str(path))
+    assert not any(d.code == "W601" for d in checked.diagnostics)
+    _, values = storm_prism(lower(checked.model), tmp_path)
+    assert values["p"] == pytest.approx(0.5)
+
+
+def test_weight_of_an_action_disabled_by_a_preemptive_hazard_is_zero(tmp_path: Path) -> None:
+    """Definition 2: w(s, a) > 0 only where a is enabled, and a preemptive hazard disables
+    the ordinary actions of its modes. Halt's weight 1 - w(Run) must see w(Run) = 0."""
+    model = _model(tmp_path, """
+machine pre;
+var x : [0..2] init 0;
+mode A = 0 initial;
+mode Low = 1 final;
+mode High = 2 final;
+action Run in A when x < 2 weight 0.9 { x := x + 1; }
+hazard Halt from {A} when x >= 1 weight 1 - w(Run) { goto Low; }
+hazard Stop from {A} when x >= 1 weight 0.3 { goto High; }
+label low = mode == Low;
+property p = P=? [ F "low" ];
+""")
+    # At x = 1 the hazards preempt Run, so w(Run) = 0 and Halt (1) beats Stop (0.3).
+    _, values = storm_prism(lower(model), tmp_path)  # type: ignore[arg-type]
+    assert values["p"] == 1.0
