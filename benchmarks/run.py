@@ -56,7 +56,7 @@ CONFIGS: dict[str, list[str]] = {
 
 FIELDS = ["instance", "config", "status", "compile_s", "states", "transitions", "choices",
           "quotient_states", "build_s", "check_s", "uniform_states", "uniform_build_s",
-          "uniform_check_s", "total_s", "peak_gb", "engine", "properties", "when"]
+          "uniform_check_s", "total_s", "peak_gb", "engine", "properties", "progress", "when"]
 
 
 @dataclass
@@ -113,9 +113,12 @@ def _tree_rss(pid: int) -> int:
 
 def run_one(instance: str, config: str, timeout: float, memory_gb: float) -> dict[str, object]:
     args = [*AFSMC, "verify", UAV, *INSTANCES[instance], *CONFIGS[config], "--json",
-            "--max-states", "400000000"]
+            "--progress", "--max-states", "400000000"]
     start = time.perf_counter()
-    proc = subprocess.Popen(args, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+    # stderr (progress lines) goes to a file: on a timeout it says how far the run got
+    log = open(os.path.join(ROOT, "benchmarks", f".{instance}-{config}.log"), "w+",  # noqa: SIM115
+               encoding="utf-8")
+    proc = subprocess.Popen(args, stdout=subprocess.PIPE, stderr=log, text=True,
                             cwd=ROOT, start_new_session=True)
     peak = 0
     status = "ok"
@@ -127,12 +130,17 @@ def run_one(instance: str, config: str, timeout: float, memory_gb: float) -> dic
             status = "timeout" if elapsed > timeout else "memory"
             os.killpg(proc.pid, signal.SIGKILL)
             break
-    out, err = proc.communicate()
+    out, _ = proc.communicate()
     total = time.perf_counter() - start
+    log.seek(0)
+    err = log.read()
+    log.close()
+    progress = [line for line in err.splitlines() if line.startswith("afsmc:")]
     row: dict[str, object] = {"instance": instance, "config": config, "status": status,
                               "total_s": round(total, 1), "peak_gb": round(peak / 2**30, 2),
                               "when": time.strftime("%Y-%m-%d %H:%M")}
     if status != "ok":
+        row["progress"] = " | ".join(progress[-4:])
         return row
     try:
         data = json.loads(out)
