@@ -194,6 +194,14 @@ def main() -> int:
     ap.add_argument("--out", default=os.path.join(ROOT, "benchmarks", "results.csv"))
     args = ap.parse_args()
     rows: list[dict[str, object]] = []
+    if os.path.exists(args.out):
+        with open(args.out, newline="", encoding="utf-8") as f:
+            old = list(csv.DictReader(f))
+        if old and list(old[0].keys()) != FIELDS:  # written by an older version: widen it
+            with open(args.out, "w", newline="", encoding="utf-8") as f:
+                w = csv.DictWriter(f, fieldnames=FIELDS)
+                w.writeheader()
+                w.writerows({k: r.get(k, "") for k in FIELDS} for r in old)
     new = not os.path.exists(args.out)
     with open(args.out, "a", newline="", encoding="utf-8") as f:
         writer = csv.DictWriter(f, fieldnames=FIELDS)
