@@ -75,7 +75,7 @@ def test_reorder_puts_wide_counters_last_and_interleaves_tuples() -> None:
     assert names.index("obj") < names.index("pos_x")
 
 
-def test_mission_time_saturates_above_the_largest_constant_it_is_compared_with() -> None:
+def test_counters_saturate_beyond_the_constants_they_are_compared_with() -> None:
     """t is only compared with T_LIMIT and DEADLINE and only grows: it saturates at
     max(T_LIMIT, DEADLINE + 1), and the PRISM output says so."""
     model = load(str(EXAMPLES / "uav.afsm"), {"T_LIMIT": "100", "DEADLINE": "120"}).model
@@ -83,5 +83,21 @@ def test_mission_time_saturates_above_the_largest_constant_it_is_compared_with()
     t = next(v for v in low.model.variables if v.name == "t")
     assert t.hi == 121
     assert any("saturated t at 121" in r for r in low.reductions)
-    # b is compared with constants too, but it decreases: never saturated
-    assert next(v for v in low.model.variables if v.name == "b").hi == 100
+    # b only decreases and is compared with B_LOW, B_FULL: every level up to B_LOW (25)
+    # behaves alike, so it saturates from below
+    b = next(v for v in low.model.variables if v.name == "b")
+    assert (b.lo, b.hi) == (25, 100)
+    assert any("b from 25" in r for r in low.reductions)
+
+
+def test_saturation_shrinks_the_uav_scenario_and_keeps_its_values(tmp_path: Path) -> None:
+    """On an instance where the battery runs low, downward saturation merges states and
+    every property keeps its value."""
+    model = load(str(EXAMPLES / "uav.afsm"), {"WIDTH": "3", "HEIGHT": "2", "T_LIMIT": "400",
+                                               "B_LOW": "85"}).model
+    base = lower(model, "nondet")
+    plain, plain_values = storm_prism(reduce(base, Reductions(True, True, False)), tmp_path, "a")
+    sat, sat_values = storm_prism(reduce(base, Reductions(True, True, True)), tmp_path, "b")
+    assert sat.nr_states < plain.nr_states
+    for name, value in plain_values.items():
+        assert sat_values[name] == pytest.approx(value, abs=1e-9), name

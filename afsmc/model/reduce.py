@@ -6,10 +6,11 @@
   no property can tell, because variables read by labels, rewards or properties are
   live everywhere. (Measured on UAV-like models: about half the states, see
   docs/benchmarks.md.)
-* ``saturate`` -- a counter that only grows and is only ever compared with constants (the
-  mission time) is saturated just above the largest constant it is compared with: all
+* ``saturate`` -- a counter that only grows (the mission time) and is only ever compared
+  with constants is saturated just above the largest constant it is compared with: all
   larger values satisfy the same comparisons and stay larger, so they are one state
-  (bisimilar). Its range shrinks accordingly.
+  (bisimilar). Likewise downwards for a counter that only shrinks (the battery, below the
+  lowest threshold). Its range shrinks accordingly.
 * ``reorder`` -- the declaration order of the variables, which Storm's decision
   diagrams (dd and hybrid engines) follow: control variables first, the fields of tuples
   interleaved (pos.x, ret.x, pos.y, ret.y), wide counters (time, battery) last. The
@@ -181,47 +182,54 @@ def reorder(low: Lowered) -> Lowered:
 
 # ---- saturating counters -------------------------------------------------------------
 
-def _increment(var: str, value: E.Expr, model: ir.Model,
-               generated: dict[str, tuple[str, int]]) -> E.Expr | None:
-    """`k` if `value` is `var + k` (possibly clamped from above by the lowering: only a
-    `min` at the variable's own upper end of a `clamp` variable; an author's `min` is kept
-    and makes the variable not a plain counter)."""
-    if _clamped_at_hi(var, value, model, generated):
+def _step(var: str, value: E.Expr, model: ir.Model, generated: dict[str, tuple[str, int]],
+          up: bool) -> E.Expr | None:
+    """`k` if `value` is `var + k` (up) or `var - k` (down), possibly under the lowering's
+    clamp at the range's own end (only for `clamp` variables: an author's `min`/`max` is
+    kept and makes the variable no plain counter)."""
+    if _clamped(var, value, model, generated, up):
         assert isinstance(value, E.Call)
         value = value.args[0]
-    if isinstance(value, E.Binary) and value.op == "+" and isinstance(value.left, E.VarRef) \
-            and value.left.name == var:
+    if isinstance(value, E.Binary) and isinstance(value.left, E.VarRef) \
+            and value.left.name == var and value.op == ("+" if up else "-"):
         return value.right
     return None
 
 
-def _clamped_at_hi(var: str, value: E.Expr, model: ir.Model,
-                   generated: dict[str, tuple[str, int]]) -> bool:
+def _clamped(var: str, value: E.Expr, model: ir.Model, generated: dict[str, tuple[str, int]],
+             up: bool) -> bool:
     v = model.variable(var)
-    return (v.clamp and isinstance(value, E.Call) and value.func == "min"
-            and len(value.args) == 2 and static(value.args[1], model, generated) == v.hi)
+    func, end = ("min", v.hi) if up else ("max", v.lo)
+    return (v.clamp and isinstance(value, E.Call) and value.func == func
+            and len(value.args) == 2 and static(value.args[1], model, generated) == end)
 
 
-def _thresholds(var: str, exprs: list[E.Expr], model: ir.Model) -> float | None:
-    """The saturation point of `var`: above every boundary of its comparisons with
-    constants; None if it is read in any other way."""
-    point = float(model.variable(var).lo)
-    flip = {"<": ">", "<=": ">=", ">": "<", ">=": "<=", "==": "==", "!=": "!="}
+# For `var OP c`: from which value on (up: upwards, down: downwards) the comparison stops
+# changing, as an offset from c.
+_UP = {"<": 0, "<=": 1, ">": 1, ">=": 0, "==": 1, "!=": 1}
+_DOWN = {"<": -1, "<=": 0, ">": 0, ">=": -1, "==": -1, "!=": -1}
+_FLIP = {"<": ">", "<=": ">=", ">": "<", ">=": "<=", "==": "==", "!=": "!="}
+
+
+def _thresholds(var: str, exprs: list[E.Expr], model: ir.Model, up: bool) -> float | None:
+    """The saturation point of `var`: beyond every boundary of its comparisons with
+    constants, upwards or downwards; None if it is read in any other way."""
+    v = model.variable(var)
+    point = float(v.lo if up else v.hi)
     ok = True
 
     def visit(e: E.Expr) -> None:
         nonlocal point, ok
-        if isinstance(e, E.Binary) and e.op in flip:
+        if isinstance(e, E.Binary) and e.op in _FLIP:
             left, right, op = e.left, e.right, e.op
             if isinstance(right, E.VarRef) and right.name == var:
-                left, right, op = right, left, flip[op]
+                left, right, op = right, left, _FLIP[op]
             if isinstance(left, E.VarRef) and left.name == var:
                 c = static(right, model)
                 if c is None or c != int(c):
                     ok = False
                     return
-                # the smallest value from which the comparison no longer changes
-                point = max(point, c + 1 if op in ("<=", ">", "==", "!=") else c)
+                point = max(point, c + _UP[op]) if up else min(point, c + _DOWN[op])
                 visit(right)
                 return
         if isinstance(e, E.VarRef) and e.name == var:
@@ -235,6 +243,20 @@ def _thresholds(var: str, exprs: list[E.Expr], model: ir.Model) -> float | None:
         if not ok:
             return None
     return point
+
+
+def _monotone(var: str, updates: list[E.Expr], model: ir.Model,
+              generated: dict[str, tuple[str, int]], up: bool) -> bool:
+    """Every update moves `var` one way by a non-negative amount, or sets a constant."""
+    for value in updates:
+        k = _step(var, value, model, generated, up)
+        if k is not None:
+            k = inline(k, model)
+            if bounds(k, model, None, generated)[0] < 0 or var in E.vars_read(k):
+                return False
+        elif static(value, model, generated) is None:
+            return False
+    return True
 
 
 def saturate(low: Lowered) -> tuple[Lowered, list[str]]:
@@ -260,45 +282,44 @@ def saturate(low: Lowered) -> tuple[Lowered, list[str]]:
                     if other != var:
                         reads[other].append(v_in)
     done: list[str] = []
-    saturated: dict[str, int] = {}
+    saturated: dict[str, tuple[bool, int]] = {}  # var -> (upwards?, point)
+    gen = low.bounds
     for v in model.variables:
-        if v.type is not E.Type.INT:
-            continue
-        # Only growth: every update is v + k with k >= 0, or a constant.
-        grows = True
-        gen = low.bounds
-        for value in self_updates[v.name]:
-            k = _increment(v.name, value, model, gen)
-            if k is not None:
-                k = inline(k, model)
-                if bounds(k, model, None, gen)[0] < 0 or v.name in E.vars_read(k):
-                    grows = False
-            elif static(value, model, gen) is None:
-                grows = False
-        if not grows or reads[v.name]:
+        if v.type is not E.Type.INT or reads[v.name]:
             continue  # other variables' updates read it: its exact value matters
-        point = _thresholds(v.name, exprs, model)
-        if point is None or point >= v.hi or point < v.init:
-            continue
-        saturated[v.name] = int(point)
-        done.append(f"{v.display} at {int(point)}")
+        for up in (True, False):
+            if not _monotone(v.name, self_updates[v.name], model, gen, up):
+                continue
+            point = _thresholds(v.name, exprs, model, up)
+            if point is None:
+                continue
+            if (up and v.init <= point < v.hi) or (not up and v.lo < point <= v.init):
+                saturated[v.name] = (up, int(point))
+                done.append(f"{v.display} {'at' if up else 'from'} {int(point)}")
+                break
     if not saturated:
         return low, []
 
     def cap(var: str, value: E.Expr) -> E.Expr:
         if var not in saturated:
             return value
-        k = static(value, model, low.bounds)
+        up, point = saturated[var]
+        k = static(value, model, gen)
         if k is not None:
-            return E.lit(int(min(k, saturated[var])))
-        if _clamped_at_hi(var, value, model, low.bounds):
+            return E.lit(int(min(k, point) if up else max(k, point)))
+        if _clamped(var, value, model, gen, up):
             assert isinstance(value, E.Call)
-            value = value.args[0]  # the clamp at the old upper end is subsumed
-        return E.Call("min", (value, E.lit(saturated[var])), E.Type.INT)
+            value = value.args[0]  # the clamp at the old end is subsumed
+        return E.Call("min" if up else "max", (value, E.lit(point)), E.Type.INT)
 
     commands = tuple(replace(cmd, branches=tuple(
         replace(b, updates=tuple((var, cap(var, val)) for var, val in b.updates))
         for b in cmd.branches)) for cmd in low.commands)
-    variables = tuple(replace(v, hi=saturated[v.name]) if v.name in saturated else v
-                      for v in model.variables)
-    return replace(low, model=replace(model, variables=variables), commands=commands), done
+    variables = []
+    for v in model.variables:
+        if v.name in saturated:
+            up, point = saturated[v.name]
+            v = replace(v, hi=point) if up else replace(v, lo=point)
+        variables.append(v)
+    return replace(low, model=replace(model, variables=tuple(variables)),
+                   commands=commands), done
