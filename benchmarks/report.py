@@ -1,0 +1,141 @@
+"""Write the measured tables of docs/benchmarks.md from benchmarks/results.csv.
+
+    .venv/bin/python benchmarks/report.py [--csv benchmarks/results.csv] [--doc docs/benchmarks.md]
+
+The document keeps its prose; the parts between `<!-- begin NAME -->` and `<!-- end NAME -->`
+are replaced: `growing` (the growing instances), `ratios` (reduced against unreduced and
+the other ratios, from the same run), `scenarios` (the paper's scenarios) and `values`
+(the properties of the scenarios). The latest row of each (instance, configuration) counts.
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import json
+import os
+import re
+import sys
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+GROWING = ["small", "default", "obj2-t300"]
+SCENARIOS = ["scenario2", "scenario1"]
+PAPER = {"scenario1": "116,191,709 states; built in 488 s; 298–813 s per property",
+         "scenario2": "35,649,503 states; built in 77 s"}
+
+
+def _n(v: str) -> str:
+    try:
+        return f"{int(v):,}"
+    except ValueError:
+        return v
+
+
+def _f(v: str, digits: int = 1) -> str:
+    try:
+        return f"{float(v):.{digits}f}"
+    except ValueError:
+        return v
+
+
+def table(rows: list[dict[str, str]]) -> str:
+    head = ["instance", "config", "status", "compile s", "states", "transitions", "bisim quotient",
+            "build s", "check s", "uniform build + check s", "total s", "peak GB", "engine"]
+    out = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
+    for r in rows:
+        uni = ""
+        if r.get("uniform_build_s") and r.get("uniform_check_s"):
+            uni = f"{float(r['uniform_build_s']) + float(r['uniform_check_s']):.1f}"
+        status = r["status"]
+        if status != "ok" and r.get("progress"):
+            status += f" ({r['progress'].split(' | ')[-1].removeprefix('afsmc: ')})"
+        cells = [r["instance"], r["config"], status, _f(r["compile_s"], 3), _n(r["states"]),
+                 _n(r["transitions"]), _n(r["quotient_states"]), _f(r["build_s"]),
+                 _f(r["check_s"]), uni, _f(r["total_s"]), _f(r["peak_gb"], 2), r["engine"]]
+        out.append("| " + " | ".join(cells) + " |")
+    return "\n".join(out)
+
+
+def ratios(latest: dict[tuple[str, str], dict[str, str]], instances: list[str]) -> str:
+    out = ["| instance | states: reduced / unreduced | total time: reduced / unreduced | "
+           "bisim quotient / reduced states | check time: bisim / plain | hybrid / sparse total time |",
+           "|---|---|---|---|---|---|"]
+    for inst in instances:
+        def get(config: str, key: str, inst: str = inst) -> float | None:
+            r = latest.get((inst, config))
+            if r is None or r["status"] != "ok" or not r.get(key):
+                return None
+            return float(r[key])
+
+        def ratio(a: float | None, b: float | None, digits: int = 2) -> str:
+            return f"{a / b:.{digits}f}" if a is not None and b else ""
+
+        cells = [inst,
+                 ratio(get("sparse", "states"), get("sparse-noreduce", "states")),
+                 ratio(get("sparse", "total_s"), get("sparse-noreduce", "total_s")),
+                 ratio(get("sparse-bisim", "quotient_states"), get("sparse", "states"), 3),
+                 ratio(max(get("sparse-bisim", "check_s") or 0, 0.01) if get("sparse-bisim", "check_s") is not None else None,
+                       max(get("sparse", "check_s") or 0, 0.01)),
+                 ratio(get("hybrid", "total_s"), get("sparse", "total_s"), 1)]
+        if any(cells[1:]):
+            out.append("| " + " | ".join(cells) + " |")
+    return "\n".join(out)
+
+
+def values(latest: dict[tuple[str, str], dict[str, str]]) -> str:
+    out = []
+    for inst in SCENARIOS:
+        row = next((latest[(i, c)] for (i, c) in sorted(latest) if i == inst
+                    and latest[(i, c)]["status"] == "ok" and latest[(i, c)].get("properties")
+                    and c != "sparse-noreduce"), None)
+        if row is None:
+            continue
+        props = json.loads(row["properties"])
+        out.append(f"**{inst}** (`{row['config']}`):\n")
+        out.append("| property | min | max | uniform |")
+        out.append("|---|---|---|---|")
+        for name, (lo, hi, uni, val) in props.items():
+            if val is not None:
+                lo = hi = uni = val
+            cells = [name] + ["" if x is None else f"{x:.4f}" for x in (lo, hi, uni)]
+            out.append("| " + " | ".join(cells) + " |")
+        out.append("")
+    return "\n".join(out).strip()
+
+
+def replace(doc: str, name: str, text: str) -> str:
+    pattern = re.compile(rf"(<!-- begin {name} -->\n)(?:.*?\n)?(<!-- end {name} -->)", re.S)
+    if not pattern.search(doc):
+        raise SystemExit(f"docs: no <!-- begin {name} --> ... <!-- end {name} --> block")
+    return pattern.sub(lambda m: m.group(1) + text + "\n" + m.group(2), doc)
+
+
+def main() -> int:
+    ap = argparse.ArgumentParser(description=__doc__)
+    ap.add_argument("--csv", default=os.path.join(ROOT, "benchmarks", "results.csv"))
+    ap.add_argument("--doc", default=os.path.join(ROOT, "docs", "benchmarks.md"))
+    args = ap.parse_args()
+    with open(args.csv, newline="", encoding="utf-8") as f:
+        rows = list(csv.DictReader(f))
+    latest: dict[tuple[str, str], dict[str, str]] = {}
+    for r in rows:
+        latest[(r["instance"], r["config"])] = r
+    ordered = sorted(latest.values(), key=lambda r: (
+        (GROWING + SCENARIOS).index(r["instance"]) if r["instance"] in GROWING + SCENARIOS else 99,
+        r["config"]))
+    with open(args.doc, encoding="utf-8") as f:
+        doc = f.read()
+    doc = replace(doc, "growing", table([r for r in ordered if r["instance"] in GROWING]))
+    doc = replace(doc, "ratios", ratios(latest, GROWING + SCENARIOS))
+    doc = replace(doc, "scenarios", table([r for r in ordered if r["instance"] in SCENARIOS]))
+    doc = replace(doc, "values", values(latest))
+    tmp = args.doc + ".tmp"
+    with open(tmp, "w", encoding="utf-8") as f:
+        f.write(doc)
+    os.replace(tmp, args.doc)
+    print(f"wrote {args.doc}", file=sys.stderr)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
