@@ -40,7 +40,8 @@ def _f(v: str, digits: int = 1) -> str:
 
 def table(rows: list[dict[str, str]]) -> str:
     head = ["instance", "config", "status", "compile s", "states", "transitions", "bisim quotient",
-            "build s", "check s", "uniform build + check s", "total s", "peak GB", "engine"]
+            "build s", "check s", "uniform build + check s", "total s", "peak GB", "engine",
+            "measured"]
     out = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
     for r in rows:
         uni = ""
@@ -51,7 +52,8 @@ def table(rows: list[dict[str, str]]) -> str:
             status += f" ({r['progress'].split(' | ')[-1].removeprefix('afsmc: ')})"
         cells = [r["instance"], r["config"], status, _f(r["compile_s"], 3), _n(r["states"]),
                  _n(r["transitions"]), _n(r["quotient_states"]), _f(r["build_s"]),
-                 _f(r["check_s"]), uni, _f(r["total_s"]), _f(r["peak_gb"], 2), r["engine"]]
+                 _f(r["check_s"]), uni, _f(r["total_s"]), _f(r["peak_gb"], 2), r["engine"],
+                 r.get("when", "")]
         out.append("| " + " | ".join(cells) + " |")
     return "\n".join(out)
 
