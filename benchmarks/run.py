@@ -52,6 +52,9 @@ CONFIGS: dict[str, list[str]] = {
     "hybrid": ["--engine", "hybrid"],
     "hybrid-noreduce": ["--engine", "hybrid", "--no-reduce"],
     "auto": ["--engine", "auto"],
+    # the paper's headline properties, min and max only: what fits the paper's scenario 1
+    "hybrid-headline": ["--engine", "hybrid", "--no-uniform", "--property", "success",
+                        "--property", "missed", "--property", "emergency"],
 }
 
 FIELDS = ["instance", "config", "status", "compile_s", "states", "transitions", "choices",
