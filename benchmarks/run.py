@@ -55,6 +55,7 @@ CONFIGS: dict[str, list[str]] = {
     # the paper's headline properties, min and max only: what fits the paper's scenario 1
     "hybrid-headline": ["--engine", "hybrid", "--no-uniform", "--property", "success",
                         "--property", "missed", "--property", "emergency"],
+    "hybrid-success": ["--engine", "hybrid", "--no-uniform", "--property", "success"],
 }
 
 FIELDS = ["instance", "config", "status", "compile_s", "states", "transitions", "choices",
