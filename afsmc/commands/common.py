@@ -79,7 +79,12 @@ def report(diags: Iterable[Diagnostic], as_json: bool = False) -> None:
         print(render_all(diags, color_enabled()), file=sys.stderr)
 
 
-def fail(exc: CompileError, as_json: bool = False) -> int:
+def fail(exc: CompileError, as_json: bool = False, wrapped: bool = False) -> int:
+    """Print the diagnostics (as text, as a JSON list, or -- `wrapped`, for commands whose
+    --json output is an object -- as `{"diagnostics": [...]}`) and return exit code 1."""
+    if as_json and wrapped:
+        print(json.dumps({"diagnostics": [d.to_json() for d in exc.diagnostics]}, indent=2))
+        return 1
     report(exc.diagnostics, as_json)
     return 1
 

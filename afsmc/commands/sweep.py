@@ -16,7 +16,6 @@ from afsmc.commands.common import add_file, fail, reductions, usage_error
 from afsmc.commands.verify import add_storm_options, positive, progress_printer
 from afsmc.compiler import write_atomic
 from afsmc.diagnostics import CompileError
-from afsmc.diagnostics import to_json as diags_to_json
 from afsmc.verify.sweep import Number, parse_values
 
 
@@ -110,11 +109,7 @@ def run(args: argparse.Namespace) -> int:
             if progress:
                 progress(f"wrote {args.plot}")
     except CompileError as exc:
-        if args.json:
-            print(json.dumps({"diagnostics": json.loads(diags_to_json(exc.diagnostics))},
-                             indent=2))
-            return 1
-        return fail(exc)
+        return fail(exc, args.json, wrapped=True)
     if args.json:
         print(json.dumps(res.to_json(), indent=2))
     elif not args.output and not args.plot:

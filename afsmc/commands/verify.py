@@ -18,7 +18,6 @@ from afsmc.commands.common import (
     report,
 )
 from afsmc.diagnostics import CompileError
-from afsmc.diagnostics import to_json as diags_to_json
 from afsmc.verify import VerifyResult
 from afsmc.verify.storm import ENGINES, VIAS
 
@@ -146,11 +145,7 @@ def run(args: argparse.Namespace) -> int:
                   progress=progress_printer(args), reductions=reductions(args),
                   bisimulation=args.bisim)
     except CompileError as exc:
-        if args.json:
-            print(json.dumps({"diagnostics": json.loads(diags_to_json(exc.diagnostics))},
-                             indent=2))
-            return 1
-        return fail(exc)
+        return fail(exc, args.json, wrapped=True)
     if args.json:
         print(json.dumps(res.to_json(), indent=2))
     else:
