@@ -382,8 +382,6 @@ def check(model: ir.Model, props: Sequence[ir.Property], *, via: Via = "prism",
             raise CompileError([failure_diagnostic(res.failure, model, low, props, job)])
         if reason and not res.engine_reason:
             res.engine_reason = reason
-        if res.engine_reason and progress is not None:
-            progress(f"engine {res.engine} for the {what}: {res.engine_reason}")
         stats.append(_stats(res, resolution))
         values.append(res.values)
     results = []
