@@ -18,7 +18,7 @@ import re
 import sys
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-GROWING = ["small", "default", "obj2-t300"]
+GROWING = ["4x4-obj2-t300", "5x5-obj2-t400"]
 SCENARIOS = ["scenario2", "scenario1"]
 PAPER = {"scenario1": "116,191,709 states; built in 488 s; 298–813 s per property",
          "scenario2": "35,649,503 states; built in 77 s"}
@@ -38,8 +38,29 @@ def _f(v: str, digits: int = 1) -> str:
         return v
 
 
+def _share(r: dict[str, str]) -> str:
+    """Compile time as a share of the whole `afsmc verify` run (which compiles too)."""
+    try:
+        c, t = float(r["compile_s"]), float(r["total_s"])
+    except (KeyError, ValueError):
+        return ""
+    return f"{100 * c / t:.2f}%" if t > 0 else ""
+
+
+def compile_summary(rows: list[dict[str, str]]) -> str:
+    shares = [(float(r["compile_s"]) / float(r["total_s"]), r)
+              for r in rows if r["status"] == "ok" and r.get("compile_s") and r.get("total_s")]
+    if not shares:
+        return "No completed run yet."
+    worst, r = max(shares, key=lambda x: x[0])
+    return (f"Compilation (parse, check, lower, reduce, emit PRISM) is at most "
+            f"{100 * worst:.2f}% of the end-to-end time in every completed row above "
+            f"(largest share: {r['instance']}, {r['config']}, {float(r['compile_s']):.3f} s "
+            f"of {float(r['total_s']):.1f} s).")
+
+
 def table(rows: list[dict[str, str]]) -> str:
-    head = ["instance", "config", "status", "compile s", "states", "transitions", "bisim quotient",
+    head = ["instance", "config", "status", "compile s", "compile share", "states", "transitions", "bisim quotient",
             "build s", "check s", "uniform build + check s", "total s", "peak GB", "engine",
             "measured"]
     out = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
@@ -50,7 +71,8 @@ def table(rows: list[dict[str, str]]) -> str:
         status = r["status"]
         if status != "ok" and r.get("progress"):
             status += f" ({r['progress'].split(' | ')[-1].removeprefix('afsmc: ')})"
-        cells = [r["instance"], r["config"], status, _f(r["compile_s"], 3), _n(r["states"]),
+        cells = [r["instance"], r["config"], status, _f(r["compile_s"], 3), _share(r),
+                 _n(r["states"]),
                  _n(r["transitions"]), _n(r["quotient_states"]), _f(r["build_s"]),
                  _f(r["check_s"]), uni, _f(r["total_s"]), _f(r["peak_gb"], 2), r["engine"],
                  r.get("when", "")]
@@ -87,11 +109,14 @@ def ratios(latest: dict[tuple[str, str], dict[str, str]], instances: list[str]) 
 def values(latest: dict[tuple[str, str], dict[str, str]]) -> str:
     out = []
     for inst in SCENARIOS:
-        row = next((latest[(i, c)] for (i, c) in sorted(latest) if i == inst
-                    and latest[(i, c)]["status"] == "ok" and latest[(i, c)].get("properties")
-                    and c != "sparse-noreduce"), None)
-        if row is None:
+        done = [latest[(i, c)] for (i, c) in sorted(latest) if i == inst
+                and latest[(i, c)]["status"] == "ok" and latest[(i, c)].get("properties")
+                and c != "sparse-noreduce"]
+        if not done:
             continue
+        # the most complete run: most properties, then uniform values too
+        row = max(done, key=lambda r: (len(json.loads(r["properties"])),
+                                       bool(r.get("uniform_check_s"))))
         props = json.loads(row["properties"])
         out.append(f"**{inst}** (`{row['config']}`):\n")
         out.append("| property | min | max | uniform |")
@@ -131,6 +156,8 @@ def main() -> int:
     doc = replace(doc, "ratios", ratios(latest, GROWING + SCENARIOS))
     doc = replace(doc, "scenarios", table([r for r in ordered if r["instance"] in SCENARIOS]))
     doc = replace(doc, "values", values(latest))
+    shown = [r for r in ordered if r["instance"] in GROWING + SCENARIOS]
+    doc = replace(doc, "compile", compile_summary(shown))
     tmp = args.doc + ".tmp"
     with open(tmp, "w", encoding="utf-8") as f:
         f.write(doc)

@@ -78,3 +78,20 @@ def test_verify_cli_reports_the_engine_and_quotient() -> None:
     assert data["model"]["quotient_states"] <= data["model"]["states"]
     r = run_cli("verify", str(EXAMPLES / "patrol.afsm"), "--no-reduce", "--json")
     assert json.loads(r.out)["model"]["states"] > data["model"]["states"]
+
+
+def test_split_checks_each_property_in_its_own_process_with_the_same_values() -> None:
+    names = ["success", "emergency"]
+    together = run(UAV, consts=SMALL["uav"], properties=names, engine="sparse", isolate=False)
+    split = run(UAV, consts=SMALL["uav"], properties=names, engine="sparse", split=True)
+    _close(_values(together), _values(split), 1e-12)
+    assert split.model.processes == len(names) and together.model.processes == 1
+    assert split.uniform_model is not None and split.uniform_model.processes == len(names)
+    assert split.model.states == together.model.states
+
+
+def test_split_is_reported_by_the_cli() -> None:
+    r = run_cli("verify", UAV, "--split", "-p", "success", "-p", "drops", "--no-uniform",
+                "--json", *[f"--const={k}={v}" for k, v in SMALL["uav"].items()])
+    assert r.code == 0, r.err
+    assert json.loads(r.out)["model"]["processes"] == 2

@@ -99,7 +99,7 @@ def run(args: argparse.Namespace) -> int:
                         via=args.via, engine=args.engine, max_states=args.max_states,
                         jobs=args.jobs, dask=args.dask, uniform=args.uniform,
                         progress=progress, reductions=reductions(args),
-                        bisimulation=args.bisim)
+                        bisimulation=args.bisim, split=args.split)
         if args.output:
             write_atomic(args.output, res.to_csv(), protect=(args.file,))
             if progress:

@@ -49,6 +49,10 @@ def add_storm_options(p: argparse.ArgumentParser) -> None:
     p.add_argument("--bisim", action="store_true",
                    help="minimise the sparse model by strong bisimulation before checking "
                         "(exact; faster checks, more memory while building)")
+    p.add_argument("--split", action="store_true",
+                   help="check each property in its own Storm process, building the model "
+                        "again for each: slower, but the memory is that of one property (the "
+                        "hybrid engine's grows with every property checked in one process)")
     add_reductions(p)
     p.add_argument("--max-states", type=positive, metavar="N",
                    help="stop (exit 1) if the model has more states than N (default: what "
@@ -123,8 +127,9 @@ def render(res: VerifyResult) -> str:
                       f"{m.choices:,}" if m.choices else "-"]
                      + ([f"{m.quotient_states:,}" if m.quotient_states is not None else "-"]
                         if bisim else [])
-                     + [f"{m.build_time + m.bisimulation_time:.3f} s", f"{m.check_time:.3f} s",
-                        m.engine])
+                     + [f"{m.build_time + m.bisimulation_time:.3f} s"
+                        + (f" ({m.processes} builds)" if m.processes > 1 else ""),
+                        f"{m.check_time:.3f} s", m.engine])
     lines += table(mrows, set(range(1, len(mrows[0]) - 1)))
     for name, m in models:
         if m.engine_reason and res.engine == "auto":
@@ -143,7 +148,7 @@ def run(args: argparse.Namespace) -> int:
                   formulas=args.formula, via=args.via, engine=args.engine,
                   max_states=args.max_states, uniform=args.uniform,
                   progress=progress_printer(args), reductions=reductions(args),
-                  bisimulation=args.bisim)
+                  bisimulation=args.bisim, split=args.split)
     except CompileError as exc:
         return fail(exc, args.json, wrapped=True)
     if args.json:

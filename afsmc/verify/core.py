@@ -51,11 +51,13 @@ class ModelStats:
     quotient_states: int | None = None  # after --bisim
     quotient_transitions: int | None = None
     bisimulation_time: float = 0.0
+    processes: int = 1  # Storm runs that built this model (--split: one per property)
 
     def to_json(self) -> dict[str, object]:
         out: dict[str, object] = {
             "states": self.states, "transitions": self.transitions, "choices": self.choices,
-            "type": self.type, "resolution": self.resolution, "engine": self.engine}
+            "type": self.type, "resolution": self.resolution, "engine": self.engine,
+            "processes": self.processes}
         if self.engine_reason:
             out["engine_reason"] = self.engine_reason
         if self.quotient_states is not None:
@@ -343,6 +345,15 @@ def _stats(res: JobResult, resolution: str) -> ModelStats:
                       res.bisimulation_time)
 
 
+def _add(a: ModelStats, b: ModelStats) -> ModelStats:
+    """Two Storm runs of one model (--split): times add up, sizes are the same."""
+    return dataclasses.replace(
+        a, parse_time=a.parse_time + b.parse_time, build_time=a.build_time + b.build_time,
+        check_time=a.check_time + b.check_time,
+        bisimulation_time=a.bisimulation_time + b.bisimulation_time,
+        processes=a.processes + b.processes)
+
+
 # Below this upper bound (modes × variable ranges) "auto" goes straight to the sparse
 # engine. The bound overestimates reachable states by 10^3-10^4 on missions like the UAV,
 # so such models are small; if one is not, the memory guard stops the build. Above it, a
@@ -361,8 +372,13 @@ def choose_engine(engine: Engine, bound: int) -> tuple[Engine, str]:
 def check(model: ir.Model, props: Sequence[ir.Property], *, via: Via = "prism",
           engine: Engine = "sparse", max_states: int | None = None, uniform: bool = True,
           isolate: bool | None = None, progress: Progress | None = None,
-          reductions: Reductions | None = None, bisimulation: bool = False) -> Checks:
-    """Check `props` (uniquely named) on a loaded model; raises CompileError on failure."""
+          reductions: Reductions | None = None, bisimulation: bool = False,
+          split: bool = False) -> Checks:
+    """Check `props` (uniquely named) on a loaded model; raises CompileError on failure.
+
+    `split`: one Storm process per property, each building the model afresh. Costs a build
+    per property, but a process's memory is that of one property: the hybrid engine's
+    memory grows with every property checked in the same process."""
     model = dataclasses.replace(model, properties=tuple(props))
     bound = upper_bound(model)
     engine, reason = choose_engine(engine, bound)
@@ -375,15 +391,29 @@ def check(model: ir.Model, props: Sequence[ir.Property], *, via: Via = "prism",
         lows.append(("nondet", lowered(model, "nondet", reductions), "DTMC"))
     stats: list[ModelStats] = []
     values: list[dict[str, float]] = []
+    groups = [[p] for p in props] if split and len(props) > 1 else [list(props)]
     for resolution, low, what in lows:
-        job = make_job(low, props, via, engine, max_states, what, bisimulation)
-        res = run_job(job, bound, isolate=isolate, progress=progress)
-        if res.failure is not None:
-            raise CompileError([failure_diagnostic(res.failure, model, low, props, job)])
-        if reason and not res.engine_reason:
-            res.engine_reason = reason
-        stats.append(_stats(res, resolution))
-        values.append(res.values)
+        merged: ModelStats | None = None
+        vals: dict[str, float] = {}
+        for i, group in enumerate(groups):
+            job = make_job(low, group, via, engine, max_states, what, bisimulation)
+            if progress is not None and len(groups) > 1:
+                progress(f"{what}, property {i + 1} of {len(groups)} ({group[0].name}) in its "
+                         "own Storm process")
+            # A fresh process per property is the point of splitting, except where no child
+            # process may be started (isolate=False: Dask workers).
+            fresh = isolate if isolate is False or len(groups) == 1 else True
+            res = run_job(job, bound, isolate=fresh, progress=progress)
+            if res.failure is not None:
+                raise CompileError([failure_diagnostic(res.failure, model, low, group, job)])
+            if reason and not res.engine_reason:
+                res.engine_reason = reason
+            one = _stats(res, resolution)
+            merged = one if merged is None else _add(merged, one)
+            vals |= res.values
+        assert merged is not None
+        stats.append(merged)
+        values.append(vals)
     results = []
     for p in props:
         r = PropertyResult(p.name, formula_text(p, p.opt, show), p.kind)
@@ -403,7 +433,8 @@ def run(path: str, *, consts: Mapping[str, str] | None = None, properties: Seque
         formulas: Sequence[str] = (), via: Via = "prism", engine: Engine = "sparse",
         max_states: int | None = None, uniform: bool = True, isolate: bool | None = None,
         progress: Progress | None = None, text: str | None = None,
-        reductions: Reductions | None = None, bisimulation: bool = False) -> VerifyResult:
+        reductions: Reductions | None = None, bisimulation: bool = False,
+        split: bool = False) -> VerifyResult:
     """Verify one .afsm file; see the package docstring. Raises CompileError."""
     t0 = time.perf_counter()
     loaded = load_with_formulas(path, consts, formulas, text=text)
@@ -418,7 +449,7 @@ def run(path: str, *, consts: Mapping[str, str] | None = None, properties: Seque
     try:
         checks = check(model, props, via=via, engine=engine, max_states=limit, uniform=uniform,
                        isolate=isolate, progress=progress, reductions=reductions,
-                       bisimulation=bisimulation)
+                       bisimulation=bisimulation, split=split)
     except CompileError as exc:
         raise loaded.remap_error(exc) from None
     consts_used: dict[str, object] = {c.name: c.value for c in model.constants if c.is_param}

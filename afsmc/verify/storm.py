@@ -174,7 +174,11 @@ def _execute(job: Job, notify: Notify) -> JobResult:
                     engine_name = "hybrid"
                     res.engine_reason = (f"{int(model.nr_states):,} states would need about "
                                          f"{need / 1e9:.1f} GB as sparse matrices, more than "
-                                         f"the {budget / 1e9:.1f} GB available")
+                                         f"the {budget / 1e9:.1f} GB available"
+                                         + ("; --split checks one property per process, "
+                                            "which bounds the hybrid engine's memory"
+                                            if len(job.names) > 2
+                                            else ""))
         else:
             model = stormpy.build_model(program, props)
     except RuntimeError as exc:

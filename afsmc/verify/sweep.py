@@ -112,6 +112,7 @@ class Task:
     shared: bool = False  # const sweep whose constant only the properties read: one build
     reductions: Reductions | None = None
     bisimulation: bool = False
+    split: bool = False  # one Storm process per property
 
 
 def _with_bound(p: ir.Property, k: int, name: str) -> ir.Property:
@@ -255,7 +256,7 @@ def _checks(model: ir.Model, props: list[ir.Property], task: Task) -> Any:
         reductions = dataclasses.replace(reductions or Reductions(), saturate=False)
     return check(model, props, via=task.via, engine=task.engine, max_states=task.max_states,
                  uniform=task.uniform, isolate=task.isolate, reductions=reductions,
-                 bisimulation=task.bisimulation)
+                 bisimulation=task.bisimulation, split=task.split)
 
 
 @dataclass
@@ -380,7 +381,7 @@ def sweep(path: str, variable: str, values: Sequence[Number], *, kind: Kind = "c
           max_states: int | None = None, jobs: int | None = None, dask: Any = None,
           uniform: bool = True, progress: Progress | None = None,
           text: str | None = None, reductions: Reductions | None = None,
-          bisimulation: bool = False) -> SweepResult:
+          bisimulation: bool = False, split: bool = False) -> SweepResult:
     """Evaluate the properties at every value; see the package docstring. Raises CompileError."""
     t0 = time.perf_counter()
     if not values:
@@ -396,7 +397,8 @@ def sweep(path: str, variable: str, values: Sequence[Number], *, kind: Kind = "c
     base = dict(path=path, text=source, consts=tuple(sorted(consts.items())),
                 properties=tuple(properties), formulas=tuple(formulas), variable=variable,
                 kind=kind, via=via, engine=engine, max_states=limit, uniform=uniform,
-                isolate=isolate, reductions=reductions, bisimulation=bisimulation)
+                isolate=isolate, reductions=reductions, bisimulation=bisimulation,
+                split=split)
     if kind == "const" and independent(path, source, consts, variable, values):
         # Only the properties read the constant (a deadline): one build per chunk.
         chunks = _chunks(values, 1 if dask is None and jobs == 1 else jobs)
