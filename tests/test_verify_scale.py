@@ -95,3 +95,36 @@ def test_split_is_reported_by_the_cli() -> None:
                 "--json", *[f"--const={k}={v}" for k, v in SMALL["uav"].items()])
     assert r.code == 0, r.err
     assert json.loads(r.out)["model"]["processes"] == 2
+
+
+# Few states, but an upper bound (modes × ranges) above AUTO_SPARSE_BOUND, so that "auto"
+# counts the states symbolically and decides with the memory budget.
+WIDE = """machine wide;
+const int STEP = [1, 2];
+var x : [0..10] init 0 clamp;
+var far : [0..1000000000] init 0;
+mode Run = 0 initial;
+mode End = 1 final;
+action Go in Run when x < 10 { 0.9: x += STEP; 0.1: x += 1; }
+action Stop in Run when x >= 10 { goto End; }
+label done = mode == End && far == 0;
+rewards steps { [Go] true : 1; }
+property reach = P=? [ F "done" ];
+property steps = R{"steps"}=? [ F "done" ];
+"""
+
+
+def test_auto_with_hybrid_checks_one_property_per_process(tmp_path: object) -> None:
+    import pathlib
+
+    path = pathlib.Path(str(tmp_path)) / "wide.afsm"
+    path.write_text(WIDE, encoding="utf-8")
+    sparse = run(str(path), engine="sparse", isolate=False)
+    tight = run(str(path), engine="auto", memory_budget=1)
+    roomy = run(str(path), engine="auto", memory_budget=1 << 40)
+    assert tight.model.engine == "hybrid" and tight.model.processes == 2
+    assert "one property per Storm process" in tight.model.engine_reason
+    assert tight.uniform_model is not None and tight.uniform_model.processes == 2
+    assert roomy.model.engine == "sparse" and roomy.model.processes == 1
+    _close(_values(tight), _values(sparse), 1e-6)
+    _close(_values(roomy), _values(sparse), 1e-9)

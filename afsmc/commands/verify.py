@@ -43,9 +43,10 @@ def add_storm_options(p: argparse.ArgumentParser) -> None:
                    help="Storm's input language: PRISM text (default) or JANI JSON")
     p.add_argument("--engine", choices=ENGINES, default="auto",
                    help="Storm's engine: auto (default: sparse when the model fits in memory "
-                        "as sparse matrices, else hybrid; counts the states symbolically first "
-                        "when they may be many), sparse (explicit matrices), dd (decision "
-                        "diagrams throughout) or hybrid (symbolic model, explicit vectors)")
+                        "as sparse matrices, else hybrid with one property per process; counts "
+                        "the states symbolically first when they may be many), sparse "
+                        "(explicit matrices), dd (decision diagrams throughout) or hybrid "
+                        "(symbolic model, explicit vectors)")
     p.add_argument("--bisim", action="store_true",
                    help="minimise the sparse model by strong bisimulation before checking "
                         "(exact; faster checks, more memory while building)")

@@ -254,15 +254,20 @@ def select(model: ir.Model, names: Sequence[str], adhoc: Sequence[str] = ()) -> 
 
 
 def make_job(low: Lowered, props: Sequence[ir.Property], via: Via, engine: Engine,
-             max_states: int | None, what: str, bisimulation: bool = False) -> Job:
-    """The Storm input for a lowered model whose `properties` are exactly `props`."""
+             max_states: int | None, what: str, bisimulation: bool = False,
+             memory_budget: int | None = None) -> Job:
+    """The Storm input for a lowered model whose `properties` are exactly `props`.
+    `memory_budget`: what "auto" may give the sparse engine (default: 70% of free memory)."""
     names = tuple(n for p in props for n, _ in property_variants(low, p))
     avail = mem_available()
-    budget = int(avail * 0.7) if avail is not None else None
+    budget = memory_budget
+    if budget is None:
+        budget = int(avail * 0.7) if avail is not None else None
+    first = len(property_variants(low, props[0])) if engine == "auto" and props else 0
     if via == "prism":
         out = prism_emit(low)
         return Job("prism", out.model, out.properties, names, engine, max_states, what,
-                   bisimulation, budget)
+                   bisimulation, budget, first)
     try:
         jani: Any = importlib.import_module("afsmc.backends.jani")
     except ImportError:
@@ -270,7 +275,7 @@ def make_job(low: Lowered, props: Sequence[ir.Property], via: Via, engine: Engin
                                        "the JANI backend (afsmc.backends.jani) is not available",
                                        None, hint="use --via prism")]) from None
     return Job("jani", jani.dumps(jani.emit(low)), "", names, engine, max_states, what,
-               bisimulation, budget)
+               bisimulation, budget, first)
 
 
 def _source_line_span(model: ir.Model, generated: str, line: int) -> Span | None:
@@ -373,7 +378,7 @@ def check(model: ir.Model, props: Sequence[ir.Property], *, via: Via = "prism",
           engine: Engine = "sparse", max_states: int | None = None, uniform: bool = True,
           isolate: bool | None = None, progress: Progress | None = None,
           reductions: Reductions | None = None, bisimulation: bool = False,
-          split: bool = False) -> Checks:
+          split: bool = False, memory_budget: int | None = None) -> Checks:
     """Check `props` (uniquely named) on a loaded model; raises CompileError on failure.
 
     `split`: one Storm process per property, each building the model afresh. Costs a build
@@ -391,12 +396,16 @@ def check(model: ir.Model, props: Sequence[ir.Property], *, via: Via = "prism",
         lows.append(("nondet", lowered(model, "nondet", reductions), "DTMC"))
     stats: list[ModelStats] = []
     values: list[dict[str, float]] = []
-    groups = [[p] for p in props] if split and len(props) > 1 else [list(props)]
     for resolution, low, what in lows:
+        groups = [[p] for p in props] if split and len(props) > 1 else [list(props)]
         merged: ModelStats | None = None
         vals: dict[str, float] = {}
-        for i, group in enumerate(groups):
-            job = make_job(low, group, via, engine, max_states, what, bisimulation)
+        job_engine = engine
+        i = 0
+        while i < len(groups):
+            group = groups[i]
+            job = make_job(low, group, via, job_engine, max_states, what, bisimulation,
+                           memory_budget)
             if progress is not None and len(groups) > 1:
                 progress(f"{what}, property {i + 1} of {len(groups)} ({group[0].name}) in its "
                          "own Storm process")
@@ -411,6 +420,16 @@ def check(model: ir.Model, props: Sequence[ir.Property], *, via: Via = "prism",
             one = _stats(res, resolution)
             merged = one if merged is None else _add(merged, one)
             vals |= res.values
+            if len(groups) == 1 and len(group) > 1 and res.engine == "hybrid" \
+                    and not all(n in vals for n in job.names):
+                # "auto" chose hybrid and checked only the first property (Job.hybrid_first):
+                # the others follow, each in a process of its own.
+                groups = [[p] for p in group]
+                job_engine = "hybrid"
+                if progress is not None:
+                    progress(f"the {what} is checked with the hybrid engine, one property per "
+                             "Storm process (its memory grows with every property checked)")
+            i += 1
         assert merged is not None
         stats.append(merged)
         values.append(vals)
@@ -434,7 +453,7 @@ def run(path: str, *, consts: Mapping[str, str] | None = None, properties: Seque
         max_states: int | None = None, uniform: bool = True, isolate: bool | None = None,
         progress: Progress | None = None, text: str | None = None,
         reductions: Reductions | None = None, bisimulation: bool = False,
-        split: bool = False) -> VerifyResult:
+        split: bool = False, memory_budget: int | None = None) -> VerifyResult:
     """Verify one .afsm file; see the package docstring. Raises CompileError."""
     t0 = time.perf_counter()
     loaded = load_with_formulas(path, consts, formulas, text=text)
@@ -449,7 +468,7 @@ def run(path: str, *, consts: Mapping[str, str] | None = None, properties: Seque
     try:
         checks = check(model, props, via=via, engine=engine, max_states=limit, uniform=uniform,
                        isolate=isolate, progress=progress, reductions=reductions,
-                       bisimulation=bisimulation, split=split)
+                       bisimulation=bisimulation, split=split, memory_budget=memory_budget)
     except CompileError as exc:
         raise loaded.remap_error(exc) from None
     consts_used: dict[str, object] = {c.name: c.value for c in model.constants if c.is_param}
