@@ -85,7 +85,7 @@ def test_split_checks_each_property_in_its_own_process_with_the_same_values() ->
     together = run(UAV, consts=SMALL["uav"], properties=names, engine="sparse", isolate=False)
     split = run(UAV, consts=SMALL["uav"], properties=names, engine="sparse", split=True)
     _close(_values(together), _values(split), 1e-12)
-    assert split.model.processes == len(names) and together.model.processes == 1
+    assert split.model.processes == 2 * len(names) and together.model.processes == 1
     assert split.uniform_model is not None and split.uniform_model.processes == len(names)
     assert split.model.states == together.model.states
 
@@ -94,7 +94,7 @@ def test_split_is_reported_by_the_cli() -> None:
     r = run_cli("verify", UAV, "--split", "-p", "success", "-p", "drops", "--no-uniform",
                 "--json", *[f"--const={k}={v}" for k, v in SMALL["uav"].items()])
     assert r.code == 0, r.err
-    assert json.loads(r.out)["model"]["processes"] == 2
+    assert json.loads(r.out)["model"]["processes"] == 4  # min and max of each
 
 
 # Few states, but an upper bound (modes × ranges) above AUTO_SPARSE_BOUND, so that "auto"
@@ -122,8 +122,8 @@ def test_auto_with_hybrid_checks_one_property_per_process(tmp_path: object) -> N
     sparse = run(str(path), engine="sparse", isolate=False)
     tight = run(str(path), engine="auto", memory_budget=1)
     roomy = run(str(path), engine="auto", memory_budget=1 << 40)
-    assert tight.model.engine == "hybrid" and tight.model.processes == 2
-    assert "one property per Storm process" in tight.model.engine_reason
+    assert tight.model.engine == "hybrid" and tight.model.processes == 4  # min, max of each
+    assert "one query per Storm process" in tight.model.engine_reason
     assert tight.uniform_model is not None and tight.uniform_model.processes == 2
     assert roomy.model.engine == "sparse" and roomy.model.processes == 1
     _close(_values(tight), _values(sparse), 1e-6)

@@ -43,7 +43,7 @@ def add_storm_options(p: argparse.ArgumentParser) -> None:
                    help="Storm's input language: PRISM text (default) or JANI JSON")
     p.add_argument("--engine", choices=ENGINES, default="auto",
                    help="Storm's engine: auto (default: sparse when the model fits in memory "
-                        "as sparse matrices, else hybrid with one property per process; counts "
+                        "as sparse matrices, else hybrid with one query per process; counts "
                         "the states symbolically first when they may be many), sparse "
                         "(explicit matrices), dd (decision diagrams throughout) or hybrid "
                         "(symbolic model, explicit vectors)")
@@ -51,9 +51,10 @@ def add_storm_options(p: argparse.ArgumentParser) -> None:
                    help="minimise the sparse model by strong bisimulation before checking "
                         "(exact; faster checks, more memory while building)")
     p.add_argument("--split", action="store_true",
-                   help="check each property in its own Storm process, building the model "
-                        "again for each: slower, but the memory is that of one property (the "
-                        "hybrid engine's grows with every property checked in one process)")
+                   help="run each query (a property; for an MDP its min and its max) in "
+                        "its own Storm process, building the model again for each: slower, but "
+                        "the memory is that of one check (the hybrid engine's grows with every "
+                        "check in one process)")
     add_reductions(p)
     p.add_argument("--max-states", type=positive, metavar="N",
                    help="stop (exit 1) if the model has more states than N (default: what "

@@ -51,7 +51,7 @@ class ModelStats:
     quotient_states: int | None = None  # after --bisim
     quotient_transitions: int | None = None
     bisimulation_time: float = 0.0
-    processes: int = 1  # Storm runs that built this model (--split: one per property)
+    processes: int = 1  # Storm runs that built this model (--split: one per query)
 
     def to_json(self) -> dict[str, object]:
         out: dict[str, object] = {
@@ -255,15 +255,17 @@ def select(model: ir.Model, names: Sequence[str], adhoc: Sequence[str] = ()) -> 
 
 def make_job(low: Lowered, props: Sequence[ir.Property], via: Via, engine: Engine,
              max_states: int | None, what: str, bisimulation: bool = False,
-             memory_budget: int | None = None) -> Job:
+             memory_budget: int | None = None, only: tuple[str, ...] | None = None) -> Job:
     """The Storm input for a lowered model whose `properties` are exactly `props`.
-    `memory_budget`: what "auto" may give the sparse engine (default: 70% of free memory)."""
-    names = tuple(n for p in props for n, _ in property_variants(low, p))
+    `memory_budget`: what "auto" may give the sparse engine (default: 70% of free memory);
+    `only`: check just these queries (property variants, e.g. `success_min`)."""
+    names = tuple(n for p in props for n, _ in property_variants(low, p)
+                  if only is None or n in only)
     avail = mem_available()
     budget = memory_budget
     if budget is None:
         budget = int(avail * 0.7) if avail is not None else None
-    first = len(property_variants(low, props[0])) if engine == "auto" and props else 0
+    first = 1 if engine == "auto" else 0
     if via == "prism":
         out = prism_emit(low)
         return Job("prism", out.model, out.properties, names, engine, max_states, what,
@@ -381,9 +383,9 @@ def check(model: ir.Model, props: Sequence[ir.Property], *, via: Via = "prism",
           split: bool = False, memory_budget: int | None = None) -> Checks:
     """Check `props` (uniquely named) on a loaded model; raises CompileError on failure.
 
-    `split`: one Storm process per property, each building the model afresh. Costs a build
-    per property, but a process's memory is that of one property: the hybrid engine's
-    memory grows with every property checked in the same process."""
+    `split`: one Storm process per query (a property, or an MDP property's min or max), each
+    building the model afresh. Costs a build per query, but a process's memory is that of
+    one check: the hybrid engine's memory grows with every check in the same process."""
     model = dataclasses.replace(model, properties=tuple(props))
     bound = upper_bound(model)
     engine, reason = choose_engine(engine, bound)
@@ -397,21 +399,24 @@ def check(model: ir.Model, props: Sequence[ir.Property], *, via: Via = "prism",
     stats: list[ModelStats] = []
     values: list[dict[str, float]] = []
     for resolution, low, what in lows:
-        groups = [[p] for p in props] if split and len(props) > 1 else [list(props)]
+        # A query is one Storm check: a property, or an MDP property's min or its max.
+        queries = [(p, n) for p in props for n, _ in property_variants(low, p)]
+        units = [[q] for q in queries] if split and len(queries) > 1 else [queries]
         merged: ModelStats | None = None
         vals: dict[str, float] = {}
         job_engine = engine
         i = 0
-        while i < len(groups):
-            group = groups[i]
+        while i < len(units):
+            unit = units[i]
+            group = list(dict.fromkeys(p for p, _ in unit))
             job = make_job(low, group, via, job_engine, max_states, what, bisimulation,
-                           memory_budget)
-            if progress is not None and len(groups) > 1:
-                progress(f"{what}, property {i + 1} of {len(groups)} ({group[0].name}) in its "
-                         "own Storm process")
-            # A fresh process per property is the point of splitting, except where no child
+                           memory_budget, only=tuple(n for _, n in unit))
+            if progress is not None and len(units) > 1:
+                progress(f"{what}, query {i + 1} of {len(units)} ({unit[0][1]}) in its own "
+                         "Storm process")
+            # A fresh process per query is the point of splitting, except where no child
             # process may be started (isolate=False: Dask workers).
-            fresh = isolate if isolate is False or len(groups) == 1 else True
+            fresh = isolate if isolate is False or len(units) == 1 else True
             res = run_job(job, bound, isolate=fresh, progress=progress)
             if res.failure is not None:
                 raise CompileError([failure_diagnostic(res.failure, model, low, group, job)])
@@ -420,15 +425,15 @@ def check(model: ir.Model, props: Sequence[ir.Property], *, via: Via = "prism",
             one = _stats(res, resolution)
             merged = one if merged is None else _add(merged, one)
             vals |= res.values
-            if len(groups) == 1 and len(group) > 1 and res.engine == "hybrid" \
+            if len(units) == 1 and len(unit) > 1 and res.engine == "hybrid" \
                     and not all(n in vals for n in job.names):
-                # "auto" chose hybrid and checked only the first property (Job.hybrid_first):
+                # "auto" chose hybrid and checked only the first query (Job.hybrid_first):
                 # the others follow, each in a process of its own.
-                groups = [[p] for p in group]
+                units = [[q] for q in unit]
                 job_engine = "hybrid"
                 if progress is not None:
-                    progress(f"the {what} is checked with the hybrid engine, one property per "
-                             "Storm process (its memory grows with every property checked)")
+                    progress(f"the {what} is checked with the hybrid engine, one query per "
+                             "Storm process (its memory grows with every check)")
             i += 1
         assert merged is not None
         stats.append(merged)

@@ -42,8 +42,8 @@ class Job:
     what: str = "model"  # for messages: "MDP", "uniform DTMC"
     bisimulation: bool = False  # minimise the sparse model (strong bisimulation) before checking
     memory_budget: int | None = None  # bytes the sparse engine may use ("auto" decides with it)
-    # If "auto" picks hybrid, check only the first `hybrid_first` names (one property's min
-    # and max) and leave the rest to fresh processes: hybrid memory grows with every check.
+    # If "auto" picks hybrid, check only the first `hybrid_first` names and leave the rest
+    # to fresh processes: the hybrid engine's memory grows with every check.
     hybrid_first: int = 0
 
 
@@ -180,7 +180,7 @@ def _execute(job: Job, notify: Notify) -> JobResult:
                                          f"the {budget / 1e9:.1f} GB available")
                     if 0 < job.hybrid_first < len(props):
                         props = props[:job.hybrid_first]
-                        res.engine_reason += "; one property per Storm process"
+                        res.engine_reason += "; one query per Storm process"
 
         else:
             model = stormpy.build_model(program, props)
