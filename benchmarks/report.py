@@ -110,8 +110,8 @@ def values(latest: dict[tuple[str, str], dict[str, str]]) -> str:
     out = []
     for inst in SCENARIOS:
         done = [latest[(i, c)] for (i, c) in sorted(latest) if i == inst
-                and latest[(i, c)]["status"] == "ok" and latest[(i, c)].get("properties")
-                and c != "sparse-noreduce"]
+                and (latest[(i, c)]["status"] == "ok" or c.startswith("hybrid-split ("))
+                and latest[(i, c)].get("properties") and c != "sparse-noreduce"]
         if not done:
             continue
         # the most complete run: most properties, then uniform values too
@@ -128,6 +128,57 @@ def values(latest: dict[tuple[str, str], dict[str, str]]) -> str:
             out.append("| " + " | ".join(cells) + " |")
         out.append("")
     return "\n".join(out).strip()
+
+
+SPLIT = "hybrid-split-"
+
+
+def aggregate(latest: dict[tuple[str, str], dict[str, str]]) -> None:
+    """Sum the per-property `hybrid-split-NAME` rows of an instance into one row."""
+    instances = sorted({i for (i, c) in latest if c.startswith(SPLIT)})
+    for inst in instances:
+        parts = [r for (i, c), r in sorted(latest.items()) if i == inst and c.startswith(SPLIT)]
+        ok = [r for r in parts if r["status"] == "ok"]
+        props: dict[str, object] = {}
+        for r in sorted(ok, key=lambda r: PROPS.index(r["config"][len(SPLIT):])
+                        if r["config"][len(SPLIT):] in PROPS else 99):
+            props |= json.loads(r["properties"])
+
+        def total(key: str, rows: list[dict[str, str]] = ok) -> str:
+            vals = [float(r[key]) for r in rows if r.get(key)]
+            return f"{sum(vals):.1f}" if vals else ""
+
+        status = "ok" if len(ok) == len(parts) == 7 else (
+            f"{len(ok)} of 7 properties done" + "".join(
+                f"; {r['config'][len(SPLIT):]}: {r['status']}" for r in parts if r["status"] != "ok"))
+        first = ok[0] if ok else parts[0]
+        latest[(inst, "hybrid-split (per property)")] = {
+            **first, "config": "hybrid-split (per property)", "status": status,
+            "build_s": total("build_s"), "check_s": total("check_s"),
+            "uniform_build_s": total("uniform_build_s"), "uniform_check_s": total("uniform_check_s"),
+            "total_s": total("total_s", parts),
+            "peak_gb": f"{max(float(r['peak_gb']) for r in parts if r.get('peak_gb')):.2f}",
+            "properties": json.dumps(props), "progress": "",
+            "when": max(r.get("when", "") for r in parts)}
+
+
+def per_property(latest: dict[tuple[str, str], dict[str, str]]) -> str:
+    """One row per property of the per-property runs (scenario 1)."""
+    out = ["| instance | property | status | builds + checks s (min, max, uniform) | peak GB | "
+           "min | max | uniform |", "|---|---|---|---|---|---|---|---|"]
+    for (inst, config), r in sorted(latest.items(), key=lambda kv: (
+            kv[0][0], PROPS.index(kv[0][1][len(SPLIT):]) if kv[0][1][len(SPLIT):] in PROPS else 99)):
+        if not config.startswith(SPLIT):
+            continue
+        name = config[len(SPLIT):]
+        vals = json.loads(r["properties"]).get(name, [None] * 4) if r.get("properties") else [None] * 4
+        cells = [inst, name, r["status"][:90], _f(r["total_s"]), _f(r["peak_gb"], 2)]
+        cells += ["" if x is None else f"{x:.4f}" for x in vals[:3]]
+        out.append("| " + " | ".join(cells) + " |")
+    return "\n".join(out) if len(out) > 2 else "No per-property run yet."
+
+
+PROPS = ["success", "missed", "timeout", "emergency", "success_by", "drops", "recharges"]
 
 
 def replace(doc: str, name: str, text: str) -> str:
@@ -147,6 +198,9 @@ def main() -> int:
     latest: dict[tuple[str, str], dict[str, str]] = {}
     for r in rows:
         latest[(r["instance"], r["config"])] = r
+    per_prop = per_property(latest)
+    aggregate(latest)
+    latest = {k: v for k, v in latest.items() if not k[1].startswith(SPLIT)}
     ordered = sorted(latest.values(), key=lambda r: (
         (GROWING + SCENARIOS).index(r["instance"]) if r["instance"] in GROWING + SCENARIOS else 99,
         r["config"]))
@@ -156,6 +210,7 @@ def main() -> int:
     doc = replace(doc, "ratios", ratios(latest, GROWING + SCENARIOS))
     doc = replace(doc, "scenarios", table([r for r in ordered if r["instance"] in SCENARIOS]))
     doc = replace(doc, "values", values(latest))
+    doc = replace(doc, "perprop", per_prop)
     shown = [r for r in ordered if r["instance"] in GROWING + SCENARIOS]
     doc = replace(doc, "compile", compile_summary(shown))
     tmp = args.doc + ".tmp"

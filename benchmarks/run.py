@@ -63,9 +63,15 @@ CONFIGS: dict[str, list[str]] = {
     "hybrid-headline": ["--engine", "hybrid", "--no-uniform", "--property", "success",
                         "--property", "missed", "--property", "emergency"],
     "hybrid-success": ["--engine", "hybrid", "--no-uniform", "--property", "success"],
-    # every property, min/max and uniform, each property in its own Storm process
+    # every property, min/max and uniform, each query in its own Storm process
     "hybrid-split": ["--engine", "hybrid", "--split"],
 }
+# The same, one property per configuration (one row each, so that a long run keeps what it
+# finished); report.py sums them into one "hybrid-split (per property)" row.
+UAV_PROPERTIES = ["success", "missed", "timeout", "emergency", "success_by", "drops",
+                  "recharges"]
+for _p in UAV_PROPERTIES:
+    CONFIGS[f"hybrid-split-{_p}"] = ["--engine", "hybrid", "--split", "--property", _p]
 
 FIELDS = ["instance", "config", "status", "compile_s", "states", "transitions", "choices",
           "quotient_states", "build_s", "check_s", "uniform_states", "uniform_build_s",

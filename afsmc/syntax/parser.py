@@ -72,7 +72,10 @@ _EXAMPLES: dict[tuple[str, str], list[str]] = {
 @cache
 def _parser() -> lark.Lark:
     text = resources.files("afsmc.syntax").joinpath("afsm.lark").read_text(encoding="utf-8")
-    return lark.Lark(text, parser="lalr", propagate_positions=True, maybe_placeholders=False)
+    # cache=True: lark keeps the LALR tables in the temp directory, keyed by the grammar's
+    # hash, which saves ~0.15 s at every start of afsmc (lark rebuilds if the file is bad).
+    return lark.Lark(text, parser="lalr", propagate_positions=True, maybe_placeholders=False,
+                     cache=True)
 
 
 def grammar_text() -> str:
