@@ -122,9 +122,49 @@ def test_auto_with_hybrid_checks_one_property_per_process(tmp_path: object) -> N
     sparse = run(str(path), engine="sparse", isolate=False)
     tight = run(str(path), engine="auto", memory_budget=1)
     roomy = run(str(path), engine="auto", memory_budget=1 << 40)
-    assert tight.model.engine == "hybrid" and tight.model.processes == 4  # min, max of each
+    # reach_min (with the count), then reach_max as 1 - Pmin (whether every path ends, and
+    # the rest), steps_min, steps_max: five processes
+    assert tight.model.engine == "hybrid" and tight.model.processes == 5
     assert "one query per Storm process" in tight.model.engine_reason
     assert tight.uniform_model is not None and tight.uniform_model.processes == 2
     assert roomy.model.engine == "sparse" and roomy.model.processes == 1
     _close(_values(tight), _values(sparse), 1e-6)
     _close(_values(roomy), _values(sparse), 1e-9)
+
+
+def test_hybrid_pmax_through_the_complementary_pmin_is_exact() -> None:
+    said: list[str] = []
+    names = ["success", "emergency", "drops"]
+    hybrid = run(UAV, consts=SMALL["uav"], properties=names, engine="hybrid", isolate=False,
+                 progress=said.append)
+    sparse = run(UAV, consts=SMALL["uav"], properties=names, engine="sparse", isolate=False)
+    assert any("1 - Pmin [F (final & !target)]" in s for s in said), said
+    _close(_values(hybrid), _values(sparse), 1e-6)
+    assert [p.name for p in hybrid.properties] == names
+
+
+# A machine that may run forever (the Spin loop): Pmax cannot be had from the complement.
+FOREVER = """machine forever;
+const int STEP = [1, 2];
+var x : [0..6] init 0 clamp;
+mode Run = 0 initial;
+mode End = 1 final;
+action Go in Run when x < 6 { 0.3: goto End; 0.7: x += STEP; }
+action Spin in Run when x >= 6 { x := 6; }
+label done = mode == End;
+property reach = P=? [ F "done" ];
+"""
+
+
+def test_hybrid_pmax_falls_back_when_paths_need_not_end(tmp_path: object) -> None:
+    import pathlib
+
+    path = pathlib.Path(str(tmp_path)) / "forever.afsm"
+    path.write_text(FOREVER, encoding="utf-8")
+    said: list[str] = []
+    hybrid = run(str(path), engine="hybrid", isolate=False, progress=said.append)
+    sparse = run(str(path), engine="sparse", isolate=False)
+    assert not any("1 - Pmin" in s for s in said), said
+    _close(_values(hybrid), _values(sparse), 1e-6)
+    reach = hybrid.property("reach")
+    assert reach.min is not None and reach.max is not None and reach.min < reach.max < 1

@@ -18,8 +18,10 @@ from afsmc.backends.prism import emit as prism_emit
 from afsmc.backends.prism import formula_text, property_variants
 from afsmc.compiler import load, lowered
 from afsmc.diagnostics import CompileError, Diagnostic, Related, Severity, Source, Span
+from afsmc.model import expr as E
 from afsmc.model import ir
-from afsmc.model.lower import Lowered
+from afsmc.model.evaluate import Env, EvalError, evaluate
+from afsmc.model.lower import Lowered, inline
 from afsmc.model.names import did_you_mean
 from afsmc.model.pretty import show
 from afsmc.model.reduce import Reductions
@@ -352,6 +354,76 @@ def _stats(res: JobResult, resolution: str) -> ModelStats:
                       res.bisimulation_time)
 
 
+# ---- Pmax as 1 - Pmin ------------------------------------------------------------------
+# The hybrid engine needs far more memory for Pmax than for Pmin: for a maximum Storm
+# removes end components from the explicit matrix of the "maybe" states, a second copy of
+# it (on the paper's scenario 1 one such check passed 19 GB, its Pmin 12 GB). When the
+# target lies inside the final (absorbing) modes and every path ends in a final mode
+# (Pmin [F final] = 1, which Storm decides by graph analysis alone), the events "F target"
+# and "F (final & !target)" are complementary under every scheduler, so
+# Pmax [F target] = 1 - Pmin [F (final & !target)], exactly.
+
+TERMINATES = "__afsmc_terminates"
+
+
+def _conjuncts(e: E.Expr) -> list[E.Expr]:
+    if isinstance(e, E.Binary) and e.op == "&&":
+        return _conjuncts(e.left) + _conjuncts(e.right)
+    return [e]
+
+
+def _within_final(target: E.Expr, model: ir.Model) -> bool:
+    """Whether a conjunct of `target` that reads only the mode is false in every
+    non-final mode."""
+    others = [m.number for m in model.modes if not m.final]
+    for c in _conjuncts(inline(target, model)):
+        if E.vars_read(c) or not E.reads_mode(c):
+            continue
+        try:
+            if not any(bool(evaluate(c, Env(mode=m, consts=model.const_values)))
+                       for m in others):
+                return True
+        except EvalError:
+            continue
+    return False
+
+
+def complements(model: ir.Model, props: Sequence[ir.Property]) -> dict[str, ir.Property]:
+    """`NAME_max` -> the property Pmin [F (final & !target)] that gives it as 1 - value."""
+    finals = {m.number for m in model.modes if m.final}
+    if not finals or not model.is_nondeterministic:
+        return {}
+    final = E.mode_in(finals, model.mode_names)
+    out = {}
+    for p in props:
+        path = p.path
+        if p.kind != "P" or p.opt == "min" or not isinstance(path, ir.Path) \
+                or path.kind != "F" or path.bound is not None \
+                or not _within_final(path.target, model):
+            continue
+        name = p.name if p.opt == "max" else f"{p.name}_max"
+        out[name] = ir.Property(f"__afsmc_rest_{p.name}", "P", "min",
+                                ir.Path("F", E.conj(final, E.neg(path.target))), None, p.span)
+    if out:
+        out[TERMINATES] = ir.Property(TERMINATES, "P", "min", ir.Path("F", final), None,
+                                      props[0].span)
+    return out
+
+
+def _rewrite(queries: list[tuple[ir.Property, str]],
+             comp: dict[str, ir.Property]) -> list[tuple[ir.Property, str]]:
+    """Ask the complementary Pmin (and whether every path ends) instead of each Pmax."""
+    out: list[tuple[ir.Property, str]] = []
+    for p, n in queries:
+        if n in comp:
+            if TERMINATES not in [m for _, m in out]:
+                out.append((comp[TERMINATES], TERMINATES))
+            out.append((comp[n], comp[n].name))
+        else:
+            out.append((p, n))
+    return out
+
+
 def _add(a: ModelStats, b: ModelStats) -> ModelStats:
     """Two Storm runs of one model (--split): times add up, sizes are the same."""
     return dataclasses.replace(
@@ -386,7 +458,9 @@ def check(model: ir.Model, props: Sequence[ir.Property], *, via: Via = "prism",
     `split`: one Storm process per query (a property, or an MDP property's min or max), each
     building the model afresh. Costs a build per query, but a process's memory is that of
     one check: the hybrid engine's memory grows with every check in the same process."""
-    model = dataclasses.replace(model, properties=tuple(props))
+    comp = complements(model, props) if engine in ("hybrid", "auto") else {}
+    model = dataclasses.replace(model, properties=tuple(props) + tuple(
+        p for n, p in sorted(comp.items())))
     bound = upper_bound(model)
     engine, reason = choose_engine(engine, bound)
     lows: list[tuple[str, Lowered, str]] = []
@@ -401,6 +475,9 @@ def check(model: ir.Model, props: Sequence[ir.Property], *, via: Via = "prism",
     for resolution, low, what in lows:
         # A query is one Storm check: a property, or an MDP property's min or its max.
         queries = [(p, n) for p in props for n, _ in property_variants(low, p)]
+        use = comp if low.kind == "mdp" else {}
+        if engine == "hybrid":
+            queries = _rewrite(queries, use)
         units = [[q] for q in queries] if split and len(queries) > 1 else [queries]
         merged: ModelStats | None = None
         vals: dict[str, float] = {}
@@ -425,16 +502,34 @@ def check(model: ir.Model, props: Sequence[ir.Property], *, via: Via = "prism",
             one = _stats(res, resolution)
             merged = one if merged is None else _add(merged, one)
             vals |= res.values
+            i += 1
             if len(units) == 1 and len(unit) > 1 and res.engine == "hybrid" \
                     and not all(n in vals for n in job.names):
                 # "auto" chose hybrid and checked only the first query (Job.hybrid_first):
                 # the others follow, each in a process of its own.
-                units = [[q] for q in unit]
+                units = [[q] for q in _rewrite([q for q in unit if q[1] not in vals], use)]
+                i = 0
                 job_engine = "hybrid"
                 if progress is not None:
                     progress(f"the {what} is checked with the hybrid engine, one query per "
                              "Storm process (its memory grows with every check)")
-            i += 1
+            if i == len(units) and TERMINATES in vals:
+                # Pmax = 1 - Pmin of the rest, if every path ends; else ask Pmax itself.
+                ends = vals.pop(TERMINATES) == 1.0
+                direct = []
+                for name, rest in use.items():
+                    if rest.name in vals:
+                        v = vals.pop(rest.name)
+                        if ends:
+                            vals[name] = 1.0 - v
+                        else:
+                            direct.append(next((p, n) for p in props
+                                               for n, _ in property_variants(low, p) if n == name))
+                if ends and progress is not None:
+                    progress(f"every path of the {what} ends in a final mode: each Pmax [F target] "
+                             "is 1 - Pmin [F (final & !target)], which needs less memory")
+                units += [[q] for q in direct] if split or job_engine == "hybrid" else (
+                    [direct] if direct else [])
         assert merged is not None
         stats.append(merged)
         values.append(vals)
