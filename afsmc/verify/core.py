@@ -357,7 +357,7 @@ def _stats(res: JobResult, resolution: str) -> ModelStats:
 # ---- Pmax as 1 - Pmin ------------------------------------------------------------------
 # The hybrid engine needs far more memory for Pmax than for Pmin: for a maximum Storm
 # removes end components from the explicit matrix of the "maybe" states, a second copy of
-# it (on the paper's scenario 1 one such check passed 19 GB, its Pmin 12 GB). When the
+# it (on the paper's scenario 1 one such check passed 19 GB; its Pmin fitted). When the
 # target lies inside the final (absorbing) modes and every path ends in a final mode
 # (Pmin [F final] = 1, which Storm decides by graph analysis alone), the events "F target"
 # and "F (final & !target)" are complementary under every scheduler, so
