@@ -364,6 +364,7 @@ def _stats(res: JobResult, resolution: str) -> ModelStats:
 # Pmax [F target] = 1 - Pmin [F (final & !target)], exactly.
 
 TERMINATES = "__afsmc_terminates"
+REST = "__afsmc_rest_"
 
 
 def _conjuncts(e: E.Expr) -> list[E.Expr]:
@@ -402,7 +403,7 @@ def complements(model: ir.Model, props: Sequence[ir.Property]) -> dict[str, ir.P
                 or not _within_final(path.target, model):
             continue
         name = p.name if p.opt == "max" else f"{p.name}_max"
-        out[name] = ir.Property(f"__afsmc_rest_{p.name}", "P", "min",
+        out[name] = ir.Property(f"{REST}{p.name}", "P", "min",
                                 ir.Path("F", E.conj(final, E.neg(path.target))), None, p.span)
     if out:
         out[TERMINATES] = ir.Property(TERMINATES, "P", "min", ir.Path("F", final), None,
@@ -422,6 +423,14 @@ def _rewrite(queries: list[tuple[ir.Property, str]],
         else:
             out.append((p, n))
     return out
+
+
+def _query_text(name: str) -> str:
+    if name == TERMINATES:
+        return "does every path end in a final mode?"
+    if name.startswith(REST):
+        return f"{name[len(REST):]} max, as 1 - Pmin of the other final states"
+    return name
 
 
 def _add(a: ModelStats, b: ModelStats) -> ModelStats:
@@ -489,8 +498,8 @@ def check(model: ir.Model, props: Sequence[ir.Property], *, via: Via = "prism",
             job = make_job(low, group, via, job_engine, max_states, what, bisimulation,
                            memory_budget, only=tuple(n for _, n in unit))
             if progress is not None and len(units) > 1:
-                progress(f"{what}, query {i + 1} of {len(units)} ({unit[0][1]}) in its own "
-                         "Storm process")
+                progress(f"{what}, query {i + 1} of {len(units)} ({_query_text(unit[0][1])}) "
+                         "in its own Storm process")
             # A fresh process per query is the point of splitting, except where no child
             # process may be started (isolate=False: Dask workers).
             fresh = isolate if isolate is False or len(units) == 1 else True
