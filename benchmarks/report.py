@@ -4,8 +4,9 @@
 
 The document keeps its prose; the parts between `<!-- begin NAME -->` and `<!-- end NAME -->`
 are replaced: `growing` (the growing instances), `ratios` (reduced against unreduced and
-the other ratios, from the same run), `scenarios` (the paper's scenarios) and `values`
-(the properties of the scenarios). The latest row of each (instance, configuration) counts.
+the other ratios, from the same run), `scenarios` (the paper's scenarios), `values` (the
+properties of the scenarios), `perprop` (the per-property runs) and `compile` (compile time
+as a share of the whole). The latest row of each (instance, configuration) counts.
 """
 
 from __future__ import annotations
@@ -16,6 +17,10 @@ import json
 import os
 import re
 import sys
+
+# run.py sits beside this script, so its directory is on sys.path
+from run import SPLIT
+from run import UAV_PROPERTIES as PROPS
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 GROWING = ["4x4-obj2-t300", "5x5-obj2-t400"]
@@ -130,9 +135,6 @@ def values(latest: dict[tuple[str, str], dict[str, str]]) -> str:
     return "\n".join(out).strip()
 
 
-SPLIT = "hybrid-split-"
-
-
 def aggregate(latest: dict[tuple[str, str], dict[str, str]]) -> None:
     """Sum the per-property `hybrid-split-NAME` rows of an instance into one row."""
     instances = sorted({i for (i, c) in latest if c.startswith(SPLIT)})
@@ -148,8 +150,8 @@ def aggregate(latest: dict[tuple[str, str], dict[str, str]]) -> None:
             vals = [float(r[key]) for r in rows if r.get(key)]
             return f"{sum(vals):.1f}" if vals else ""
 
-        status = "ok" if len(ok) == len(parts) == 7 else (
-            f"{len(ok)} of 7 properties done" + "".join(
+        status = "ok" if len(ok) == len(parts) == len(PROPS) else (
+            f"{len(ok)} of {len(PROPS)} properties done" + "".join(
                 f"; {r['config'][len(SPLIT):]}: {r['status']}" for r in parts if r["status"] != "ok"))
         first = ok[0] if ok else parts[0]
         latest[(inst, "hybrid-split (per property)")] = {
@@ -177,8 +179,6 @@ def per_property(latest: dict[tuple[str, str], dict[str, str]]) -> str:
         out.append("| " + " | ".join(cells) + " |")
     return "\n".join(out) if len(out) > 2 else "No per-property run yet."
 
-
-PROPS = ["success", "missed", "timeout", "emergency", "success_by", "drops", "recharges"]
 
 
 def replace(doc: str, name: str, text: str) -> str:

@@ -70,8 +70,9 @@ CONFIGS: dict[str, list[str]] = {
 # finished); report.py sums them into one "hybrid-split (per property)" row.
 UAV_PROPERTIES = ["success", "missed", "timeout", "emergency", "success_by", "drops",
                   "recharges"]
+SPLIT = "hybrid-split-"
 for _p in UAV_PROPERTIES:
-    CONFIGS[f"hybrid-split-{_p}"] = ["--engine", "hybrid", "--split", "--property", _p]
+    CONFIGS[SPLIT + _p] = ["--engine", "hybrid", "--split", "--property", _p]
 
 FIELDS = ["instance", "config", "status", "compile_s", "states", "transitions", "choices",
           "quotient_states", "build_s", "check_s", "uniform_states", "uniform_build_s",

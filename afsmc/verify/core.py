@@ -339,6 +339,10 @@ def failure_diagnostic(f: StormFailure, model: ir.Model, low: Lowered,
                     "raise --max-states if the machine has the memory (the sparse engine needs "
                     "about 250 bytes per state), or check a smaller instance with --const")
     if f.stage == "memory":
+        if job.engine in ("hybrid", "dd"):
+            return diag("E406", first, None, "this one check needs more memory than the "
+                        "machine has, even symbolically; check a smaller instance with --const, "
+                        "or leave this property out with --property")
         return diag("E406", first, None, "check a smaller instance with --const, or try "
                     "--engine hybrid, which stores the model symbolically")
     return diag("E406", f"internal error while running Storm: {first}", None)
@@ -467,11 +471,12 @@ def check(model: ir.Model, props: Sequence[ir.Property], *, via: Via = "prism",
     `split`: one Storm process per query (a property, or an MDP property's min or max), each
     building the model afresh. Costs a build per query, but a process's memory is that of
     one check: the hybrid engine's memory grows with every check in the same process."""
+    bound = upper_bound(model)
+    engine, reason = choose_engine(engine, bound)
+    # Only the hybrid engine needs them ("auto" may still pick it after counting states).
     comp = complements(model, props) if engine in ("hybrid", "auto") else {}
     model = dataclasses.replace(model, properties=tuple(props) + tuple(
         p for n, p in sorted(comp.items())))
-    bound = upper_bound(model)
-    engine, reason = choose_engine(engine, bound)
     lows: list[tuple[str, Lowered, str]] = []
     if model.is_nondeterministic:
         lows.append(("nondet", lowered(model, "nondet", reductions), "MDP"))
@@ -484,6 +489,7 @@ def check(model: ir.Model, props: Sequence[ir.Property], *, via: Via = "prism",
     for resolution, low, what in lows:
         # A query is one Storm check: a property, or an MDP property's min or its max.
         queries = [(p, n) for p in props for n, _ in property_variants(low, p)]
+        by_name = {n: (p, n) for p, n in queries}
         use = comp if low.kind == "mdp" else {}
         if engine == "hybrid":
             queries = _rewrite(queries, use)
@@ -532,13 +538,12 @@ def check(model: ir.Model, props: Sequence[ir.Property], *, via: Via = "prism",
                         if ends:
                             vals[name] = 1.0 - v
                         else:
-                            direct.append(next((p, n) for p in props
-                                               for n, _ in property_variants(low, p) if n == name))
+                            direct.append(by_name[name])
                 if ends and progress is not None:
                     progress(f"every path of the {what} ends in a final mode: each Pmax [F target] "
                              "is 1 - Pmin [F (final & !target)], which needs less memory")
-                units += [[q] for q in direct] if split or job_engine == "hybrid" else (
-                    [direct] if direct else [])
+                # the complements are asked on the hybrid engine only: one process each
+                units += [[q] for q in direct]
         assert merged is not None
         stats.append(merged)
         values.append(vals)

@@ -181,7 +181,6 @@ def _execute(job: Job, notify: Notify) -> JobResult:
                     if 0 < job.hybrid_first < len(props):
                         props = props[:job.hybrid_first]
                         res.engine_reason += "; one query per Storm process"
-
         else:
             model = stormpy.build_model(program, props)
     except RuntimeError as exc:

@@ -112,7 +112,7 @@ class Task:
     shared: bool = False  # const sweep whose constant only the properties read: one build
     reductions: Reductions | None = None
     bisimulation: bool = False
-    split: bool = False  # one Storm process per property
+    split: bool = False  # one Storm process per query
 
 
 def _with_bound(p: ir.Property, k: int, name: str) -> ir.Property:
