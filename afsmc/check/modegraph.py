@@ -31,7 +31,7 @@ from typing import Any, Literal
 
 import networkx as nx
 
-from afsmc.check.search import find
+from afsmc.check.search import exists
 from afsmc.diagnostics import Reporter, Span
 from afsmc.model import expr as E
 from afsmc.model import ir
@@ -108,7 +108,7 @@ def analyse(model: ir.Model) -> ModeGraph:
     edges: list[Edge] = []
     for a in model.actions:
         for mode in a.modes:
-            ok = mode not in finals and find(model, mode, fire_condition(model, a, mode)) is not None
+            ok = mode not in finals and exists(model, mode, fire_condition(model, a, mode))
             fires[(a.name, mode)] = ok
             if ok:
                 edges += _outcome_edges(model, mode, a.name, a.kind, a.outcomes, a.name_span, None)
@@ -182,7 +182,7 @@ def check_cannot_end(model: ir.Model, rep: Reporter) -> None:
 def _why(mg: ModeGraph, a: ir.Action, modes: tuple[int, ...]) -> str:
     """Tell a guard that never holds from a competitor that always wins."""
     model = mg.model
-    if all(find(model, n, enabled(model, a, n)) is None for n in modes):
+    if not any(exists(model, n, enabled(model, a, n)) for n in modes):
         if a.kind == "preemptive":
             return "its condition never holds"
         if any(b.kind == "preemptive" for n in modes for b in model.actions_in(n)):

@@ -12,6 +12,7 @@ from afsmc.check.search import Witness, find
 from afsmc.diagnostics import Reporter
 from afsmc.model import expr as E
 from afsmc.model import ir
+from afsmc.model.bounds import bounds
 from afsmc.model.evaluate import Env, EvalError, evaluate
 from afsmc.model.expr import Type
 from afsmc.model.lower import enabled, fire_condition, inline
@@ -46,11 +47,20 @@ def _check_updates(model: ir.Model, rep: Reporter, when: dict[int, E.Expr],
             var = model.variable(u.var)
             if var.clamp or var.type is not Type.INT:
                 continue
+            # Interval arithmetic over every state is conservative: inside the range there,
+            # no state can leave it, and the exact search (the slow part) is not needed.
+            lo, hi = bounds(u.value, model)
+            if var.lo <= lo and hi <= var.hi:
+                continue
             out = E.disj(E.Binary("<", u.value, E.lit(var.lo), Type.BOOL),
                          E.Binary(">", u.value, E.lit(var.hi), Type.BOOL))
             done = False
             for consts in _interval_choices(model, u.value):
                 for mode, cond in when.items():
+                    # `out` alone reads few variables: when no state at all leaves the range,
+                    # the search under the (large) firing condition is not needed.
+                    if find(model, mode, out, consts) is None:
+                        continue
                     wit = find(model, mode, E.conj(cond, out), consts)
                     if wit is None:
                         continue

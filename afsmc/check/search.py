@@ -56,10 +56,28 @@ def find(model: ir.Model, mode: int, pred: E.Expr,
     return _smt(model, mode, pred, variables, values)
 
 
+def exists(model: ir.Model, mode: int, pred: E.Expr,
+           consts: Mapping[str, Any] | None = None) -> bool:
+    """Whether some state of the mode satisfies `pred`. Predicates that hold somewhere (an
+    action that can fire) usually hold at a few typical values too, so those are tried
+    first; only a miss pays for the exhaustive search."""
+    inlined = inline(pred, model)
+    values = dict(model.const_values) | dict(consts or {})
+    names = sorted(E.vars_read(inlined), key=[v.name for v in model.variables].index)
+    variables = [model.variable(n) for n in names]
+    axes = [np.array(sorted({v.lo, v.hi, v.lo + 1, v.hi - 1, (v.lo + v.hi) // 2, int(v.init)}
+                            & set(range(v.lo, v.hi + 1))))
+            if v.type is E.Type.INT else np.array([False, True]) for v in variables]
+    if _enumerate(model, mode, inlined, variables, values, axes) is not None:
+        return True  # a sampled state is a state: the answer is exact
+    return find(model, mode, pred, consts) is not None
+
+
 def _enumerate(model: ir.Model, mode: int, pred: E.Expr, variables: list[ir.Variable],
-               consts: Mapping[str, Any]) -> Witness | None:
-    axes = [np.arange(v.lo, v.hi + 1) if v.type is E.Type.INT else np.array([False, True])
-            for v in variables]
+               consts: Mapping[str, Any], axes: list[Any] | None = None) -> Witness | None:
+    if axes is None:
+        axes = [np.arange(v.lo, v.hi + 1) if v.type is E.Type.INT else np.array([False, True])
+                for v in variables]
     # Open grids broadcast against each other: no copy of the full product per variable.
     grids = np.meshgrid(*axes, indexing="ij", sparse=True) if axes else []
     env_vars = {v.name: g for v, g in zip(variables, grids, strict=True)}

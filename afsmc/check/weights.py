@@ -9,6 +9,7 @@ from afsmc.check.search import Witness, find
 from afsmc.diagnostics import Related, Reporter
 from afsmc.model import expr as E
 from afsmc.model import ir
+from afsmc.model.bounds import bounds
 from afsmc.model.evaluate import Env, EvalError, evaluate
 from afsmc.model.expr import Type
 from afsmc.model.lower import competitors, enabled, inline
@@ -27,6 +28,9 @@ def _value_at(model: ir.Model, e: E.Expr, w: Witness, mode: int) -> str:
 
 def check_weight_range(model: ir.Model, rep: Reporter) -> None:
     for a in model.actions:
+        lo, hi = bounds(a.weight, model)
+        if lo >= 0 and hi <= 1:
+            continue  # interval arithmetic is conservative: no state can leave [0, 1]
         for mode in a.modes:
             w = a.weight
             bad = E.disj(E.Binary("<", w, E.lit(0), Type.BOOL), E.Binary(">", w, E.lit(1), Type.BOOL))
@@ -47,6 +51,8 @@ def check_weight_uniqueness(model: ir.Model, rep: Reporter) -> None:
         for a, b in itertools.combinations(acts, 2):
             if a.kind != b.kind or (a.name, b.name) in reported or b not in competitors(model, a, m.number):
                 continue
+            if _apart(bounds(a.weight, model), bounds(b.weight, model)):
+                continue  # the weights' ranges do not meet: they cannot tie in any state
             tie = E.conj(enabled(model, a, m.number), enabled(model, b, m.number),
                          E.Binary("==", a.weight, b.weight, Type.BOOL))
             wit = find(model, m.number, tie)
@@ -61,6 +67,11 @@ def check_weight_uniqueness(model: ir.Model, rep: Reporter) -> None:
                 hint="in every state the enabled actions need distinct weights, so that one "
                      "action fires; give one a larger weight or make their guards exclusive",
                 related=[Related(f"the weight of {b.name}", b.weight_span or b.name_span)])
+
+
+def _apart(a: tuple[float, float], b: tuple[float, float]) -> bool:
+    # Weights equal within 1e-12 count as a tie (evaluate's `==` on doubles): keep a margin.
+    return a[1] < b[0] - 1e-9 or b[1] < a[0] - 1e-9
 
 
 def check_deadlock(model: ir.Model, rep: Reporter) -> None:

@@ -96,10 +96,28 @@ def evaluate(e: Expr, env: Env) -> Array:
     raise EvalError(f"cannot evaluate {type(e).__name__}")
 
 
+# Python scalars (one state, or a part that reads no variable): numpy's ufuncs cost about
+# a microsecond each on them, and the checks evaluate thousands of such parts.
+_SCALAR = (bool, int, np.bool_, np.integer)
+_PYTHON_OPS: dict[str, Callable[[Any, Any], Any]] = {
+    "+": lambda a, b: a + b, "-": lambda a, b: a - b, "*": lambda a, b: a * b,
+    "<": lambda a, b: a < b, "<=": lambda a, b: a <= b, ">": lambda a, b: a > b,
+    ">=": lambda a, b: a >= b, "==": lambda a, b: a == b, "!=": lambda a, b: a != b,
+}
+
+
 def _binary(e: Binary, env: Env) -> Array:
     op = e.op
     left = evaluate(e.left, env)
     if op in ("&&", "||", "=>"):
+        # A scalar left side may decide the result for every state: skip the right side.
+        if isinstance(left, _SCALAR):
+            if op == "&&" and not left:
+                return False
+            if op == "||" and left:
+                return True
+            if op == "=>" and not left:
+                return True
         right = evaluate(e.right, env)
         if op == "&&":
             return np.logical_and(left, right)
@@ -107,6 +125,9 @@ def _binary(e: Binary, env: Env) -> Array:
             return np.logical_or(left, right)
         return np.logical_or(np.logical_not(left), right)
     right = evaluate(e.right, env)
+    # Integers and booleans only: doubles keep numpy's semantics (== with a tolerance).
+    if isinstance(left, _SCALAR) and isinstance(right, _SCALAR) and op in _PYTHON_OPS:
+        return _PYTHON_OPS[op](left, right)
     if op == "+":
         return left + right
     if op == "-":

@@ -93,22 +93,27 @@ def effective_weight(model: ir.Model, action: ir.Action) -> E.Expr:
 
 def inline(e: E.Expr, model: ir.Model) -> E.Expr:
     """Replace formulas and weight references by what they stand for."""
-    memo: dict[str, E.Expr] = {}
+    # What a name stands for depends on the model only: the checks and reductions inline
+    # the same formulas hundreds of times, so the model keeps them.
+    memo = model.cache.setdefault("inline", {})
+    assert isinstance(memo, dict)
 
     def fn(n: E.Expr) -> E.Expr | None:
         if isinstance(n, E.FormulaRef):
-            if n.name not in memo:
-                memo[n.name] = inline(model.formula(n.name).value, model)
-            return memo[n.name]
+            key = "f:" + n.name
+            if key not in memo:
+                memo[key] = inline(model.formula(n.name).value, model)
+            return memo[key]  # type: ignore[no-any-return]
         if isinstance(n, E.WeightRef):
             key = "w:" + n.action
             if key not in memo:
                 memo[key] = inline(effective_weight(model, model.action(n.action)), model)
-            return memo[key]
+            return memo[key]  # type: ignore[no-any-return]
         if isinstance(n, E.LabelRef):
-            if key_label(n.name) not in memo:
-                memo[key_label(n.name)] = inline(model.label(n.name).value, model)
-            return memo[key_label(n.name)]
+            key = key_label(n.name)
+            if key not in memo:
+                memo[key] = inline(model.label(n.name).value, model)
+            return memo[key]  # type: ignore[no-any-return]
         return None
 
     return E.transform(e, fn)
