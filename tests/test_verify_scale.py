@@ -168,3 +168,24 @@ def test_hybrid_pmax_falls_back_when_paths_need_not_end(tmp_path: object) -> Non
     _close(_values(hybrid), _values(sparse), 1e-6)
     reach = hybrid.property("reach")
     assert reach.min is not None and reach.max is not None and reach.min < reach.max < 1
+
+
+def test_too_small_decision_diagram_tables_are_retried_with_storm_s_default() -> None:
+    # Sylvan ends the process when its tables are full; the guard runs the job again.
+    from afsmc.verify.guard import run_isolated
+    from afsmc.verify.storm import DD_MEMORY_RETRY
+
+    model = load(UAV, SMALL["uav"]).model
+    low = lowered(model, "nondet")
+    out = emit(low)
+    names = tuple(n for p in model.properties if p.name == "success"
+                  for n, _ in property_variants(low, p))
+    said: list[str] = []
+    tight = run_isolated(Job("prism", out.model, out.properties, names, "hybrid",
+                             dd_memory_mb=1), said.append)
+    sparse = execute(Job("prism", out.model, out.properties, names, "sparse"))
+    assert tight.failure is None and sparse.failure is None
+    assert any(f"retrying with {DD_MEMORY_RETRY} MB" in s for s in said), said
+    assert tight.states == sparse.states
+    for name in names:
+        assert tight.values[name] == pytest.approx(sparse.values[name], abs=1e-6)

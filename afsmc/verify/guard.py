@@ -15,10 +15,11 @@ import multiprocessing
 import os
 import time
 from collections.abc import Callable
+from dataclasses import replace
 from typing import Any
 
 from afsmc.model import ir
-from afsmc.verify.storm import Job, JobResult, StormFailure, execute
+from afsmc.verify.storm import DD_MEMORY_RETRY, Job, JobResult, StormFailure, execute
 
 # Below this upper bound a build takes well under a second: no child process needed.
 IN_PROCESS_STATES = 200_000
@@ -116,6 +117,20 @@ def _child(conn: Any, job: Job, address_limit: int | None) -> None:
 def run_isolated(job: Job, progress: Progress | None, *, every: float = 5.0,
                  first: float = 3.0) -> JobResult:
     """Run `job` in a watched child process; see the module docstring."""
+    res, code = _run_isolated(job, progress, every, first)
+    if code == 1 and job.engine != "sparse" and job.dd_memory_mb < DD_MEMORY_RETRY:
+        # Sylvan ends the process (exit code 1, "Unique table full" on stderr) when its
+        # tables are too small for the diagrams: once more with Storm's default size.
+        if progress is not None:
+            progress(f"the decision-diagram tables ({job.dd_memory_mb} MB) were too small for "
+                     f"the {job.what}: retrying with {DD_MEMORY_RETRY} MB")
+        res, code = _run_isolated(replace(job, dd_memory_mb=DD_MEMORY_RETRY), progress,
+                                  every, first)
+    return res
+
+
+def _run_isolated(job: Job, progress: Progress | None, every: float,
+                  first: float) -> tuple[JobResult, int | None]:
     ctx = multiprocessing.get_context("spawn")
     parent, child_end = ctx.Pipe(duplex=False)
     avail = mem_available()
@@ -176,13 +191,13 @@ def run_isolated(job: Job, progress: Progress | None, *, every: float = 5.0,
                 return JobResult(failure=StormFailure(
                     "too-big", f"stopped building the {job.what} after {now - start:.0f} s: about "
                     f"{human(explored)} states explored (estimated from memory use), more than "
-                    f"--max-states {job.max_states:,}", states=int(explored)))
+                    f"--max-states {job.max_states:,}", states=int(explored))), None
             if cap is not None and rss > cap:
                 proc.kill()
                 proc.join()
                 return JobResult(failure=StormFailure(
                     "memory", f"stopped the {job.what} after {now - start:.0f} s: it used "
-                    f"{rss / 2**30:.1f} GB, 85% of the memory that was available"))
+                    f"{rss / 2**30:.1f} GB, 85% of the memory that was available")), None
             if now >= next_report:
                 next_report = now + every
                 if phase == "build":
@@ -197,14 +212,17 @@ def run_isolated(job: Job, progress: Progress | None, *, every: float = 5.0,
         proc.join()
         parent.close()
     if result is not None:
-        return result
+        return result, proc.exitcode
     code = proc.exitcode
     why = (f"was killed by signal {-code}" if code is not None and code < 0
            else f"exited with code {code}")
+    if code == 1 and job.engine != "sparse":
+        why += (f" (with decision-diagram tables of {job.dd_memory_mb} MB; Sylvan exits when "
+                "they are full)")
     gb = f"; it had used {peak / 2**30:.1f} GB" if peak else ""
     return JobResult(failure=StormFailure(
         "memory" if code is not None and code < 0 else "internal",
-        f"the Storm process building the {job.what} {why}{gb}"))
+        f"the Storm process building the {job.what} {why}{gb}")), code
 
 
 def run_job(job: Job, bound: int, *, isolate: bool | None, progress: Progress | None) -> JobResult:

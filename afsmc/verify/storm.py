@@ -45,6 +45,14 @@ class Job:
     # If "auto" picks hybrid, check only the first `hybrid_first` names and leave the rest
     # to fresh processes: the hybrid engine's memory grows with every check.
     hybrid_first: int = 0
+    # Sylvan's node tables for the symbolic engines, MB. Storm reserves 4 GB by default and
+    # touches most of it; the UAV's diagrams fit in far less even at 77 M states, and the
+    # memory is better spent on the explicit vectors of the hybrid engine. A model whose
+    # diagrams need more makes Sylvan exit; the guard then retries with DD_MEMORY_RETRY.
+    dd_memory_mb: int = 1024
+
+
+DD_MEMORY_RETRY = 4096  # MB: Storm's own default
 
 
 @dataclass(frozen=True)
@@ -157,7 +165,9 @@ def _execute(job: Job, notify: Notify) -> JobResult:
             sprog = program.substitute_constants()
             if hasattr(sprog, "substitute_functions"):
                 sprog.substitute_functions()  # JANI: in place
-            model: Any = stormpy.build_symbolic_model(sprog, props)
+            env = stormpy.Environment()
+            env.dd().sylvan().maximal_memory = job.dd_memory_mb
+            model: Any = stormpy.build_symbolic_model(sprog, props, environment=env)
             if engine_name == "auto":
                 # The symbolic build counts the states exactly at little memory; the sparse
                 # engine is much faster to check but needs ~260 bytes per state.
