@@ -465,8 +465,12 @@ def check(model: ir.Model, props: Sequence[ir.Property], *, via: Via = "prism",
           engine: Engine = "sparse", max_states: int | None = None, uniform: bool = True,
           isolate: bool | None = None, progress: Progress | None = None,
           reductions: Reductions | None = None, bisimulation: bool = False,
-          split: bool = False, memory_budget: int | None = None) -> Checks:
+          split: bool = False, memory_budget: int | None = None,
+          preserve: Sequence[ir.Property] = ()) -> Checks:
     """Check `props` (uniquely named) on a loaded model; raises CompileError on failure.
+
+    `preserve`: further properties that the reductions keep exact but that are not checked
+    (a sweep's other points, so that every chunk of it builds the same model).
 
     `split`: one Storm process per query (a property, or an MDP property's min or max), each
     building the model afresh. Costs a build per query, but a process's memory is that of
@@ -476,7 +480,7 @@ def check(model: ir.Model, props: Sequence[ir.Property], *, via: Via = "prism",
     # Only the hybrid engine needs them ("auto" may still pick it after counting states).
     comp = complements(model, props) if engine in ("hybrid", "auto") else {}
     model = dataclasses.replace(model, properties=tuple(props) + tuple(
-        p for n, p in sorted(comp.items())))
+        p for n, p in sorted(comp.items())) + tuple(preserve))
     lows: list[tuple[str, Lowered, str]] = []
     if model.is_nondeterministic:
         lows.append(("nondet", lowered(model, "nondet", reductions), "MDP"))

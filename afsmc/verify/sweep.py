@@ -110,6 +110,9 @@ class Task:
     uniform: bool
     isolate: bool | None
     shared: bool = False  # const sweep whose constant only the properties read: one build
+    # Every value of the whole sweep (shared builds): the reductions keep each of them
+    # exact, so every chunk builds the same model whatever the number of jobs.
+    sweep_xs: tuple[Number, ...] = ()
     reductions: Reductions | None = None
     bisimulation: bool = False
     split: bool = False  # one Storm process per query
@@ -170,9 +173,9 @@ def _points(model: ir.Model, props: list[ir.Property], task: Task, t0: float) ->
 
 
 def _regroup(model: ir.Model, bounded: list[tuple[int, str, str, ir.Property]], task: Task,
-             t0: float) -> list[SweepPoint]:
+             t0: float, preserve: Sequence[ir.Property] = ()) -> list[SweepPoint]:
     """Check every (point, property) on one model and split the results by point."""
-    c = _checks(model, [b for _, _, _, b in bounded], task)
+    c = _checks(model, [b for _, _, _, b in bounded], task, preserve)
     per_point: dict[int, list[PropertyResult]] = {}
     for (i, name, formula, _), r in zip(bounded, c.properties, strict=True):
         per_point.setdefault(i, []).append(
@@ -207,18 +210,24 @@ def _inline_consts(p: ir.Property, model: ir.Model, name: str) -> ir.Property:
 
 def _shared_points(task: Task, t0: float) -> list[SweepPoint]:
     bounded = []
+    preserve: list[ir.Property] = []
     first: Any = None
-    for i, x in enumerate(task.xs):
+    mine = set(task.xs)
+    others = [x for x in task.sweep_xs if x not in mine]
+    for i, x in enumerate([*task.xs, *others]):
         consts = dict(task.consts) | {task.variable: fmt(x)}
         # The model is the same at every point (sweep() checked): check it once.
         loaded = load_with_formulas(task.path, consts, task.formulas, text=task.text,
                                     run_checks=first is None)
         first = first or loaded
         for p in select(loaded.model, task.properties, loaded.adhoc):
-            bounded.append((i, p.name, formula_text(p, p.opt, show),
-                            _inline_consts(p, loaded.model, f"{p.name}__at{i}")))
+            if i < len(task.xs):
+                bounded.append((i, p.name, formula_text(p, p.opt, show),
+                                _inline_consts(p, loaded.model, f"{p.name}__at{i}")))
+            else:  # another chunk's point: kept exact by the reductions, not checked here
+                preserve.append(_inline_consts(p, loaded.model, f"{p.name}__keep{i}"))
     try:
-        return _regroup(first.model, bounded, task, t0)
+        return _regroup(first.model, bounded, task, t0, preserve)
     except CompileError as exc:
         raise first.remap_error(exc) from None
 
@@ -248,15 +257,16 @@ def independent(path: str, text: str, consts: dict[str, str], variable: str,
     return a == b
 
 
-def _checks(model: ir.Model, props: list[ir.Property], task: Task) -> Any:
-    reductions = task.reductions
-    if task.shared:
-        # One model serves every value of the constant: it must not be saturated at a
-        # threshold that depends on the value it was built with (e.g. a deadline).
-        reductions = dataclasses.replace(reductions or Reductions(), saturate=False)
+def _checks(model: ir.Model, props: list[ir.Property], task: Task,
+            preserve: Sequence[ir.Property] = ()) -> Any:
+    # A shared model serves every value of the constant. Saturation stays exact for all of
+    # them: the properties arrive with the constant inlined per point (`_inline_consts`),
+    # and the reductions preserve these and `preserve` (the sweep's other points), so a
+    # counter is capped above the largest deadline of the sweep, not the one the model was
+    # loaded with.
     return check(model, props, via=task.via, engine=task.engine, max_states=task.max_states,
-                 uniform=task.uniform, isolate=task.isolate, reductions=reductions,
-                 bisimulation=task.bisimulation, split=task.split)
+                 uniform=task.uniform, isolate=task.isolate, reductions=task.reductions,
+                 bisimulation=task.bisimulation, split=task.split, preserve=preserve)
 
 
 @dataclass
@@ -402,7 +412,8 @@ def sweep(path: str, variable: str, values: Sequence[Number], *, kind: Kind = "c
     if kind == "const" and independent(path, source, consts, variable, values):
         # Only the properties read the constant (a deadline): one build per chunk.
         chunks = _chunks(values, 1 if dask is None and jobs == 1 else jobs)
-        tasks = [Task(xs=c, shared=True, **base) for c in chunks]  # type: ignore[arg-type]
+        tasks = [Task(xs=c, shared=True, sweep_xs=tuple(values), **base)  # type: ignore[arg-type]
+                 for c in chunks]
     elif kind == "const":
         tasks = [Task(xs=(x,), **base) for x in values]  # type: ignore[arg-type]
     else:
