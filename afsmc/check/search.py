@@ -8,6 +8,7 @@ Reachability is not considered: a check speaks of every state of the mode.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping
 from dataclasses import dataclass
 from fractions import Fraction
@@ -65,12 +66,31 @@ def exists(model: ir.Model, mode: int, pred: E.Expr,
     values = dict(model.const_values) | dict(consts or {})
     names = sorted(E.vars_read(inlined), key=[v.name for v in model.variables].index)
     variables = [model.variable(n) for n in names]
-    axes = [np.array(sorted({v.lo, v.hi, v.lo + 1, v.hi - 1, (v.lo + v.hi) // 2, int(v.init)}
-                            & set(range(v.lo, v.hi + 1))))
-            if v.type is E.Type.INT else np.array([False, True]) for v in variables]
-    if _enumerate(model, mode, inlined, variables, values, axes) is not None:
-        return True  # a sampled state is a state: the answer is exact
+    for picks in (_typical, _ends, _init):  # fewer values per variable when there are many
+        axes = [np.array(sorted(pick(v))) for v in variables for pick in [picks]]
+        if math.prod(len(a) for a in axes) <= SAMPLE_LIMIT:
+            if _enumerate(model, mode, inlined, variables, values, axes) is not None:
+                return True  # a sampled state is a state: the answer is exact
+            break
     return find(model, mode, pred, consts) is not None
+
+
+SAMPLE_LIMIT = 50_000  # states tried before the exhaustive search
+
+
+def _typical(v: ir.Variable) -> set[Any]:
+    if v.type is not E.Type.INT:
+        return {False, True}
+    near = {v.lo, v.hi, v.lo + 1, v.hi - 1, (v.lo + v.hi) // 2, int(v.init)}
+    return {x for x in near if v.lo <= x <= v.hi}
+
+
+def _ends(v: ir.Variable) -> set[Any]:
+    return {False, True} if v.type is not E.Type.INT else {v.lo, v.hi, int(v.init)}
+
+
+def _init(v: ir.Variable) -> set[Any]:
+    return {v.init}
 
 
 def _enumerate(model: ir.Model, mode: int, pred: E.Expr, variables: list[ir.Variable],
