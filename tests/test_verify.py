@@ -224,6 +224,24 @@ def test_max_states_stops_patrol() -> None:
     assert "error[E405]" in r.err and "more than --max-states 10" in r.err
 
 
+def test_default_max_states_binds_the_sparse_engine_only(monkeypatch: pytest.MonkeyPatch) -> None:
+    """The default limit predicts sparse memory; the symbolic engines are held by the
+    memory guard (scenario 1's 77.6 M states are over the default of 50 M)."""
+    import afsmc.verify.core as core
+    from afsmc.compiler import CompileError
+    from afsmc.verify import run
+
+    monkeypatch.setattr(core, "default_max_states", lambda: 10)
+    hybrid = run(PATROL, engine="hybrid", isolate=False)
+    assert hybrid.model.states > 10
+    with pytest.raises(CompileError) as sparse:
+        run(PATROL, engine="sparse", isolate=False)
+    assert "E405" in str(sparse.value.diagnostics[0].code)
+    with pytest.raises(CompileError) as explicit:
+        run(PATROL, engine="hybrid", isolate=False, max_states=10)
+    assert "E405" in str(explicit.value.diagnostics[0].code)
+
+
 def test_max_states_stops_a_big_build_early(spec: Spec) -> None:
     """The child process is stopped while Storm explores, long before 2.25 M states."""
     from afsmc.compiler import load

@@ -57,8 +57,10 @@ def add_storm_options(p: argparse.ArgumentParser) -> None:
                         "check in one process)")
     add_reductions(p)
     p.add_argument("--max-states", type=positive, metavar="N",
-                   help="stop (exit 1) if the model has more states than N (default: what "
-                        "70%% of the free memory holds, at most 50 M)")
+                   help="stop (exit 1) if the model has more states than N (default, for "
+                        "the sparse engine only: what 70%% of the free memory holds as sparse "
+                        "matrices, at most 50 M; the symbolic engines are stopped by the "
+                        "memory guard instead)")
     p.add_argument("--no-uniform", dest="uniform", action="store_false",
                    help="for an MDP, skip the uniform resolution of the interval constants")
     p.add_argument("--progress", action="store_true",

@@ -471,6 +471,10 @@ def check(model: ir.Model, props: Sequence[ir.Property], *, via: Via = "prism",
 
     `preserve`: further properties that the reductions keep exact but that are not checked
     (a sweep's other points, so that every chunk of it builds the same model).
+    `max_states`: None is the default limit, which the sparse engine only has: there the
+    state count predicts the memory. The symbolic engines' memory is held by the guard
+    instead (85% of the free memory), and "auto" picks hybrid only for a model whose
+    sparse matrices would not fit.
 
     `split`: one Storm process per query (a property, or an MDP property's min or max), each
     building the model afresh. Costs a build per query, but a process's memory is that of
@@ -505,7 +509,9 @@ def check(model: ir.Model, props: Sequence[ir.Property], *, via: Via = "prism",
         while i < len(units):
             unit = units[i]
             group = list(dict.fromkeys(p for p, _ in unit))
-            job = make_job(low, group, via, job_engine, max_states, what, bisimulation,
+            limit = max_states if max_states is not None else (
+                default_max_states() if job_engine == "sparse" else None)
+            job = make_job(low, group, via, job_engine, limit, what, bisimulation,
                            memory_budget, only=tuple(n for _, n in unit))
             if progress is not None and len(units) > 1:
                 progress(f"{what}, query {i + 1} of {len(units)} ({_query_text(unit[0][1])}) "
@@ -582,10 +588,11 @@ def run(path: str, *, consts: Mapping[str, str] | None = None, properties: Seque
     bound = upper_bound(model)
     if progress is not None:
         progress(f"state space: at most {human(bound)} states (modes × variable ranges); "
-                 f"--max-states {limit:,}")
+                 f"--max-states {limit:,}" + (" for the sparse engine" if max_states is None
+                                               and engine != "sparse" else ""))
     try:
-        checks = check(model, props, via=via, engine=engine, max_states=limit, uniform=uniform,
-                       isolate=isolate, progress=progress, reductions=reductions,
+        checks = check(model, props, via=via, engine=engine, max_states=max_states,
+                       uniform=uniform, isolate=isolate, progress=progress, reductions=reductions,
                        bisimulation=bisimulation, split=split, memory_budget=memory_budget)
     except CompileError as exc:
         raise loaded.remap_error(exc) from None

@@ -29,7 +29,7 @@ from afsmc.model.lower import lower
 from afsmc.model.pretty import show
 from afsmc.model.reduce import Reductions
 from afsmc.verify.core import PropertyResult, check, load_with_formulas, select
-from afsmc.verify.guard import Progress, default_max_states
+from afsmc.verify.guard import Progress
 from afsmc.verify.storm import Engine, Via, finite
 
 Kind = Literal["const", "bound"]
@@ -106,7 +106,7 @@ class Task:
     xs: tuple[Number, ...]
     via: Via
     engine: Engine
-    max_states: int
+    max_states: int | None  # None: the default, for the sparse engine only (see check)
     uniform: bool
     isolate: bool | None
     shared: bool = False  # const sweep whose constant only the properties read: one build
@@ -401,12 +401,11 @@ def sweep(path: str, variable: str, values: Sequence[Number], *, kind: Kind = "c
     if kind == "const":
         consts.pop(variable, None)
     jobs = jobs or os.cpu_count() or 1
-    limit = default_max_states() if max_states is None else max_states
     # Dask workers are daemon processes, which cannot start the guard's child process.
     isolate: bool | None = False if dask is not None else None
     base = dict(path=path, text=source, consts=tuple(sorted(consts.items())),
                 properties=tuple(properties), formulas=tuple(formulas), variable=variable,
-                kind=kind, via=via, engine=engine, max_states=limit, uniform=uniform,
+                kind=kind, via=via, engine=engine, max_states=max_states, uniform=uniform,
                 isolate=isolate, reductions=reductions, bisimulation=bisimulation,
                 split=split)
     if kind == "const" and independent(path, source, consts, variable, values):
