@@ -230,5 +230,9 @@ def run_job(job: Job, bound: int, *, isolate: bool | None, progress: Progress | 
     if isolate is None:
         isolate = bound > IN_PROCESS_STATES
     if not isolate:
+        if bound > IN_PROCESS_STATES and job.dd_memory_mb < DD_MEMORY_RETRY:
+            # No child to retry in (a Dask worker): full tables for a model that may be big,
+            # as Sylvan would end this very process when they are full.
+            job = replace(job, dd_memory_mb=DD_MEMORY_RETRY)
         return execute(job)
     return run_isolated(job, progress)
