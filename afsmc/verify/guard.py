@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import multiprocessing
 import os
+import sys
 import time
 from collections.abc import Callable
 from dataclasses import replace
@@ -121,9 +122,12 @@ def run_isolated(job: Job, progress: Progress | None, *, every: float = 5.0,
     if code == 1 and job.engine != "sparse" and job.dd_memory_mb < DD_MEMORY_RETRY:
         # Sylvan ends the process (exit code 1, "Unique table full" on stderr) when its
         # tables are too small for the diagrams: once more with Storm's default size.
+        note = (f"the decision-diagram tables ({job.dd_memory_mb} MB) were too small for the "
+                f"{job.what}: retrying with {DD_MEMORY_RETRY} MB")
         if progress is not None:
-            progress(f"the decision-diagram tables ({job.dd_memory_mb} MB) were too small for "
-                     f"the {job.what}: retrying with {DD_MEMORY_RETRY} MB")
+            progress(note)
+        else:  # Sylvan has said "Unique table full" on stderr: say what it means there too
+            print(f"afsmc: {note}", file=sys.stderr, flush=True)
         res, code = _run_isolated(replace(job, dd_memory_mb=DD_MEMORY_RETRY), progress,
                                   every, first)
     return res
