@@ -217,8 +217,13 @@ def _shared_points(task: Task, t0: float) -> list[SweepPoint]:
     for i, x in enumerate([*task.xs, *others]):
         consts = dict(task.consts) | {task.variable: fmt(x)}
         # The model is the same at every point (sweep() checked): check it once.
-        loaded = load_with_formulas(task.path, consts, task.formulas, text=task.text,
-                                    run_checks=first is None)
+        try:
+            loaded = load_with_formulas(task.path, consts, task.formulas, text=task.text,
+                                        run_checks=first is None)
+        except CompileError:
+            if i < len(task.xs):
+                raise
+            continue  # another chunk's point: that chunk reports it
         first = first or loaded
         for p in select(loaded.model, task.properties, loaded.adhoc):
             if i < len(task.xs):
