@@ -45,16 +45,7 @@ class Witness:
 def find(model: ir.Model, mode: int, pred: E.Expr,
          consts: Mapping[str, Any] | None = None) -> Witness | None:
     """A state with the given mode where `pred` holds, or None if there is none."""
-    pred = inline(pred, model)
-    values = dict(model.const_values) | dict(consts or {})
-    names = sorted(E.vars_read(pred), key=[v.name for v in model.variables].index)
-    variables = [model.variable(n) for n in names]
-    size = 1
-    for v in variables:
-        size *= v.size
-    if size <= ENUMERATION_LIMIT:
-        return _enumerate(model, mode, pred, variables, values)
-    return _smt(model, mode, pred, variables, values)
+    return _search(model, mode, *_prepare(model, pred, consts))
 
 
 def exists(model: ir.Model, mode: int, pred: E.Expr,
@@ -62,17 +53,30 @@ def exists(model: ir.Model, mode: int, pred: E.Expr,
     """Whether some state of the mode satisfies `pred`. Predicates that hold somewhere (an
     action that can fire) usually hold at a few typical values too, so those are tried
     first; only a miss pays for the exhaustive search."""
-    inlined = inline(pred, model)
-    values = dict(model.const_values) | dict(consts or {})
-    names = sorted(E.vars_read(inlined), key=[v.name for v in model.variables].index)
-    variables = [model.variable(n) for n in names]
+    inlined, variables, values = _prepare(model, pred, consts)
     for picks in (_typical, _ends, _init):  # fewer values per variable when there are many
-        axes = [np.array(sorted(pick(v))) for v in variables for pick in [picks]]
+        axes = [np.array(sorted(picks(v))) for v in variables]
         if math.prod(len(a) for a in axes) <= SAMPLE_LIMIT:
             if _enumerate(model, mode, inlined, variables, values, axes) is not None:
                 return True  # a sampled state is a state: the answer is exact
             break
-    return find(model, mode, pred, consts) is not None
+    return _search(model, mode, inlined, variables, values) is not None
+
+
+def _prepare(model: ir.Model, pred: E.Expr, consts: Mapping[str, Any] | None
+             ) -> tuple[E.Expr, list[ir.Variable], dict[str, Any]]:
+    """The predicate inlined, the variables it reads (in declaration order), the constants."""
+    inlined = inline(pred, model)
+    values = dict(model.const_values) | dict(consts or {})
+    names = sorted(E.vars_read(inlined), key=[v.name for v in model.variables].index)
+    return inlined, [model.variable(n) for n in names], values
+
+
+def _search(model: ir.Model, mode: int, pred: E.Expr, variables: list[ir.Variable],
+            values: Mapping[str, Any]) -> Witness | None:
+    if math.prod(v.size for v in variables) <= ENUMERATION_LIMIT:
+        return _enumerate(model, mode, pred, variables, values)
+    return _smt(model, mode, pred, variables, values)
 
 
 SAMPLE_LIMIT = 50_000  # states tried before the exhaustive search
