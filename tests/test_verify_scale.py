@@ -4,11 +4,13 @@ through `afsmc verify` give the same values as the plain sparse route."""
 from __future__ import annotations
 
 import json
+from collections.abc import Callable
 
 import pytest
 
-from afsmc.backends.prism import emit, property_variants
+from afsmc.backends.prism import PrismOutput, emit, property_variants
 from afsmc.compiler import load, lowered
+from afsmc.model import ir
 from afsmc.model.reduce import Reductions
 from afsmc.verify import run
 from afsmc.verify.storm import Job, execute
@@ -51,12 +53,16 @@ def test_auto_picks_sparse_for_small_models_and_says_why() -> None:
     assert "sparse engine is fastest" in res.model.engine_reason, res.model.engine_reason
 
 
-def test_auto_falls_back_to_hybrid_when_sparse_would_not_fit() -> None:
+def _small_uav(keep: Callable[[ir.Property], bool]) -> tuple[PrismOutput, tuple[str, ...]]:
+    """The small UAV's PRISM text and the query names of the properties `keep` selects."""
     model = load(UAV, SMALL["uav"]).model
     low = lowered(model, "nondet")
-    out = emit(low)
-    names = tuple(n for p in model.properties if p.kind == "P"
-                  for n, _ in property_variants(low, p))
+    names = tuple(n for p in model.properties if keep(p) for n, _ in property_variants(low, p))
+    return emit(low), names
+
+
+def test_auto_falls_back_to_hybrid_when_sparse_would_not_fit() -> None:
+    out, names = _small_uav(lambda p: p.kind == "P")
     sparse = execute(Job("prism", out.model, out.properties, names, "sparse"))
     tiny = execute(Job("prism", out.model, out.properties, names, "auto", memory_budget=1))
     roomy = execute(Job("prism", out.model, out.properties, names, "auto",
@@ -175,11 +181,7 @@ def test_too_small_decision_diagram_tables_are_retried_with_storm_s_default() ->
     from afsmc.verify.guard import run_isolated
     from afsmc.verify.storm import DD_MEMORY_RETRY
 
-    model = load(UAV, SMALL["uav"]).model
-    low = lowered(model, "nondet")
-    out = emit(low)
-    names = tuple(n for p in model.properties if p.name == "success"
-                  for n, _ in property_variants(low, p))
+    out, names = _small_uav(lambda p: p.name == "success")
     said: list[str] = []
     tight = run_isolated(Job("prism", out.model, out.properties, names, "hybrid",
                              dd_memory_mb=1), said.append)
