@@ -4,6 +4,7 @@ through `afsmc verify` give the same values as the plain sparse route."""
 from __future__ import annotations
 
 import json
+import re
 from collections.abc import Callable
 
 import pytest
@@ -89,8 +90,15 @@ def test_verify_cli_reports_the_engine_and_quotient() -> None:
 def test_split_checks_each_property_in_its_own_process_with_the_same_values() -> None:
     names = ["success", "emergency"]
     together = run(UAV, consts=SMALL["uav"], properties=names, engine="sparse", isolate=False)
-    split = run(UAV, consts=SMALL["uav"], properties=names, engine="sparse", split=True)
+    said: list[str] = []
+    split = run(UAV, consts=SMALL["uav"], properties=names, engine="sparse", split=True,
+                progress=said.append)
     _close(_values(together), _values(split), 1e-12)
+    # each process is announced, with the time spent so far
+    queries = [s for s in said if ", query " in s]
+    assert len(queries) == 2 * len(names) + len(names), said
+    assert queries[0].startswith("MDP, query 1 of 4 (success_min)"), queries
+    assert all(re.search(r"; \d+ (s|min) so far$", s) for s in queries), queries
     assert split.model.processes == 2 * len(names) and together.model.processes == 1
     assert split.uniform_model is not None and split.uniform_model.processes == len(names)
     assert split.model.states == together.model.states

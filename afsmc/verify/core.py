@@ -437,6 +437,12 @@ def _query_text(name: str) -> str:
     return name
 
 
+def _so_far(seconds: float) -> str:
+    if seconds < 120:
+        return f"{seconds:.0f} s so far"
+    return f"{seconds / 60:.0f} min so far"
+
+
 def _add(a: ModelStats, b: ModelStats) -> ModelStats:
     """Two Storm runs of one model (--split): times add up, sizes are the same."""
     return dataclasses.replace(
@@ -479,6 +485,7 @@ def check(model: ir.Model, props: Sequence[ir.Property], *, via: Via = "prism",
     `split`: one Storm process per query (a property, or an MDP property's min or max), each
     building the model afresh. Costs a build per query, but a process's memory is that of
     one check: the hybrid engine's memory grows with every check in the same process."""
+    started = time.perf_counter()
     bound = upper_bound(model)
     engine, reason = choose_engine(engine, bound)
     # Only the hybrid engine needs them ("auto" may still pick it after counting states).
@@ -514,8 +521,9 @@ def check(model: ir.Model, props: Sequence[ir.Property], *, via: Via = "prism",
             job = make_job(low, group, via, job_engine, limit, what, bisimulation,
                            memory_budget, only=tuple(n for _, n in unit))
             if progress is not None and len(units) > 1:
+                # Long runs (scenario 1: over an hour) say how far they are.
                 progress(f"{what}, query {i + 1} of {len(units)} ({_query_text(unit[0][1])}) "
-                         "in its own Storm process")
+                         f"in its own Storm process; {_so_far(time.perf_counter() - started)}")
             # A fresh process per query is the point of splitting, except where no child
             # process may be started (isolate=False: Dask workers).
             fresh = isolate if isolate is False or len(units) == 1 else True
