@@ -3,6 +3,7 @@ through `afsmc verify` give the same values as the plain sparse route."""
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import re
 from collections.abc import Callable
@@ -199,3 +200,32 @@ def test_too_small_decision_diagram_tables_are_retried_with_storm_s_default() ->
     assert tight.states == sparse.states
     for name in names:
         assert tight.values[name] == pytest.approx(sparse.values[name], abs=1e-6)
+
+
+def test_complementary_queries_keep_the_larger_tables_once_one_needed_them(
+        monkeypatch: pytest.MonkeyPatch) -> None:
+    # Every first attempt gets 1 MB tables, too small for any query of the small UAV.
+    from afsmc.verify import core
+    from afsmc.verify.storm import DD_MEMORY_RETRY
+
+    make_job = core.make_job
+    monkeypatch.setattr(core, "make_job", lambda *a, **k: dataclasses.replace(
+        make_job(*a, **k), dd_memory_mb=1))
+    said: list[str] = []
+    names = ["success", "missed"]
+    hybrid = run(UAV, consts=SMALL["uav"], properties=names, engine="hybrid", split=True,
+                 uniform=False, progress=said.append)
+    sparse = run(UAV, consts=SMALL["uav"], properties=names, engine="sparse", isolate=False,
+                 uniform=False)
+    _close(_values(hybrid), _values(sparse), 1e-6)
+    starts = [i for i, s in enumerate(said) if ", query " in s]
+    retried = [any("retrying with" in s for s in said[i:j])
+               for i, j in zip(starts, [*starts[1:], len(said)], strict=True)]
+    queries = [said[i].split("(", 1)[1] for i in starts]
+    assert [q.split(")")[0] for q in queries] == [
+        "success_min", "does every path end in a final mode?",
+        "success max, as 1 - Pmin of the other final states", "missed_min",
+        "missed max, as 1 - Pmin of the other final states"], queries
+    # the second complementary query starts with the tables the first one ended with
+    assert retried == [True, True, True, True, False], said
+    assert any(f"start with {DD_MEMORY_RETRY} MB" in s for s in said), said

@@ -512,6 +512,11 @@ def check(model: ir.Model, props: Sequence[ir.Property], *, via: Via = "prism",
         merged: ModelStats | None = None
         vals: dict[str, float] = {}
         job_engine = engine
+        # Sylvan's tables for the complementary Pmin queries, once one of them outgrew the
+        # default: they share their shape, Pmin [F final & !target] (on scenario 1 three of
+        # five outgrew 1 GB, 43-144 s into their processes). The other queries keep the
+        # default: the expected rewards' minimum needs it to stay under 20 GB.
+        rest_tables = 0
         i = 0
         while i < len(units):
             unit = units[i]
@@ -520,6 +525,9 @@ def check(model: ir.Model, props: Sequence[ir.Property], *, via: Via = "prism",
                 default_max_states() if job_engine == "sparse" else None)
             job = make_job(low, group, via, job_engine, limit, what, bisimulation,
                            memory_budget, only=tuple(n for _, n in unit))
+            complementary = all(n.startswith(REST) for _, n in unit)
+            if complementary and rest_tables > job.dd_memory_mb:
+                job = dataclasses.replace(job, dd_memory_mb=rest_tables)
             if progress is not None and len(units) > 1:
                 # Long runs (scenario 1: over an hour) say how far they are.
                 progress(f"{what}, query {i + 1} of {len(units)} ({_query_text(unit[0][1])}) "
@@ -530,6 +538,11 @@ def check(model: ir.Model, props: Sequence[ir.Property], *, via: Via = "prism",
             res = run_job(job, bound, isolate=fresh, progress=progress)
             if res.failure is not None:
                 raise CompileError([failure_diagnostic(res.failure, model, low, group, job)])
+            if complementary and res.dd_memory_mb > max(job.dd_memory_mb, rest_tables):
+                rest_tables = res.dd_memory_mb
+                if progress is not None:
+                    progress(f"the {what}'s further complementary Pmin queries start with "
+                             f"{rest_tables} MB decision-diagram tables")
             if reason and not res.engine_reason:
                 res.engine_reason = reason
             one = _stats(res, resolution)
