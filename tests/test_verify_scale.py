@@ -229,3 +229,12 @@ def test_complementary_queries_keep_the_larger_tables_once_one_needed_them(
     # the second complementary query starts with the tables the first one ended with
     assert retried == [True, True, True, True, False], said
     assert any(f"start with {DD_MEMORY_RETRY} MB" in s for s in said), said
+
+
+def test_in_process_checks_carry_no_tables_over_without_a_rerun() -> None:
+    # In process (a Dask worker) a big model starts with full tables: nothing was rerun.
+    said: list[str] = []
+    run(UAV, consts=SMALL["uav"], properties=["success"], engine="hybrid", isolate=False,
+        split=True, uniform=False, progress=said.append)
+    assert any("1 - Pmin [F (final & !target)]" in s for s in said), said
+    assert not any("further complementary" in s or "retrying" in s for s in said), said

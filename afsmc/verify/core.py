@@ -33,7 +33,15 @@ from afsmc.verify.guard import (
     run_job,
     upper_bound,
 )
-from afsmc.verify.storm import Engine, Job, JobResult, StormFailure, Via, finite
+from afsmc.verify.storm import (
+    DD_MEMORY_RETRY,
+    Engine,
+    Job,
+    JobResult,
+    StormFailure,
+    Via,
+    finite,
+)
 
 
 @dataclass
@@ -512,11 +520,11 @@ def check(model: ir.Model, props: Sequence[ir.Property], *, via: Via = "prism",
         merged: ModelStats | None = None
         vals: dict[str, float] = {}
         job_engine = engine
-        # Sylvan's tables for the complementary Pmin queries, once one of them outgrew the
-        # default: they share their shape, Pmin [F final & !target] (on scenario 1 three of
-        # five outgrew 1 GB, 43-144 s into their processes). The other queries keep the
-        # default: the expected rewards' minimum needs it to stay under 20 GB.
-        rest_tables = 0
+        # Once the guard reran one complementary Pmin query with full tables, the later ones
+        # start with them: they share their shape, Pmin [F final & !target] (on scenario 1
+        # three of five outgrew 1 GB, 43-144 s into their processes). The other queries keep
+        # the default: the expected rewards' minimum needs it to stay under 20 GB.
+        rest_full_tables = False
         i = 0
         while i < len(units):
             unit = units[i]
@@ -526,8 +534,8 @@ def check(model: ir.Model, props: Sequence[ir.Property], *, via: Via = "prism",
             job = make_job(low, group, via, job_engine, limit, what, bisimulation,
                            memory_budget, only=tuple(n for _, n in unit))
             complementary = all(n.startswith(REST) for _, n in unit)
-            if complementary and rest_tables > job.dd_memory_mb:
-                job = dataclasses.replace(job, dd_memory_mb=rest_tables)
+            if complementary and rest_full_tables:
+                job = dataclasses.replace(job, dd_memory_mb=DD_MEMORY_RETRY)
             if progress is not None and len(units) > 1:
                 # Long runs (scenario 1: over an hour) say how far they are.
                 progress(f"{what}, query {i + 1} of {len(units)} ({_query_text(unit[0][1])}) "
@@ -538,11 +546,11 @@ def check(model: ir.Model, props: Sequence[ir.Property], *, via: Via = "prism",
             res = run_job(job, bound, isolate=fresh, progress=progress)
             if res.failure is not None:
                 raise CompileError([failure_diagnostic(res.failure, model, low, group, job)])
-            if complementary and res.dd_memory_mb > max(job.dd_memory_mb, rest_tables):
-                rest_tables = res.dd_memory_mb
+            if complementary and res.dd_retried and not rest_full_tables:
+                rest_full_tables = True
                 if progress is not None:
                     progress(f"the {what}'s further complementary Pmin queries start with "
-                             f"{rest_tables} MB decision-diagram tables")
+                             f"{DD_MEMORY_RETRY} MB decision-diagram tables")
             if reason and not res.engine_reason:
                 res.engine_reason = reason
             one = _stats(res, resolution)

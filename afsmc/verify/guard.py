@@ -130,6 +130,7 @@ def run_isolated(job: Job, progress: Progress | None, *, every: float = 5.0,
             print(f"afsmc: {note}", file=sys.stderr, flush=True)
         res, code = _run_isolated(replace(job, dd_memory_mb=DD_MEMORY_RETRY), progress,
                                   every, first)
+        res.dd_retried = True
     return res
 
 

@@ -79,7 +79,7 @@ class JobResult:
     quotient_states: int | None = None  # states after bisimulation
     quotient_transitions: int | None = None
     bisimulation_time: float = 0.0
-    dd_memory_mb: int = 0  # the symbolic engines: Sylvan's tables the check ran with, MB
+    dd_retried: bool = False  # Sylvan's tables were full: the guard reran it with DD_MEMORY_RETRY
     failure: StormFailure | None = None
 
 
@@ -168,7 +168,6 @@ def _execute(job: Job, notify: Notify) -> JobResult:
                 sprog.substitute_functions()  # JANI: in place
             env = stormpy.Environment()
             env.dd().sylvan().maximal_memory = job.dd_memory_mb
-            res.dd_memory_mb = job.dd_memory_mb
             model: Any = stormpy.build_symbolic_model(sprog, props, environment=env)
             if engine_name == "auto":
                 # The symbolic build counts the states exactly at little memory; the sparse
