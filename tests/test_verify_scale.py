@@ -129,22 +129,58 @@ property steps = R{"steps"}=? [ F "done" ];
 """
 
 
-def test_auto_with_hybrid_checks_one_property_per_process(tmp_path: object) -> None:
+def test_auto_with_hybrid_groups_the_queries_in_two_processes(tmp_path: object) -> None:
     import pathlib
 
     path = pathlib.Path(str(tmp_path)) / "wide.afsm"
     path.write_text(WIDE, encoding="utf-8")
     sparse = run(str(path), engine="sparse", isolate=False)
-    tight = run(str(path), engine="auto", memory_budget=1)
+    said: list[str] = []
+    tight = run(str(path), engine="auto", memory_budget=1, progress=said.append)
     roomy = run(str(path), engine="auto", memory_budget=1 << 40)
-    # reach_min (with the count), then reach_max as 1 - Pmin (whether every path ends, and
-    # the rest), steps_min, steps_max: five processes
-    assert tight.model.engine == "hybrid" and tight.model.processes == 5
-    assert "one query per Storm process" in tight.model.engine_reason
-    assert tight.uniform_model is not None and tight.uniform_model.processes == 2
+    # reach_min, steps_min and steps_max where "auto" counted the states; then reach_max as
+    # 1 - Pmin (whether every path ends, and the rest) with larger tables
+    assert tight.model.engine == "hybrid" and tight.model.processes == 2
+    assert "queries grouped" in tight.model.engine_reason
+    assert any("process 2 of 2: 2 queries (termination, reach_max as 1 - Pmin) in one "
+               "Storm process with 4096 MB" in s for s in said), said
+    assert tight.uniform_model is not None and tight.uniform_model.processes == 1
     assert roomy.model.engine == "sparse" and roomy.model.processes == 1
     _close(_values(tight), _values(sparse), 1e-6)
     _close(_values(roomy), _values(sparse), 1e-9)
+
+
+def test_a_grouped_process_that_dies_keeps_its_answers_and_the_rest_run_alone() -> None:
+    # Kill the first process as soon as it has answered one query, as the memory guard
+    # would: the answered value is kept, the others each get a process of their own.
+    import multiprocessing
+    import os
+    import signal
+
+    said: list[str] = []
+    killed: list[int] = []
+
+    def progress(s: str) -> None:
+        said.append(s)
+        if s.startswith("checked ") and not killed:
+            for child in multiprocessing.active_children():
+                if child.pid is not None:
+                    os.kill(child.pid, signal.SIGKILL)
+                    killed.append(child.pid)
+
+    names = ["success", "drops"]
+    hybrid = run(UAV, consts=SMALL["uav"], properties=names, engine="hybrid", uniform=False,
+                 progress=progress)
+    sparse = run(UAV, consts=SMALL["uav"], properties=names, engine="sparse", isolate=False,
+                 uniform=False)
+    assert killed, said
+    _close(_values(hybrid), _values(sparse), 1e-6)
+    stopped = [s for s in said if "queries were answered" in s]
+    assert len(stopped) == 1 and "1 of its 3 queries" in stopped[0], said
+    # success_min, drops_min, drops_max together; then the two the process had not
+    # answered alone; then the complementary process for success_max
+    assert hybrid.model.processes == 3, said
+    assert sum(", query " in s and "in its own Storm process" in s for s in said) == 2, said
 
 
 def test_hybrid_pmax_through_the_complementary_pmin_is_exact() -> None:
@@ -179,7 +215,8 @@ def test_hybrid_pmax_falls_back_when_paths_need_not_end(tmp_path: object) -> Non
     said: list[str] = []
     hybrid = run(str(path), engine="hybrid", isolate=False, progress=said.append)
     sparse = run(str(path), engine="sparse", isolate=False)
-    assert not any("1 - Pmin" in s for s in said), said
+    assert not any("ends in a final mode" in s for s in said), said
+    assert any("(reach_max) in its own Storm process" in s for s in said), said
     _close(_values(hybrid), _values(sparse), 1e-6)
     reach = hybrid.property("reach")
     assert reach.min is not None and reach.max is not None and reach.min < reach.max < 1

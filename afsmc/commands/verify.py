@@ -43,7 +43,8 @@ def add_storm_options(p: argparse.ArgumentParser) -> None:
                    help="Storm's input language: PRISM text (default) or JANI JSON")
     p.add_argument("--engine", choices=ENGINES, default="auto",
                    help="Storm's engine: auto (default: sparse when the model fits in memory "
-                        "as sparse matrices, else hybrid with one query per process; counts "
+                        "as sparse matrices, else hybrid, with a second process for the Pmax "
+                        "queries; counts "
                         "the states symbolically first when they may be many), sparse "
                         "(explicit matrices), dd (decision diagrams throughout) or hybrid "
                         "(symbolic model, explicit vectors)")
@@ -53,8 +54,7 @@ def add_storm_options(p: argparse.ArgumentParser) -> None:
     p.add_argument("--split", action="store_true",
                    help="run each query (a property; for an MDP its min and its max) in "
                         "its own Storm process, building the model again for each: slower, but "
-                        "the memory is that of one check (the hybrid engine's grows with every "
-                        "check in one process)")
+                        "the memory is that of one check")
     add_reductions(p)
     p.add_argument("--max-states", type=positive, metavar="N",
                    help="stop (exit 1) if the model has more states than N (default, for "

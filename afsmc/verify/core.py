@@ -265,21 +265,23 @@ def select(model: ir.Model, names: Sequence[str], adhoc: Sequence[str] = ()) -> 
 
 def make_job(low: Lowered, props: Sequence[ir.Property], via: Via, engine: Engine,
              max_states: int | None, what: str, bisimulation: bool = False,
-             memory_budget: int | None = None, only: tuple[str, ...] | None = None) -> Job:
+             memory_budget: int | None = None, only: tuple[str, ...] | None = None,
+             hybrid_skip: tuple[str, ...] = ()) -> Job:
     """The Storm input for a lowered model whose `properties` are exactly `props`.
     `memory_budget`: what "auto" may give the sparse engine (default: 70% of free memory);
-    `only`: check just these queries (property variants, e.g. `success_min`)."""
+    `only`: check just these queries (property variants, e.g. `success_min`);
+    `hybrid_skip`: queries "auto" leaves to another process if it picks hybrid."""
     names = tuple(n for p in props for n, _ in property_variants(low, p)
                   if only is None or n in only)
     avail = mem_available()
     budget = memory_budget
     if budget is None:
         budget = int(avail * 0.7) if avail is not None else None
-    first = 1 if engine == "auto" else 0
+    skip = hybrid_skip if engine == "auto" else ()
     if via == "prism":
         out = prism_emit(low)
         return Job("prism", out.model, out.properties, names, engine, max_states, what,
-                   bisimulation, budget, first)
+                   bisimulation, budget, skip)
     try:
         jani: Any = importlib.import_module("afsmc.backends.jani")
     except ImportError:
@@ -287,7 +289,7 @@ def make_job(low: Lowered, props: Sequence[ir.Property], via: Via, engine: Engin
                                        "the JANI backend (afsmc.backends.jani) is not available",
                                        None, hint="use --via prism")]) from None
     return Job("jani", jani.dumps(jani.emit(low)), "", names, engine, max_states, what,
-               bisimulation, budget, first)
+               bisimulation, budget, skip)
 
 
 def _source_line_span(model: ir.Model, generated: str, line: int) -> Span | None:
@@ -445,6 +447,18 @@ def _query_text(name: str) -> str:
     return name
 
 
+def _unit_text(unit: list[tuple[ir.Property, str]], i: int,
+               units: list[list[tuple[ir.Property, str]]]) -> str:
+    """'query 3 of 14 (missed_min)' or 'process 1 of 2: 10 queries (success_min, ...)'."""
+    if len(unit) == 1:
+        order = list(dict.fromkeys(n for u in units for _, n in u))
+        return f"query {order.index(unit[0][1]) + 1} of {len(order)} ({_query_text(unit[0][1])})"
+    names = ", ".join("termination" if n == TERMINATES else
+                      f"{n[len(REST):]}_max as 1 - Pmin" if n.startswith(REST) else n
+                      for _, n in unit)
+    return f"process {i + 1} of {len(units)}: {len(unit)} queries ({names})"
+
+
 def _so_far(seconds: float) -> str:
     if seconds < 120:
         return f"{seconds:.0f} s so far"
@@ -492,7 +506,10 @@ def check(model: ir.Model, props: Sequence[ir.Property], *, via: Via = "prism",
 
     `split`: one Storm process per query (a property, or an MDP property's min or max), each
     building the model afresh. Costs a build per query, but a process's memory is that of
-    one check: the hybrid engine's memory grows with every check in the same process."""
+    one check. Without it the hybrid engine (chosen, or picked by "auto") uses two processes
+    per model: one for the queries asked directly, one with larger decision-diagram tables
+    for the complementary Pmin queries that give each Pmax. If a process of several queries
+    runs out of memory, the queries it had not answered follow one per process."""
     started = time.perf_counter()
     bound = upper_bound(model)
     engine, reason = choose_engine(engine, bound)
@@ -514,9 +531,20 @@ def check(model: ir.Model, props: Sequence[ir.Property], *, via: Via = "prism",
         queries = [(p, n) for p in props for n, _ in property_variants(low, p)]
         by_name = {n: (p, n) for p, n in queries}
         use = comp if low.kind == "mdp" else {}
-        if engine == "hybrid":
-            queries = _rewrite(queries, use)
-        units = [[q] for q in queries] if split and len(queries) > 1 else [queries]
+
+        def plan(qs: list[tuple[ir.Property, str]], hybrid: bool,
+                 use: dict[str, ir.Property] = use) -> list[list[tuple[ir.Property, str]]]:
+            """Queries -> Storm processes. Hybrid: a Pmax as 1 - the complementary Pmin, and
+            those complements in a process of their own (they need larger tables)."""
+            if not hybrid:
+                return [[q] for q in qs] if split and len(qs) > 1 else [qs] if qs else []
+            if split:
+                return [[q] for q in _rewrite(qs, use)]
+            direct = [q for q in qs if q[1] not in use]
+            rests = _rewrite([q for q in qs if q[1] in use], use)
+            return [u for u in (direct, rests) if u]
+
+        units = plan(queries, engine == "hybrid")
         merged: ModelStats | None = None
         vals: dict[str, float] = {}
         job_engine = engine
@@ -532,18 +560,35 @@ def check(model: ir.Model, props: Sequence[ir.Property], *, via: Via = "prism",
             limit = max_states if max_states is not None else (
                 default_max_states() if job_engine == "sparse" else None)
             job = make_job(low, group, via, job_engine, limit, what, bisimulation,
-                           memory_budget, only=tuple(n for _, n in unit))
-            complementary = all(n.startswith(REST) for _, n in unit)
-            if complementary and rest_full_tables:
+                           memory_budget, only=tuple(n for _, n in unit),
+                           hybrid_skip=tuple(n for _, n in unit if n in use))
+            complementary = any(n.startswith(REST) for _, n in unit) and all(
+                n.startswith(REST) or n == TERMINATES for _, n in unit)
+            if complementary and (rest_full_tables or len(unit) > 1):
                 job = dataclasses.replace(job, dd_memory_mb=DD_MEMORY_RETRY)
-            if progress is not None and len(units) > 1:
-                # Long runs (scenario 1: over an hour) say how far they are.
-                progress(f"{what}, query {i + 1} of {len(units)} ({_query_text(unit[0][1])}) "
-                         f"in its own Storm process; {_so_far(time.perf_counter() - started)}")
-            # A fresh process per query is the point of splitting, except where no child
+            # A fresh process per unit when there are several, except where no child
             # process may be started (isolate=False: Dask workers).
             fresh = isolate if isolate is False or len(units) == 1 else True
+            if progress is not None and len(units) > 1:
+                # Long runs (scenario 1: over an hour) say how far they are.
+                where = ("in its own Storm process" if len(unit) == 1 else
+                         "in one Storm process" + (f" with {job.dd_memory_mb} MB decision-"
+                                                   "diagram tables" if complementary else ""))
+                progress(f"{what}, {_unit_text(unit, i, units)} {where}; "
+                         f"{_so_far(time.perf_counter() - started)}")
             res = run_job(job, bound, isolate=fresh, progress=progress)
+            if res.failure is not None and len(unit) > 1 and fresh is not False \
+                    and res.failure.stage in ("memory", "internal"):
+                # A process for several queries ran out of memory: keep what it answered and
+                # give each of the others a process of its own.
+                vals |= res.values
+                left = [q for q in unit if q[1] not in res.values]
+                if progress is not None:
+                    progress(f"{res.failure.message}; {len(res.values)} of its {len(unit)} "
+                             "queries were answered, the others follow one per Storm process")
+                units = units[:i + 1] + [[q] for q in left] + units[i + 1:]
+                i += 1
+                continue
             if res.failure is not None:
                 raise CompileError([failure_diagnostic(res.failure, model, low, group, job)])
             if complementary and res.dd_retried and not rest_full_tables:
@@ -557,16 +602,17 @@ def check(model: ir.Model, props: Sequence[ir.Property], *, via: Via = "prism",
             merged = one if merged is None else _add(merged, one)
             vals |= res.values
             i += 1
-            if len(units) == 1 and len(unit) > 1 and res.engine == "hybrid" \
-                    and not all(n in vals for n in job.names):
-                # "auto" chose hybrid and checked only the first query (Job.hybrid_first):
-                # the others follow, each in a process of its own.
-                units = [[q] for q in _rewrite([q for q in unit if q[1] not in vals], use)]
-                i = 0
+            if job_engine == "auto" and res.engine == "hybrid":
+                # "auto" chose hybrid: the queries it left (Job.hybrid_skip) and any later
+                # ones follow as the hybrid engine wants them.
                 job_engine = "hybrid"
-                if progress is not None:
-                    progress(f"the {what} is checked with the hybrid engine, one query per "
-                             "Storm process (its memory grows with every check)")
+                left = [q for u in [unit, *units[i:]] for q in u if q[1] not in vals]
+                units = units[:i] + plan(left, True)
+                if progress is not None and left:
+                    progress(f"the {what} is checked with the hybrid engine: "
+                             + ("one query per Storm process" if split else
+                                "the Pmax queries follow as 1 - Pmin, in a process of "
+                                "their own"))
             if i == len(units) and TERMINATES in vals:
                 # Pmax = 1 - Pmin of the rest, if every path ends; else ask Pmax itself.
                 ends = vals.pop(TERMINATES) == 1.0

@@ -121,15 +121,19 @@ def run_isolated(job: Job, progress: Progress | None, *, every: float = 5.0,
     res, code = _run_isolated(job, progress, every, first)
     if code == 1 and job.engine != "sparse" and job.dd_memory_mb < DD_MEMORY_RETRY:
         # Sylvan ends the process (exit code 1, "Unique table full" on stderr) when its
-        # tables are too small for the diagrams: once more with Storm's default size.
+        # tables are too small for the diagrams: once more with Storm's default size, for
+        # the queries the process had not answered yet.
         note = (f"the decision-diagram tables ({job.dd_memory_mb} MB) were too small for the "
                 f"{job.what}: retrying with {DD_MEMORY_RETRY} MB")
         if progress is not None:
             progress(note)
         else:  # Sylvan has said "Unique table full" on stderr: say what it means there too
             print(f"afsmc: {note}", file=sys.stderr, flush=True)
-        res, code = _run_isolated(replace(job, dd_memory_mb=DD_MEMORY_RETRY), progress,
-                                  every, first)
+        done = res.values
+        rest = tuple(n for n in job.names if n not in done)
+        res, code = _run_isolated(replace(job, dd_memory_mb=DD_MEMORY_RETRY, names=rest),
+                                  progress, every, first)
+        res.values = done | res.values
         res.dd_retried = True
     return res
 
@@ -157,6 +161,7 @@ def _run_isolated(job: Job, progress: Progress | None, every: float,
     phase = "start"
     peak = 0
     result: JobResult | None = None
+    answered: dict[str, float] = {}  # values the child sent before it may die
 
     def say(text: str) -> None:
         if progress is not None:
@@ -177,6 +182,9 @@ def _run_isolated(job: Job, progress: Progress | None, every: float,
                     states, transitions, secs = data
                     say(f"built the {job.what}: {states:,} states, {transitions:,} transitions "
                         f"in {secs:.1f} s")
+                elif event == "value":
+                    answered[data[0]] = data[1]
+                    say(f"checked {data[0]} on the {job.what}: {time.monotonic() - start:.0f} s")
                 elif event == "result":
                     result = data
                 continue
@@ -200,7 +208,7 @@ def _run_isolated(job: Job, progress: Progress | None, every: float,
             if cap is not None and rss > cap:
                 proc.kill()
                 proc.join()
-                return JobResult(failure=StormFailure(
+                return JobResult(values=answered, failure=StormFailure(
                     "memory", f"stopped the {job.what} after {now - start:.0f} s: it used "
                     f"{rss / 2**30:.1f} GB, 85% of the memory that was available")), None
             if now >= next_report:
@@ -225,7 +233,7 @@ def _run_isolated(job: Job, progress: Progress | None, every: float,
         why += (f" (with decision-diagram tables of {job.dd_memory_mb} MB; Sylvan exits when "
                 "they are full)")
     gb = f"; it had used {peak / 2**30:.1f} GB" if peak else ""
-    return JobResult(failure=StormFailure(
+    return JobResult(values=answered, failure=StormFailure(
         "memory" if code is not None and code < 0 else "internal",
         f"the Storm process building the {job.what} {why}{gb}")), code
 

@@ -42,9 +42,9 @@ class Job:
     what: str = "model"  # for messages: "MDP", "uniform DTMC"
     bisimulation: bool = False  # minimise the sparse model (strong bisimulation) before checking
     memory_budget: int | None = None  # bytes the sparse engine may use ("auto" decides with it)
-    # If "auto" picks hybrid, check only the first `hybrid_first` names and leave the rest
-    # to fresh processes: the hybrid engine's memory grows with every check.
-    hybrid_first: int = 0
+    # If "auto" picks hybrid, leave these names out: they are asked another way, in another
+    # process (a Pmax as 1 - the complementary Pmin, which needs other table sizes).
+    hybrid_skip: tuple[str, ...] = ()
     # Sylvan's node tables for the symbolic engines, MB. Storm reserves 4 GB by default and
     # touches most of it; the UAV's diagrams fit in far less even at 77 M states, and the
     # memory is better spent on the explicit vectors of the hybrid engine. A model whose
@@ -189,9 +189,10 @@ def _execute(job: Job, notify: Notify) -> JobResult:
                     res.engine_reason = (f"{int(model.nr_states):,} states would need about "
                                          f"{need / 1e9:.1f} GB as sparse matrices, more than "
                                          f"the {budget / 1e9:.1f} GB available")
-                    if 0 < job.hybrid_first < len(props):
-                        props = props[:job.hybrid_first]
-                        res.engine_reason += "; one query per Storm process"
+                    if job.hybrid_skip:
+                        props = [p for n, p in zip(job.names, props, strict=True)
+                                 if n not in job.hybrid_skip]
+                        res.engine_reason += "; queries grouped by the tables they need"
         else:
             model = stormpy.build_model(program, props)
     except RuntimeError as exc:
@@ -225,7 +226,9 @@ def _execute(job: Job, notify: Notify) -> JobResult:
 
     t0 = time.perf_counter()
     engine = {"dd": stormpy.Engine.DD, "hybrid": stormpy.Engine.HYBRID}.get(engine_name)
-    for name, prop in zip(job.names, props, strict=False):  # hybrid_first may cut props
+    names = [n for n in job.names if not (engine_name == "hybrid" and n in job.hybrid_skip
+                                          and job.engine == "auto")]
+    for name, prop in zip(names, props, strict=True):
         notify("phase", f"check {name}")
         try:
             if symbolic:
@@ -243,6 +246,8 @@ def _execute(job: Job, notify: Notify) -> JobResult:
                                        "this property (Storm returned no result)", prop=name)
             return res
         res.values[name] = float(value)
+        # A process that dies later (memory) has still answered this one: the watcher keeps it.
+        notify("value", (name, float(value)))
     res.check_time = time.perf_counter() - t0
     return res
 
