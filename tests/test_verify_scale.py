@@ -138,13 +138,13 @@ def test_auto_with_hybrid_groups_the_queries_in_two_processes(tmp_path: object) 
     said: list[str] = []
     tight = run(str(path), engine="auto", memory_budget=1, progress=said.append)
     roomy = run(str(path), engine="auto", memory_budget=1 << 40)
-    # reach_min, steps_min and steps_max where "auto" counted the states; then reach_max as
-    # 1 - Pmin (whether every path ends, and the rest) with larger tables
+    # the expected rewards where "auto" counted the states; then the probabilities, reach_max
+    # as 1 - Pmin (whether every path ends, and the rest), with larger tables
     assert tight.model.engine == "hybrid" and tight.model.processes == 2
     assert "queries grouped" in tight.model.engine_reason
-    assert any("process 2 of 2: 2 queries (termination, reach_max as 1 - Pmin) in one "
-               "Storm process with 4096 MB" in s for s in said), said
-    assert tight.uniform_model is not None and tight.uniform_model.processes == 1
+    assert any("process 2 of 2: 3 queries (reach_min, termination, reach_max as 1 - Pmin) in "
+               "one Storm process with 4096 MB" in s for s in said), said
+    assert tight.uniform_model is not None and tight.uniform_model.processes == 2
     assert roomy.model.engine == "sparse" and roomy.model.processes == 1
     _close(_values(tight), _values(sparse), 1e-6)
     _close(_values(roomy), _values(sparse), 1e-9)
@@ -176,11 +176,11 @@ def test_a_grouped_process_that_dies_keeps_its_answers_and_the_rest_run_alone() 
     assert killed, said
     _close(_values(hybrid), _values(sparse), 1e-6)
     stopped = [s for s in said if "queries were answered" in s]
-    assert len(stopped) == 1 and "1 of its 3 queries" in stopped[0], said
-    # success_min, drops_min, drops_max together; then the two the process had not
-    # answered alone; then the complementary process for success_max
-    assert hybrid.model.processes == 3, said
-    assert sum(", query " in s and "in its own Storm process" in s for s in said) == 2, said
+    assert len(stopped) == 1 and "1 of its 2 queries" in stopped[0], said
+    # drops_min and drops_max together; then the one the process had not answered alone;
+    # then the probabilities (success_max as 1 - Pmin)
+    assert hybrid.model.processes == 2, said
+    assert sum("(drops_max) in its own Storm process" in s for s in said) == 1, said
 
 
 def test_hybrid_pmax_through_the_complementary_pmin_is_exact() -> None:
@@ -275,3 +275,45 @@ def test_in_process_checks_carry_no_tables_over_without_a_rerun() -> None:
         split=True, uniform=False, progress=said.append)
     assert any("1 - Pmin [F (final & !target)]" in s for s in said), said
     assert not any("further complementary" in s or "retrying" in s for s in said), said
+
+
+@pytest.mark.parametrize("answered", [1, 0])
+def test_full_tables_in_a_grouped_process_replan_the_queries_it_had_not_answered(
+        monkeypatch: pytest.MonkeyPatch, answered: int) -> None:
+    # The guard's verdict when Sylvan ends a process of several queries while checking
+    # (seen on scenario 1 after one answer): stand in for it with Storm's real answers.
+    from afsmc.verify import core
+    from afsmc.verify.storm import JobResult, StormFailure
+
+    names = ["success", "drops"]
+    sparse = run(UAV, consts=SMALL["uav"], properties=names, engine="sparse", isolate=False,
+                 uniform=False)
+    from afsmc.verify.guard import run_job as real
+    calls: list[tuple[str, ...]] = []
+
+    def run_job(job: Job, bound: int, *, isolate: bool | None,
+                progress: Callable[[str], None] | None) -> JobResult:
+        calls.append(job.names)
+        if len(calls) > 1:
+            return real(job, bound, isolate=isolate, progress=progress)
+        res = real(dataclasses.replace(job, names=job.names[:answered]), bound,
+                   isolate=isolate, progress=progress) if answered else JobResult(states=1)
+        res.failure = StormFailure("tables", "the decision-diagram tables (1024 MB) of the "
+                                   f"MDP were full after {answered} of its 2 queries")
+        return res
+
+    monkeypatch.setattr(core, "run_job", run_job)
+    said: list[str] = []
+    hybrid = run(UAV, consts=SMALL["uav"], properties=names, engine="hybrid", uniform=False,
+                 progress=said.append)
+    _close(_values(hybrid), _values(sparse), 1e-6)
+    rewards = ("drops_min", "drops_max")
+    probabilities = ("success_min", "__afsmc_terminates", "__afsmc_rest_success")
+    if answered:
+        # the one it had not answered goes on in a fresh process
+        assert calls == [rewards, ("drops_max",), probabilities], calls
+        assert any("the others follow in a fresh process" in s for s in said), said
+    else:
+        # full at its first query: that one alone, then the others
+        assert calls == [rewards, ("drops_min",), ("drops_max",), probabilities], calls
+        assert any("drops_min follows alone" in s for s in said), said

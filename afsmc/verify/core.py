@@ -534,15 +534,17 @@ def check(model: ir.Model, props: Sequence[ir.Property], *, via: Via = "prism",
 
         def plan(qs: list[tuple[ir.Property, str]], hybrid: bool,
                  use: dict[str, ir.Property] = use) -> list[list[tuple[ir.Property, str]]]:
-            """Queries -> Storm processes. Hybrid: a Pmax as 1 - the complementary Pmin, and
-            those complements in a process of their own (they need larger tables)."""
+            """Queries -> Storm processes. Hybrid: each Pmax as 1 - the complementary Pmin;
+            the expected rewards in one process, with small decision-diagram tables (their
+            minimum needs the most explicit memory: 18.8 GB on scenario 1), the probabilities
+            in another, with large tables (their complementary targets need them)."""
             if not hybrid:
                 return [[q] for q in qs] if split and len(qs) > 1 else [qs] if qs else []
             if split:
                 return [[q] for q in _rewrite(qs, use)]
-            direct = [q for q in qs if q[1] not in use]
-            rests = _rewrite([q for q in qs if q[1] in use], use)
-            return [u for u in (direct, rests) if u]
+            rewards = [q for q in qs if q[0].kind != "P"]
+            probabilities = _rewrite([q for q in qs if q[0].kind == "P"], use)
+            return [u for u in (rewards, probabilities) if u]
 
         units = plan(queries, engine == "hybrid")
         merged: ModelStats | None = None
@@ -559,12 +561,16 @@ def check(model: ir.Model, props: Sequence[ir.Property], *, via: Via = "prism",
             group = list(dict.fromkeys(p for p, _ in unit))
             limit = max_states if max_states is not None else (
                 default_max_states() if job_engine == "sparse" else None)
+            # "auto" checks what the hybrid engine would check first, if it picks that.
+            first = {n for _, n in plan(unit, True)[0]} if job_engine == "auto" else set()
             job = make_job(low, group, via, job_engine, limit, what, bisimulation,
                            memory_budget, only=tuple(n for _, n in unit),
-                           hybrid_skip=tuple(n for _, n in unit if n in use))
+                           hybrid_skip=tuple(n for _, n in unit if n not in first))
             complementary = any(n.startswith(REST) for _, n in unit) and all(
                 n.startswith(REST) or n == TERMINATES for _, n in unit)
-            if complementary and (rest_full_tables or len(unit) > 1):
+            big_tables = job_engine == "hybrid" and len(unit) > 1 and all(
+                p.kind == "P" for p, _ in unit)
+            if big_tables or (complementary and rest_full_tables):
                 job = dataclasses.replace(job, dd_memory_mb=DD_MEMORY_RETRY)
             # A fresh process per unit when there are several, except where no child
             # process may be started (isolate=False: Dask workers).
@@ -573,20 +579,35 @@ def check(model: ir.Model, props: Sequence[ir.Property], *, via: Via = "prism",
                 # Long runs (scenario 1: over an hour) say how far they are.
                 where = ("in its own Storm process" if len(unit) == 1 else
                          "in one Storm process" + (f" with {job.dd_memory_mb} MB decision-"
-                                                   "diagram tables" if complementary else ""))
+                                                   "diagram tables" if big_tables else ""))
                 progress(f"{what}, {_unit_text(unit, i, units)} {where}; "
                          f"{_so_far(time.perf_counter() - started)}")
             res = run_job(job, bound, isolate=fresh, progress=progress)
-            if res.failure is not None and len(unit) > 1 and fresh is not False \
-                    and res.failure.stage in ("memory", "internal"):
-                # A process for several queries ran out of memory: keep what it answered and
-                # give each of the others a process of its own.
+            failure = res.failure
+            if failure is not None and len(unit) > 1 and fresh is not False and (
+                    failure.stage == "tables" or (job_engine == "hybrid"
+                    and failure.stage in ("memory", "internal"))):
+                # A process for several queries failed: keep what it answered and plan the
+                # others again.
                 vals |= res.values
-                left = [q for q in unit if q[1] not in res.values]
+                left = [q for q in unit if q[1] not in vals]
+                # "auto" leaves here only after a hybrid check (sparse fills no tables).
+                head, *extra = (plan(left, True) if job_engine == "auto" else [left]) or [[]]
+                job_engine = "hybrid"
+                if failure.stage == "tables" and head:
+                    # Full after some answers: the nodes of the earlier checks may have
+                    # filled them, so the rest go on in a fresh process. Full at the first
+                    # query: that one alone (the guard gives it larger tables), then the rest.
+                    again = [head] if res.values else [[head[0]], head[1:]]
+                    then = ("the others follow in a fresh process" if res.values else
+                            f"{head[0][1]} follows alone, the others in a further process")
+                else:
+                    again = [[q] for q in head]
+                    then = "the others follow one per Storm process"
                 if progress is not None:
-                    progress(f"{res.failure.message}; {len(res.values)} of its {len(unit)} "
-                             "queries were answered, the others follow one per Storm process")
-                units = units[:i + 1] + [[q] for q in left] + units[i + 1:]
+                    progress(f"{failure.message}; {len(res.values)} of its {len(unit)} "
+                             f"queries were answered, {then}")
+                units = units[:i + 1] + [u for u in again if u] + extra + units[i + 1:]
                 i += 1
                 continue
             if res.failure is not None:

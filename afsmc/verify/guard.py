@@ -121,8 +121,16 @@ def run_isolated(job: Job, progress: Progress | None, *, every: float = 5.0,
     res, code = _run_isolated(job, progress, every, first)
     if code == 1 and job.engine != "sparse" and job.dd_memory_mb < DD_MEMORY_RETRY:
         # Sylvan ends the process (exit code 1, "Unique table full" on stderr) when its
-        # tables are too small for the diagrams: once more with Storm's default size, for
-        # the queries the process had not answered yet.
+        # tables are too small for the diagrams.
+        if len(job.names) > 1 and res.states:
+            # Full while checking one of several queries: the caller decides what to run
+            # again and with which tables (the nodes of earlier checks may have filled them).
+            res.failure = StormFailure(
+                "tables", f"the decision-diagram tables ({job.dd_memory_mb} MB) of the "
+                f"{job.what} were full after {len(res.values)} of its {len(job.names)} queries")
+            return res
+        # Too small for the model itself, or for its one query: once more with Storm's
+        # default size, for the queries the process had not answered yet.
         note = (f"the decision-diagram tables ({job.dd_memory_mb} MB) were too small for the "
                 f"{job.what}: retrying with {DD_MEMORY_RETRY} MB")
         if progress is not None:
@@ -162,6 +170,7 @@ def _run_isolated(job: Job, progress: Progress | None, every: float,
     peak = 0
     result: JobResult | None = None
     answered: dict[str, float] = {}  # values the child sent before it may die
+    built = 0  # states, once the child has built the model
 
     def say(text: str) -> None:
         if progress is not None:
@@ -180,6 +189,7 @@ def _run_isolated(job: Job, progress: Progress | None, every: float,
                     phase = data
                 elif event == "built":
                     states, transitions, secs = data
+                    built = states
                     say(f"built the {job.what}: {states:,} states, {transitions:,} transitions "
                         f"in {secs:.1f} s")
                 elif event == "value":
@@ -208,7 +218,7 @@ def _run_isolated(job: Job, progress: Progress | None, every: float,
             if cap is not None and rss > cap:
                 proc.kill()
                 proc.join()
-                return JobResult(values=answered, failure=StormFailure(
+                return JobResult(states=built, values=answered, failure=StormFailure(
                     "memory", f"stopped the {job.what} after {now - start:.0f} s: it used "
                     f"{rss / 2**30:.1f} GB, 85% of the memory that was available")), None
             if now >= next_report:
@@ -233,7 +243,7 @@ def _run_isolated(job: Job, progress: Progress | None, every: float,
         why += (f" (with decision-diagram tables of {job.dd_memory_mb} MB; Sylvan exits when "
                 "they are full)")
     gb = f"; it had used {peak / 2**30:.1f} GB" if peak else ""
-    return JobResult(values=answered, failure=StormFailure(
+    return JobResult(states=built, values=answered, failure=StormFailure(
         "memory" if code is not None and code < 0 else "internal",
         f"the Storm process building the {job.what} {why}{gb}")), code
 

@@ -26,7 +26,8 @@ Via = Literal["prism", "jani"]
 VIAS: tuple[Via, ...] = ("prism", "jani")
 
 # Storm stages a failure can come from; the caller picks the diagnostic code from it.
-Stage = Literal["parse", "property", "build", "check", "too-big", "memory", "internal"]
+Stage = Literal["parse", "property", "build", "check", "too-big", "memory", "tables",
+                "internal"]
 
 Notify = Callable[[str, Any], None]
 
@@ -246,6 +247,7 @@ def _execute(job: Job, notify: Notify) -> JobResult:
                                        "this property (Storm returned no result)", prop=name)
             return res
         res.values[name] = float(value)
+        del r  # before the next check: the result holds decision diagrams of this model
         # A process that dies later (memory) has still answered this one: the watcher keeps it.
         notify("value", (name, float(value)))
     res.check_time = time.perf_counter() - t0
