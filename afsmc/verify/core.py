@@ -459,6 +459,12 @@ def _unit_text(unit: list[tuple[ir.Property, str]], i: int,
     return f"process {i + 1} of {len(units)}: {len(unit)} queries ({names})"
 
 
+def _readable(text: str) -> str:
+    """The guard's progress names the queries afsmc asks instead; say what they are."""
+    text = text.replace(TERMINATES, "termination (Pmin [F final])")
+    return re.sub(re.escape(REST) + r"(\w+)", r"\1_max (as 1 - Pmin)", text)
+
+
 def _so_far(seconds: float) -> str:
     if seconds < 120:
         return f"{seconds:.0f} s so far"
@@ -511,6 +517,9 @@ def check(model: ir.Model, props: Sequence[ir.Property], *, via: Via = "prism",
     for the complementary Pmin queries that give each Pmax. If a process of several queries
     runs out of memory, the queries it had not answered follow one per process."""
     started = time.perf_counter()
+    if progress is not None:
+        say = progress
+        progress = lambda text: say(_readable(text))  # noqa: E731
     bound = upper_bound(model)
     engine, reason = choose_engine(engine, bound)
     # Only the hybrid engine needs them ("auto" may still pick it after counting states).
@@ -555,6 +564,7 @@ def check(model: ir.Model, props: Sequence[ir.Property], *, via: Via = "prism",
         # three of five outgrew 1 GB, 43-144 s into their processes). The other queries keep
         # the default: the expected rewards' minimum needs it to stay under 20 GB.
         rest_full_tables = False
+        lost, lost_processes = 0.0, 0  # processes that failed after answering some queries
         i = 0
         while i < len(units):
             unit = units[i]
@@ -572,6 +582,9 @@ def check(model: ir.Model, props: Sequence[ir.Property], *, via: Via = "prism",
                 p.kind == "P" for p, _ in unit)
             if big_tables or (complementary and rest_full_tables):
                 job = dataclasses.replace(job, dd_memory_mb=DD_MEMORY_RETRY)
+            if big_tables and any(n.startswith(REST) for _, n in unit):
+                # should they fall back to a process each, they keep the larger tables
+                rest_full_tables = True
             # A fresh process per unit when there are several, except where no child
             # process may be started (isolate=False: Dask workers).
             fresh = isolate if isolate is False or len(units) == 1 else True
@@ -590,6 +603,8 @@ def check(model: ir.Model, props: Sequence[ir.Property], *, via: Via = "prism",
                 # A process for several queries failed: keep what it answered and plan the
                 # others again.
                 vals |= res.values
+                # its time counts as checking: it answered some of the queries
+                lost, lost_processes = lost + res.elapsed, lost_processes + 1
                 left = [q for q in unit if q[1] not in vals]
                 # "auto" leaves here only after a hybrid check (sparse fills no tables).
                 head, *extra = (plan(left, True) if job_engine == "auto" else [left]) or [[]]
@@ -632,8 +647,7 @@ def check(model: ir.Model, props: Sequence[ir.Property], *, via: Via = "prism",
                 if progress is not None and left:
                     progress(f"the {what} is checked with the hybrid engine: "
                              + ("one query per Storm process" if split else
-                                "the Pmax queries follow as 1 - Pmin, in a process of "
-                                "their own"))
+                                "the other queries follow in one more Storm process"))
             if i == len(units) and TERMINATES in vals:
                 # Pmax = 1 - Pmin of the rest, if every path ends; else ask Pmax itself.
                 ends = vals.pop(TERMINATES) == 1.0
@@ -651,7 +665,8 @@ def check(model: ir.Model, props: Sequence[ir.Property], *, via: Via = "prism",
                 # the complements are asked on the hybrid engine only: one process each
                 units += [[q] for q in direct]
         assert merged is not None
-        stats.append(merged)
+        stats.append(dataclasses.replace(merged, check_time=merged.check_time + lost,
+                                         processes=merged.processes + lost_processes))
         values.append(vals)
     results = []
     for p in props:

@@ -218,7 +218,8 @@ def _run_isolated(job: Job, progress: Progress | None, every: float,
             if cap is not None and rss > cap:
                 proc.kill()
                 proc.join()
-                return JobResult(states=built, values=answered, failure=StormFailure(
+                return JobResult(states=built, values=answered, elapsed=now - start,
+                                 failure=StormFailure(
                     "memory", f"stopped the {job.what} after {now - start:.0f} s: it used "
                     f"{rss / 2**30:.1f} GB, 85% of the memory that was available")), None
             if now >= next_report:
@@ -243,7 +244,8 @@ def _run_isolated(job: Job, progress: Progress | None, every: float,
         why += (f" (with decision-diagram tables of {job.dd_memory_mb} MB; Sylvan exits when "
                 "they are full)")
     gb = f"; it had used {peak / 2**30:.1f} GB" if peak else ""
-    return JobResult(states=built, values=answered, failure=StormFailure(
+    return JobResult(states=built, values=answered, elapsed=time.monotonic() - start,
+                     failure=StormFailure(
         "memory" if code is not None and code < 0 else "internal",
         f"the Storm process building the {job.what} {why}{gb}")), code
 

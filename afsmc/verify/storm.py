@@ -81,6 +81,7 @@ class JobResult:
     quotient_transitions: int | None = None
     bisimulation_time: float = 0.0
     dd_retried: bool = False  # Sylvan's tables were full: the guard reran it with DD_MEMORY_RETRY
+    elapsed: float = 0.0  # wall time of a process that failed (its answers may still count)
     failure: StormFailure | None = None
 
 
