@@ -566,7 +566,25 @@ def check(model: ir.Model, props: Sequence[ir.Property], *, via: Via = "prism",
         rest_full_tables = False
         lost, lost_processes = 0.0, 0  # processes that failed after answering some queries
         i = 0
-        while i < len(units):
+        while True:
+            if i == len(units) and TERMINATES in vals:
+                # Pmax = 1 - Pmin of the rest, if every path ends; else ask Pmax itself.
+                ends = vals.pop(TERMINATES) == 1.0
+                direct = []
+                for name, rest in use.items():
+                    if rest.name in vals:
+                        v = vals.pop(rest.name)
+                        if ends:
+                            vals[name] = 1.0 - v
+                        else:
+                            direct.append(by_name[name])
+                if ends and progress is not None:
+                    progress(f"every path of the {what} ends in a final mode: each Pmax [F target] "
+                             "is 1 - Pmin [F (final & !target)], which needs less memory")
+                # the complements are asked on the hybrid engine only: one process each
+                units += [[q] for q in direct]
+            if i == len(units):
+                break
             unit = units[i]
             group = list(dict.fromkeys(p for p, _ in unit))
             limit = max_states if max_states is not None else (
@@ -648,22 +666,6 @@ def check(model: ir.Model, props: Sequence[ir.Property], *, via: Via = "prism",
                     progress(f"the {what} is checked with the hybrid engine: "
                              + ("one query per Storm process" if split else
                                 "the other queries follow in one more Storm process"))
-            if i == len(units) and TERMINATES in vals:
-                # Pmax = 1 - Pmin of the rest, if every path ends; else ask Pmax itself.
-                ends = vals.pop(TERMINATES) == 1.0
-                direct = []
-                for name, rest in use.items():
-                    if rest.name in vals:
-                        v = vals.pop(rest.name)
-                        if ends:
-                            vals[name] = 1.0 - v
-                        else:
-                            direct.append(by_name[name])
-                if ends and progress is not None:
-                    progress(f"every path of the {what} ends in a final mode: each Pmax [F target] "
-                             "is 1 - Pmin [F (final & !target)], which needs less memory")
-                # the complements are asked on the hybrid engine only: one process each
-                units += [[q] for q in direct]
         assert merged is not None
         stats.append(dataclasses.replace(merged, check_time=merged.check_time + lost,
                                          processes=merged.processes + lost_processes))
