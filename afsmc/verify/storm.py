@@ -43,8 +43,9 @@ class Job:
     what: str = "model"  # for messages: "MDP", "uniform DTMC"
     bisimulation: bool = False  # minimise the sparse model (strong bisimulation) before checking
     memory_budget: int | None = None  # bytes the sparse engine may use ("auto" decides with it)
-    # If "auto" picks hybrid, leave these names out: they are asked another way, in another
-    # process (a Pmax as 1 - the complementary Pmin, which needs other table sizes).
+    # If "auto" picks hybrid, leave these names out: the caller checks them in a later
+    # process, with the decision-diagram tables they need (a Pmax as 1 - Pmin of its
+    # complement; see afsmc.verify.core.check).
     hybrid_skip: tuple[str, ...] = ()
     # Sylvan's node tables for the symbolic engines, MB. Storm reserves 4 GB by default and
     # touches most of it; the UAV's diagrams fit in far less even at 77 M states, and the
