@@ -93,6 +93,18 @@ def _quiet() -> None:
     developer.set_log_level(developer.LogLevel.OFF)
 
 
+def _give_back() -> None:
+    """Return the heap a check has freed to the system. glibc keeps it otherwise: 2.3 GB
+    after a check of scenario 1, on top of the next check's own peak in the same process
+    (the complement of `emergency` then passed 85% of the free memory; with this, the
+    whole group peaked at 17.7 GB)."""
+    import contextlib
+    import ctypes
+
+    with contextlib.suppress(OSError, AttributeError):  # not glibc: nothing to do
+        ctypes.CDLL("libc.so.6").malloc_trim(0)
+
+
 def _message(exc: BaseException) -> str:
     """Storm's message without the C++ exception class and trailing whitespace."""
     text = str(exc).strip()
@@ -250,6 +262,7 @@ def _execute(job: Job, notify: Notify) -> JobResult:
             return res
         res.values[name] = float(value)
         del r  # before the next check: the result holds decision diagrams of this model
+        _give_back()
         # A process that dies later (memory) has still answered this one: the watcher keeps it.
         notify("value", (name, float(value)))
     res.check_time = time.perf_counter() - t0
