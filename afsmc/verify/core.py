@@ -513,9 +513,10 @@ def check(model: ir.Model, props: Sequence[ir.Property], *, via: Via = "prism",
     `split`: one Storm process per query (a property, or an MDP property's min or max), each
     building the model afresh. Costs a build per query, but a process's memory is that of
     one check. Without it the hybrid engine (chosen, or picked by "auto") uses two processes
-    per model: one for the queries asked directly, one with larger decision-diagram tables
-    for the complementary Pmin queries that give each Pmax. If a process of several queries
-    runs out of memory, the queries it had not answered follow one per process."""
+    per model: one for the expected rewards, one with larger decision-diagram tables for the
+    probabilities (each Pmax as 1 - the complementary Pmin). If a process of several queries
+    fills its tables, the queries it had not answered go on in a fresh process; if it runs
+    out of memory, they follow one per process."""
     started = time.perf_counter()
     if progress is not None:
         say = progress
