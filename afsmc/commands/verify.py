@@ -43,8 +43,8 @@ def add_storm_options(p: argparse.ArgumentParser) -> None:
                    help="Storm's input language: PRISM text (default) or JANI JSON")
     p.add_argument("--engine", choices=ENGINES, default="auto",
                    help="Storm's engine: auto (default: sparse when the model fits in memory "
-                        "as sparse matrices, else hybrid, with a second process for the Pmax "
-                        "queries; counts "
+                        "as sparse matrices, else hybrid, with the expected rewards and the "
+                        "probabilities in two Storm processes; counts "
                         "the states symbolically first when they may be many), sparse "
                         "(explicit matrices), dd (decision diagrams throughout) or hybrid "
                         "(symbolic model, explicit vectors)")

@@ -174,6 +174,7 @@ def _execute(job: Job, notify: Notify) -> JobResult:
     notify("phase", "build")
     t0 = time.perf_counter()
     engine_name: str = job.engine
+    names = list(job.names)  # the queries this process checks, in the order of `props`
     symbolic = engine_name != "sparse"
     try:
         if symbolic:
@@ -205,8 +206,9 @@ def _execute(job: Job, notify: Notify) -> JobResult:
                                          f"{need / 1e9:.1f} GB as sparse matrices, more than "
                                          f"the {budget / 1e9:.1f} GB available")
                     if job.hybrid_skip:
-                        props = [p for n, p in zip(job.names, props, strict=True)
-                                 if n not in job.hybrid_skip]
+                        kept = [(n, p) for n, p in zip(names, props, strict=True)
+                                if n not in job.hybrid_skip]
+                        names, props = [n for n, _ in kept], [p for _, p in kept]
                         res.engine_reason += "; queries grouped by the tables they need"
         else:
             model = stormpy.build_model(program, props)
@@ -241,8 +243,6 @@ def _execute(job: Job, notify: Notify) -> JobResult:
 
     t0 = time.perf_counter()
     engine = {"dd": stormpy.Engine.DD, "hybrid": stormpy.Engine.HYBRID}.get(engine_name)
-    names = [n for n in job.names if not (engine_name == "hybrid" and n in job.hybrid_skip
-                                          and job.engine == "auto")]
     for name, prop in zip(names, props, strict=True):
         notify("phase", f"check {name}")
         try:
