@@ -440,10 +440,12 @@ def _rewrite(queries: list[tuple[ir.Property, str]],
 
 
 def _query_text(name: str) -> str:
+    """The one wording for a query, in every progress line: the queries afsmc asks instead
+    of a Pmax are named by what they give, not by their internal names."""
     if name == TERMINATES:
-        return "does every path end in a final mode?"
+        return "termination"
     if name.startswith(REST):
-        return f"{name[len(REST):]} max, as 1 - Pmin of the other final states"
+        return f"{name[len(REST):]}_max as 1 - Pmin"
     return name
 
 
@@ -453,16 +455,14 @@ def _unit_text(unit: list[tuple[ir.Property, str]], i: int,
     if len(unit) == 1:
         order = list(dict.fromkeys(n for u in units for _, n in u))
         return f"query {order.index(unit[0][1]) + 1} of {len(order)} ({_query_text(unit[0][1])})"
-    names = ", ".join("termination" if n == TERMINATES else
-                      f"{n[len(REST):]}_max as 1 - Pmin" if n.startswith(REST) else n
-                      for _, n in unit)
+    names = ", ".join(_query_text(n) for _, n in unit)
     return f"process {i + 1} of {len(units)}: {len(unit)} queries ({names})"
 
 
 def _readable(text: str) -> str:
-    """The guard's progress names the queries afsmc asks instead; say what they are."""
-    text = text.replace(TERMINATES, "termination (Pmin [F final])")
-    return re.sub(re.escape(REST) + r"(\w+)", r"\1_max (as 1 - Pmin)", text)
+    """The guard's progress lines carry the internal names; say what they are."""
+    return re.sub(re.escape(REST) + r"\w+|" + re.escape(TERMINATES),
+                  lambda m: _query_text(m.group(0)), text)
 
 
 def _so_far(seconds: float) -> str:
