@@ -39,10 +39,10 @@ Progress = Callable[[str], None]
 
 
 def _tables_full(code: int | None, job: Job) -> bool:
-    """Sylvan ends the process when its decision-diagram tables are full: exit code 1, or a
-    segmentation fault when one of its worker threads is still at work while exit() tears
-    the process down (stderr shows "Unique table full" either way; the fault came in 3 of
-    25 runs of a test that fills 1 MB tables, on a busy machine)."""
+    """Sylvan ends the process when its decision-diagram tables are full: exit code 1, or
+    sometimes a segmentation fault (likely its worker threads racing the exit): a test that
+    fills 1 MB tables ended so in 3 of 25 runs on a busy machine, after "Unique table
+    full" on stderr."""
     return job.engine != "sparse" and code in (1, -signal.SIGSEGV)
 
 
