@@ -153,6 +153,69 @@ def test_auto_with_hybrid_groups_the_queries_in_two_processes(tmp_path: object) 
     _close(_values(roomy), _values(sparse), 1e-9)
 
 
+def test_auto_with_hybrid_checks_probabilities_only_in_one_process(tmp_path: object) -> None:
+    # With no expected reward, the process where "auto" counted the states also asks the
+    # complementary queries that give each Pmax: no second build.
+    import pathlib
+
+    path = pathlib.Path(str(tmp_path)) / "wide.afsm"
+    path.write_text(WIDE, encoding="utf-8")
+    sparse = run(str(path), properties=["reach"], engine="sparse", isolate=False)
+    said: list[str] = []
+    tight = run(str(path), properties=["reach"], engine="auto", memory_budget=1,
+                progress=said.append)
+    assert tight.model.engine == "hybrid" and tight.model.processes == 1, said
+    assert tight.uniform_model is not None and tight.uniform_model.processes == 1
+    assert any(s.startswith("checked reach_max as 1 - Pmin on the MDP") for s in said), said
+    assert any("ends in a final mode" in s for s in said), said
+    assert not any("one more Storm process" in s for s in said), said
+    _close(_values(tight), _values(sparse), 1e-6)
+    # with room for the sparse engine, the same job asks Pmax itself
+    roomy = run(str(path), properties=["reach"], engine="auto", memory_budget=1 << 40)
+    assert roomy.model.engine == "sparse" and roomy.model.processes == 1
+    _close(_values(roomy), _values(sparse), 1e-9)
+
+
+def test_auto_hybrid_process_stopped_keeps_its_answers(
+        tmp_path: object, monkeypatch: pytest.MonkeyPatch) -> None:
+    # The memory guard stops the process where "auto" picked hybrid after its first answer
+    # (stand in for its verdict with Storm's real answers): the answer is kept, and the
+    # rest (termination, the complement) run one per process.
+    import pathlib
+
+    from afsmc.verify import core
+    from afsmc.verify.guard import run_job as real
+    from afsmc.verify.storm import JobResult, StormFailure
+
+    path = pathlib.Path(str(tmp_path)) / "wide.afsm"
+    path.write_text(WIDE, encoding="utf-8")
+    calls: list[tuple[str, ...]] = []
+
+    def run_job(job: Job, bound: int, *, isolate: bool | None,
+                progress: Callable[[str], None] | None) -> JobResult:
+        calls.append(job.names + job.hybrid_extra)
+        res = real(job, bound, isolate=isolate, progress=progress)
+        if len(calls) == 1:
+            first = next(iter(res.values))
+            res.values = {first: res.values[first]}
+            res.failure = StormFailure("memory", "stopped the MDP after 1 s: it used 9.9 GB, "
+                                       "85% of the memory that was available")
+        return res
+
+    sparse = run(str(path), properties=["reach"], engine="sparse", isolate=False,
+                 uniform=False)
+    monkeypatch.setattr(core, "run_job", run_job)
+    said: list[str] = []
+    tight = run(str(path), properties=["reach"], engine="auto", memory_budget=1,
+                uniform=False, progress=said.append)
+    stopped = [s for s in said if "queries were answered" in s]
+    assert len(stopped) == 1 and "1 of its 3 queries" in stopped[0], said
+    assert calls == [("reach_min", "reach_max", "__afsmc_terminates", "__afsmc_rest_reach"),
+                     ("__afsmc_terminates",), ("__afsmc_rest_reach",)], calls
+    assert tight.model.processes == 3, said
+    _close(_values(tight), _values(sparse), 1e-6)
+
+
 def test_a_grouped_process_that_dies_keeps_its_answers_and_the_rest_run_alone() -> None:
     # Kill the first process as soon as it has answered one query, as the memory guard
     # would: the answered value is kept, the others each get a process of their own.

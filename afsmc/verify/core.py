@@ -266,22 +266,24 @@ def select(model: ir.Model, names: Sequence[str], adhoc: Sequence[str] = ()) -> 
 def make_job(low: Lowered, props: Sequence[ir.Property], via: Via, engine: Engine,
              max_states: int | None, what: str, bisimulation: bool = False,
              memory_budget: int | None = None, only: tuple[str, ...] | None = None,
-             hybrid_skip: tuple[str, ...] = ()) -> Job:
+             hybrid_skip: tuple[str, ...] = (),
+             hybrid_extra: tuple[str, ...] = ()) -> Job:
     """The Storm input for a lowered model whose `properties` are exactly `props`.
     `memory_budget`: what "auto" may give the sparse engine (default: 70% of free memory);
     `only`: check just these queries (property variants, e.g. `success_min`);
-    `hybrid_skip`: queries "auto" leaves to another process if it picks hybrid."""
+    `hybrid_skip`: queries "auto" leaves to another process if it picks hybrid;
+    `hybrid_extra`: queries (of `low`'s properties) it checks only if it picks hybrid."""
     names = tuple(n for p in props for n, _ in property_variants(low, p)
                   if only is None or n in only)
     avail = mem_available()
     budget = memory_budget
     if budget is None:
         budget = int(avail * 0.7) if avail is not None else None
-    skip = hybrid_skip if engine == "auto" else ()
+    skip, extra = (hybrid_skip, hybrid_extra) if engine == "auto" else ((), ())
     if via == "prism":
         out = prism_emit(low)
         return Job("prism", out.model, out.properties, names, engine, max_states, what,
-                   bisimulation, budget, skip)
+                   bisimulation, budget, skip, extra)
     try:
         jani: Any = importlib.import_module("afsmc.backends.jani")
     except ImportError:
@@ -289,7 +291,7 @@ def make_job(low: Lowered, props: Sequence[ir.Property], via: Via, engine: Engin
                                        "the JANI backend (afsmc.backends.jani) is not available",
                                        None, hint="use --via prism")]) from None
     return Job("jani", jani.dumps(jani.emit(low)), "", names, engine, max_states, what,
-               bisimulation, budget, skip)
+               bisimulation, budget, skip, extra)
 
 
 def _source_line_span(model: ir.Model, generated: str, line: int) -> Span | None:
@@ -437,6 +439,14 @@ def _rewrite(queries: list[tuple[ir.Property, str]],
         else:
             out.append((p, n))
     return out
+
+
+def _unanswered(queries: list[tuple[ir.Property, str]], vals: dict[str, float],
+                comp: dict[str, ir.Property]) -> list[tuple[ir.Property, str]]:
+    """The queries without an answer yet; a Pmax whose complementary Pmin has one (and
+    termination, which decides how it is used) counts as answered."""
+    return [(p, n) for p, n in queries if n not in vals
+            and not (n in comp and comp[n].name in vals and TERMINATES in vals)]
 
 
 def _query_text(name: str) -> str:
@@ -590,18 +600,24 @@ def check(model: ir.Model, props: Sequence[ir.Property], *, via: Via = "prism",
             group = list(dict.fromkeys(p for p, _ in unit))
             limit = max_states if max_states is not None else (
                 default_max_states() if job_engine == "sparse" else None)
-            # "auto" checks what the hybrid engine would check first, if it picks that.
-            first = {n for _, n in plan(unit, True)[0]} if job_engine == "auto" else set()
+            # "auto" checks what the hybrid engine would check first, if it picks that: with
+            # probabilities only, that includes the queries standing in for each Pmax.
+            first = [n for _, n in plan(unit, True)[0]] if job_engine == "auto" else []
+            mine = [n for _, n in unit]
+            extra = tuple(n for n in first if n not in mine)
             job = make_job(low, group, via, job_engine, limit, what, bisimulation,
-                           memory_budget, only=tuple(n for _, n in unit),
-                           hybrid_skip=tuple(n for _, n in unit if n not in first))
+                           memory_budget, only=tuple(mine),
+                           hybrid_skip=tuple(n for n in mine if n not in first),
+                           hybrid_extra=extra)
             complementary = any(n.startswith(REST) for _, n in unit) and all(
                 n.startswith(REST) or n == TERMINATES for _, n in unit)
-            big_tables = job_engine == "hybrid" and len(unit) > 1 and all(
-                p.kind == "P" for p, _ in unit)
+            # The probabilities' process (its complementary targets need the larger tables;
+            # for "auto" they only take memory while the symbolic model lives).
+            big_tables = (job_engine == "hybrid" and len(unit) > 1 and all(
+                p.kind == "P" for p, _ in unit)) or bool(extra)
             if big_tables or (complementary and rest_full_tables):
                 job = dataclasses.replace(job, dd_memory_mb=DD_MEMORY_RETRY)
-            if big_tables and any(n.startswith(REST) for _, n in unit):
+            if big_tables and (extra or any(n.startswith(REST) for _, n in unit)):
                 # should they fall back to a process each, they keep the larger tables
                 rest_full_tables = True
             # A fresh process per unit when there are several, except where no child
@@ -616,17 +632,22 @@ def check(model: ir.Model, props: Sequence[ir.Property], *, via: Via = "prism",
                          f"{_so_far(time.perf_counter() - started)}")
             res = run_job(job, bound, isolate=fresh, progress=progress)
             failure = res.failure
-            if failure is not None and len(unit) > 1 and fresh is not False and (
-                    failure.stage == "tables" or (job_engine == "hybrid"
-                    and failure.stage in ("memory", "internal"))):
+            # What the process set out to check ("auto" adds and leaves some for hybrid).
+            asked = len(unit) if job_engine != "auto" or res.engine != "hybrid" else (
+                len(unit) - len(job.hybrid_skip) + len(job.hybrid_extra))
+            if failure is not None and asked > 1 and fresh is not False and (
+                    failure.stage == "tables" or (failure.stage in ("memory", "internal")
+                    and "hybrid" in (job_engine, res.engine))):
                 # A process for several queries failed: keep what it answered and plan the
                 # others again.
                 vals |= res.values
                 # its time counts as checking: it answered some of the queries
                 lost, lost_processes = lost + res.elapsed, lost_processes + 1
-                left = [q for q in unit if q[1] not in vals]
-                # "auto" leaves here only after a hybrid check (sparse fills no tables).
-                head, *extra = (plan(left, True) if job_engine == "auto" else [left]) or [[]]
+                left = _unanswered(unit, vals, use)
+                # "auto" leaves here only after a hybrid check (sparse fills no tables, and
+                # a sparse process out of memory is not retried).
+                head, *later = ([_unanswered(u, vals, use) for u in plan(left, True)]
+                                if job_engine == "auto" else [left]) or [[]]
                 job_engine = "hybrid"
                 if failure.stage == "tables" and head:
                     # Full after some answers: the nodes of the earlier checks may have
@@ -639,9 +660,9 @@ def check(model: ir.Model, props: Sequence[ir.Property], *, via: Via = "prism",
                     again = [[q] for q in head]
                     then = "the others follow one per Storm process"
                 if progress is not None:
-                    progress(f"{failure.message}; {len(res.values)} of its {len(unit)} "
+                    progress(f"{failure.message}; {len(res.values)} of its {asked} "
                              f"queries were answered, {then}")
-                units = units[:i + 1] + [u for u in again if u] + extra + units[i + 1:]
+                units = units[:i + 1] + [u for u in again if u] + later + units[i + 1:]
                 i += 1
                 continue
             if res.failure is not None:
@@ -661,8 +682,9 @@ def check(model: ir.Model, props: Sequence[ir.Property], *, via: Via = "prism",
                 # "auto" chose hybrid: the queries it left (Job.hybrid_skip) and any later
                 # ones follow as the hybrid engine wants them.
                 job_engine = "hybrid"
-                left = [q for u in [unit, *units[i:]] for q in u if q[1] not in vals]
-                units = units[:i] + plan(left, True)
+                left = _unanswered([q for u in [unit, *units[i:]] for q in u], vals, use)
+                units = units[:i] + [u for u in (_unanswered(u, vals, use)
+                                                 for u in plan(left, True)) if u]
                 if progress is not None and left:
                     progress(f"the {what} is checked with the hybrid engine: "
                              + ("one query per Storm process" if split else

@@ -130,12 +130,14 @@ def run_isolated(job: Job, progress: Progress | None, *, every: float = 5.0,
     res, code = _run_isolated(job, progress, every, first)
     if _tables_full(code, job) and job.dd_memory_mb < DD_MEMORY_RETRY:
         # The tables are too small for the diagrams.
-        if len(job.names) > 1 and res.states:
+        # Full tables after the build: the symbolic engine checks (auto picked hybrid).
+        queries = len([n for n in job.names if n not in job.hybrid_skip]) + len(job.hybrid_extra)
+        if queries > 1 and res.states:
             # Full while checking one of several queries: the caller decides what to run
             # again and with which tables (the nodes of earlier checks may have filled them).
             res.failure = StormFailure(
                 "tables", f"the decision-diagram tables ({job.dd_memory_mb} MB) of the "
-                f"{job.what} were full after {len(res.values)} of its {len(job.names)} queries")
+                f"{job.what} were full after {len(res.values)} of its {queries} queries")
             return res
         # Too small for the model itself, or for its one query: once more with Storm's
         # default size, for the queries the process had not answered yet.
@@ -147,8 +149,9 @@ def run_isolated(job: Job, progress: Progress | None, *, every: float = 5.0,
             print(f"afsmc: {note}", file=sys.stderr, flush=True)
         done = res.values
         rest = tuple(n for n in job.names if n not in done)
-        res, code = _run_isolated(replace(job, dd_memory_mb=DD_MEMORY_RETRY, names=rest),
-                                  progress, every, first)
+        extra = tuple(n for n in job.hybrid_extra if n not in done)
+        res, code = _run_isolated(replace(job, dd_memory_mb=DD_MEMORY_RETRY, names=rest,
+                                          hybrid_extra=extra), progress, every, first)
         res.values = done | res.values
         res.dd_retried = True
     return res
@@ -179,6 +182,7 @@ def _run_isolated(job: Job, progress: Progress | None, every: float,
     result: JobResult | None = None
     answered: dict[str, float] = {}  # values the child sent before it may die
     built = 0  # states, once the child has built the model
+    engine = ""  # the engine it checks with ("auto" decides after building)
 
     def say(text: str) -> None:
         if progress is not None:
@@ -195,6 +199,8 @@ def _run_isolated(job: Job, progress: Progress | None, every: float,
                     baseline = data
                 elif event == "phase":
                     phase = data
+                elif event == "engine":
+                    engine = data
                 elif event == "built":
                     states, transitions, secs = data
                     built = states
@@ -227,7 +233,7 @@ def _run_isolated(job: Job, progress: Progress | None, every: float,
                 proc.kill()
                 proc.join()
                 return JobResult(states=built, values=answered, elapsed=now - start,
-                                 failure=StormFailure(
+                                 engine=engine, failure=StormFailure(
                     "memory", f"stopped the {job.what} after {now - start:.0f} s: it used "
                     f"{rss / 2**30:.1f} GB, 85% of the memory that was available")), None
             if now >= next_report:
@@ -253,7 +259,7 @@ def _run_isolated(job: Job, progress: Progress | None, every: float,
                 "they are full)")
     gb = f"; it had used {peak / 2**30:.1f} GB" if peak else ""
     return JobResult(states=built, values=answered, elapsed=time.monotonic() - start,
-                     failure=StormFailure(
+                     engine=engine, failure=StormFailure(
         "memory" if code is not None and code < 0 else "internal",
         f"the Storm process building the {job.what} {why}{gb}")), code
 

@@ -14,7 +14,7 @@ import os
 import tempfile
 import time
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any, Literal
 
 Engine = Literal["sparse", "dd", "hybrid", "auto"]
@@ -47,6 +47,9 @@ class Job:
     # process, with the decision-diagram tables they need (a Pmax as 1 - Pmin of its
     # complement; see afsmc.verify.core.check).
     hybrid_skip: tuple[str, ...] = ()
+    # If "auto" picks hybrid, check these after the others (the queries that stand in for
+    # each Pmax); the sparse engine leaves them out, as it asks each Pmax itself.
+    hybrid_extra: tuple[str, ...] = ()
     # Sylvan's node tables for the symbolic engines, MB. Storm reserves 4 GB by default and
     # touches most of it; the UAV's diagrams fit in far less even at 77 M states, and the
     # memory is better spent on the explicit vectors of the hybrid engine. A model whose
@@ -154,7 +157,7 @@ def _execute(job: Job, notify: Notify) -> JobResult:
                 msg = _message(exc)
                 res.failure = StormFailure("parse", msg, line=_parse_line(msg))
                 return res
-        props, failure = _prism_properties(stormpy, program, job)
+        props, failure = _prism_properties(stormpy, program, _with_extra(job))
     else:
         try:
             program, all_props = stormpy.parse_jani_model_from_string(job.model_text)
@@ -162,10 +165,11 @@ def _execute(job: Job, notify: Notify) -> JobResult:
             res.failure = StormFailure("parse", _message(exc))
             return res
         by_name = {p.get_name(): p for p in all_props}
-        missing = [n for n in job.names if n not in by_name]
+        wanted = _with_extra(job).names
+        missing = [n for n in wanted if n not in by_name]
         failure = StormFailure("property", "the JANI model has no property named "
                                + ", ".join(missing), prop=missing[0]) if missing else None
-        props = [by_name[n] for n in job.names if n in by_name]
+        props = [by_name[n] for n in wanted if n in by_name]
     if failure is not None:
         res.failure = failure
         return res
@@ -174,7 +178,9 @@ def _execute(job: Job, notify: Notify) -> JobResult:
     notify("phase", "build")
     t0 = time.perf_counter()
     engine_name: str = job.engine
-    names = list(job.names)  # the queries this process checks, in the order of `props`
+    # the queries this process checks, in the order of `props` (the extras go once the
+    # engine is known)
+    names = list(_with_extra(job).names)
     symbolic = engine_name != "sparse"
     try:
         if symbolic:
@@ -192,6 +198,7 @@ def _execute(job: Job, notify: Notify) -> JobResult:
                 budget = job.memory_budget
                 if budget is None or need <= budget:
                     engine_name = "sparse"
+                    names, props = _keep(names, props, job.hybrid_extra)
                     res.engine_reason = (f"{int(model.nr_states):,} states need about "
                                          f"{need / 1e9:.1f} GB as sparse matrices"
                                          + (f", within the {budget / 1e9:.1f} GB available"
@@ -206,16 +213,16 @@ def _execute(job: Job, notify: Notify) -> JobResult:
                                          f"{need / 1e9:.1f} GB as sparse matrices, more than "
                                          f"the {budget / 1e9:.1f} GB available")
                     if job.hybrid_skip:
-                        kept = [(n, p) for n, p in zip(names, props, strict=True)
-                                if n not in job.hybrid_skip]
-                        names, props = [n for n, _ in kept], [p for _, p in kept]
+                        names, props = _keep(names, props, job.hybrid_skip)
                         res.engine_reason += "; queries grouped by the tables they need"
         else:
+            names, props = _keep(names, props, job.hybrid_extra)
             model = stormpy.build_model(program, props)
     except RuntimeError as exc:
         res.failure = StormFailure("build", _message(exc))
         return res
     res.engine = engine_name
+    notify("engine", engine_name)  # a process that dies later still says which engine ran
     res.build_time = time.perf_counter() - t0
     res.states, res.transitions = int(model.nr_states), int(model.nr_transitions)
     res.choices = int(getattr(model, "nr_choices", res.transitions) or 0) if not symbolic else 0
@@ -267,6 +274,20 @@ def _execute(job: Job, notify: Notify) -> JobResult:
         notify("value", (name, float(value)))
     res.check_time = time.perf_counter() - t0
     return res
+
+
+def _with_extra(job: Job) -> Job:
+    """`job` asking its hybrid extras too (for parsing; the engine decides which stay)."""
+    if not job.hybrid_extra:
+        return job
+    return replace(job, names=job.names + tuple(n for n in job.hybrid_extra
+                                                if n not in job.names))
+
+
+def _keep(names: list[str], props: list[Any],
+          drop: tuple[str, ...]) -> tuple[list[str], list[Any]]:
+    kept = [(n, p) for n, p in zip(names, props, strict=True) if n not in drop]
+    return [n for n, _ in kept], [p for _, p in kept]
 
 
 def _prism_properties(stormpy: Any, program: Any, job: Job) -> tuple[list[Any], StormFailure | None]:
