@@ -64,8 +64,10 @@ def main(argv: Sequence[str] | None = None) -> int:
         return 2
     try:
         code: int = args._run(args)
-    except KeyboardInterrupt:
+    except KeyboardInterrupt as exc:
         print("afsmc: interrupted", file=sys.stderr)
+        for note in getattr(exc, "__notes__", []):  # e.g. the values verify had by then
+            print(f"afsmc: {note}", file=sys.stderr)
         return 130
     except BrokenPipeError:
         return 0

@@ -382,3 +382,76 @@ def test_full_tables_in_a_grouped_process_replan_the_queries_it_had_not_answered
         # full at its first query: that one alone, then the others
         assert calls == [rewards, ("drops_min",), ("drops_max",), probabilities], calls
         assert any("drops_min follows alone" in s for s in said), said
+
+
+def _stop_after_first_answer(monkeypatch: pytest.MonkeyPatch, stop: Callable[
+        [dict[str, float]], BaseException | None]) -> None:
+    """Run the first Storm job for real, then fail it (or raise) with its first answer only:
+    what a memory stop or a Ctrl-C leaves, with Storm's real value."""
+    from afsmc.verify import core
+    from afsmc.verify.guard import run_job as real
+    from afsmc.verify.storm import JobResult, StormFailure
+
+    calls: list[int] = []
+
+    def run_job(job: Job, bound: int, *, isolate: bool | None,
+                progress: Callable[[str], None] | None) -> JobResult:
+        calls.append(1)
+        res = real(job, bound, isolate=isolate, progress=progress)
+        first = job.names[0]
+        res.values = {first: res.values[first]}
+        exc = stop(res.values)
+        if exc is not None:
+            raise exc
+        res.failure = StormFailure("memory", "stopped the MDP after 1 s: it used 9.9 GB, 85% "
+                                   "of the memory that was available")
+        return res
+
+    monkeypatch.setattr(core, "run_job", run_job)
+
+
+def test_a_failed_run_reports_the_values_it_had(monkeypatch: pytest.MonkeyPatch) -> None:
+    from afsmc.diagnostics import CompileError, Severity
+
+    names = ["success", "drops"]
+    sparse = run(UAV, consts=SMALL["uav"], properties=names, engine="sparse", isolate=False,
+                 uniform=False)
+    _stop_after_first_answer(monkeypatch, lambda _v: None)
+    with pytest.raises(CompileError) as info:
+        run(UAV, consts=SMALL["uav"], properties=names, engine="sparse", uniform=False)
+    codes = [(d.code, d.severity) for d in info.value.diagnostics]
+    assert codes == [("E406", Severity.ERROR), ("N412", Severity.NOTE)], codes
+    note = info.value.diagnostics[1].message
+    assert note == f"answered before this:\n  success_min = {sparse.property('success').min!r} " \
+                   "on the MDP", note
+
+
+def test_ctrl_c_prints_the_values_verify_had(monkeypatch: pytest.MonkeyPatch,
+                                             capsys: pytest.CaptureFixture[str]) -> None:
+    from afsmc.cli import main
+    from afsmc.verify.guard import Interrupted
+
+    sparse = run(UAV, consts=SMALL["uav"], properties=["success"], engine="sparse",
+                 isolate=False, uniform=False)
+    _stop_after_first_answer(monkeypatch, lambda v: Interrupted(dict(v)))
+    code = main(["verify", UAV, "-p", "success", "--no-uniform", "--engine", "sparse",
+                 *[f"--const={k}={v}" for k, v in SMALL["uav"].items()]])
+    err = capsys.readouterr().err
+    assert code == 130
+    assert "afsmc: interrupted" in err
+    assert f"success_min = {sparse.property('success').min!r} on the MDP" in err, err
+
+
+def test_kept_values_give_each_pmax_from_its_complement() -> None:
+    from afsmc.verify import core
+
+    model = load(UAV, SMALL["uav"]).model
+    comp = core.complements(model, [p for p in model.properties if p.name == "success"])
+    rest = comp["success_max"].name
+    ends = core._kept([("MDP", {"success_min": 0.5, core.TERMINATES: 1.0, rest: 0.25})], comp)
+    assert [d.message for d in ends] == [
+        "answered before this:\n  success_min = 0.5 on the MDP\n  success_max = 0.75 on the MDP"]
+    # if not every path ends, the complement does not give the Pmax: it is left out
+    open_ = core._kept([("MDP", {"success_min": 0.5, core.TERMINATES: 0.9, rest: 0.25})], comp)
+    assert [d.message for d in open_] == ["answered before this:\n  success_min = 0.5 on the MDP"]
+    assert core._kept([("MDP", {})], comp) == []

@@ -26,6 +26,7 @@ from afsmc.model.names import did_you_mean
 from afsmc.model.pretty import show
 from afsmc.model.reduce import Reductions
 from afsmc.verify.guard import (
+    Interrupted,
     Progress,
     default_max_states,
     human,
@@ -449,6 +450,25 @@ def _unanswered(queries: list[tuple[ir.Property, str]], vals: dict[str, float],
             and not (n in comp and comp[n].name in vals and TERMINATES in vals)]
 
 
+def _kept(done: Sequence[tuple[str, dict[str, float]]],
+          comp: Mapping[str, ir.Property]) -> list[Diagnostic]:
+    """A note with the values answered before a failure: a long run keeps what it got."""
+    gives = {p.name: name for name, p in comp.items()}  # complementary Pmin -> its Pmax
+    lines = []
+    for what, vals in done:
+        ends = vals.get(TERMINATES) == 1.0
+        for name, value in vals.items():
+            if name == TERMINATES or (name in gives and not ends):
+                continue
+            if name in gives:
+                name, value = gives[name], 1.0 - value
+            lines.append(f"  {name} = {value!r} on the {what}")
+    if not lines:
+        return []
+    return [Diagnostic("N412", Severity.NOTE, "answered before this:\n" + "\n".join(lines),
+                       None)]
+
+
 def _query_text(name: str) -> str:
     """The one wording for a query, in every progress line: the queries afsmc asks instead
     of a Pmax are named by what they give, not by their internal names."""
@@ -630,7 +650,15 @@ def check(model: ir.Model, props: Sequence[ir.Property], *, via: Via = "prism",
                                                    "diagram tables" if big_tables else ""))
                 progress(f"{what}, {_unit_text(unit, i, units)} {where}; "
                          f"{_so_far(time.perf_counter() - started)}")
-            res = run_job(job, bound, isolate=fresh, progress=progress)
+            try:
+                res = run_job(job, bound, isolate=fresh, progress=progress)
+            except KeyboardInterrupt as exc:
+                # An hour's answers are not lost to a Ctrl-C: the CLI prints these notes.
+                got = exc.values if isinstance(exc, Interrupted) else {}
+                for d in _kept([*zip([w for _, _, w in lows], values, strict=False),
+                                (what, vals | got)], comp):
+                    exc.add_note(d.message)
+                raise
             failure = res.failure
             # What the process set out to check ("auto" adds and leaves some for hybrid).
             asked = len(unit) if job_engine != "auto" or res.engine != "hybrid" else (
@@ -666,7 +694,9 @@ def check(model: ir.Model, props: Sequence[ir.Property], *, via: Via = "prism",
                 i += 1
                 continue
             if res.failure is not None:
-                raise CompileError([failure_diagnostic(res.failure, model, low, group, job)])
+                raise CompileError([failure_diagnostic(res.failure, model, low, group, job),
+                                    *_kept([*zip([w for _, _, w in lows], values, strict=False),
+                                            (what, vals | res.values)], comp)])
             if complementary and res.dd_retried and not rest_full_tables:
                 rest_full_tables = True
                 if progress is not None:

@@ -157,6 +157,14 @@ def run_isolated(job: Job, progress: Progress | None, *, every: float = 5.0,
     return res
 
 
+class Interrupted(KeyboardInterrupt):
+    """Ctrl-C while a Storm process ran: carries the values it had sent."""
+
+    def __init__(self, values: dict[str, float]):
+        super().__init__()
+        self.values = values
+
+
 def _run_isolated(job: Job, progress: Progress | None, every: float,
                   first: float) -> tuple[JobResult, int | None]:
     ctx = multiprocessing.get_context("spawn")
@@ -244,6 +252,8 @@ def _run_isolated(job: Job, progress: Progress | None, every: float,
                     say(f"building the {job.what}: {now - start:.0f} s{est}")
                 elif phase.startswith("check "):
                     say(f"checking {phase[6:]} on the {job.what}: {now - start:.0f} s")
+    except KeyboardInterrupt as exc:
+        raise Interrupted(dict(answered)) from exc
     finally:
         if proc.is_alive() and result is None:
             proc.kill()
