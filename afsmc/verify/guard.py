@@ -150,8 +150,12 @@ def run_isolated(job: Job, progress: Progress | None, *, every: float = 5.0,
         done = res.values
         rest = tuple(n for n in job.names if n not in done)
         extra = tuple(n for n in job.hybrid_extra if n not in done)
-        res, code = _run_isolated(replace(job, dd_memory_mb=DD_MEMORY_RETRY, names=rest,
-                                          hybrid_extra=extra), progress, every, first)
+        try:
+            res, code = _run_isolated(replace(job, dd_memory_mb=DD_MEMORY_RETRY, names=rest,
+                                              hybrid_extra=extra), progress, every, first)
+        except Interrupted as exc:
+            exc.values = done | exc.values  # the first attempt's answers count too
+            raise
         res.values = done | res.values
         res.dd_retried = True
     return res
