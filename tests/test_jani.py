@@ -267,7 +267,8 @@ def test_name_clashes_get_fresh_names(tmp_path: Path) -> None:
 
 
 def test_bounded_globally_is_a_diagnostic() -> None:
-    # The resolver already rejects `G<=k` (E243); emit must not print it wrongly either.
+    # Storm's JANI has no bounded G: `afsmc verify` asks its dual (afsmc.verify.core.dual),
+    # and `afsmc compile -t jani` says so rather than print it wrongly.
     low = lowered("grid.afsm", "nondet", text=GRID)
     safe = next(p for p in low.model.properties if p.name == "safe")
     assert isinstance(safe.path, ir.Path)

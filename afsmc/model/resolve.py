@@ -100,6 +100,7 @@ class _Resolver:
                   for d in decls if isinstance(d, ast.LabelDecl)]
         rewards = [self._rewards(d) for d in decls if isinstance(d, ast.RewardsDecl)]
         props = [self._property(d) for d in decls if isinstance(d, ast.PropertyDecl)]
+        self._check_query_names(props)
         self._check_weight_cycles(actions)
         name = self.m.machine.name.text if self.m.machine else _stem(self.src.path)
         return ir.Model(
@@ -762,6 +763,20 @@ class _Resolver:
             items.append(ir.RewardItem(it.action.text if it.action else None, guard, value, it.span))
         return ir.RewardStruct(d.name.text, tuple(items), d.span)
 
+    def _check_query_names(self, props: list[ir.Property]) -> None:
+        """An MDP asks `P=? [...]` of property `a` as the queries `a_min` and `a_max`: a
+        property of that name would share its query, and one of the two values be wrong."""
+        asked = {f"{p.name}_{o}": p for p in props if not p.opt for o in ("min", "max")}
+        for p in props:
+            if p.name in asked:
+                other = asked[p.name]
+                self.rep.error(
+                    "E244", f"property {p.name} has the name of a query of property "
+                    f"{other.name}: with interval constants afsmc asks {other.name} as "
+                    f"{other.name}_min and {other.name}_max", p.span,
+                    hint="rename one of them", related=[Related(f"property {other.name}",
+                                                                other.span)])
+
     def _property(self, d: ast.PropertyDecl) -> ir.Property:
         ctx = Ctx("a property", labels=True)
         q = d.query
@@ -780,10 +795,7 @@ class _Resolver:
             if isinstance(p, ast.Eventually):
                 path = ir.Path("F", self._bool(p.target, ctx), bound=bound(p.bound))
             elif isinstance(p, ast.Globally):
-                if p.bound is not None:
-                    self.rep.error("E243", "Storm cannot check a step-bounded G", p.span,
-                                   hint="P=? [ G<=k phi ] is 1 - P=? [ F<=k !phi ]: ask the "
-                                        "latter (min and max swap)")
+                # Storm has no step-bounded G; afsmc.verify asks 1 - P[F<=k !phi] for it.
                 path = ir.Path("G", self._bool(p.target, ctx), bound=bound(p.bound))
             elif isinstance(p, ast.Until):
                 path = ir.Path("U", self._bool(p.right, ctx), self._bool(p.left, ctx), bound(p.bound))

@@ -382,6 +382,20 @@ def _stats(res: JobResult, resolution: str) -> ModelStats:
 
 TERMINATES = "__afsmc_terminates"
 REST = "__afsmc_rest_"
+DUAL = "__afsmc_dual_"  # P[G<=k φ] asked as 1 - P[F<=k !φ]
+
+
+def _bounded_g(p: ir.Property) -> bool:
+    return isinstance(p.path, ir.Path) and p.path.kind == "G" and p.path.bound is not None
+
+
+def dual(p: ir.Property) -> ir.Property:
+    """Storm has no step-bounded G: P[G<=k φ] = 1 - P[F<=k !φ], exactly, and for an MDP
+    the minimum of one is 1 - the maximum of the other."""
+    assert isinstance(p.path, ir.Path)
+    return dataclasses.replace(p, name=DUAL + p.name,
+                               opt="max" if p.opt == "min" else "min" if p.opt else "",
+                               path=ir.Path("F", E.neg(p.path.target), bound=p.path.bound))
 
 
 def _conjuncts(e: E.Expr) -> list[E.Expr]:
@@ -450,8 +464,21 @@ def _unanswered(queries: list[tuple[ir.Property, str]], vals: dict[str, float],
             and not (n in comp and comp[n].name in vals and TERMINATES in vals)]
 
 
-def _kept(done: Sequence[tuple[str, dict[str, float]]],
-          comp: Mapping[str, ir.Property]) -> list[Diagnostic]:
+def _dual_names(props: Sequence[ir.Property]) -> dict[str, str]:
+    """The queries of the duals (`dual`) -> the queries of the bounded-G properties whose
+    values they give, as 1 - value."""
+    out = {}
+    for p in props:
+        if _bounded_g(p):
+            out[DUAL + p.name] = p.name  # a DTMC, or an MDP property with Pmin/Pmax
+            if not p.opt:
+                out[f"{DUAL}{p.name}_min"] = f"{p.name}_max"
+                out[f"{DUAL}{p.name}_max"] = f"{p.name}_min"
+    return out
+
+
+def _kept(done: Sequence[tuple[str, dict[str, float]]], comp: Mapping[str, ir.Property],
+          duals: Mapping[str, str] | None = None) -> list[Diagnostic]:
     """A note with the values answered before a failure: a long run keeps what it got."""
     gives = {p.name: name for name, p in comp.items()}  # complementary Pmin -> its Pmax
     lines = []
@@ -462,6 +489,8 @@ def _kept(done: Sequence[tuple[str, dict[str, float]]],
                 continue
             if name in gives:
                 name, value = gives[name], 1.0 - value
+            if duals and name in duals:
+                name, value = duals[name], 1.0 - value
             lines.append(f"  {name} = {value!r} on the {what}")
     if not lines:
         return []
@@ -476,6 +505,12 @@ def _query_text(name: str) -> str:
         return "termination"
     if name.startswith(REST):
         return f"{name[len(REST):]}_max as 1 - Pmin"
+    if name.startswith(DUAL):
+        base = name[len(DUAL):]
+        for mine, its in (("_min", "max"), ("_max", "min")):
+            if base.endswith(mine):
+                return f"{base[:-len(mine)]}_{its} as 1 - P{mine[1:]} [F<=k !φ]"
+        return f"{base} as 1 - P [F<=k !φ]"
     return name
 
 
@@ -491,7 +526,7 @@ def _unit_text(unit: list[tuple[ir.Property, str]], i: int,
 
 def _readable(text: str) -> str:
     """The guard's progress lines carry the internal names; say what they are."""
-    return re.sub(re.escape(REST) + r"\w+|" + re.escape(TERMINATES),
+    return re.sub(re.escape(REST) + r"\w+|" + re.escape(DUAL) + r"\w+|" + re.escape(TERMINATES),
                   lambda m: _query_text(m.group(0)), text)
 
 
@@ -551,6 +586,10 @@ def check(model: ir.Model, props: Sequence[ir.Property], *, via: Via = "prism",
     if progress is not None:
         say = progress
         progress = lambda text: say(_readable(text))  # noqa: E731
+    original = list(props)
+    duals = _dual_names(original)
+    props = [dual(p) if _bounded_g(p) else p for p in props]
+    preserve = [dual(p) if _bounded_g(p) else p for p in preserve]
     bound = upper_bound(model)
     engine, reason = choose_engine(engine, bound)
     # Only the hybrid engine needs them ("auto" may still pick it after counting states).
@@ -656,7 +695,7 @@ def check(model: ir.Model, props: Sequence[ir.Property], *, via: Via = "prism",
                 # An hour's answers are not lost to a Ctrl-C: the CLI prints these notes.
                 got = exc.values if isinstance(exc, Interrupted) else {}
                 for d in _kept([*zip([w for _, _, w in lows], values, strict=False),
-                                (what, vals | got)], comp):
+                                (what, vals | got)], comp, duals):
                     exc.add_note(d.message)
                 raise
             failure = res.failure
@@ -696,7 +735,7 @@ def check(model: ir.Model, props: Sequence[ir.Property], *, via: Via = "prism",
             if res.failure is not None:
                 raise CompileError([failure_diagnostic(res.failure, model, low, group, job),
                                     *_kept([*zip([w for _, _, w in lows], values, strict=False),
-                                            (what, vals | res.values)], comp)])
+                                            (what, vals | res.values)], comp, duals)])
             if complementary and res.dd_retried and not rest_full_tables:
                 rest_full_tables = True
                 if progress is not None:
@@ -724,16 +763,24 @@ def check(model: ir.Model, props: Sequence[ir.Property], *, via: Via = "prism",
                                          processes=merged.processes + lost_processes))
         values.append(vals)
     results = []
-    for p in props:
+    for p in original:
         r = PropertyResult(p.name, formula_text(p, p.opt, show), p.kind)
         low = lows[0][1]
+        flip = _bounded_g(p)  # its values are 1 - those of the dual, min and max swapped
+        key = DUAL + p.name if flip else p.name
+
+        def value(vals: dict[str, float], name: str, flip: bool = flip) -> float:
+            return 1.0 - vals[name] if flip else vals[name]
+
         if low.kind == "mdp":
             for name, opt in property_variants(low, p):
-                setattr(r, opt, values[0][name])
+                src = name if not flip else key if p.opt else (
+                    f"{key}_{'max' if opt == 'min' else 'min'}")
+                setattr(r, opt, value(values[0], src))
             if len(values) > 1:
-                r.uniform = values[1][p.name]
+                r.uniform = value(values[1], key)
         else:
-            r.value = values[0][p.name]
+            r.value = value(values[0], key)
         results.append(r)
     return Checks(stats[0], stats[1] if len(stats) > 1 else None, results)
 
