@@ -150,9 +150,17 @@ class _Resolver:
             return
         if kind == "action":
             self._check_reserved(name, kind)
+        else:
+            self._check_internal(name, kind)
         table[name.text] = name.span
 
+    def _check_internal(self, name: ast.Ident, kind: str) -> None:
+        if name.text.startswith("__afsmc"):  # the queries and names afsmc generates
+            self.rep.error("E202", f"'{name.text}' cannot name {_a(kind)}: names that start "
+                           "with __afsmc are afsmc's own", name.span, hint="choose another name")
+
     def _check_reserved(self, name: ast.Ident, kind: str) -> None:
+        self._check_internal(name, kind)
         if name.text in RESERVED:
             self.rep.error(
                 "E202", f"'{name.text}' cannot name {_a(kind)}: it is reserved in PRISM or Storm",
