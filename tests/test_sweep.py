@@ -154,3 +154,47 @@ def test_uav_deadline_sweep_equals_verify_at_each_point() -> None:
         got = point.properties[0]
         for key in ("min", "max", "uniform"):
             assert getattr(got, key) == pytest.approx(getattr(one, key), abs=1e-9), (point.x, key)
+
+
+def test_a_failed_point_keeps_the_others(deadline: str) -> None:
+    # P_FAIL = 1.5 is no probability: that point fails, the two before it are reported.
+    from afsmc.diagnostics import CompileError, Severity
+
+    with pytest.raises(CompileError) as info:
+        sweep(deadline, "P_FAIL", [0, 0.25, 1.5], properties=["steps"], jobs=1)
+    diags = info.value.diagnostics
+    assert diags[0].is_error and "at P_FAIL=1.5" in diags[0].message, diags
+    note = diags[-1]
+    assert note.code == "N412" and note.severity is Severity.NOTE
+    head, *lines = note.message.split("\n")
+    assert head == "2 points were evaluated before this:"
+    got = rows("\n".join(lines) + "\n")
+    assert [(r["P_FAIL"], r["property"]) for r in got] == [("0", "steps"), ("0.25", "steps")]
+    for r in got:
+        want = 2 / (1 - float(r["P_FAIL"]))
+        assert float(r["min"]) == pytest.approx(want, rel=1e-5)
+
+
+def test_ctrl_c_prints_the_points_a_sweep_had(deadline: str, monkeypatch: pytest.MonkeyPatch,
+                                               capsys: pytest.CaptureFixture[str]) -> None:
+    # Stop the sweep as a Ctrl-C would, once its first point is done.
+    import importlib
+
+    from afsmc.cli import main
+
+    sweep_module = importlib.import_module("afsmc.verify.sweep")
+    real = sweep_module.evaluate
+    calls: list[int] = []
+
+    def evaluate(task: object) -> object:
+        calls.append(1)
+        if len(calls) > 1:
+            raise KeyboardInterrupt
+        return real(task)  # type: ignore[arg-type]
+
+    monkeypatch.setattr(sweep_module, "evaluate", evaluate)
+    code = main(["sweep", deadline, "--const", "P_FAIL=0,0.25", "-p", "steps", "--jobs", "1"])
+    err = capsys.readouterr().err
+    assert code == 130 and "afsmc: interrupted" in err
+    assert "1 points were evaluated before this:" in err, err
+    assert "\n0,steps,2.0," in err, err

@@ -423,25 +423,49 @@ def sweep(path: str, variable: str, values: Sequence[Number], *, kind: Kind = "c
     else:
         parallel = 1 if dask is None and jobs == 1 else (jobs if dask is None else 4 * jobs)
         tasks = [Task(xs=c, **base) for c in _chunks(values, parallel)]  # type: ignore[arg-type]
-    outcomes = _run(tasks, jobs, dask, progress, len(values))
+    name = variable if kind == "const" else "bound"
+    finished: dict[int, tuple[list[SweepPoint], list[Diagnostic]]] = {}
+    try:
+        outcomes = _run(tasks, jobs, dask, progress, len(values), finished)
+    except KeyboardInterrupt as exc:
+        # The points of the chunks that finished are not lost: the CLI prints this note.
+        got = [pt for pts, diags in finished.values() if not diags for pt in pts]
+        for d in _kept(path, name, kind, got):
+            exc.add_note(d.message)
+        raise
     points: list[SweepPoint] = []
+    failed: list[Diagnostic] = []
     for task, (pts, diags) in zip(tasks, outcomes, strict=True):
         if diags:
             where = f"{variable}={fmt(task.xs[0])}" if kind == "const" else \
                 f"bounds {fmt(task.xs[0])}..{fmt(task.xs[-1])}"
-            raise CompileError([dataclasses.replace(d, message=f"at {where}: {d.message}")
-                                if d.is_error else d for d in diags])
-        points += pts
+            failed += [dataclasses.replace(d, message=f"at {where}: {d.message}")
+                       if d.is_error else d for d in diags]
+        else:
+            points += pts
+    if failed:
+        raise CompileError(failed + _kept(path, name, kind, points))
     first = points[0]
     typ = "mdp" if any(r.min is not None or r.max is not None for r in first.properties) \
         else "dtmc"
-    return SweepResult(path, variable if kind == "const" else "bound", kind, typ, points,
-                       [r.name for r in first.properties], time.perf_counter() - t0)
+    return SweepResult(path, name, kind, typ, points, [r.name for r in first.properties],
+                       time.perf_counter() - t0)
 
 
-def _run(tasks: list[Task], jobs: int, dask: Any, progress: Progress | None,
-         total: int) -> list[tuple[list[SweepPoint], list[Diagnostic]]]:
-    results: dict[int, tuple[list[SweepPoint], list[Diagnostic]]] = {}
+def _kept(path: str, variable: str, kind: Kind, points: list[SweepPoint]) -> list[Diagnostic]:
+    """A note with the points evaluated before a failure or a Ctrl-C, as CSV."""
+    if not points:
+        return []
+    points = sorted(points, key=lambda pt: pt.x)
+    part = SweepResult(path, variable, kind, "", points)
+    return [Diagnostic("N412", Severity.NOTE, f"{len(points)} points were evaluated before "
+                       "this:\n" + part.to_csv().rstrip("\n"), None)]
+
+
+def _run(tasks: list[Task], jobs: int, dask: Any, progress: Progress | None, total: int,
+         results: dict[int, tuple[list[SweepPoint], list[Diagnostic]]],
+         ) -> list[tuple[list[SweepPoint], list[Diagnostic]]]:
+    """Evaluate the tasks; `results` fills as they finish (a Ctrl-C keeps what it has)."""
     start = time.monotonic()
     last = [0.0]
 
