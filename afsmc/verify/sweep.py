@@ -439,8 +439,9 @@ def sweep(path: str, variable: str, values: Sequence[Number], *, kind: Kind = "c
         if diags:
             where = f"{variable}={fmt(task.xs[0])}" if kind == "const" else \
                 f"bounds {fmt(task.xs[0])}..{fmt(task.xs[-1])}"
+            # every diagnostic names its point (a failed check's note of the values it had)
             failed += [dataclasses.replace(d, message=f"at {where}: {d.message}")
-                       if d.is_error else d for d in diags]
+                       for d in diags]
         else:
             points += pts
     if failed:
