@@ -700,8 +700,7 @@ def check(model: ir.Model, props: Sequence[ir.Property], *, via: Via = "prism",
                 raise
             failure = res.failure
             # What the process set out to check ("auto" adds and leaves some for hybrid).
-            asked = len(unit) if job_engine != "auto" or res.engine != "hybrid" else (
-                len(unit) - len(job.hybrid_skip) + len(job.hybrid_extra))
+            asked = len(job.hybrid_queries if res.engine == "hybrid" else job.names)
             if failure is not None and asked > 1 and fresh is not False and (
                     failure.stage == "tables" or (failure.stage in ("memory", "internal")
                     and "hybrid" in (job_engine, res.engine))):

@@ -131,7 +131,7 @@ def run_isolated(job: Job, progress: Progress | None, *, every: float = 5.0,
     if _tables_full(code, job) and job.dd_memory_mb < DD_MEMORY_RETRY:
         # The tables are too small for the diagrams.
         # Full tables after the build: the symbolic engine checks (auto picked hybrid).
-        queries = len([n for n in job.names if n not in job.hybrid_skip]) + len(job.hybrid_extra)
+        queries = len(job.hybrid_queries)
         if queries > 1 and res.states:
             # Full while checking one of several queries: the caller decides what to run
             # again and with which tables (the nodes of earlier checks may have filled them).

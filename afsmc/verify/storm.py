@@ -14,7 +14,7 @@ import os
 import tempfile
 import time
 from collections.abc import Callable
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 from typing import Any, Literal
 
 Engine = Literal["sparse", "dd", "hybrid", "auto"]
@@ -55,6 +55,16 @@ class Job:
     # memory is better spent on the explicit vectors of the hybrid engine. A model whose
     # diagrams need more makes Sylvan exit; the guard then retries with DD_MEMORY_RETRY.
     dd_memory_mb: int = 1024
+
+    @property
+    def wanted(self) -> tuple[str, ...]:
+        """Every query it may check: the names, then the hybrid extras (the engine decides)."""
+        return self.names + tuple(n for n in self.hybrid_extra if n not in self.names)
+
+    @property
+    def hybrid_queries(self) -> tuple[str, ...]:
+        """The queries it checks if the engine is (or "auto" picks) hybrid."""
+        return tuple(n for n in self.names if n not in self.hybrid_skip) + self.hybrid_extra
 
 
 DD_MEMORY_RETRY = 4096  # MB: Storm's own default
@@ -157,7 +167,7 @@ def _execute(job: Job, notify: Notify) -> JobResult:
                 msg = _message(exc)
                 res.failure = StormFailure("parse", msg, line=_parse_line(msg))
                 return res
-        props, failure = _prism_properties(stormpy, program, _with_extra(job))
+        props, failure = _prism_properties(stormpy, program, job.props_text, job.wanted)
     else:
         try:
             program, all_props = stormpy.parse_jani_model_from_string(job.model_text)
@@ -165,11 +175,10 @@ def _execute(job: Job, notify: Notify) -> JobResult:
             res.failure = StormFailure("parse", _message(exc))
             return res
         by_name = {p.get_name(): p for p in all_props}
-        wanted = _with_extra(job).names
-        missing = [n for n in wanted if n not in by_name]
+        missing = [n for n in job.wanted if n not in by_name]
         failure = StormFailure("property", "the JANI model has no property named "
                                + ", ".join(missing), prop=missing[0]) if missing else None
-        props = [by_name[n] for n in wanted if n in by_name]
+        props = [by_name[n] for n in job.wanted if n in by_name]
     if failure is not None:
         res.failure = failure
         return res
@@ -180,7 +189,7 @@ def _execute(job: Job, notify: Notify) -> JobResult:
     engine_name: str = job.engine
     # the queries this process checks, in the order of `props` (the extras go once the
     # engine is known)
-    names = list(_with_extra(job).names)
+    names = list(job.wanted)
     symbolic = engine_name != "sparse"
     try:
         if symbolic:
@@ -276,34 +285,27 @@ def _execute(job: Job, notify: Notify) -> JobResult:
     return res
 
 
-def _with_extra(job: Job) -> Job:
-    """`job` asking its hybrid extras too (for parsing; the engine decides which stay)."""
-    if not job.hybrid_extra:
-        return job
-    return replace(job, names=job.names + tuple(n for n in job.hybrid_extra
-                                                if n not in job.names))
-
-
 def _keep(names: list[str], props: list[Any],
           drop: tuple[str, ...]) -> tuple[list[str], list[Any]]:
     kept = [(n, p) for n, p in zip(names, props, strict=True) if n not in drop]
     return [n for n, _ in kept], [p for _, p in kept]
 
 
-def _prism_properties(stormpy: Any, program: Any, job: Job) -> tuple[list[Any], StormFailure | None]:
+def _prism_properties(stormpy: Any, program: Any, props_text: str,
+                      names: tuple[str, ...]) -> tuple[list[Any], StormFailure | None]:
     try:
-        parsed = stormpy.parse_properties(job.props_text, program)
+        parsed = stormpy.parse_properties(props_text, program)
     except RuntimeError:
         parsed = None
     if parsed is not None:
         by_name = {p.get_name(): p for p in parsed}
-        if all(n in by_name for n in job.names):
-            return [by_name[n] for n in job.names], None
+        if all(n in by_name for n in names):
+            return [by_name[n] for n in names], None
     # Find the property Storm rejects, so the diagnostic can point at it.
-    lines = {n: line for line in job.props_text.splitlines()
+    lines = {n: line for line in props_text.splitlines()
              for n in [line.split('"', 2)[1] if line.startswith('"') else ""] if n}
     out = []
-    for n in job.names:
+    for n in names:
         try:
             out.append(stormpy.parse_properties(lines.get(n, ""), program)[0])
         except (RuntimeError, IndexError) as exc:
