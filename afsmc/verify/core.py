@@ -605,6 +605,11 @@ def check(model: ir.Model, props: Sequence[ir.Property], *, via: Via = "prism",
         lows.append(("nondet", lowered(model, "nondet", reductions), "DTMC"))
     stats: list[ModelStats] = []
     values: list[dict[str, float]] = []
+
+    def kept(what: str, vals: dict[str, float]) -> list[Diagnostic]:
+        """The note of what the finished models and this one have answered."""
+        done = [*zip([w for _, _, w in lows], values, strict=False), (what, vals)]
+        return _kept(done, comp, duals)
     for resolution, low, what in lows:
         # A query is one Storm check: a property, or an MDP property's min or its max.
         queries = [(p, n) for p in props for n, _ in property_variants(low, p)]
@@ -694,8 +699,7 @@ def check(model: ir.Model, props: Sequence[ir.Property], *, via: Via = "prism",
             except KeyboardInterrupt as exc:
                 # An hour's answers are not lost to a Ctrl-C: the CLI prints these notes.
                 got = exc.values if isinstance(exc, Interrupted) else {}
-                for d in _kept([*zip([w for _, _, w in lows], values, strict=False),
-                                (what, vals | got)], comp, duals):
+                for d in kept(what, vals | got):
                     exc.add_note(d.message)
                 raise
             failure = res.failure
@@ -733,8 +737,7 @@ def check(model: ir.Model, props: Sequence[ir.Property], *, via: Via = "prism",
                 continue
             if res.failure is not None:
                 raise CompileError([failure_diagnostic(res.failure, model, low, group, job),
-                                    *_kept([*zip([w for _, _, w in lows], values, strict=False),
-                                            (what, vals | res.values)], comp, duals)])
+                                    *kept(what, vals | res.values)])
             if complementary and res.dd_retried and not rest_full_tables:
                 rest_full_tables = True
                 if progress is not None:
@@ -761,25 +764,23 @@ def check(model: ir.Model, props: Sequence[ir.Property], *, via: Via = "prism",
         stats.append(dataclasses.replace(merged, check_time=merged.check_time + lost,
                                          processes=merged.processes + lost_processes))
         values.append(vals)
+    # a bounded G's query -> its dual's, whose value it is 1 minus (min and max swapped)
+    asked_as = {query: its for its, query in duals.items()}
+
+    def value(vals: dict[str, float], name: str) -> float:
+        return 1.0 - vals[asked_as[name]] if name in asked_as else vals[name]
+
     results = []
     for p in original:
         r = PropertyResult(p.name, formula_text(p, p.opt, show), p.kind)
         low = lows[0][1]
-        flip = _bounded_g(p)  # its values are 1 - those of the dual, min and max swapped
-        key = DUAL + p.name if flip else p.name
-
-        def value(vals: dict[str, float], name: str, flip: bool = flip) -> float:
-            return 1.0 - vals[name] if flip else vals[name]
-
         if low.kind == "mdp":
             for name, opt in property_variants(low, p):
-                src = name if not flip else key if p.opt else (
-                    f"{key}_{'max' if opt == 'min' else 'min'}")
-                setattr(r, opt, value(values[0], src))
+                setattr(r, opt, value(values[0], name))
             if len(values) > 1:
-                r.uniform = value(values[1], key)
+                r.uniform = value(values[1], p.name)
         else:
-            r.value = value(values[0], key)
+            r.value = value(values[0], p.name)
         results.append(r)
     return Checks(stats[0], stats[1] if len(stats) > 1 else None, results)
 
