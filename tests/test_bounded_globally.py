@@ -69,6 +69,21 @@ def test_progress_names_the_dual_queries(model: Path) -> None:
     assert not any("__afsmc" in s for s in said), said
 
 
+def test_progress_words_a_dual_by_its_property_not_its_name(tmp_path: Path) -> None:
+    # A DTMC property whose own name ends in _min: its dual is no "max as 1 - Pmin".
+    path = tmp_path / "dtmc.afsm"
+    path.write_text(TEXT.replace("const int STEP = [1, 2];", "const int STEP = 1;")
+                    .replace("property stay ", "property stay_min "), encoding="utf-8")
+    said: list[str] = []
+    res = run(str(path), properties=["stay_min", "stay_dual"], engine="sparse", isolate=True,
+              progress=said.append)
+    assert any(s.startswith("checked stay_min as 1 - P [F<=k !φ] on the DTMC")
+               for s in said), said
+    assert not any("stay_max" in s for s in said), said
+    g, f = res.property("stay_min").value, res.property("stay_dual").value
+    assert g is not None and f is not None and g == pytest.approx(1.0 - f, abs=1e-12)
+
+
 def test_bounded_g_in_the_generated_prism(model: Path, tmp_path: Path) -> None:
     # PRISM itself checks G<=k: the .props file keeps the property as written.
     r = run_cli("compile", str(model), "-o", str(tmp_path))

@@ -498,36 +498,45 @@ def _kept(done: Sequence[tuple[str, dict[str, float]]], comp: Mapping[str, ir.Pr
                        None)]
 
 
-def _query_text(name: str) -> str:
+def _dual_texts(props: Sequence[ir.Property]) -> dict[str, str]:
+    """The queries of the duals -> what they give, worded from the properties themselves
+    (a property's own name may end in `_min`)."""
+    out = {}
+    for p in props:
+        if _bounded_g(p):
+            asked = {"min": "max", "max": "min"}.get(p.opt or "", "")
+            out[DUAL + p.name] = f"{p.name} as 1 - P{asked} [F<=k !φ]"
+            if not p.opt:
+                out[f"{DUAL}{p.name}_min"] = f"{p.name}_max as 1 - Pmin [F<=k !φ]"
+                out[f"{DUAL}{p.name}_max"] = f"{p.name}_min as 1 - Pmax [F<=k !φ]"
+    return out
+
+
+def _query_text(name: str, duals: Mapping[str, str]) -> str:
     """The one wording for a query, in every progress line: the queries afsmc asks instead
-    of a Pmax are named by what they give, not by their internal names."""
+    of a Pmax or a bounded G are named by what they give, not by their internal names."""
     if name == TERMINATES:
         return "termination"
     if name.startswith(REST):
         return f"{name[len(REST):]}_max as 1 - Pmin"
-    if name.startswith(DUAL):
-        base = name[len(DUAL):]
-        for mine, its in (("_min", "max"), ("_max", "min")):
-            if base.endswith(mine):
-                return f"{base[:-len(mine)]}_{its} as 1 - P{mine[1:]} [F<=k !φ]"
-        return f"{base} as 1 - P [F<=k !φ]"
-    return name
+    return duals.get(name, name)
 
 
 def _unit_text(unit: list[tuple[ir.Property, str]], i: int,
-               units: list[list[tuple[ir.Property, str]]]) -> str:
+               units: list[list[tuple[ir.Property, str]]], duals: Mapping[str, str]) -> str:
     """'query 3 of 14 (missed_min)' or 'process 1 of 2: 10 queries (success_min, ...)'."""
     if len(unit) == 1:
         order = list(dict.fromkeys(n for u in units for _, n in u))
-        return f"query {order.index(unit[0][1]) + 1} of {len(order)} ({_query_text(unit[0][1])})"
-    names = ", ".join(_query_text(n) for _, n in unit)
+        return (f"query {order.index(unit[0][1]) + 1} of {len(order)} "
+                f"({_query_text(unit[0][1], duals)})")
+    names = ", ".join(_query_text(n, duals) for _, n in unit)
     return f"process {i + 1} of {len(units)}: {len(unit)} queries ({names})"
 
 
-def _readable(text: str) -> str:
+def _readable(text: str, duals: Mapping[str, str]) -> str:
     """The guard's progress lines carry the internal names; say what they are."""
     return re.sub(re.escape(REST) + r"\w+|" + re.escape(DUAL) + r"\w+|" + re.escape(TERMINATES),
-                  lambda m: _query_text(m.group(0)), text)
+                  lambda m: _query_text(m.group(0), duals), text)
 
 
 def _so_far(seconds: float) -> str:
@@ -583,10 +592,11 @@ def check(model: ir.Model, props: Sequence[ir.Property], *, via: Via = "prism",
     fills its tables, the queries it had not answered go on in a fresh process; if it runs
     out of memory, they follow one per process."""
     started = time.perf_counter()
+    original = list(props)
+    texts = _dual_texts(original)
     if progress is not None:
         say = progress
-        progress = lambda text: say(_readable(text))  # noqa: E731
-    original = list(props)
+        progress = lambda text: say(_readable(text, texts))  # noqa: E731
     duals = _dual_names(original)
     props = [dual(p) if _bounded_g(p) else p for p in props]
     preserve = [dual(p) if _bounded_g(p) else p for p in preserve]
@@ -692,7 +702,7 @@ def check(model: ir.Model, props: Sequence[ir.Property], *, via: Via = "prism",
                 where = ("in its own Storm process" if len(unit) == 1 else
                          "in one Storm process" + (f" with {job.dd_memory_mb} MB decision-"
                                                    "diagram tables" if big_tables else ""))
-                progress(f"{what}, {_unit_text(unit, i, units)} {where}; "
+                progress(f"{what}, {_unit_text(unit, i, units, texts)} {where}; "
                          f"{_so_far(time.perf_counter() - started)}")
             try:
                 res = run_job(job, bound, isolate=fresh, progress=progress)
