@@ -7,6 +7,7 @@ import dataclasses
 import json
 import re
 from collections.abc import Callable
+from pathlib import Path
 
 import pytest
 
@@ -15,6 +16,7 @@ from afsmc.compiler import load, lowered
 from afsmc.model import ir
 from afsmc.model.reduce import Reductions
 from afsmc.verify import run
+from afsmc.verify.guard import IN_PROCESS_STATES
 from afsmc.verify.storm import Job, execute
 from tests.conftest import EXAMPLES, run_cli
 from tests.test_prism import SMALL
@@ -455,3 +457,30 @@ def test_kept_values_give_each_pmax_from_its_complement() -> None:
     open_ = core._kept([("MDP", {"success_min": 0.5, core.TERMINATES: 0.9, rest: 0.25})], comp)
     assert [d.message for d in open_] == ["answered before this:\n  success_min = 0.5 on the MDP"]
     assert core._kept([("MDP", {})], comp) == []
+
+
+def test_a_users_address_space_limit_is_kept_not_raised(tmp_path: Path) -> None:
+    # Under `ulimit -v` the watched Storm process may only lower the limit: raising it
+    # was a ValueError in the child, reported as a crash ("killed by signal 9").
+    import resource
+    import subprocess
+    import sys
+
+    model = tmp_path / "grid.afsm"
+    model.write_text("machine grid;\nparam int N = 700;\nvar a : [0..N] init 0;\n"
+                     "var c : [0..N] init 0;\nmode A = 0 initial;\nmode B = 1 final;\n"
+                     "action Inc in A when a < N { 0.5: a := a + 1; 0.5: c := min(c + 1, N); }\n"
+                     "action Stop in A when a >= N { goto B; }\n"
+                     "property p = P=? [ F mode == B ];\n", encoding="utf-8")
+    limit = 12 * 2**30
+
+    def cap() -> None:
+        resource.setrlimit(resource.RLIMIT_AS, (limit, limit))
+
+    r = subprocess.run([sys.executable, "-m", "afsmc", "verify", str(model), "--json"],
+                       capture_output=True, text=True, preexec_fn=cap, timeout=300)
+    assert r.returncode == 0, r.stderr
+    assert "Traceback" not in r.stderr and "signal" not in r.stderr, r.stderr
+    res = json.loads(r.stdout)
+    assert res["model"]["states"] > IN_PROCESS_STATES  # so it ran in the watched process
+    assert res["properties"][0]["value"] == pytest.approx(1.0)

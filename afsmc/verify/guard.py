@@ -117,6 +117,9 @@ def _child(conn: Any, job: Job, address_limit: int | None) -> None:
         if size is not None:
             # A backstop: an allocation past this fails in the child, not in the machine.
             limit = size + address_limit
+            _, hard = resource.getrlimit(resource.RLIMIT_AS)
+            if hard != resource.RLIM_INFINITY:
+                limit = min(limit, hard)  # a user's `ulimit -v` may not be raised
             resource.setrlimit(resource.RLIMIT_AS, (limit, limit))
     conn.send(("ready", _rss(os.getpid())))
     result = execute(job, lambda event, data: conn.send((event, data)))
