@@ -69,6 +69,18 @@ def lowered(model: ir.Model, resolution: Resolution = "nondet",
     return reduce(lower(model, resolution), Reductions() if reductions is None else reductions)
 
 
+def refuse_inputs(paths: list[str], protect: tuple[str, ...]) -> None:
+    """E002 if any of `paths` is one of the inputs: checked for every output before the
+    first is written, so that a refusal leaves nothing half-done."""
+    for path in paths:
+        real = os.path.realpath(path)
+        for p in protect:
+            if os.path.exists(p) and os.path.realpath(p) == real:
+                raise CompileError([Diagnostic("E002", Severity.ERROR,
+                                               f"refusing to overwrite the input {p}", None,
+                                               hint="choose another output with -o")])
+
+
 def write_atomic(path: str, content: str | bytes, *, protect: tuple[str, ...] = (),
                  newline: str | None = "\n", keep_mode: bool = False) -> None:
     """Write via a temporary file and rename, so a reader never sees half a file.
@@ -76,12 +88,8 @@ def write_atomic(path: str, content: str | bytes, *, protect: tuple[str, ...] = 
     Refuses to overwrite any of `protect` (the inputs). Text is written with `newline`
     (None: as given); `keep_mode` keeps the permission bits of the file it replaces
     (rewriting an input in place, as `sim-check --update` and `fmt` do)."""
+    refuse_inputs([path], protect)
     real = os.path.realpath(path)
-    for p in protect:
-        if os.path.exists(p) and os.path.realpath(p) == real:
-            raise CompileError([Diagnostic("E002", Severity.ERROR,
-                                           f"refusing to overwrite the input {p}", None,
-                                           hint="choose another output with -o")])
     directory = os.path.dirname(real) or "."
     tmp = os.path.join(directory, f".{os.path.basename(real)}.tmp{os.getpid()}")
     try:

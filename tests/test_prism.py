@@ -175,3 +175,13 @@ def test_compile_refuses_to_overwrite_the_input(tmp_path: Path) -> None:
     r = run_cli("compile", str(src), "-o", str(tmp_path))
     assert r.code == 1 and "refusing to overwrite the input" in r.err
     assert src.read_text() == (EXAMPLES / "patrol.afsm").read_text()
+
+
+def test_compile_refusing_one_output_writes_none(tmp_path: Path) -> None:
+    # The input is named like the second output (.props): the .prism must not be left behind.
+    src = tmp_path / "z.props"
+    src.write_text((EXAMPLES / "patrol.afsm").read_text())
+    r = run_cli("compile", str(src), "-o", str(tmp_path))
+    assert r.code == 1 and "refusing to overwrite the input" in r.err, r.err
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["z.props"]
+    assert "wrote" not in r.err
