@@ -334,9 +334,13 @@ def test_results_json_overlay(tmp_path: Path) -> None:
     nodes, _, _ = svg_graph(out)
     assert nodes["results"] == "finish: 0.25 – 0.5 (uniform 0.375) | fault: 0.125 | steps: 3 – inf"
     assert nodes["m1"] == "Dock | 1 | P(reach) 0.75"
-    rj.write_text("{not json")
-    r = run_cli("diagram", str(EXAMPLES / "patrol.afsm"), "--results", str(rj), "-o", str(out))
-    assert r.code == 1 and "error[E611]" in r.err
+    for bad, said in (("{not json", "is not JSON"), ('{"x": 1}', '"properties" list'),
+                      ('{"properties": [1]}', '"properties" list'),
+                      (json.dumps({**results, "machine": "uav"}), "results of machine uav")):
+        rj.write_text(bad)
+        r = run_cli("diagram", str(EXAMPLES / "patrol.afsm"), "--results", str(rj), "-o",
+                    str(out))
+        assert r.code == 1 and "error[E611]" in r.err and said in r.err, (bad, r.err)
 
 
 # The arrows of the paper's Figure 1 (the tikz \path list), by mode number.

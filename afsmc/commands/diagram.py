@@ -98,9 +98,14 @@ def read_results(path: str, model: ir.Model) -> Overlay:
     except (json.JSONDecodeError, UnicodeDecodeError) as exc:
         raise _error("E611", f"{path} is not JSON: {exc}",
                      hint="pass the output of `afsmc verify --json`") from None
-    if not isinstance(data, dict) or not isinstance(data.get("properties", []), list):
-        raise _error("E611", f"{path}: expected an object with a \"properties\" list",
-                     hint="pass the output of `afsmc verify --json`")
+    if not isinstance(data, dict) or not isinstance(data.get("properties"), list) or not all(
+            isinstance(e, dict) and isinstance(e.get("name"), str) for e in data["properties"]):
+        raise _error("E611", f"{path}: expected an object with a \"properties\" list of "
+                     "named results", hint="pass the output of `afsmc verify --json`")
+    machine = data.get("machine")
+    if isinstance(machine, str) and machine != model.name:
+        raise _error("E611", f"{path} holds the results of machine {machine}, not {model.name}",
+                     hint=f"run `afsmc verify --json` on the file of machine {model.name}")
     notes: list[str] = []
     for entry in data.get("properties", []):
         if isinstance(entry, dict) and "name" in entry:
