@@ -14,6 +14,7 @@ from afsmc.backends.prism import emit
 from afsmc.compiler import load
 from afsmc.model.lower import Resolution, lower
 from afsmc.sim.run import job_for, simulate
+from afsmc.verify import run
 
 try:  # tests/ may or may not be a package
     from tests.conftest import CASES, EXAMPLES, run_cli
@@ -24,6 +25,7 @@ PATROL = EXAMPLES / "patrol.afsm"
 MISSION = CASES / "sim_mission" / "mission.afsm"
 WEIGHTS = CASES / "sim_weights" / "weights.afsm"
 UAV = EXAMPLES / "uav.afsm"
+DEADLOCK = CASES / "sim_deadlock"
 
 
 def storm_values(path: Path, resolution: Resolution, consts: dict[str, str] | None = None,
@@ -70,6 +72,31 @@ def test_interval_contains_storm_value(path: Path, consts: dict[str, str], runs:
     for p in props:
         assert p["low"] <= exact[p["name"]] <= p["high"], (p, exact[p["name"]])
         assert p["low"] <= p["estimate"] <= p["high"]
+
+
+@pytest.mark.parametrize("name", ["deadlock", "mixed"])
+def test_deadlocked_and_final_states_agree_with_storm(name: str) -> None:
+    """A state where no action is enabled (W302) stays put, like a final state, and keeps
+    earning its state rewards; the simulator and Storm (sparse, via PRISM and via JANI)
+    agree. Storm's sparse engine used to give such a state no reward (r = 2, ri = 0 for
+    deadlock.afsm, where the simulator said 5 and 1)."""
+    path = DEADLOCK / f"{name}.afsm"
+    data = sim_json(path, "--runs", "20000", "--seed", "3")
+    sim = {p["name"]: p for p in data["properties"]}  # type: ignore[union-attr]
+    for via in ("prism", "jani"):
+        res = run(str(path), via=via, engine="sparse")  # type: ignore[arg-type]
+        assert [r.name for r in res.properties] == list(sim)
+        for r in res.properties:
+            assert r.value is not None
+            assert sim[r.name]["low"] <= r.value <= sim[r.name]["high"], (via, r.name, r.value,
+                                                                          sim[r.name])
+
+
+def test_deadlocked_state_has_one_meaning_on_every_engine() -> None:
+    path = str(DEADLOCK / "deadlock.afsm")
+    for engine in ("sparse", "hybrid", "dd"):
+        values = {r.name: r.value for r in run(path, engine=engine).properties}  # type: ignore[arg-type]
+        assert values == {"r": pytest.approx(5.0), "ri": pytest.approx(1.0)}, engine
 
 
 def test_deterministic_for_a_seed_and_independent_of_workers() -> None:

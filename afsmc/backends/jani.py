@@ -22,7 +22,7 @@ import json
 import os
 from typing import Any
 
-from afsmc.backends.prism import property_variants
+from afsmc.backends.prism import describe, property_variants
 from afsmc.diagnostics import CompileError, Diagnostic, Severity, Span
 from afsmc.model import expr as E
 from afsmc.model import ir
@@ -195,13 +195,12 @@ def _location(low: Lowered, names: _Names, ex: _Exprs) -> Json:
 def _edge(cmd: Command, low: Lowered, names: _Names, ex: _Exprs) -> Json:
     model = low.model
     modes = ", ".join(model.mode_by_number(n).name for n in cmd.modes)
-    what = {"action": "action", "preemptive": "hazard", "final": "final mode"}[cmd.kind]
-    comment = f"{what} {cmd.action} in {modes}: {_where(cmd.span)}"
+    comment = f"{describe(cmd, modes)}: {_where(cmd.span)}"
     if cmd.choice:
         comment += " (" + ", ".join(f"{c}={end}" for c, end in cmd.choice) + ")"
     edge: Json = {"location": LOCATION}
     rewards: list[Json] = []
-    if cmd.kind != "final":
+    if not cmd.silent:
         edge["action"] = cmd.action
         for r in model.rewards:
             items = [it for it in r.items if it.action == cmd.action]
@@ -294,7 +293,7 @@ def emit(low: Lowered) -> dict[str, Any]:
     model = low.model
     names = _Names(low)
     ex = _Exprs(low, names)
-    actions = sorted({c.action for c in low.commands if c.kind != "final"})
+    actions = sorted({c.action for c in low.commands if not c.silent})
     return {
         "jani-version": 1,
         "name": model.name,

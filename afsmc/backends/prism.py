@@ -13,7 +13,7 @@ from typing import ClassVar
 from afsmc import __version__
 from afsmc.model import expr as E
 from afsmc.model import ir
-from afsmc.model.lower import Lowered
+from afsmc.model.lower import Command, Lowered
 from afsmc.model.pretty import Printer, number
 
 
@@ -37,6 +37,14 @@ class PrismPrinter(Printer):
         if isinstance(e, E.WeightRef):
             return self.weight_names[e.action]
         return super().atom(e)
+
+
+def describe(cmd: Command, modes: str) -> str:
+    """What a command stands for, for the generated file's comments."""
+    if cmd.kind == "deadlock":
+        return f"no action enabled in {modes}: the machine stays there"
+    what = {"action": "action", "preemptive": "hazard", "final": "final mode"}[cmd.kind]
+    return f"{what} {cmd.action} in {modes}"
 
 
 def weight_formula_names(low: Lowered) -> dict[str, str]:
@@ -121,12 +129,11 @@ def emit(low: Lowered) -> PrismOutput:
         if cmd.span != last:
             w("")
             modes_txt = ", ".join(f"{model.mode_by_number(n).name}" for n in cmd.modes)
-            what = {"action": "action", "preemptive": "hazard", "final": "final mode"}[cmd.kind]
-            w(f"  // {what} {cmd.action} in {modes_txt}: {where(cmd.span)}")
+            w(f"  // {describe(cmd, modes_txt)}: {where(cmd.span)}")
             last = cmd.span
         if cmd.choice:
             w("  // " + ", ".join(f"{c}={end}" for c, end in cmd.choice))
-        label = "" if cmd.kind == "final" else cmd.action
+        label = "" if cmd.silent else cmd.action
         w(f"  [{label}] {p(cmd.guard)} ->")
         branches = []
         for b in cmd.branches:

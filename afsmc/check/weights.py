@@ -12,7 +12,7 @@ from afsmc.model import ir
 from afsmc.model.bounds import bounds
 from afsmc.model.evaluate import Env, EvalError, evaluate
 from afsmc.model.expr import Type
-from afsmc.model.lower import competitors, enabled, inline
+from afsmc.model.lower import competitors, enabled, inline, stuck
 from afsmc.model.pretty import number
 
 
@@ -74,6 +74,16 @@ def _apart(a: tuple[float, float], b: tuple[float, float]) -> bool:
     return a[1] < b[0] - 1e-9 or b[1] < a[0] - 1e-9
 
 
+def deadlock_witness(model: ir.Model, mode: int) -> Witness | None:
+    """A state of the (non-final) mode where no action is enabled, or None. The lowering
+    asks too (it makes such states absorbing), so the answer is kept on the model."""
+    memo = model.cache.setdefault("deadlocks", {})
+    assert isinstance(memo, dict)
+    if mode not in memo:
+        memo[mode] = find(model, mode, stuck(model, mode))
+    return memo[mode]  # type: ignore[no-any-return]
+
+
 def check_deadlock(model: ir.Model, rep: Reporter) -> None:
     for m in model.modes:
         if m.final:
@@ -83,8 +93,7 @@ def check_deadlock(model: ir.Model, rep: Reporter) -> None:
             rep.warning("W301", f"mode {m.name} has no actions: the machine stops there",
                         m.span, hint=f"mark it final ('mode {m.name} final;') if it ends the mission")
             continue
-        stuck = E.conj(*(E.neg(enabled(model, a, m.number)) for a in acts))
-        wit = find(model, m.number, stuck)
+        wit = deadlock_witness(model, m.number)
         if wit is not None:
             names = ", ".join(a.name for a in acts)
             rep.warning("W302", f"no action is enabled in the state {wit}: the machine stops "

@@ -46,7 +46,14 @@ class Command:
     branches: tuple[Branch, ...]
     span: Span  # the action's declaration
     choice: tuple[tuple[str, str], ...] = ()  # (interval constant, "lo"|"hi") fixed here
-    kind: Literal["action", "preemptive", "final"] = "action"
+    # "final": a final mode's self-loop; "deadlock": the self-loop of the states of a
+    # non-final mode where no action is enabled (W301/W302)
+    kind: Literal["action", "preemptive", "final", "deadlock"] = "action"
+
+    @property
+    def silent(self) -> bool:
+        """A self-loop no action labels: it earns no action reward."""
+        return self.kind in ("final", "deadlock")
 
 
 @dataclass(frozen=True)
@@ -69,6 +76,11 @@ def enabled(model: ir.Model, action: ir.Action, mode: int) -> E.Expr:
     if action.kind == "action":
         parts += [E.neg(h.guard) for h in model.actions_in(mode) if h.kind == "preemptive"]
     return E.conj(*parts)
+
+
+def stuck(model: ir.Model, mode: int) -> E.Expr:
+    """No action of the mode is enabled (true if it has none)."""
+    return E.conj(*(E.neg(enabled(model, a, mode)) for a in model.actions_in(mode)))
 
 
 def competitors(model: ir.Model, action: ir.Action, mode: int) -> tuple[ir.Action, ...]:
@@ -189,12 +201,35 @@ def lower(model: ir.Model, resolution: Resolution = "nondet") -> Lowered:
                 commands.append(Command(action.name, tuple(modes), guard, bs, action.span, choice,
                                         action.kind))
     for m in model.modes:
+        stay = (Branch(E.Lit(1, Type.INT), (), m.span),)
         if m.final:
             commands.append(Command(
                 f"{m.name}", (m.number,), E.mode_in({m.number}, names),
-                (Branch(E.Lit(1, Type.INT), (), m.span),), m.span, (), "final"))
+                stay, m.span, (), "final"))
+        elif _can_deadlock(model, m.number):
+            # A state with no enabled action stays where it is, like a final one. Left to
+            # Storm, its engines disagree: the sparse one gives such a state no reward,
+            # the symbolic ones its state reward; the simulator must match one semantics.
+            commands.append(Command(
+                f"{m.name}", (m.number,), E.conj(E.mode_in({m.number}, names),
+                                                 stuck(model, m.number)),
+                stay, m.span, (), "deadlock"))
     weights = {a.name: effective_weight(model, a) for a in model.actions}
     return Lowered(model, tuple(commands), resolution, weights, bounds)
+
+
+def _can_deadlock(model: ir.Model, mode: int) -> bool:
+    # The checks (W301/W302) ask the same question; they come first in the pipeline but
+    # use this module, hence the late import.
+    from afsmc.check.search import Undecided
+    from afsmc.check.weights import deadlock_witness
+
+    if not model.actions_in(mode):
+        return True
+    try:
+        return deadlock_witness(model, mode) is not None
+    except Undecided:
+        return True  # a self-loop whose guard never holds changes nothing
 
 
 def _updates(model: ir.Model, updates: tuple[ir.Update, ...]) -> tuple[tuple[str, E.Expr], ...]:

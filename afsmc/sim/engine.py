@@ -106,7 +106,7 @@ def build(low: Lowered) -> Program:
                 branches.append(CBranch(compile_expr(p), None if ps is None else float(ps),
                                         ups, b.hazard))
             rws: list[tuple[int, Fn]] = []
-            if cmd.kind != "final":
+            if not cmd.silent:
                 for r in model.rewards:
                     for it in r.items:
                         if it.action == cmd.action:
@@ -115,7 +115,7 @@ def build(low: Lowered) -> Program:
                             rws.append((reward_index[r.name], compile_expr(v)))
             gs = static(g)
             selfloop = len(branches) == 1 and branches[0].prob_static == 1.0
-            cmds.append(CCommand(i, "" if cmd.kind == "final" else cmd.action, compile_expr(g),
+            cmds.append(CCommand(i, "" if cmd.silent else cmd.action, compile_expr(g),
                                  None if gs is None else bool(gs), branches,
                                  sorted(read - {"mode"}), selfloop, rws))
         modes[m.number] = cmds
@@ -203,7 +203,8 @@ def simulate_batch(prog: Program, runs: int, rng: np.random.Generator, max_steps
                                      "mode": prog.model.mode_by_number(int(state["mode"][j])).name}
             if t > 0 and cmd_i >= 0:
                 c = prog.commands[cmd_i]
-                entry["action"] = c.action if c.kind != "final" else "(final)"
+                entry["action"] = {"final": "(final)", "deadlock": "(no enabled action)"}.get(
+                    c.kind, c.action)
                 hz = c.branches[br].hazard if 0 <= br < len(c.branches) else None
                 if hz:
                     entry["hazard"] = hz
