@@ -78,7 +78,30 @@ def refuse_inputs(paths: list[str], protect: tuple[str, ...]) -> None:
             if os.path.exists(p) and os.path.realpath(p) == real:
                 raise CompileError([Diagnostic("E002", Severity.ERROR,
                                                f"refusing to overwrite the input {p}", None,
-                                               hint="choose another output with -o")])
+                                               hint="choose another output path")])
+
+
+def check_writable(path: str, *, protect: tuple[str, ...] = ()) -> None:
+    """Raise now what `write_atomic(path, ...)` would raise later for the path itself
+    (E002 an input, E003 not writable), for commands that compute for long before they
+    write."""
+    refuse_inputs([path], protect)
+    real = os.path.realpath(path)
+
+    def cannot(why: str) -> CompileError:
+        return CompileError([Diagnostic("E003", Severity.ERROR, f"cannot write {path}: {why}",
+                                        None)])
+
+    if os.path.isdir(real):
+        raise cannot("it is a directory")
+    # write_atomic creates missing directories: the nearest existing one must allow it.
+    directory = os.path.dirname(real) or "."
+    while not os.path.exists(directory):
+        directory = os.path.dirname(directory)
+    if not os.path.isdir(directory):
+        raise cannot(f"{directory} is not a directory")
+    if not os.access(directory, os.W_OK | os.X_OK):
+        raise cannot(f"permission denied in {directory}")
 
 
 def write_atomic(path: str, content: str | bytes, *, protect: tuple[str, ...] = (),

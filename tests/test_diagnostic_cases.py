@@ -1,5 +1,7 @@
 """Negative cases, one per directory under tests/cases/err_* and warn_*: `afsmc check`
-gives the pinned diagnostics (code, file:line:col, caret, hint) and exit code."""
+gives the pinned diagnostics (code, file:line:col, caret, hint) and exit code. A case with a
+`command.txt` (one argument per line, `{input}` for the input's path) runs that command
+instead of `check`."""
 
 from __future__ import annotations
 
@@ -17,7 +19,10 @@ CASE_DIRS = sorted(p for p in CASES.iterdir() if p.name.startswith(("err_", "war
 def test_case(case: Path, update_golden: bool, monkeypatch: pytest.MonkeyPatch) -> None:
     monkeypatch.chdir(ROOT)
     rel = (case / "input.afsm").relative_to(ROOT).as_posix()
-    result = run_cli("check", rel)
+    command = case / "command.txt"
+    argv = [a.replace("{input}", rel) for a in command.read_text().splitlines() if a] \
+        if command.exists() else ["check", rel]
+    result = run_cli(*argv)
     is_error = case.name.startswith("err_")
     assert result.code == (1 if is_error else 0), result.err
     kind = "error" if is_error else "warning"

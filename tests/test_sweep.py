@@ -7,6 +7,7 @@ import csv
 import io
 import itertools
 import json
+import re
 from pathlib import Path
 
 import pytest
@@ -112,6 +113,61 @@ def test_usage_errors(deadline: str) -> None:
     assert run_cli("sweep", deadline, "--const", "D=1:3", "--plot", "x.gif").code == 2
     r = run_cli("sweep", deadline, "--const", "D=1:3", "--bound", "1:3")
     assert r.code == 2
+
+
+@pytest.fixture
+def no_points(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Fail the test if the sweep computes any point."""
+    import importlib
+
+    sweep_mod = importlib.import_module("afsmc.verify.sweep")  # afsmc.verify.sweep is a function
+
+    def boom(*_a: object, **_k: object) -> None:
+        raise AssertionError("a point was computed before the error was reported")
+
+    monkeypatch.setattr(sweep_mod, "_run", boom)
+
+
+def test_bound_sweep_rejects_properties_without_a_step_bound(tmp_path: Path,
+                                                             no_points: None) -> None:
+    """An unbounded F or G used to be given the bound silently (P[F "done"] came out as
+    P[F<=k "done"], exit 0); R[F] failed in every chunk after all points were checked."""
+    p = tmp_path / "geo.afsm"
+    p.write_text(GEO + 'property pd = P=? [ F "done" ];\nproperty pg = P=? [ G !"done" ];\n')
+    r = run_cli("sweep", str(p), "--bound", "0:10:5", "-p", "soon", "-p", "pd", "-p", "pg",
+                "-p", "tries", "--formula", 'R{"tries"}=? [ C ]', "--jobs", "2")
+    assert r.code == 1, r.err
+    errors = re.findall(r"^(\S+): error\[E410\]: property '(\w+)' has no step bound to sweep",
+                        r.err, re.M)
+    where = {name: at for at, name in errors}
+    assert list(where) == ["pd", "pg", "tries", "adhoc"]  # each once, in order
+    assert where["pd"] == f"{p}:14:1" and where["adhoc"] == "--formula:1:1"
+    assert "at bounds" not in r.err and "Traceback" not in r.err
+    assert "soon" not in r.err  # F<=5 has a bound to sweep
+
+
+def test_bound_sweep_rejects_a_bad_bound_once(tmp_path: Path, no_points: None) -> None:
+    p = tmp_path / "geo.afsm"
+    p.write_text(GEO)
+    r = run_cli("sweep", str(p), "--bound", "0:2:0.5", "-p", "soon", "--jobs", "2")
+    assert r.code == 1
+    assert r.err.count("error[E410]") == 1 and "--bound 0.5, 1.5: step bounds are integers" in r.err
+
+
+def test_outputs_are_checked_before_any_point(deadline: str, tmp_path: Path,
+                                              no_points: None) -> None:
+    blocker = tmp_path / "file"
+    blocker.write_text("")
+    for opt, name in (("-o", "out.csv"), ("--plot", "out.png")):
+        r = run_cli("sweep", deadline, "--const", "D=1:3", opt, str(blocker / name))
+        assert r.code == 1, r.err
+        assert f"error[E003]: cannot write {blocker / name}: {blocker} is not a directory" in r.err
+        # the same as compile, diagram and simulate --traces-out: E002, exit 1 (was 2)
+        src = tmp_path / f"model{Path(name).suffix}"  # an .afsm file named like a plot
+        src.write_text(Path(deadline).read_text())
+        r = run_cli("sweep", str(src), "--const", "D=1:3", opt, str(src))
+        assert r.code == 1 and f"error[E002]: refusing to overwrite the input {src}" in r.err
+        assert "Traceback" not in r.err
 
 
 def test_failure_at_a_point_is_a_diagnostic(deadline: str) -> None:

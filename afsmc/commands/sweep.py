@@ -1,7 +1,8 @@
 """`afsmc sweep FILE --const T=0:900:25 --property success [--plot fig.png] [-o out.csv]`.
 
 One open constant takes a range (`start:stop:step`, stop included) or a list (`a,b,c`);
-or `--bound 0:40:5` sweeps the step bound of the properties (F<=k, C<=k, I=k).
+or `--bound 0:40:5` sweeps the step bound of the properties (F<=k, C<=k, I=k; a property
+without one is an error, E410).
 """
 
 from __future__ import annotations
@@ -14,7 +15,7 @@ import sys
 from afsmc import verify as lib
 from afsmc.commands.common import add_file, fail, reductions, usage_error
 from afsmc.commands.verify import add_storm_options, positive, progress_printer
-from afsmc.compiler import write_atomic
+from afsmc.compiler import check_writable, write_atomic
 from afsmc.diagnostics import CompileError
 from afsmc.verify.sweep import Number, parse_values
 
@@ -25,7 +26,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    help="an open constant's value; exactly one may take a range "
                         "start:stop:step (stop included) or a list a,b,c: the sweep's x axis")
     p.add_argument("--bound", metavar="RANGE",
-                   help="sweep the step bound k of the properties (F<=k, C<=k, I=k) instead")
+                   help="sweep the step bound k of the properties (F<=k, G<=k, U<=k, C<=k, I=k; "
+                        "each must have one) instead")
     add_storm_options(p)
     p.add_argument("-o", "--output", metavar="FILE.csv", help="write the points as CSV")
     p.add_argument("--json", action="store_true", help="print the points as one JSON object")
@@ -87,13 +89,14 @@ def run(args: argparse.Namespace) -> int:
                         + ", ".join(sorted(swept)))
         ((variable, values),) = swept.items()
         kind = "const"
-    for out in (args.output, args.plot):
-        if out and os.path.abspath(out) == os.path.abspath(args.file):
-            usage_error(f"refusing to overwrite the input {args.file}")
     if args.plot and os.path.splitext(args.plot)[1].lower() not in (".png", ".svg"):
         usage_error(f"--plot {args.plot}: the name must end in .png or .svg")
     progress = progress_printer(args)
     try:
+        # A sweep can take hours: an output it could not write is said before it starts.
+        for out in (args.output, args.plot):
+            if out:
+                check_writable(out, protect=(args.file,))
         res = lib.sweep(args.file, variable, values, kind=kind,  # type: ignore[arg-type]
                         consts=fixed, properties=args.property, formulas=args.formula,
                         via=args.via, engine=args.engine, max_states=args.max_states,

@@ -29,8 +29,9 @@ transitions, choices, parse/build/check times), ``.properties`` (list of
 via="prism", engine="sparse", max_states=None, jobs=None, dask=None, uniform=True,
 progress=None) -> SweepResult``
     Evaluate the properties for each value of one open constant (``kind="const"``) or of
-    the step bound of the properties (``kind="bound"``: ``F<=k``, ``C<=k``, ``I=k``; the model is
-    built once per chunk of bounds). Points run in `jobs` local processes (default: the
+    the step bound of the properties (``kind="bound"``: ``F<=k``, ``C<=k``, ``I=k``; a property
+    without a step bound is E410, raised before any point; the model is built once per chunk
+    of bounds). Points run in `jobs` local processes (default: the
     number of cores; 1 runs in this process) or, with ``dask="tcp://host:8786"``, on that
     Dask cluster (a ``distributed.Client`` or an address). ``SweepResult.points`` is a list
     of :class:`SweepPoint` (x, properties, states, transitions) in the order of `values`;

@@ -118,16 +118,24 @@ class Task:
     split: bool = False  # one Storm process per query
 
 
-def _with_bound(p: ir.Property, k: int, name: str) -> ir.Property:
-    path = p.path
-    lit = E.Lit(k, E.Type.INT)
-    if isinstance(path, ir.Path) and path.kind != "X":
-        return dataclasses.replace(p, name=name, path=dataclasses.replace(path, bound=lit))
-    if isinstance(path, ir.RewardPath) and path.kind in ("C", "I"):
-        return dataclasses.replace(p, name=name, path=dataclasses.replace(path, bound=lit))
-    raise CompileError([Diagnostic(
+def _unbounded(p: ir.Property) -> Diagnostic | None:
+    """E410 if `p` has no step bound for --bound to sweep. Only a bound that is there is
+    swept: giving `F "done"` one would answer another question (`F<=k "done"`)."""
+    # X, R[F] and I have no optional bound; F, G, U and C have one only if written.
+    if p.path.bound is not None:
+        return None
+    return Diagnostic(
         "E410", Severity.ERROR, f"property '{p.name}' has no step bound to sweep", p.span,
-        hint="--bound sweeps F<=k, G<=k, U<=k, C<=k and I=k")])
+        hint="--bound sweeps the k of F<=k, G<=k, U<=k, C<=k and I=k; write a bound "
+             "(F<=K, any K) or choose other properties with --property")
+
+
+def _with_bound(p: ir.Property, k: int, name: str) -> ir.Property:
+    bad = _unbounded(p)
+    if bad is not None:
+        raise CompileError([bad])
+    return dataclasses.replace(p, name=name,
+                               path=dataclasses.replace(p.path, bound=E.Lit(k, E.Type.INT)))
 
 
 def evaluate(task: Task) -> tuple[list[SweepPoint], list[Diagnostic]]:
@@ -164,10 +172,7 @@ def _points(model: ir.Model, props: list[ir.Property], task: Task, t0: float) ->
                            time.perf_counter() - t0)]
     bounded = []
     for i, x in enumerate(task.xs):
-        if not isinstance(x, int) or x < 0:
-            raise CompileError([Diagnostic("E410", Severity.ERROR,
-                                           f"--bound {fmt(x)}: step bounds are integers >= 0",
-                                           None)])
+        assert isinstance(x, int) and x >= 0  # sweep() checked
         bounded += [(i, p.name, "", _with_bound(p, x, f"{p.name}__at{i}")) for p in props]
     return _regroup(model, bounded, task, t0)
 
@@ -405,6 +410,8 @@ def sweep(path: str, variable: str, values: Sequence[Number], *, kind: Kind = "c
     consts = dict(consts or {})
     if kind == "const":
         consts.pop(variable, None)
+    else:
+        _check_bounds(path, source, consts, properties, formulas, values)
     jobs = jobs or os.cpu_count() or 1
     # Dask workers are daemon processes, which cannot start the guard's child process.
     isolate: bool | None = False if dask is not None else None
@@ -451,6 +458,22 @@ def sweep(path: str, variable: str, values: Sequence[Number], *, kind: Kind = "c
         else "dtmc"
     return SweepResult(path, name, kind, typ, points, [r.name for r in first.properties],
                        time.perf_counter() - t0)
+
+
+def _check_bounds(path: str, text: str, consts: dict[str, str], properties: Sequence[str],
+                  formulas: Sequence[str], values: Sequence[Number]) -> None:
+    """A bound sweep's errors, once and before any point is computed (every chunk would
+    otherwise find them, after the others' points were checked)."""
+    bad = [fmt(x) for x in values if not isinstance(x, int) or x < 0]
+    if bad:
+        raise CompileError([Diagnostic("E410", Severity.ERROR,
+                                       f"--bound {', '.join(bad)}: step bounds are integers >= 0",
+                                       None)])
+    loaded = load_with_formulas(path, consts, formulas, text=text)
+    diags = [d for p in select(loaded.model, properties, loaded.adhoc)
+             if (d := _unbounded(p)) is not None]
+    if diags:
+        raise loaded.remap_error(CompileError(diags))
 
 
 def _kept(path: str, variable: str, kind: Kind, points: list[SweepPoint]) -> list[Diagnostic]:
