@@ -157,6 +157,21 @@ def test_usage_and_model_errors(tmp_path: Path) -> None:
     assert "E203" in r.err and "Traceback" not in r.err
 
 
+def test_no_properties_is_e407_as_in_verify_unless_traces_are_asked(tmp_path: Path) -> None:
+    """It used to print '(no properties declared)' and exit 0 where verify exits 1."""
+    f = tmp_path / "bare.afsm"
+    f.write_text("machine bare;\nvar x : [0..2] init 0;\nmode A = 0 initial;\nmode B = 1 final;\n"
+                 "action Go in A { 0.5: x := 1; 0.5: goto B; }\n")
+    for cmd in ("simulate", "verify"):
+        r = run_cli(cmd, str(f), *(["--runs", "10"] if cmd == "simulate" else []))
+        assert r.code == 1, (cmd, r.err)
+        assert f"error[E407]: {f} declares no properties" in r.err and "Traceback" not in r.err
+    out = tmp_path / "traces.json"
+    r = run_cli("simulate", str(f), "--runs", "10", "--traces", "2", "--traces-out", str(out))
+    assert r.code == 0, r.err  # sample runs are a use of a file without properties
+    assert r.out.startswith("trace 1 (") and len(json.loads(out.read_text())) == 2
+
+
 def test_rewards_cumulative_against_storm(tmp_path: Path) -> None:
     exact = storm_values(PATROL, "uniform", tmp=tmp_path)["charges"]
     data = sim_json(PATROL, "--runs", "20000", "--seed", "1")

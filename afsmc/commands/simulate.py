@@ -15,7 +15,7 @@ from afsmc.commands.common import add_consts, add_file, fail, overrides, print_j
 from afsmc.compiler import read_source, write_atomic
 from afsmc.diagnostics import CompileError, Diagnostic, Severity
 from afsmc.sim.compile import SimError
-from afsmc.sim.run import BATCH, STRATEGIES, Outcome, job_for, simulate
+from afsmc.sim.run import BATCH, STRATEGIES, Outcome, job_for, program, simulate
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
@@ -56,6 +56,13 @@ def run(args: argparse.Namespace) -> int:
     try:
         text = read_source(args.file)
         job = job_for(args.file, text, overrides(args), args.resolve, args.max_steps)
+        # Without properties there is nothing to estimate; sample runs (--traces) are
+        # the one use of such a file, as verify has none (E407 there too).
+        if not args.traces and not program(job).monitors:
+            raise CompileError([Diagnostic(
+                "E407", Severity.ERROR, f"{args.file} declares no properties", None,
+                hint="declare one ('property ok = P=? [ F \"done\" ];'), or watch sample "
+                     "runs with --traces K")])
         last = [-1]
 
         def progress(done: int, total: int) -> None:
