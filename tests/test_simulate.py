@@ -172,6 +172,18 @@ def test_no_properties_is_e407_as_in_verify_unless_traces_are_asked(tmp_path: Pa
     assert r.out.startswith("trace 1 (") and len(json.loads(out.read_text())) == 2
 
 
+def test_traces_out_is_checked_before_the_runs(tmp_path: Path) -> None:
+    blocker = tmp_path / "file"
+    blocker.write_text("")
+    r = run_cli("simulate", str(PATROL), "--runs", "10", "--traces", "1",
+                "--traces-out", str(blocker / "t.json"))
+    assert r.code == 1
+    assert f"error[E003]: cannot write {blocker / 't.json'}: {blocker} is not a directory" in r.err
+    assert "simulate:" not in r.err and not r.out  # no run was made
+    r = run_cli("simulate", str(PATROL), "--runs", "10", "--traces-out", str(PATROL))
+    assert r.code == 1 and "error[E002]: refusing to overwrite the input" in r.err
+
+
 def test_rewards_cumulative_against_storm(tmp_path: Path) -> None:
     exact = storm_values(PATROL, "uniform", tmp=tmp_path)["charges"]
     data = sim_json(PATROL, "--runs", "20000", "--seed", "1")

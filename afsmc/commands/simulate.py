@@ -12,7 +12,7 @@ import sys
 from typing import Any
 
 from afsmc.commands.common import add_consts, add_file, fail, overrides, print_json
-from afsmc.compiler import read_source, write_atomic
+from afsmc.compiler import check_writable, read_source, write_atomic
 from afsmc.diagnostics import CompileError, Diagnostic, Severity
 from afsmc.sim.compile import SimError
 from afsmc.sim.run import BATCH, STRATEGIES, Outcome, job_for, program, simulate
@@ -54,6 +54,8 @@ def run(args: argparse.Namespace) -> int:
         print("afsmc simulate: error: --confidence must be in (0, 1)", file=sys.stderr)
         return 2
     try:
+        if args.traces_out:  # said before the runs, not after them
+            check_writable(args.traces_out, protect=(args.file,))
         text = read_source(args.file)
         job = job_for(args.file, text, overrides(args), args.resolve, args.max_steps)
         # Without properties there is nothing to estimate; sample runs (--traces) are
