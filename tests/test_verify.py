@@ -163,6 +163,33 @@ def test_symbolic_engines_agree_with_sparse(spec: Spec, engine: str) -> None:
             assert getattr(a, key) == pytest.approx(getattr(b, key), abs=1e-5)
 
 
+FORMULAS = """machine fl;
+var a : [0..5] init 0;
+mode A = 0 initial;
+mode B = 1 final;
+formula high = a >= 3;
+action Inc in A when a < 5 { 0.5: a := a + 1; 0.5: goto B; }
+action Stop in A when a >= 5 { goto B; }
+label hi = high;
+rewards r { high : 1; }
+property p  = P=? [ F "hi" ];
+property q  = R{"r"}=? [ F mode == B ];
+property p2 = P=? [ F high && a < 5 ];
+"""
+
+
+@pytest.mark.parametrize(("engine", "via"), [("hybrid", "prism"), ("dd", "prism"),
+                                             ("hybrid", "jani")])
+def test_symbolic_engines_take_formulas_in_labels_and_rewards(spec: Spec, engine: str,
+                                                              via: str) -> None:
+    # By hand: a reaches 3 only through three heads in a row (1/8); the reward is collected
+    # once in each of a = 3, 4, 5 of mode A, reached with 1/8, 1/16, 1/32, until mode B.
+    res = run(spec("fl", FORMULAS), engine=engine, via=via)  # type: ignore[arg-type]
+    assert res.property("p").value == pytest.approx(1 / 8, abs=1e-9)
+    assert res.property("p2").value == pytest.approx(1 / 8, abs=1e-9)
+    assert res.property("q").value == pytest.approx(1 / 8 + 1 / 16 + 1 / 32, abs=1e-9)
+
+
 def test_json_shape(spec: Spec) -> None:
     r = run_cli("verify", spec("deadline", DEADLINE), "--json", "--engine", "hybrid")
     assert r.code == 0, r.err

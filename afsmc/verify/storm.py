@@ -195,6 +195,9 @@ def _execute(job: Job, notify: Notify) -> JobResult:
         if symbolic:
             # Labels and guards that mention constants fail in the symbolic builder otherwise.
             sprog = program.substitute_constants()
+            if hasattr(sprog, "substitute_formulas"):
+                # PRISM: a formula in a label or reward has no decision diagram otherwise
+                sprog = sprog.substitute_formulas()
             if hasattr(sprog, "substitute_functions"):
                 sprog.substitute_functions()  # JANI: in place
             env = stormpy.Environment()
