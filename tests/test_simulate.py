@@ -180,8 +180,17 @@ def test_traces_out_is_checked_before_the_runs(tmp_path: Path) -> None:
     assert r.code == 1
     assert f"error[E003]: cannot write {blocker / 't.json'}: {blocker} is not a directory" in r.err
     assert "simulate:" not in r.err and not r.out  # no run was made
-    r = run_cli("simulate", str(PATROL), "--runs", "10", "--traces-out", str(PATROL))
+    r = run_cli("simulate", str(PATROL), "--runs", "10", "--traces", "1", "--traces-out",
+                str(PATROL))
     assert r.code == 1 and "error[E002]: refusing to overwrite the input" in r.err
+
+
+def test_traces_out_without_traces_is_a_usage_error(tmp_path: Path) -> None:
+    # It used to write an empty list: no runs are saved unless --traces K asks for them.
+    out = tmp_path / "t.json"
+    r = run_cli("simulate", str(PATROL), "--runs", "10", "--traces-out", str(out))
+    assert r.code == 2 and "--traces-out needs --traces K" in r.err, r.err
+    assert not out.exists()
 
 
 def test_rewards_cumulative_against_storm(tmp_path: Path) -> None:

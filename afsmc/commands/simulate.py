@@ -45,10 +45,13 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    if args.runs < 1 or args.jobs < 1 or args.max_steps < 1 or args.batch_size < 1 \
-            or args.traces < 0:
+    if args.runs < 1 or args.jobs < 1 or args.max_steps < 1 or args.batch_size < 1:
         print("afsmc simulate: error: --runs, --jobs, --max-steps and --batch-size must be "
               "positive", file=sys.stderr)
+        return 2
+    if args.traces < 0 or (args.traces_out and not args.traces):
+        print("afsmc simulate: error: --traces K needs K >= 0, and --traces-out needs "
+              "--traces K with K >= 1 (the number of runs to save)", file=sys.stderr)
         return 2
     if not 0.0 < args.confidence < 1.0:
         print("afsmc simulate: error: --confidence must be in (0, 1)", file=sys.stderr)
