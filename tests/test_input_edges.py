@@ -5,8 +5,13 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import pytest
+
+from afsmc.cli import build_parser
+from afsmc.commands.common import overrides
+from afsmc.commands.sweep import split_consts
 from afsmc.syntax.fmt import format_text
-from tests.conftest import run_cli
+from tests.conftest import EXAMPLES, run_cli
 
 BOM = "\ufeff"
 
@@ -36,3 +41,42 @@ def test_fmt_keeps_a_byte_order_mark() -> None:
     out = format_text(BOM + "machine  small ;\n" + SMALL.split("\n", 1)[1])
     assert out.startswith(BOM + "machine small;\n") and out.count(BOM) == 1
     assert format_text(out) == out
+
+
+def test_a_constant_given_twice_is_a_usage_error() -> None:
+    for argv in (["--const", "CELLS=3,CELLS=4"], ["--const", "CELLS=3", "-c", "CELLS=5"]):
+        r = run_cli("check", str(EXAMPLES / "patrol.afsm"), *argv)
+        assert r.code == 2 and "--const CELLS is given twice" in r.err, r.err
+
+
+def test_sweep_a_range_replaces_a_preset_value_but_not_a_second_value() -> None:
+    fixed, swept = split_consts(["OBJECTS=2", "DEADLINE=500", "DEADLINE=150:500:50"])
+    assert fixed == {"OBJECTS": "2"} and swept == {"DEADLINE": [150, 200, 250, 300, 350, 400, 450, 500]}
+    assert split_consts(["N=2,T=0:10:5", "M=1"]) == ({"N": "2", "M": "1"}, {"T": [0, 5, 10]})
+    for items in (["N=1", "N=2"], ["N=1,N=2"], ["T=1:3", "T=4,5"]):
+        with pytest.raises(SystemExit) as exc:
+            split_consts(items)
+        assert exc.value.code == 2
+
+
+def test_argument_files_are_split_like_a_shell(tmp_path: Path) -> None:
+    args = tmp_path / "a.args"
+    args.write_text('# a preset\n--const "CELLS=2"  # quoted\n--const ROUNDS=1 --engine sparse\n'
+                    "--formula 'P=? [ F \"done\" ]'\n")
+    ns = build_parser().parse_args(["verify", "examples/patrol.afsm", f"@{args}"])
+    assert overrides(ns) == {"CELLS": "2", "ROUNDS": "1"}
+    assert ns.engine == "sparse" and ns.formula == ['P=? [ F "done" ]']
+    assert run_cli("check", str(EXAMPLES / "patrol.afsm"), f"@{args}").code == 2  # --formula: verify's
+    ok = tmp_path / "ok.args"
+    ok.write_text('--const "CELLS=2"\n')
+    assert run_cli("check", str(EXAMPLES / "patrol.afsm"), f"@{ok}").code == 0
+    bad = tmp_path / "bad.args"
+    bad.write_text('--const "CELLS=2\n')
+    r = run_cli("check", str(EXAMPLES / "patrol.afsm"), f"@{bad}")
+    assert r.code == 2 and "No closing quotation" in r.err
+
+
+def test_the_scenario_presets_still_read() -> None:
+    ns = build_parser().parse_args(["verify", "examples/uav.afsm", f"@{EXAMPLES / 'uav-scenario1.args'}"])
+    assert overrides(ns) == {"OBJECTS": "3", "T_LIMIT": "900", "DEADLINE": "900", "WIDTH": "7",
+                             "HEIGHT": "7", "ALPHA": "0.085"}
