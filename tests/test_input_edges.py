@@ -3,6 +3,7 @@ or non-finite constants, numbers beyond 64 bits, names PRISM or Storm reserve.""
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
 
 import pytest
@@ -10,7 +11,10 @@ import pytest
 from afsmc.cli import build_parser
 from afsmc.commands.common import overrides
 from afsmc.commands.sweep import split_consts
+from afsmc.model.pretty import number
 from afsmc.syntax.fmt import format_text
+from afsmc.verify.guard import human
+from afsmc.verify.sweep import parse_values
 from tests.conftest import EXAMPLES, run_cli
 
 BOM = "\ufeff"
@@ -80,3 +84,52 @@ def test_the_scenario_presets_still_read() -> None:
     ns = build_parser().parse_args(["verify", "examples/uav.afsm", f"@{EXAMPLES / 'uav-scenario1.args'}"])
     assert overrides(ns) == {"OBJECTS": "3", "T_LIMIT": "900", "DEADLINE": "900", "WIDTH": "7",
                              "HEIGHT": "7", "ALPHA": "0.085"}
+
+
+WEIGHTED = """machine weighted;
+param double D = 0.5;
+param int N = 3;
+var x : [0..3] init 0;
+mode A = 0 initial;
+mode B = 1 final;
+action Up in A when x < 3 && x < N weight D { x += 1; }
+action Done in A when x >= 3 || x >= N { goto B; }
+label done = mode == B;
+property reach = P=? [ F "done" ];
+"""
+
+
+@pytest.mark.parametrize("value", ["inf", "-inf", "1e400", "nan", "NaN", "infinity"])
+def test_a_non_finite_double_on_the_command_line_is_e208(tmp_path: Path, value: str) -> None:
+    path = tmp_path / "weighted.afsm"
+    path.write_text(WEIGHTED)
+    for argv in (["check"], ["compile", "-o", "-"]):
+        r = run_cli(*argv, str(path), "--const", f"D={value}")
+        assert r.code == 1, r.err
+        assert f"{path}:2:14: error[E208]: --const D={value}: not a finite double" in r.err
+        assert "Traceback" not in r.err and "E302" not in r.err
+
+
+def test_an_integer_beyond_64_bits_on_the_command_line_is_e208(tmp_path: Path) -> None:
+    path = tmp_path / "weighted.afsm"
+    path.write_text(WEIGHTED)
+    r = run_cli("check", str(path), "--const", "N=10000000000000000000")
+    assert r.code == 1 and "error[E208]: --const N=10000000000000000000: does not fit in a " \
+        "64-bit integer (-9223372036854775808 to 9223372036854775807)" in r.err
+    assert run_cli("check", str(path), "--const", "N=9223372036854775807").code == 0
+
+
+def test_printing_never_fails_on_a_non_finite_double() -> None:
+    assert [number(v) for v in (math.inf, -math.inf, math.nan, 1e300, 2.0)] == \
+        ["inf", "-inf", "nan", "1e+300", "2.0"]
+
+
+def test_huge_state_counts_read_as_powers_of_ten() -> None:
+    assert [human(n) for n in (12_345_678, 2.5e9, 2e19, 2 * 10**400, math.inf)] == \
+        ["12.3 M", "2.5 G", "2.0e19", "2.0e400", "inf"]
+
+
+def test_sweep_values_must_be_finite() -> None:
+    for text in ("inf,1", "nan", "0:inf:1", "0:1:nan"):
+        with pytest.raises(ValueError, match="finite"):
+            parse_values(text)

@@ -6,6 +6,7 @@ becomes a placeholder of the expected type so that checking can go on.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
@@ -13,7 +14,7 @@ from typing import Any
 from afsmc.diagnostics import CompileError, Related, Reporter, Span
 from afsmc.model import expr as E
 from afsmc.model import ir
-from afsmc.model.evaluate import EvalError, scalar
+from afsmc.model.evaluate import EvalError, RangeError, scalar
 from afsmc.model.expr import Type
 from afsmc.model.names import RESERVED, did_you_mean
 from afsmc.syntax import ast
@@ -40,6 +41,33 @@ def parse_override(text: str) -> tuple[str, str]:
         raise ValueError(f"expected NAME=VALUE, got {text!r}")
     name, value = text.split("=", 1)
     return name.strip(), value.strip()
+
+
+INT64 = (-(2**63), 2**63 - 1)
+_NUMBERS_HINT = "PRISM and Storm compute with 64-bit integers and finite doubles"
+
+
+def unrepresentable(v: Any) -> str | None:
+    """What keeps the value `v` from PRISM and Storm ("is infinite", ...), or None."""
+    if isinstance(v, bool):
+        return None
+    if isinstance(v, int) and not INT64[0] <= v <= INT64[1]:
+        return f"does not fit in a 64-bit integer ({INT64[0]} to {INT64[1]})"
+    if isinstance(v, float) and not math.isfinite(v):
+        return "is not a number (NaN)" if math.isnan(v) else "is infinite"
+    return None
+
+
+def _state_free(x: E.Expr) -> bool:
+    return all(isinstance(n, (E.Lit, E.ConstRef, E.Unary, E.Binary, E.Call)) for n in E.walk(x))
+
+
+def _shown(v: int) -> str:
+    """A huge integer, short: 1.00e300."""
+    digits = str(abs(v))
+    if len(digits) <= 24:
+        return str(v)
+    return f"{'-' if v < 0 else ''}{digits[0]}.{digits[1:3]}e{len(digits) - 1}"
 
 
 def resolve(module: ast.Module, overrides: Mapping[str, str] | None = None) -> ir.Model:
@@ -215,17 +243,23 @@ class _Resolver:
         self.consts[name] = ir.Constant(name, t, value, interval, is_param, source, d.span, d.type)
 
     def _parse_override(self, name: str, text: str, t: Type, span: Span) -> Any:
+        placeholder = {Type.INT: 0, Type.DOUBLE: 0.0, Type.BOOL: False}[t]
         try:
             if t is Type.BOOL:
                 if text not in ("true", "false"):
                     raise ValueError
                 return text == "true"
-            if t is Type.INT:
-                return int(text)
-            return float(text)
+            value: int | float = int(text) if t is Type.INT else float(text)
         except ValueError:
             self.rep.error("E208", f"--const {name}={text}: not {_a(t.value)}", span)
-            return {Type.INT: 0, Type.DOUBLE: 0.0, Type.BOOL: False}[t]
+            return placeholder
+        why = unrepresentable(value)
+        if why is not None:
+            self.rep.error("E208", f"--const {name}={text}: "
+                           + (why if t is Type.INT else "not a finite double"), span,
+                           hint=_NUMBERS_HINT)
+            return placeholder
+        return value
 
     def _check_overrides(self) -> None:
         for name in self.overrides:
@@ -251,6 +285,12 @@ class _Resolver:
             v = scalar(x, self._const_env())
         except (EvalError, ZeroDivisionError, OverflowError) as exc:
             self.rep.error("E211", f"cannot evaluate this constant: {exc}", e.span)
+            return 0
+        why = unrepresentable(v)
+        if why is not None:
+            value = f"its value {_shown(v)}" if isinstance(v, int) else "its value"
+            self.rep.error("E211", f"cannot evaluate this constant: {value} {why}", e.span,
+                           hint=_NUMBERS_HINT)
             return 0
         if want is Type.DOUBLE and isinstance(v, int) and not isinstance(v, bool):
             v = float(v)
@@ -419,9 +459,36 @@ class _Resolver:
         return x
 
     def _expr(self, e: ast.Expr, ctx: Ctx) -> E.Expr:
+        x = self._build(e, ctx)
+        if isinstance(x, (E.Unary, E.Binary, E.Call)) and x.type.numeric and _state_free(x):
+            # Storm folds such parts itself, and fails on an infinite or too large result.
+            why: str | None
+            try:
+                v = scalar(x, self._const_env())
+                why = unrepresentable(v)
+                if why is not None:
+                    why = f"its value {_shown(v) + ' ' if isinstance(v, int) else ''}{why}"
+            except RangeError as exc:
+                why = str(exc)
+            except (EvalError, ArithmeticError):
+                return x  # e.g. 1/0 under a `?:` that never takes it
+            if why is not None:
+                self.rep.error("E245", f"this expression cannot be compiled: {why}", e.span,
+                               hint=_NUMBERS_HINT)
+                return E.Lit(0 if x.type is Type.INT else 0.0, x.type, e.span)
+        return x
+
+    def _build(self, e: ast.Expr, ctx: Ctx) -> E.Expr:
         s = e.span
         if isinstance(e, ast.Num):
-            return E.Lit(e.value, Type.INT if isinstance(e.value, int) else Type.DOUBLE, s)
+            t = Type.INT if isinstance(e.value, int) else Type.DOUBLE
+            why = unrepresentable(e.value)
+            if why is not None:
+                self.rep.error("E245", f"{e.text} " + (why if t is Type.INT else "is too large for a "
+                                                       "double: it would be infinite"),
+                               s, hint=_NUMBERS_HINT)
+                return E.Lit(0 if t is Type.INT else 0.0, t, s)
+            return E.Lit(e.value, t, s)
         if isinstance(e, ast.BoolLit):
             return E.Lit(e.value, Type.BOOL, s)
         if isinstance(e, ast.Name):
