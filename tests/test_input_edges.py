@@ -7,15 +7,20 @@ import math
 from pathlib import Path
 
 import pytest
+import stormpy
 
 from afsmc.cli import build_parser
 from afsmc.commands.common import overrides
 from afsmc.commands.sweep import split_consts
+from afsmc.compiler import load
+from afsmc.model.lower import lower
+from afsmc.model.names import RESERVED, STORM_KEYWORDS
 from afsmc.model.pretty import number
 from afsmc.syntax.fmt import format_text
 from afsmc.verify.guard import human
 from afsmc.verify.sweep import parse_values
 from tests.conftest import EXAMPLES, run_cli
+from tests.storm_util import storm_prism
 
 BOM = "\ufeff"
 
@@ -133,3 +138,31 @@ def test_sweep_values_must_be_finite() -> None:
     for text in ("inf,1", "nan", "0:inf:1", "0:1:nan"):
         with pytest.raises(ValueError, match="finite"):
             parse_values(text)
+
+
+@pytest.mark.parametrize("stem", ["init", "module", "true", "rewards", "dtmc", "floor", "F", "9lives",
+                                  "café-1"])
+def test_a_machine_named_by_its_file_gets_a_name_storm_reads(tmp_path: Path, stem: str) -> None:
+    """Without a `machine` line the module is named after the file; a user cannot be
+    blamed for the file's name, so it is made safe rather than refused."""
+    path = tmp_path / f"{stem}.afsm"
+    path.write_text(SMALL.split("\n", 1)[1])
+    model = load(str(path)).model
+    assert model.name.isascii() and model.name.isidentifier() and model.name not in RESERVED
+    _, values = storm_prism(lower(model), tmp_path)
+    assert values == {"reach": 1.0}
+
+
+def test_storm_refuses_the_names_afsmc_reserves_for_it(tmp_path: Path) -> None:
+    """The lists in afsmc.model.names are not stale: Storm's PRISM parser refuses its own
+    keywords and PRISM's as a module name (player/endplayer: newer Storm releases only)."""
+    names = sorted(STORM_KEYWORDS - {"player", "endplayer"}) + ["init", "module", "true", "dtmc"]
+    refused = []
+    for name in names:
+        path = tmp_path / f"{name}.prism"
+        path.write_text(f"dtmc\nmodule {name}\n  x : [0..1] init 0;\n  [] x = 0 -> (x'=1);\nendmodule\n")
+        try:
+            stormpy.parse_prism_program(str(path))
+        except RuntimeError:
+            refused.append(name)
+    assert refused == names

@@ -16,7 +16,7 @@ from afsmc.model import expr as E
 from afsmc.model import ir
 from afsmc.model.evaluate import EvalError, RangeError, scalar
 from afsmc.model.expr import Type
-from afsmc.model.names import RESERVED, did_you_mean
+from afsmc.model.names import LABEL_RESERVED, QUOTED_RESERVED, RESERVED, did_you_mean, safe_identifier
 from afsmc.syntax import ast
 
 
@@ -141,6 +141,8 @@ class _Resolver:
 
     # ---- names -------------------------------------------------------------------
     def _declare_names(self, decls: tuple[ast.Decl, ...]) -> None:
+        if self.m.machine is not None:  # PRISM's module
+            self._check_reserved(self.m.machine.name, "machine")
         for d in decls:
             if isinstance(d, (ast.ConstDecl, ast.ParamDecl)):
                 self._declare_value(d.name, "constant")
@@ -176,10 +178,9 @@ class _Resolver:
             self.rep.error("E201", f"{kind} '{name.text}' is declared twice", name.span,
                            related=[Related("first declared here", table[name.text])])
             return
-        if kind == "action":
-            self._check_reserved(name, kind)
-        else:
-            self._check_internal(name, kind)
+        reserved = {"action": RESERVED, "label": LABEL_RESERVED,
+                    "reward structure": QUOTED_RESERVED}.get(kind, frozenset())
+        self._check_reserved(name, kind, reserved)
         table[name.text] = name.span
 
     def _check_internal(self, name: ast.Ident, kind: str) -> None:
@@ -187,9 +188,9 @@ class _Resolver:
             self.rep.error("E202", f"'{name.text}' cannot name {_a(kind)}: names that start "
                            "with __afsmc are afsmc's own", name.span, hint="choose another name")
 
-    def _check_reserved(self, name: ast.Ident, kind: str) -> None:
+    def _check_reserved(self, name: ast.Ident, kind: str, reserved: frozenset[str] = RESERVED) -> None:
         self._check_internal(name, kind)
-        if name.text in RESERVED:
+        if name.text in reserved:
             self.rep.error(
                 "E202", f"'{name.text}' cannot name {_a(kind)}: it is reserved in PRISM or Storm",
                 name.span, hint=f"choose another name, e.g. '{name.text}_{kind.split()[0]}'")
@@ -907,6 +908,4 @@ def _a(word: str) -> str:
 def _stem(path: str) -> str:
     import os
     base = os.path.basename(path)
-    stem = base.rsplit(".", 1)[0] or "machine"
-    clean = "".join(ch if ch.isalnum() or ch == "_" else "_" for ch in stem)
-    return clean if clean[:1].isalpha() else f"m_{clean}"
+    return safe_identifier(base.rsplit(".", 1)[0] or "machine")
