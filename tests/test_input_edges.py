@@ -156,7 +156,7 @@ def test_a_machine_named_by_its_file_gets_a_name_storm_reads(tmp_path: Path, ste
 def test_storm_refuses_the_names_afsmc_reserves_for_it(tmp_path: Path) -> None:
     """The lists in afsmc.model.names are not stale: Storm's PRISM parser refuses its own
     keywords and PRISM's as a module name (player/endplayer: newer Storm releases only)."""
-    names = sorted(STORM_KEYWORDS - {"player", "endplayer"}) + ["init", "module", "true", "dtmc"]
+    names = [*sorted(STORM_KEYWORDS - {"player", "endplayer"}), "init", "module", "true", "dtmc"]
     refused = []
     for name in names:
         path = tmp_path / f"{name}.prism"

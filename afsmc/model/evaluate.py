@@ -181,12 +181,13 @@ def _call(e: Call, env: Env) -> Array:
         return _to_int(np.ceil(args[0]))
     if f == "pow":
         base, power = args
-        if (e.type is Type.INT and isinstance(base, _SCALAR) and isinstance(power, _SCALAR)
-                and power >= 0):
+        if (e.type is Type.INT and isinstance(base, (int, np.integer))
+                and isinstance(power, (int, np.integer)) and power >= 0):
             # Exact on scalars (constants), where numpy's int64 would wrap around unseen.
-            if abs(base) > 1 and power >= 64:
-                raise RangeError(f"pow({base}, {power}) does not fit in a 64-bit integer")
-            return int(base) ** int(power)
+            b, k = int(base), int(power)
+            if abs(b) > 1 and k >= 64:
+                raise RangeError(f"pow({b}, {k}) does not fit in a 64-bit integer")
+            return b**k
         exp = np.asarray(args[1])
         if e.type is Type.INT and not np.any(exp < 0):
             return np.power(np.asarray(args[0], dtype=np.int64), exp.astype(np.int64))

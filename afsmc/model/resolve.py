@@ -16,7 +16,13 @@ from afsmc.model import expr as E
 from afsmc.model import ir
 from afsmc.model.evaluate import EvalError, RangeError, scalar
 from afsmc.model.expr import Type
-from afsmc.model.names import LABEL_RESERVED, QUOTED_RESERVED, RESERVED, did_you_mean, safe_identifier
+from afsmc.model.names import (
+    LABEL_RESERVED,
+    QUOTED_RESERVED,
+    RESERVED,
+    did_you_mean,
+    safe_identifier,
+)
 from afsmc.syntax import ast
 
 
