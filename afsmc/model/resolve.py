@@ -293,12 +293,6 @@ class _Resolver:
         except (EvalError, ZeroDivisionError, OverflowError) as exc:
             self.rep.error("E211", f"cannot evaluate this constant: {exc}", e.span)
             return 0
-        why = unrepresentable(v)
-        if why is not None:
-            value = f"its value {_shown(v)}" if isinstance(v, int) else "its value"
-            self.rep.error("E211", f"cannot evaluate this constant: {value} {why}", e.span,
-                           hint=_NUMBERS_HINT)
-            return 0
         if want is Type.DOUBLE and isinstance(v, int) and not isinstance(v, bool):
             v = float(v)
         return v
