@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import argparse
 import importlib
+import shlex
 import sys
 from collections.abc import Sequence
 
@@ -29,10 +30,14 @@ COMMANDS: dict[str, str] = {
 
 class _Parser(argparse.ArgumentParser):
     """`afsmc verify uav.afsm @scenario1.args`: arguments from a file, one or more per
-    line, `#` starts a comment (used for the scenario presets in examples/)."""
+    line, split as a shell would (quotes group, `#` starts a comment); used for the
+    scenario presets in examples/."""
 
     def convert_arg_line_to_args(self, arg_line: str) -> list[str]:
-        return arg_line.split("#", 1)[0].split()
+        try:
+            return shlex.split(arg_line, comments=True)
+        except ValueError as exc:  # an unbalanced quote
+            self.error(f"in an argument file, the line {arg_line.rstrip()!r}: {exc}")
 
 
 def build_parser() -> argparse.ArgumentParser:

@@ -19,9 +19,16 @@ class Severity(StrEnum):
     NOTE = "note"
 
 
+BOM = "\ufeff"
+
+
 @dataclass(frozen=True)
 class Source:
-    """The text of one input file, kept so diagnostics can quote it."""
+    """The text of one input file, kept so diagnostics can quote it.
+
+    Offsets index `text` as read, a leading byte-order mark included (so that edits by
+    offset, e.g. `sim-check --update`, keep it); lines and columns leave the mark out, as
+    editors do."""
 
     path: str
     text: str
@@ -29,7 +36,7 @@ class Source:
     def line(self, lineno: int) -> str:
         lines = self.text.splitlines()
         if 1 <= lineno <= len(lines):
-            return lines[lineno - 1]
+            return lines[lineno - 1].removeprefix(BOM) if lineno == 1 else lines[lineno - 1]
         return ""
 
     def position(self, offset: int) -> tuple[int, int]:
@@ -37,6 +44,8 @@ class Source:
         offset = max(0, min(offset, len(self.text)))
         line = self.text.count("\n", 0, offset) + 1
         col = offset - (self.text.rfind("\n", 0, offset) + 1) + 1
+        if line == 1 and offset > 0 and self.text.startswith(BOM):
+            col -= 1
         return line, col
 
 

@@ -22,7 +22,9 @@ def _value_at(model: ir.Model, e: E.Expr, w: Witness, mode: int) -> str:
               consts=model.const_values)
     try:
         return number(evaluate(inline(e, model), env))
-    except (EvalError, KeyError):
+    except EvalError as exc:
+        return f"undefined ({exc})"
+    except KeyError:
         return "?"
 
 
@@ -33,12 +35,15 @@ def check_weight_range(model: ir.Model, rep: Reporter) -> None:
             continue  # interval arithmetic is conservative: no state can leave [0, 1]
         for mode in a.modes:
             w = a.weight
-            bad = E.disj(E.Binary("<", w, E.lit(0), Type.BOOL), E.Binary(">", w, E.lit(1), Type.BOOL))
+            # not (0 <= w <= 1) rather than w < 0 || w > 1: a NaN weight (0 / 0) is bad too
+            bad = E.Unary("!", E.conj(E.Binary(">=", w, E.lit(0), Type.BOOL),
+                                      E.Binary("<=", w, E.lit(1), Type.BOOL)), Type.BOOL)
             wit = find(model, mode, E.conj(enabled(model, a, mode), bad))
             if wit is not None:
-                rep.error("E302", f"the weight of {a.name} is {_value_at(model, w, wit, mode)}, "
-                          f"outside [0, 1], in the state {wit}", a.weight_span or a.name_span,
-                          hint="Definition 2 maps weights into [0, 1]")
+                value = _value_at(model, w, wit, mode)
+                where = "" if value.startswith("undefined") or value == "nan" else ", outside [0, 1],"
+                rep.error("E302", f"the weight of {a.name} is {value}{where} in the state {wit}",
+                          a.weight_span or a.name_span, hint="Definition 2 maps weights into [0, 1]")
                 break
 
 

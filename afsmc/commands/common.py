@@ -58,6 +58,8 @@ def overrides(args: argparse.Namespace) -> dict[str, str]:
                 name, value = parse_override(part)
             except ValueError as exc:
                 usage_error(f"--const: {exc}")
+            if name in out:
+                usage_error(f"--const {name} is given twice ({name}={out[name]} and {name}={value})")
             out[name] = value
     return out
 

@@ -41,9 +41,11 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def split_consts(items: list[str]) -> tuple[dict[str, str], dict[str, list[Number]]]:
-    """`N=2,T=0:900:25` and `T=100,200,300` -> fixed constants and the swept ones."""
-    raw: dict[str, list[str]] = {}
-    current = None
+    """`N=2,T=0:900:25` and `T=100,200,300` -> fixed constants and the swept ones.
+
+    A constant given twice is a usage error, except that a range or list replaces one
+    fixed value of the same constant (`@preset.args --const DEADLINE=150:500:25`)."""
+    given: list[tuple[str, list[str]]] = []
     for item in items:
         for part in item.split(","):
             part = part.strip()
@@ -53,22 +55,28 @@ def split_consts(items: list[str]) -> tuple[dict[str, str], dict[str, list[Numbe
                 name, value = (s.strip() for s in part.split("=", 1))
                 if not name:
                     usage_error(f"--const {item}: expected NAME=VALUES")
-                raw[name] = [value]
-                current = name
-            elif current is None:
+                given.append((name, [value]))
+            elif not given:
                 usage_error(f"--const {item}: expected NAME=VALUES")
             else:
-                raw[current].append(part)
+                given[-1][1].append(part)
     fixed: dict[str, str] = {}
     swept: dict[str, list[Number]] = {}
-    for name, values in raw.items():
+    for name, values in given:
         if len(values) == 1 and ":" not in values[0]:
+            if name in fixed:
+                usage_error(f"--const {name} is given twice ({name}={fixed[name]} and "
+                            f"{name}={values[0]})")
             fixed[name] = values[0]
             continue
+        if name in swept:
+            usage_error(f"--const {name} is given two ranges")
         try:
             swept[name] = parse_values(",".join(values))
         except ValueError as exc:
             usage_error(f"--const {name}: {exc}")
+    for name in swept:
+        fixed.pop(name, None)
     return fixed, swept
 
 

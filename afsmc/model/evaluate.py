@@ -38,6 +38,10 @@ class EvalError(Exception):
     """An expression cannot be evaluated (division by zero, a missing name)."""
 
 
+class RangeError(EvalError):
+    """A value beyond what PRISM and Storm compute with (a 64-bit integer)."""
+
+
 @dataclass
 class Env:
     vars: Mapping[str, Array] = field(default_factory=dict)
@@ -176,6 +180,14 @@ def _call(e: Call, env: Env) -> Array:
     if f == "ceil":
         return _to_int(np.ceil(args[0]))
     if f == "pow":
+        base, power = args
+        if (e.type is Type.INT and isinstance(base, (int, np.integer))
+                and isinstance(power, (int, np.integer)) and power >= 0):
+            # Exact on scalars (constants), where numpy's int64 would wrap around unseen.
+            b, k = int(base), int(power)
+            if abs(b) > 1 and k >= 64:
+                raise RangeError(f"pow({b}, {k}) does not fit in a 64-bit integer")
+            return b**k
         exp = np.asarray(args[1])
         if e.type is Type.INT and not np.any(exp < 0):
             return np.power(np.asarray(args[0], dtype=np.int64), exp.astype(np.int64))
@@ -214,7 +226,8 @@ def _to_int(v: Array) -> Array:
 
 def scalar(e: Expr, consts: Mapping[str, Any], formulas: Mapping[str, Expr] | None = None) -> Any:
     """The value of a state-free expression, as a Python scalar."""
-    v = evaluate(e, Env(consts=consts, formulas=formulas or {}))
+    with np.errstate(all="ignore"):  # inf and NaN are the caller's to judge, not warnings
+        v = evaluate(e, Env(consts=consts, formulas=formulas or {}))
     if isinstance(v, np.generic):
         return v.item()
     if isinstance(v, np.ndarray):

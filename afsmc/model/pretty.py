@@ -5,6 +5,7 @@ Backends with other syntaxes (PRISM) reuse :class:`Printer` with their own table
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
 from typing import ClassVar
 
@@ -20,6 +21,8 @@ def number(v: int | float | bool) -> str:
         return "true" if v else "false"
     if isinstance(v, int):
         return str(v)
+    if not math.isfinite(v):  # never valid in a model (resolve rejects it), but printable
+        return repr(float(v))
     if v == int(v) and abs(v) < 1e15:
         return f"{int(v)}.0"
     return repr(float(v))

@@ -19,6 +19,7 @@
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, replace
 
 from afsmc.model import expr as E
@@ -226,7 +227,7 @@ def _thresholds(var: str, exprs: list[E.Expr], model: ir.Model, up: bool) -> flo
                 left, right, op = right, left, _FLIP[op]
             if isinstance(left, E.VarRef) and left.name == var:
                 c = static(right, model)
-                if c is None or c != int(c):
+                if c is None or not math.isfinite(c) or c != int(c):
                     ok = False
                     return
                 point = max(point, c + _UP[op]) if up else min(point, c + _DOWN[op])

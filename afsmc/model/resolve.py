@@ -6,6 +6,7 @@ becomes a placeholder of the expected type so that checking can go on.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
@@ -13,9 +14,15 @@ from typing import Any
 from afsmc.diagnostics import CompileError, Related, Reporter, Span
 from afsmc.model import expr as E
 from afsmc.model import ir
-from afsmc.model.evaluate import EvalError, scalar
+from afsmc.model.evaluate import EvalError, RangeError, scalar
 from afsmc.model.expr import Type
-from afsmc.model.names import RESERVED, did_you_mean
+from afsmc.model.names import (
+    LABEL_RESERVED,
+    QUOTED_RESERVED,
+    RESERVED,
+    did_you_mean,
+    safe_identifier,
+)
 from afsmc.syntax import ast
 
 
@@ -40,6 +47,33 @@ def parse_override(text: str) -> tuple[str, str]:
         raise ValueError(f"expected NAME=VALUE, got {text!r}")
     name, value = text.split("=", 1)
     return name.strip(), value.strip()
+
+
+INT64 = (-(2**63), 2**63 - 1)
+_NUMBERS_HINT = "PRISM and Storm compute with 64-bit integers and finite doubles"
+
+
+def unrepresentable(v: Any) -> str | None:
+    """What keeps the value `v` from PRISM and Storm ("is infinite", ...), or None."""
+    if isinstance(v, bool):
+        return None
+    if isinstance(v, int) and not INT64[0] <= v <= INT64[1]:
+        return f"does not fit in a 64-bit integer ({INT64[0]} to {INT64[1]})"
+    if isinstance(v, float) and not math.isfinite(v):
+        return "is not a number (NaN)" if math.isnan(v) else "is infinite"
+    return None
+
+
+def _state_free(x: E.Expr) -> bool:
+    return all(isinstance(n, (E.Lit, E.ConstRef, E.Unary, E.Binary, E.Call)) for n in E.walk(x))
+
+
+def _shown(v: int) -> str:
+    """A huge integer, short: 1.00e300."""
+    digits = str(abs(v))
+    if len(digits) <= 24:
+        return str(v)
+    return f"{'-' if v < 0 else ''}{digits[0]}.{digits[1:3]}e{len(digits) - 1}"
 
 
 def resolve(module: ast.Module, overrides: Mapping[str, str] | None = None) -> ir.Model:
@@ -113,6 +147,8 @@ class _Resolver:
 
     # ---- names -------------------------------------------------------------------
     def _declare_names(self, decls: tuple[ast.Decl, ...]) -> None:
+        if self.m.machine is not None:  # PRISM's module
+            self._check_reserved(self.m.machine.name, "machine")
         for d in decls:
             if isinstance(d, (ast.ConstDecl, ast.ParamDecl)):
                 self._declare_value(d.name, "constant")
@@ -148,10 +184,9 @@ class _Resolver:
             self.rep.error("E201", f"{kind} '{name.text}' is declared twice", name.span,
                            related=[Related("first declared here", table[name.text])])
             return
-        if kind == "action":
-            self._check_reserved(name, kind)
-        else:
-            self._check_internal(name, kind)
+        reserved = {"action": RESERVED, "label": LABEL_RESERVED,
+                    "reward structure": QUOTED_RESERVED}.get(kind, frozenset())
+        self._check_reserved(name, kind, reserved)
         table[name.text] = name.span
 
     def _check_internal(self, name: ast.Ident, kind: str) -> None:
@@ -159,9 +194,9 @@ class _Resolver:
             self.rep.error("E202", f"'{name.text}' cannot name {_a(kind)}: names that start "
                            "with __afsmc are afsmc's own", name.span, hint="choose another name")
 
-    def _check_reserved(self, name: ast.Ident, kind: str) -> None:
+    def _check_reserved(self, name: ast.Ident, kind: str, reserved: frozenset[str] = RESERVED) -> None:
         self._check_internal(name, kind)
-        if name.text in RESERVED:
+        if name.text in reserved:
             self.rep.error(
                 "E202", f"'{name.text}' cannot name {_a(kind)}: it is reserved in PRISM or Storm",
                 name.span, hint=f"choose another name, e.g. '{name.text}_{kind.split()[0]}'")
@@ -215,17 +250,23 @@ class _Resolver:
         self.consts[name] = ir.Constant(name, t, value, interval, is_param, source, d.span, d.type)
 
     def _parse_override(self, name: str, text: str, t: Type, span: Span) -> Any:
+        placeholder = {Type.INT: 0, Type.DOUBLE: 0.0, Type.BOOL: False}[t]
         try:
             if t is Type.BOOL:
                 if text not in ("true", "false"):
                     raise ValueError
                 return text == "true"
-            if t is Type.INT:
-                return int(text)
-            return float(text)
+            value: int | float = int(text) if t is Type.INT else float(text)
         except ValueError:
             self.rep.error("E208", f"--const {name}={text}: not {_a(t.value)}", span)
-            return {Type.INT: 0, Type.DOUBLE: 0.0, Type.BOOL: False}[t]
+            return placeholder
+        why = unrepresentable(value)
+        if why is not None:
+            self.rep.error("E208", f"--const {name}={text}: "
+                           + (why if t is Type.INT else "not a finite double"), span,
+                           hint=_NUMBERS_HINT)
+            return placeholder
+        return value
 
     def _check_overrides(self) -> None:
         for name in self.overrides:
@@ -419,9 +460,36 @@ class _Resolver:
         return x
 
     def _expr(self, e: ast.Expr, ctx: Ctx) -> E.Expr:
+        x = self._build(e, ctx)
+        if isinstance(x, (E.Unary, E.Binary, E.Call)) and x.type.numeric and _state_free(x):
+            # Storm folds such parts itself, and fails on an infinite or too large result.
+            why: str | None
+            try:
+                v = scalar(x, self._const_env())
+                why = unrepresentable(v)
+                if why is not None:
+                    why = f"its value {_shown(v) + ' ' if isinstance(v, int) else ''}{why}"
+            except RangeError as exc:
+                why = str(exc)
+            except (EvalError, ArithmeticError):
+                return x  # e.g. 1/0 under a `?:` that never takes it
+            if why is not None:
+                self.rep.error("E245", f"this expression cannot be compiled: {why}", e.span,
+                               hint=_NUMBERS_HINT)
+                return E.Lit(0 if x.type is Type.INT else 0.0, x.type, e.span)
+        return x
+
+    def _build(self, e: ast.Expr, ctx: Ctx) -> E.Expr:
         s = e.span
         if isinstance(e, ast.Num):
-            return E.Lit(e.value, Type.INT if isinstance(e.value, int) else Type.DOUBLE, s)
+            t = Type.INT if isinstance(e.value, int) else Type.DOUBLE
+            why = unrepresentable(e.value)
+            if why is not None:
+                self.rep.error("E245", f"{e.text} " + (why if t is Type.INT else "is too large for a "
+                                                       "double: it would be infinite"),
+                               s, hint=_NUMBERS_HINT)
+                return E.Lit(0 if t is Type.INT else 0.0, t, s)
+            return E.Lit(e.value, t, s)
         if isinstance(e, ast.BoolLit):
             return E.Lit(e.value, Type.BOOL, s)
         if isinstance(e, ast.Name):
@@ -840,6 +908,4 @@ def _a(word: str) -> str:
 def _stem(path: str) -> str:
     import os
     base = os.path.basename(path)
-    stem = base.rsplit(".", 1)[0] or "machine"
-    clean = "".join(ch if ch.isalnum() or ch == "_" else "_" for ch in stem)
-    return clean if clean[:1].isalpha() else f"m_{clean}"
+    return safe_identifier(base.rsplit(".", 1)[0] or "machine")

@@ -26,7 +26,7 @@ from typing import Any
 import lark
 from lark.exceptions import LarkError
 
-from afsmc.diagnostics import CompileError, Diagnostic, Severity, Span
+from afsmc.diagnostics import BOM, CompileError, Diagnostic, Severity, Span
 from afsmc.syntax import ast
 from afsmc.syntax.parser import grammar_text, parse
 
@@ -52,6 +52,8 @@ def tokens(text: str) -> list[lark.Token]:
 
 def format_text(text: str, path: str = "<input>") -> str:
     """The canonical layout of `text`. Raises CompileError if it does not parse."""
+    if text.startswith(BOM):  # kept, and left out of the layout
+        return BOM + format_text(text[1:], path)
     module = parse(text, path)
     try:
         toks = tokens(text)

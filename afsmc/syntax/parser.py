@@ -10,7 +10,7 @@ import lark
 from lark import Token, Transformer, v_args
 from lark.exceptions import UnexpectedCharacters, UnexpectedEOF, UnexpectedInput, UnexpectedToken
 
-from afsmc.diagnostics import CompileError, Reporter, Source, Span
+from afsmc.diagnostics import BOM, CompileError, Reporter, Source, Span
 from afsmc.syntax import ast
 
 # Human names for the grammar's terminals, used in "expected ..." messages.
@@ -87,7 +87,8 @@ def parse(text: str, path: str = "<input>") -> ast.Module:
     source = Source(path, text)
     reporter = Reporter()
     try:
-        tree = _parser().parse(text)
+        # A leading byte-order mark lexes as a blank, which keeps every offset as in `text`.
+        tree = _parser().parse(" " + text[1:] if text.startswith(BOM) else text)
     except UnexpectedInput as exc:
         _report_syntax_error(exc, source, reporter)
         raise CompileError(reporter.diagnostics) from None

@@ -11,6 +11,7 @@ states is compared with --max-states before anything is checked.
 
 from __future__ import annotations
 
+import math
 import multiprocessing
 import os
 import signal
@@ -18,6 +19,7 @@ import sys
 import time
 from collections.abc import Callable
 from dataclasses import replace
+from decimal import Decimal
 from typing import Any
 
 from afsmc.model import ir
@@ -74,7 +76,12 @@ def default_max_states() -> int:
 
 
 def human(n: float) -> str:
-    """12_345_678 -> '12.3 M'."""
+    """12_345_678 -> '12.3 M'; from 10^12 on, powers of ten: 2e19 -> '2.0e19'."""
+    if isinstance(n, float) and not math.isfinite(n):
+        return str(n)
+    if n >= 1e12:
+        mantissa, exponent = f"{Decimal(n):.1e}".split("e")  # Decimal: ints beyond floats too
+        return f"{mantissa}e{int(exponent)}"
     if n >= 1e9:
         return f"{n / 1e9:.1f} G"
     if n >= 1e6:

@@ -53,6 +53,8 @@ def parse_values(text: str) -> list[Number]:
             step = Decimal(parts[2]) if len(parts) == 3 else Decimal(1)
         except InvalidOperation:
             raise ValueError(f"expected numbers in start:stop:step, got {text!r}") from None
+        if not all(d.is_finite() for d in (start, stop, step)):
+            raise ValueError(f"expected finite numbers in start:stop:step, got {text!r}")
         if step <= 0:
             raise ValueError(f"the step of {text!r} must be positive")
         if stop < start:
@@ -64,9 +66,12 @@ def parse_values(text: str) -> list[Number]:
     out = []
     for part in text.split(","):
         try:
-            out.append(_number(Decimal(part.strip())))
+            d = Decimal(part.strip())
         except InvalidOperation:
             raise ValueError(f"not a number: {part.strip()!r}") from None
+        if not d.is_finite():
+            raise ValueError(f"not a finite number: {part.strip()!r}")
+        out.append(_number(d))
     return out
 
 

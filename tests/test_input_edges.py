@@ -1,0 +1,168 @@
+"""Inputs at the edges of what afsmc accepts: byte-order marks, argument files, repeated
+or non-finite constants, numbers beyond 64 bits, names PRISM or Storm reserve."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import pytest
+import stormpy
+
+from afsmc.cli import build_parser
+from afsmc.commands.common import overrides
+from afsmc.commands.sweep import split_consts
+from afsmc.compiler import load
+from afsmc.model.lower import lower
+from afsmc.model.names import RESERVED, STORM_KEYWORDS
+from afsmc.model.pretty import number
+from afsmc.syntax.fmt import format_text
+from afsmc.verify.guard import human
+from afsmc.verify.sweep import parse_values
+from tests.conftest import EXAMPLES, run_cli
+from tests.storm_util import storm_prism
+
+BOM = "\ufeff"
+
+SMALL = """machine small;
+var x : [0..3] init 0;
+mode A = 0 initial;
+mode B = 1 final;
+action Up in A when x < 3 { x += 1; }
+action Done in A when x == 3 { goto B; }
+label done = mode == B;
+property reach = P=? [ F "done" ];
+"""
+
+
+def test_a_leading_byte_order_mark_is_skipped(tmp_path: Path) -> None:
+    path = tmp_path / "bom.afsm"
+    path.write_text(BOM + SMALL, encoding="utf-8")
+    assert run_cli("check", str(path)).code == 0
+    bad = tmp_path / "bad.afsm"
+    bad.write_text(BOM + "const int 5;\n", encoding="utf-8")
+    r = run_cli("check", str(bad))
+    assert r.code == 1 and f"{bad}:1:11: error[E101]: unexpected '5'" in r.err
+    assert "\n 1 | const int 5;\n   |           ^\n" in r.err
+
+
+def test_fmt_keeps_a_byte_order_mark() -> None:
+    out = format_text(BOM + "machine  small ;\n" + SMALL.split("\n", 1)[1])
+    assert out.startswith(BOM + "machine small;\n") and out.count(BOM) == 1
+    assert format_text(out) == out
+
+
+def test_a_constant_given_twice_is_a_usage_error() -> None:
+    for argv in (["--const", "CELLS=3,CELLS=4"], ["--const", "CELLS=3", "-c", "CELLS=5"]):
+        r = run_cli("check", str(EXAMPLES / "patrol.afsm"), *argv)
+        assert r.code == 2 and "--const CELLS is given twice" in r.err, r.err
+
+
+def test_sweep_a_range_replaces_a_preset_value_but_not_a_second_value() -> None:
+    fixed, swept = split_consts(["OBJECTS=2", "DEADLINE=500", "DEADLINE=150:500:50"])
+    assert fixed == {"OBJECTS": "2"} and swept == {"DEADLINE": [150, 200, 250, 300, 350, 400, 450, 500]}
+    assert split_consts(["N=2,T=0:10:5", "M=1"]) == ({"N": "2", "M": "1"}, {"T": [0, 5, 10]})
+    for items in (["N=1", "N=2"], ["N=1,N=2"], ["T=1:3", "T=4,5"]):
+        with pytest.raises(SystemExit) as exc:
+            split_consts(items)
+        assert exc.value.code == 2
+
+
+def test_argument_files_are_split_like_a_shell(tmp_path: Path) -> None:
+    args = tmp_path / "a.args"
+    args.write_text('# a preset\n--const "CELLS=2"  # quoted\n--const ROUNDS=1 --engine sparse\n'
+                    "--formula 'P=? [ F \"done\" ]'\n")
+    ns = build_parser().parse_args(["verify", "examples/patrol.afsm", f"@{args}"])
+    assert overrides(ns) == {"CELLS": "2", "ROUNDS": "1"}
+    assert ns.engine == "sparse" and ns.formula == ['P=? [ F "done" ]']
+    assert run_cli("check", str(EXAMPLES / "patrol.afsm"), f"@{args}").code == 2  # --formula: verify's
+    ok = tmp_path / "ok.args"
+    ok.write_text('--const "CELLS=2"\n')
+    assert run_cli("check", str(EXAMPLES / "patrol.afsm"), f"@{ok}").code == 0
+    bad = tmp_path / "bad.args"
+    bad.write_text('--const "CELLS=2\n')
+    r = run_cli("check", str(EXAMPLES / "patrol.afsm"), f"@{bad}")
+    assert r.code == 2 and "No closing quotation" in r.err
+
+
+def test_the_scenario_presets_still_read() -> None:
+    ns = build_parser().parse_args(["verify", "examples/uav.afsm", f"@{EXAMPLES / 'uav-scenario1.args'}"])
+    assert overrides(ns) == {"OBJECTS": "3", "T_LIMIT": "900", "DEADLINE": "900", "WIDTH": "7",
+                             "HEIGHT": "7", "ALPHA": "0.085"}
+
+
+WEIGHTED = """machine weighted;
+param double D = 0.5;
+param int N = 3;
+var x : [0..3] init 0;
+mode A = 0 initial;
+mode B = 1 final;
+action Up in A when x < 3 && x < N weight D { x += 1; }
+action Done in A when x >= 3 || x >= N { goto B; }
+label done = mode == B;
+property reach = P=? [ F "done" ];
+"""
+
+
+@pytest.mark.parametrize("value", ["inf", "-inf", "1e400", "nan", "NaN", "infinity"])
+def test_a_non_finite_double_on_the_command_line_is_e208(tmp_path: Path, value: str) -> None:
+    path = tmp_path / "weighted.afsm"
+    path.write_text(WEIGHTED)
+    for argv in (["check"], ["compile", "-o", "-"]):
+        r = run_cli(*argv, str(path), "--const", f"D={value}")
+        assert r.code == 1, r.err
+        assert f"{path}:2:14: error[E208]: --const D={value}: not a finite double" in r.err
+        assert "Traceback" not in r.err and "E302" not in r.err
+
+
+def test_an_integer_beyond_64_bits_on_the_command_line_is_e208(tmp_path: Path) -> None:
+    path = tmp_path / "weighted.afsm"
+    path.write_text(WEIGHTED)
+    r = run_cli("check", str(path), "--const", "N=10000000000000000000")
+    assert r.code == 1 and "error[E208]: --const N=10000000000000000000: does not fit in a " \
+        "64-bit integer (-9223372036854775808 to 9223372036854775807)" in r.err
+    assert run_cli("check", str(path), "--const", "N=9223372036854775807").code == 0
+
+
+def test_printing_never_fails_on_a_non_finite_double() -> None:
+    assert [number(v) for v in (math.inf, -math.inf, math.nan, 1e300, 2.0)] == \
+        ["inf", "-inf", "nan", "1e+300", "2.0"]
+
+
+def test_huge_state_counts_read_as_powers_of_ten() -> None:
+    assert [human(n) for n in (12_345_678, 2.5e9, 2e19, 2 * 10**400, math.inf)] == \
+        ["12.3 M", "2.5 G", "2.0e19", "2.0e400", "inf"]
+
+
+def test_sweep_values_must_be_finite() -> None:
+    for text in ("inf,1", "nan", "0:inf:1", "0:1:nan"):
+        with pytest.raises(ValueError, match="finite"):
+            parse_values(text)
+
+
+@pytest.mark.parametrize("stem", ["init", "module", "true", "rewards", "dtmc", "floor", "F", "9lives",
+                                  "café-1"])
+def test_a_machine_named_by_its_file_gets_a_name_storm_reads(tmp_path: Path, stem: str) -> None:
+    """Without a `machine` line the module is named after the file; a user cannot be
+    blamed for the file's name, so it is made safe rather than refused."""
+    path = tmp_path / f"{stem}.afsm"
+    path.write_text(SMALL.split("\n", 1)[1])
+    model = load(str(path)).model
+    assert model.name.isascii() and model.name.isidentifier() and model.name not in RESERVED
+    _, values = storm_prism(lower(model), tmp_path)
+    assert values == {"reach": 1.0}
+
+
+def test_storm_refuses_the_names_afsmc_reserves_for_it(tmp_path: Path) -> None:
+    """The lists in afsmc.model.names are not stale: Storm's PRISM parser refuses its own
+    keywords and PRISM's as a module name (player/endplayer: newer Storm releases only)."""
+    names = [*sorted(STORM_KEYWORDS - {"player", "endplayer"}), "init", "module", "true", "dtmc"]
+    refused = []
+    for name in names:
+        path = tmp_path / f"{name}.prism"
+        path.write_text(f"dtmc\nmodule {name}\n  x : [0..1] init 0;\n  [] x = 0 -> (x'=1);\nendmodule\n")
+        try:
+            stormpy.parse_prism_program(str(path))
+        except RuntimeError:
+            refused.append(name)
+    assert refused == names
