@@ -2,15 +2,16 @@
 
 from __future__ import annotations
 
+from dataclasses import dataclass, field
 from functools import cache
 from importlib import resources
 from typing import Any, cast
 
 import lark
 from lark import Token, Transformer, v_args
-from lark.exceptions import UnexpectedCharacters, UnexpectedEOF, UnexpectedInput, UnexpectedToken
+from lark.exceptions import UnexpectedCharacters, UnexpectedInput, UnexpectedToken
 
-from afsmc.diagnostics import BOM, CompileError, Reporter, Source, Span
+from afsmc.diagnostics import BOM, CompileError, Related, Reporter, Source, Span
 from afsmc.syntax import ast
 
 # Human names for the grammar's terminals, used in "expected ..." messages.
@@ -69,13 +70,20 @@ _EXAMPLES: dict[tuple[str, str], list[str]] = {
 }
 
 
+# The grammar's start rules: a whole file, and one property (`verify --formula`).
+_STARTS = ["start", "prop"]
+_CLOSERS = {"{": ("}", "RBRACE"), "(": (")", "RPAR"), "[": ("]", "RSQB")}
+_DECL_KEYWORDS = frozenset({"machine", "const", "param", "var", "mode", "action", "hazard",
+                            "formula", "label", "rewards", "property"})
+
+
 @cache
 def _parser() -> lark.Lark:
     text = resources.files("afsmc.syntax").joinpath("afsm.lark").read_text(encoding="utf-8")
     # cache=True: lark keeps the LALR tables in the temp directory, keyed by the grammar's
     # hash, which saves ~0.15 s at every start of afsmc (lark rebuilds if the file is bad).
     return lark.Lark(text, parser="lalr", propagate_positions=True, maybe_placeholders=False,
-                     cache=True)
+                     cache=True, start=_STARTS)
 
 
 def grammar_text() -> str:
@@ -84,65 +92,170 @@ def grammar_text() -> str:
 
 def parse(text: str, path: str = "<input>") -> ast.Module:
     """Parse one file. Raises CompileError with a single syntax diagnostic on failure."""
+    return cast(ast.Module, _parse(text, path, "start"))
+
+
+def parse_property(text: str, path: str = "--formula") -> ast.PQuery | ast.RQuery:
+    """Parse one property formula on its own (`P=? [ F "done" ]`), so that a syntax error
+    speaks only of the formula. Raises CompileError like :func:`parse`."""
+    return cast("ast.PQuery | ast.RQuery", _parse(text, path, "prop"))
+
+
+def _parse(text: str, path: str, start: str) -> Any:
     source = Source(path, text)
     reporter = Reporter()
     try:
         # A leading byte-order mark lexes as a blank, which keeps every offset as in `text`.
-        tree = _parser().parse(" " + text[1:] if text.startswith(BOM) else text)
+        tree = _parser().parse(" " + text[1:] if text.startswith(BOM) else text, start=start)
     except UnexpectedInput as exc:
-        _report_syntax_error(exc, source, reporter)
+        _report_syntax_error(exc, source, reporter, formula=start == "prop")
         raise CompileError(reporter.diagnostics) from None
     builder = _Builder(source, reporter)
     try:
-        module = cast(ast.Module, builder.transform(tree))
+        node = builder.transform(tree)
     except lark.exceptions.VisitError as exc:
         if isinstance(exc.orig_exc, CompileError):
             raise exc.orig_exc from None
         raise
     if reporter.has_errors:
         raise CompileError(reporter.diagnostics)
-    return module
+    return node
 
 
-def _report_syntax_error(exc: UnexpectedInput, source: Source, reporter: Reporter) -> None:
-    pos = getattr(exc, "pos_in_stream", None)
-    if isinstance(exc, UnexpectedToken) and exc.token.start_pos is not None:
-        pos = exc.token.start_pos
-    if pos is None:
-        pos = len(source.text)
-    end = pos + 1
-    if isinstance(exc, UnexpectedToken) and exc.token.end_pos is not None:
-        end = max(exc.token.end_pos, pos + 1)
-    span = Span.at_offset(source, pos, end)
+@dataclass
+class _Scan:
+    """What precedes an offset: the end of the last token, the brackets still open
+    (innermost last) and the first token of every line."""
 
-    matched = _match_example(exc)
+    last_end: int = 0
+    open: list[tuple[str, int]] = field(default_factory=list)
+    line_heads: dict[int, tuple[int, str]] = field(default_factory=dict)  # line -> (offset, text)
 
+
+def _scan(text: str, upto: int) -> _Scan:
+    # A small tokenizer of its own: lark's lexer state at the error only has the token
+    # that failed, not the ones before it.
+    out = _Scan()
+    i, line, line_open = 0, 1, True
+    while i < upto:
+        c = text[i]
+        if c == "\n":
+            i, line, line_open = i + 1, line + 1, True
+            continue
+        if c.isspace() or c == BOM:
+            i += 1
+            continue
+        if text.startswith("//", i):
+            j = text.find("\n", i)
+            i = upto if j < 0 else j
+            continue
+        if text.startswith("/*", i):
+            j = text.find("*/", i + 2)
+            j = upto if j < 0 else j + 2
+            if "\n" in text[i:j]:
+                line, line_open = line + text.count("\n", i, j), True
+            i = j
+            continue
+        j = i + 1
+        if c == '"':
+            while j < upto and text[j] not in '"\n':
+                j += 2 if text[j] == "\\" else 1
+            j += 1
+        elif c.isalnum() or c == "_":
+            while j < upto and (text[j].isalnum() or text[j] == "_"):
+                j += 1
+        elif c in _CLOSERS:
+            out.open.append((c, i))
+        elif out.open and c == _CLOSERS[out.open[-1][0]][0]:
+            out.open.pop()
+        j = min(j, upto)
+        if line_open:
+            out.line_heads[line] = (i, text[i:j])
+            line_open = False
+        out.last_end = j
+        i = j
+    return out
+
+
+def _report_syntax_error(exc: UnexpectedInput, source: Source, reporter: Reporter,
+                         formula: bool = False) -> None:
+    text = source.text
+    the_end = "end of the formula" if formula else "end of file"
     if isinstance(exc, UnexpectedCharacters):
-        char = source.text[pos] if pos < len(source.text) else "?"
-        reporter.error("E101", f"unexpected character {char!r}", span,
-                       hint=_expected_hint(exc.allowed) if exc.allowed else None)
+        pos = len(text) if exc.pos_in_stream is None else exc.pos_in_stream
+        char = text[pos] if pos < len(text) else "?"
+        reporter.error("E101", f"unexpected character {char!r}", Span.at_offset(source, pos),
+                       hint=_expected_hint(exc.allowed, the_end) if exc.allowed else None)
         return
-    if isinstance(exc, UnexpectedEOF):
+    if not isinstance(exc, UnexpectedToken):  # UnexpectedEOF: lark's LALR does not raise it
+        scan = _scan(text, len(text))
         reporter.error("E101", "the file ends in the middle of a declaration",
-                       Span.at_offset(source, max(0, len(source.text) - 1)),
-                       hint=_expected_hint(set(exc.expected)))
+                       Span.at_offset(source, scan.last_end),
+                       hint=_expected_hint(set(getattr(exc, "expected", ())), the_end))
         return
-    assert isinstance(exc, UnexpectedToken)
     tok = exc.token
-    found = "end of file" if tok.type == "$END" else repr(str(tok))
-    if matched is not None:
+    at_end = tok.type == "$END"
+    # lark gives $END the position of the last token; the end is after it
+    pos = len(text) if at_end else (tok.start_pos or 0)
+    scan = _scan(text, pos)
+    after_last = Span.at_offset(source, scan.last_end)
+    span = after_last if at_end else Span.at_offset(source, pos, max(tok.end_pos or 0, pos + 1))
+    accepts = set(exc.accepts or exc.expected)
+
+    if scan.open and _unclosed(exc, source, reporter, scan, accepts, formula):
+        return
+    matched = _match_example(exc)
+    if matched is not None and not (formula and matched[0] == "E102"):
         code, message = matched
         if code == "E102":
             # The mistake is before the token that revealed it: point just after the
             # previous token, where the ';' belongs.
-            prev_end = source.text.rstrip()[:pos].rstrip()
-            at = len(prev_end)
-            span = Span.at_offset(source, at, at + 1)
-            reporter.error(code, message, span, hint=f"add ';' here; the next line starts with {found}")
+            hint = ("add ';' here; the file ends after this declaration" if at_end else
+                    f"add ';' here; the next line starts with {str(tok)!r}")
+            reporter.error(code, message, after_last, hint=hint)
             return
-        reporter.error(code, message, span, hint=f"found {found}")
+        reporter.error(code, message, span, hint=f"found {_found(tok, the_end)}")
         return
-    reporter.error("E101", f"unexpected {found}", span, hint=_expected_hint(exc.accepts or exc.expected))
+    reporter.error("E101", f"unexpected {_found(tok, the_end)}", span,
+                   hint=_expected_hint(accepts, the_end))
+
+
+def _found(tok: Token, the_end: str) -> str:
+    return the_end if tok.type == "$END" else repr(str(tok))
+
+
+def _unclosed(exc: UnexpectedToken, source: Source, reporter: Reporter, scan: _Scan,
+              accepts: set[str], formula: bool) -> bool:
+    """Report a bracket left open (E112), if that is what stopped the parser: the text
+    ends where its closer is acceptable, or a '{' block runs into the next declaration."""
+    char, at = scan.open[-1]
+    closer, terminal = _CLOSERS[char]
+    note = Related(f"the {char!r} that is not closed", Span.at_offset(source, at))
+    tok = exc.token
+    if tok.type == "$END":
+        if terminal not in accepts:
+            return False
+        the_end = "the formula" if formula else "the file"
+        reporter.error("E112", f"missing {closer!r}", Span.at_offset(source, scan.last_end),
+                       hint=f"add {closer!r} here; {the_end} ends before it", related=[note])
+        return True
+    if char != "{" or formula:
+        return False
+    # `action A in S { ...` followed by `action B ...`: the body runs into the next
+    # declaration, whose keyword the parser took for a name; it stops on it or just after.
+    line, _ = source.position(tok.start_pos or 0)
+    head = scan.line_heads.get(line)
+    if head is None or head[1] not in _DECL_KEYWORDS or head[0] <= at:
+        return False
+    between = source.text[head[0]:tok.start_pos].split()
+    if len(between) > 1:
+        return False
+    before = _scan(source.text, head[0]).last_end
+    reporter.error("E112", "missing '}' before the next declaration",
+                   Span.at_offset(source, before),
+                   hint=f"add '}}' here; the next line starts a new declaration ({head[1]!r})",
+                   related=[note])
+    return True
 
 
 def _state_of(exc: UnexpectedInput) -> object:
@@ -157,7 +270,7 @@ def _example_states() -> list[tuple[object, str, tuple[str, str]]]:
     for mistake, examples in _EXAMPLES.items():
         for text in examples:
             try:
-                _parser().parse(text)
+                _parser().parse(text, start="start")
             except UnexpectedToken as exc:
                 out.append((_state_of(exc), exc.token.type, mistake))
             except UnexpectedInput:
@@ -178,8 +291,9 @@ def _match_example(exc: UnexpectedInput) -> tuple[str, str] | None:
     return candidates[0][1] if candidates else None
 
 
-def _expected_hint(expected: set[str] | frozenset[str]) -> str:
-    names = sorted({_TOKEN_NAMES.get(t, _literal_name(t)) for t in expected})
+def _expected_hint(expected: set[str] | frozenset[str], the_end: str = "end of file") -> str:
+    names = sorted({the_end if t == "$END" else _TOKEN_NAMES.get(t, _literal_name(t))
+                    for t in expected})
     if len(names) > 8:
         names = [*names[:8], "..."]
     return "expected " + ", ".join(names)

@@ -25,6 +25,7 @@ from afsmc.model.lower import Lowered, inline
 from afsmc.model.names import did_you_mean
 from afsmc.model.pretty import show
 from afsmc.model.reduce import Reductions
+from afsmc.syntax.parser import parse, parse_property
 from afsmc.verify.guard import (
     Interrupted,
     Progress,
@@ -204,6 +205,9 @@ def load_with_formulas(path: str, overrides: Mapping[str, str] | None = None,
             raise CompileError([Diagnostic(
                 "E409", Severity.ERROR, f"--formula {f!r}: one property, without ';'", None,
                 hint="repeat --formula for several properties")])
+        # Parsed on its own first, so a syntax error speaks of the formula alone and not
+        # of the declaration it is wrapped in below.
+        parse_property(f, "--formula")
         name = _fresh_name(base, "adhoc", taken)
         names.append(name)
         head = f"property {name} = "
@@ -212,6 +216,8 @@ def load_with_formulas(path: str, overrides: Mapping[str, str] | None = None,
     try:
         checked = load(path, overrides, text=full, run_checks=run_checks)
     except CompileError as exc:
+        if where and any(d.code.startswith("E1") for d in exc.diagnostics):
+            parse(base, path)  # a syntax error of the file: its own, without the formulas
         raise CompileError([_remap(d, len(base), where) for d in exc.diagnostics]) from None
     return Loaded(checked.model, [_remap(d, len(base), where) for d in checked.diagnostics],
                   names, len(base), where)
