@@ -14,7 +14,7 @@ import pytest
 
 from afsmc.verify import parse_values, sweep
 from tests.conftest import EXAMPLES, run_cli
-from tests.test_verify import DEADLINE, GEO
+from tests.test_verify import DEADLINE, GEO, RECORD
 
 TOL = 1e-6  # Storm's value iteration stops at a relative precision of 1e-6
 
@@ -104,6 +104,22 @@ def test_bound_sweep_matches_closed_form(tmp_path: Path) -> None:
         (prop,) = pt["properties"]
         assert prop["value"] == pytest.approx(1 - 0.7 ** pt["x"], abs=1e-9)
         assert prop["formula"] == f'P=? [ F<={pt["x"]} "done" ]'
+
+
+def test_bound_sweep_formulas_are_written_as_in_the_file(tmp_path: Path) -> None:
+    """Each point shows the property as written with its bound put in, and it re-parses."""
+    from afsmc.syntax.parser import parse_property
+
+    p = tmp_path / "rec.afsm"
+    p.write_text(RECORD)
+    r = run_cli("sweep", str(p), "--bound", "0:2", "-p", "g", "-p", "u", "--json", "--jobs", "1")
+    assert r.code == 0, r.err
+    for pt in json.loads(r.out)["points"]:
+        g, u = pt["properties"]
+        assert g["formula"] == f"P=? [ G<={pt['x']} !(mode in {{Run, Walk}}) ]"
+        assert u["formula"] == f"P=? [ mode == Start U<={pt['x']} ret.px == 1 ]"
+        parse_property(g["formula"])
+        parse_property(u["formula"])
 
 
 def test_usage_errors(deadline: str) -> None:

@@ -58,6 +58,35 @@ property by_deadline = P=? [ F "done" && t <= D ];
 property steps = R{"steps"}=? [ F "done" ];
 """
 
+# A record variable and mode ranges: the IR has `ret_px` and `mode >= Run`, which afsm
+# does not accept; the formula shown must be afsm.
+RECORD = """
+machine rec;
+var ret : (px: [0..2], py: [0..2]) init (0, 0);
+mode Start = 0 initial;
+mode Run = 1;
+mode Walk = 2;
+mode Other = 3;
+mode End = 4 final;
+action Go in Start {
+    0.5: goto Run, ret.px := 1;
+    0.25: goto Walk, ret.py := 2;
+    0.25: goto Other;
+}
+action Stop in {1..3} when ret.py < 2 {
+    goto End;
+}
+action Back in Walk when ret.py == 2 {
+    goto Start, ret.py := 0;
+}
+label fin = mode == End;
+rewards moves { [Go] true : 1; }
+property q = P=? [ F mode in {1..3} && ret.px == 1 ];
+property g = P=? [ G<=3 /* not yet */ !(mode in {Run, Walk})  ];
+property u = P=? [ mode == Start U<=(2) ret.px == 1 ];
+property r = R{"moves"}=? [ F "fin" ];
+"""
+
 # About 2.25 M reachable states: too big for a small --max-states, built in a child.
 BIG = """
 machine big;
@@ -220,6 +249,30 @@ def test_table_and_ad_hoc_formula(spec: Spec) -> None:
     assert lines["adhoc"][-3:] == ["-", "0", "0"]
     assert lines["adhoc2"][-3:] == ["0", "1", "0.75"]
     assert "states" in r.out and "transitions" in r.out and "build" in r.out
+
+
+@pytest.mark.parametrize(("name", "consts"), [
+    ("patrol", {}), ("uav", {"WIDTH": "2", "HEIGHT": "2", "T_LIMIT": "100", "DEADLINE": "80"}),
+    ("record", {})])
+def test_shown_formulas_are_afsm_with_the_same_values(spec: Spec, name: str,
+                                                      consts: dict[str, str]) -> None:
+    """verify's formula column (docs/verification.md: afsm syntax) re-parses as --formula
+    and gives the property's values."""
+    path = spec(name, RECORD) if name == "record" else str(EXAMPLES / f"{name}.afsm")
+    res = run(path, consts=consts, isolate=False)
+    if name == "record":
+        assert [p.formula for p in res.properties] == [
+            "P=? [ F mode in {1..3} && ret.px == 1 ]", "P=? [ G<=3 !(mode in {Run, Walk}) ]",
+            "P=? [ mode == Start U<=(2) ret.px == 1 ]", 'R{"moves"}=? [ F "fin" ]']
+    again = run(path, consts=consts, formulas=[p.formula for p in res.properties],
+                isolate=False)
+    assert len(again.properties) == len(res.properties)
+    for p, q in zip(res.properties, again.properties, strict=True):
+        assert q.formula == p.formula
+        for key in ("min", "max", "uniform", "value"):
+            a, b = getattr(p, key), getattr(q, key)
+            assert (a is None) == (b is None) and (a is None or a == pytest.approx(b, abs=1e-12)), \
+                (p.name, key)
 
 
 def test_formula_errors_point_into_the_formula(spec: Spec) -> None:

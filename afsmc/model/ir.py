@@ -163,6 +163,12 @@ class Property:
     path: Path | RewardPath
     reward: str | None
     span: Span
+    # The formula as written (comments dropped, whitespace normalised): what verify and
+    # sweep show, since printing the IR back would give flat names (`pos_x`) and mode
+    # ranges (`mode >= A`) that afsm does not accept. "" if the property has no source.
+    text: str = ""
+    # Where in `text` the step bound (`<=k`, `=k`) stands, or would go after F/G/U/C.
+    bound_site: tuple[int, int] | None = None
 
 
 @dataclass(frozen=True)

@@ -24,6 +24,7 @@ from afsmc.model.names import (
     safe_identifier,
 )
 from afsmc.syntax import ast
+from afsmc.syntax.parser import flat_text, tokens
 
 
 @dataclass(frozen=True)
@@ -878,7 +879,8 @@ class _Resolver:
             else:
                 path = ir.Path("X", self._bool(p.target, ctx))
             opt = {"P": "", "Pmin": "min", "Pmax": "max"}[q.op]
-            return ir.Property(d.name.text, "P", opt, path, None, d.span)  # type: ignore[arg-type]
+            return ir.Property(d.name.text, "P", opt, path, None, d.span,  # type: ignore[arg-type]
+                               *_written(q))
         rp = q.path
         if q.reward is None:
             if len(self.reward_names) != 1:
@@ -897,7 +899,27 @@ class _Resolver:
             path = ir.RewardPath("C", bound=bound(rp.bound))
         else:
             path = ir.RewardPath("I", bound=bound(rp.at))
-        return ir.Property(d.name.text, "R", q.opt, path, reward, d.span)
+        return ir.Property(d.name.text, "R", q.opt, path, reward, d.span, *_written(q))
+
+
+def _written(q: ast.PQuery | ast.RQuery) -> tuple[str, tuple[int, int] | None]:
+    """The query's text as written and where its step bound stands (ir.Property.text)."""
+    text = q.span.source.text
+    p = q.path
+    if isinstance(p, ast.Next | ast.ReachReward):
+        return flat_text(text, q.span.start, q.span.end)
+    if isinstance(p, ast.Until):
+        op = next((i for i, j in tokens(text, p.left.span.end, p.right.span.start)
+                   if text[i:j] == "U"), None)
+        after = p.right.span.start
+    else:  # F, G, C, I: the path starts at its letter
+        op = p.span.start
+        after = p.target.span.start if isinstance(p, ast.Eventually | ast.Globally) \
+            else q.span.end - 1  # the closing ']'
+    if op is None:
+        return flat_text(text, q.span.start, q.span.end)
+    site_end = max((j for _, j in tokens(text, op + 1, after)), default=op + 1)
+    return flat_text(text, q.span.start, q.span.end, (op + 1, site_end))
 
 
 def _a(word: str) -> str:

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from collections.abc import Iterator
 from dataclasses import dataclass, field
 from functools import cache
 from importlib import resources
@@ -132,48 +133,74 @@ class _Scan:
     line_heads: dict[int, tuple[int, str]] = field(default_factory=dict)  # line -> (offset, text)
 
 
-def _scan(text: str, upto: int) -> _Scan:
-    # A small tokenizer of its own: lark's lexer state at the error only has the token
-    # that failed, not the ones before it.
-    out = _Scan()
-    i, line, line_open = 0, 1, True
-    while i < upto:
+def tokens(text: str, start: int = 0, end: int | None = None) -> Iterator[tuple[int, int]]:
+    """(start, end) of each token of text[start:end], skipping whitespace and comments.
+    Only positions and brackets matter to its users: `<=` may come out as two tokens."""
+    end = len(text) if end is None else end
+    i = start
+    while i < end:
         c = text[i]
-        if c == "\n":
-            i, line, line_open = i + 1, line + 1, True
-            continue
         if c.isspace() or c == BOM:
             i += 1
             continue
         if text.startswith("//", i):
             j = text.find("\n", i)
-            i = upto if j < 0 else j
+            i = end if j < 0 else j
             continue
         if text.startswith("/*", i):
             j = text.find("*/", i + 2)
-            j = upto if j < 0 else j + 2
-            if "\n" in text[i:j]:
-                line, line_open = line + text.count("\n", i, j), True
-            i = j
+            i = end if j < 0 else j + 2
             continue
         j = i + 1
         if c == '"':
-            while j < upto and text[j] not in '"\n':
+            while j < end and text[j] not in '"\n':
                 j += 2 if text[j] == "\\" else 1
             j += 1
         elif c.isalnum() or c == "_":
-            while j < upto and (text[j].isalnum() or text[j] == "_"):
+            while j < end and (text[j].isalnum() or text[j] == "_"):
                 j += 1
-        elif c in _CLOSERS:
+        j = min(j, end)
+        yield i, j
+        i = j
+
+
+def flat_text(text: str, start: int, end: int,
+              site: tuple[int, int] | None = None) -> tuple[str, tuple[int, int] | None]:
+    """text[start:end] on one line as written, comments dropped and each gap between tokens
+    one space; and where the region `site` (source offsets) ends up in it."""
+    out = ""
+    prev = None
+    at: list[int] = []
+    for i, j in tokens(text, start, end):
+        if site is not None and not at and i >= site[0]:
+            at.append(len(out))
+        if site is not None and len(at) == 1 and i >= site[1]:
+            at.append(len(out))
+        if prev is not None and prev < i:
+            out += " "
+        out += text[i:j]
+        prev = j
+    if site is not None:
+        at += [len(out)] * (2 - len(at))
+        return out, (at[0], at[1])
+    return out, None
+
+
+def _scan(text: str, upto: int) -> _Scan:
+    # lark's lexer state at an error only has the token that failed, not the ones before it.
+    out = _Scan()
+    line, counted = 1, 0
+    for i, j in tokens(text, 0, upto):
+        newlines = text.count("\n", counted, i)
+        line, counted = line + newlines, i
+        if newlines or not out.line_heads:
+            out.line_heads.setdefault(line, (i, text[i:j]))
+        c = text[i]
+        if c in _CLOSERS:
             out.open.append((c, i))
         elif out.open and c == _CLOSERS[out.open[-1][0]][0]:
             out.open.pop()
-        j = min(j, upto)
-        if line_open:
-            out.line_heads[line] = (i, text[i:j])
-            line_open = False
         out.last_end = j
-        i = j
     return out
 
 

@@ -159,6 +159,11 @@ class VerifyResult:
         }
 
 
+def shown(p: ir.Property) -> str:
+    """A property's formula for people, in afsm syntax: as written where it was written."""
+    return p.text or formula_text(p, p.opt, show)
+
+
 # ---- loading with ad-hoc formulas --------------------------------------------------
 
 
@@ -788,7 +793,7 @@ def check(model: ir.Model, props: Sequence[ir.Property], *, via: Via = "prism",
 
     results = []
     for p in original:
-        r = PropertyResult(p.name, formula_text(p, p.opt, show), p.kind)
+        r = PropertyResult(p.name, shown(p), p.kind)
         low = lows[0][1]
         if low.kind == "mdp":
             for name, opt in property_variants(low, p):

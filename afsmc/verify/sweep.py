@@ -20,15 +20,13 @@ from decimal import Decimal, InvalidOperation
 from typing import Any, Literal
 
 from afsmc.backends.prism import emit as prism_emit
-from afsmc.backends.prism import formula_text
 from afsmc.compiler import read_source, write_atomic
 from afsmc.diagnostics import CompileError, Diagnostic, Severity
 from afsmc.model import expr as E
 from afsmc.model import ir
 from afsmc.model.lower import lower
-from afsmc.model.pretty import show
 from afsmc.model.reduce import Reductions
-from afsmc.verify.core import PropertyResult, check, load_with_formulas, select
+from afsmc.verify.core import PropertyResult, check, load_with_formulas, select, shown
 from afsmc.verify.guard import Progress
 from afsmc.verify.storm import Engine, Via, finite
 
@@ -139,8 +137,14 @@ def _with_bound(p: ir.Property, k: int, name: str) -> ir.Property:
     bad = _unbounded(p)
     if bad is not None:
         raise CompileError([bad])
+    text = ""  # the formula as written, with k for its bound
+    if p.bound_site is not None:
+        a, b = p.bound_site
+        op = "=" if isinstance(p.path, ir.RewardPath) and p.path.kind == "I" else "<="
+        text = f"{p.text[:a]}{op}{k}{p.text[b:]}"
     return dataclasses.replace(p, name=name,
-                               path=dataclasses.replace(p.path, bound=E.Lit(k, E.Type.INT)))
+                               path=dataclasses.replace(p.path, bound=E.Lit(k, E.Type.INT)),
+                               text=text, bound_site=None)
 
 
 def evaluate(task: Task) -> tuple[list[SweepPoint], list[Diagnostic]]:
@@ -237,7 +241,7 @@ def _shared_points(task: Task, t0: float) -> list[SweepPoint]:
         first = first or loaded
         for p in select(loaded.model, task.properties, loaded.adhoc):
             if i < len(task.xs):
-                bounded.append((i, p.name, formula_text(p, p.opt, show),
+                bounded.append((i, p.name, shown(p),
                                 _inline_consts(p, loaded.model, f"{p.name}__at{i}")))
             else:  # another chunk's point: kept exact by the reductions, not checked here
                 preserve.append(_inline_consts(p, loaded.model, f"{p.name}__keep{i}"))
