@@ -25,7 +25,8 @@ def test_exists_agrees_with_the_exhaustive_search(path: Path) -> None:
     asked = 0
     for a in model.actions:
         for mode in a.modes:
-            for pred in (fire_condition(model, a, mode), enabled(model, a, mode),
+            for pred in (fire_condition(model, a, mode),
+                         fire_condition(model, a, mode, ties=True), enabled(model, a, mode),
                          E.neg(enabled(model, a, mode))):
                 assert exists(model, mode, pred) == (find(model, mode, pred) is not None)
                 asked += 1
@@ -57,3 +58,24 @@ def _ends(model: ir.Model, e: E.Expr) -> list[dict[str, int]]:
     for c in used:
         out = [d | {c.name: end} for d in out for end in (c.interval or ())]
     return out
+
+
+@pytest.mark.parametrize("case", ["err_weight_tie", "err_weight_tie_rounding",
+                                  "err_weight_tie_no_order_warnings", "warn_deadlock"])
+def test_the_smt_solver_decides_ties_as_enumeration_does(
+        case: str, monkeypatch: pytest.MonkeyPatch) -> None:
+    """A tie (weights within 1e-12, E301) and the mode graph's view of it are the same
+    whether the states are enumerated or left to Z3."""
+    from afsmc import check
+    from afsmc.check import search
+
+    path = str(ROOT / "tests" / "cases" / case / "input.afsm")
+
+    def run() -> list[tuple[str, str]]:
+        model = load(path, run_checks=False).model
+        return [(d.code, d.message) for d in check.run(model)]
+
+    enumerated = run()
+    monkeypatch.setattr(search, "ENUMERATION_LIMIT", 0)
+    monkeypatch.setattr(search, "SAMPLE_LIMIT", 0)
+    assert run() == enumerated

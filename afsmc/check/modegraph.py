@@ -4,7 +4,8 @@ Nodes are modes; an edge `M -> N` exists when some action (or hazard) can fire i
 one of its outcomes moves to N (an outcome without `goto` stays: a self-loop). Only
 actions that can fire contribute edges: an action fires in a mode iff some state of the
 mode satisfies `fire_condition` (enabled, and beating every enabled competitor), decided
-exactly by `afsmc.check.search.find`. Probabilistic hazards are woven into the commands
+exactly by `afsmc.check.search.find`. A tie of weights (E301) counts as a state where
+either action may fire, so that no warning here contradicts the tie. Probabilistic hazards are woven into the commands
 of their modes, so they move a mode only where some action of it fires. Final modes are
 absorbing: nothing leaves them. Outcomes whose probability is the constant 0 are dropped.
 
@@ -108,7 +109,8 @@ def analyse(model: ir.Model) -> ModeGraph:
     edges: list[Edge] = []
     for a in model.actions:
         for mode in a.modes:
-            ok = mode not in finals and exists(model, mode, fire_condition(model, a, mode))
+            ok = mode not in finals and exists(model, mode,
+                                               fire_condition(model, a, mode, ties=True))
             fires[(a.name, mode)] = ok
             if ok:
                 edges += _outcome_edges(model, mode, a.name, a.kind, a.outcomes, a.name_span, None)

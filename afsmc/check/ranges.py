@@ -81,7 +81,8 @@ def _check_updates(model: ir.Model, rep: Reporter, when: dict[int, E.Expr],
 
 def check_update_ranges(model: ir.Model, rep: Reporter) -> None:
     for a in model.actions:
-        _check_updates(model, rep, {m: fire_condition(model, a, m) for m in a.modes}, a.outcomes)
+        _check_updates(model, rep, {m: fire_condition(model, a, m, ties=True) for m in a.modes},
+                       a.outcomes)
     for h in model.hazards:
         when = {m: E.disj(*(enabled(model, a, m) for a in model.actions_in(m))) for m in h.modes}
         _check_updates(model, rep, when, h.outcomes)

@@ -12,7 +12,7 @@ from afsmc.model import ir
 from afsmc.model.bounds import bounds
 from afsmc.model.evaluate import Env, EvalError, evaluate
 from afsmc.model.expr import Type
-from afsmc.model.lower import competitors, enabled, inline, stuck
+from afsmc.model.lower import TIE, competitors, enabled, inline, stuck, weights_tie
 from afsmc.model.pretty import number
 
 
@@ -59,15 +59,17 @@ def check_weight_uniqueness(model: ir.Model, rep: Reporter) -> None:
             if _apart(bounds(a.weight, model), bounds(b.weight, model)):
                 continue  # the weights' ranges do not meet: they cannot tie in any state
             tie = E.conj(enabled(model, a, m.number), enabled(model, b, m.number),
-                         E.Binary("==", a.weight, b.weight, Type.BOOL))
+                         weights_tie(a.weight, b.weight))
             wit = find(model, m.number, tie)
             if wit is None:
                 continue
             reported.add((a.name, b.name))
-            value = _value_at(model, a.weight, wit, m.number)
+            va = _value_at(model, a.weight, wit, m.number)
+            vb = _value_at(model, b.weight, wit, m.number)
+            both = f"both {va}" if va == vb else f"{va} and {vb} are equal within {TIE:g}"
             rep.error(
                 "E301",
-                f"weights of {a.name} and {b.name} tie (both {value}) in the state {wit}",
+                f"weights of {a.name} and {b.name} tie ({both}) in the state {wit}",
                 a.weight_span or a.name_span,
                 hint="in every state the enabled actions need distinct weights, so that one "
                      "action fires; give one a larger weight or make their guards exclusive",
@@ -75,7 +77,7 @@ def check_weight_uniqueness(model: ir.Model, rep: Reporter) -> None:
 
 
 def _apart(a: tuple[float, float], b: tuple[float, float]) -> bool:
-    # Weights equal within 1e-12 count as a tie (evaluate's `==` on doubles): keep a margin.
+    # Weights equal within TIE count as a tie: keep a margin.
     return a[1] < b[0] - 1e-9 or b[1] < a[0] - 1e-9
 
 

@@ -151,17 +151,42 @@ def static_value(e: E.Expr, model: ir.Model) -> float | None:
     return float(v)
 
 
-def fire_condition(model: ir.Model, action: ir.Action, mode: int) -> E.Expr:
-    """Without the mode test: `a` is enabled and beats every enabled competitor."""
+# Weights closer than this tie, as evaluate's `==` on doubles has it: 0.1 + 0.2 ties with
+# 0.3. E301 rejects a tie of enabled competitors; without one, `<` and "smaller by more
+# than TIE" agree in every state, so the lowering keeps plain `<`.
+TIE = 1e-12
+
+
+def weights_tie(a: E.Expr, b: E.Expr) -> E.Expr:
+    """|a - b| <= TIE, written so that enumeration and the SMT solver decide it alike."""
+    if a.type is Type.INT and b.type is Type.INT:
+        return E.Binary("==", a, b, Type.BOOL)
+    return E.conj(_at_most_tie(a, b), _at_most_tie(b, a))
+
+
+def _at_most_tie(a: E.Expr, b: E.Expr) -> E.Expr:
+    """a - b <= TIE: `a` is below `b` or ties with it."""
+    if a.type is Type.INT and b.type is Type.INT:
+        return E.Binary("<=", a, b, Type.BOOL)  # integers tie only when equal
+    return E.Binary("<=", E.sub(a, b), E.Lit(TIE, Type.DOUBLE), Type.BOOL)
+
+
+def fire_condition(model: ir.Model, action: ir.Action, mode: int, *,
+                   ties: bool = False) -> E.Expr:
+    """Without the mode test: `a` is enabled and beats every enabled competitor. With
+    `ties`, also where it ties with one: what the checks use, so that what they conclude
+    holds however a tie (an E301 error) were settled."""
     parts = [enabled(model, action, mode)]
     wa = static_value(action.weight, model)
     for b in competitors(model, action, mode):
         en_b = enabled(model, b, mode)
         wb = static_value(b.weight, model)
         if wa is not None and wb is not None:
-            if wb < wa:
+            if wb - wa <= TIE if ties else wb < wa:
                 continue
             parts.append(E.neg(en_b))
+        elif ties:
+            parts.append(E.disj(E.neg(en_b), _at_most_tie(b.weight, action.weight)))
         else:
             parts.append(E.disj(E.neg(en_b),
                                 E.Binary("<", b.weight, action.weight, Type.BOOL)))
