@@ -12,10 +12,12 @@ import shutil
 import subprocess
 import sys
 from pathlib import Path
+from typing import Any
 
 import pytest
 import pytest_lsp
 from lsprotocol import types as T
+from pygls.exceptions import JsonRpcException
 from pytest_lsp import ClientServerConfig, LanguageClient
 
 from afsmc.compiler import load
@@ -238,6 +240,90 @@ async def test_formatting_and_rename_round_trip(client: LanguageClient) -> None:
     after = load("x.afsm", text=renamed, run_checks=False).model
     assert after.mode("Carrying").number == before.mode("Transport").number
     assert len(after.actions) == len(before.actions)
+
+
+SMALL = """machine small;
+var b : [0..3] init 3;
+var pos : (x: [0..1], y: [0..1]) init (0, 0);
+mode A = 0 initial;
+mode B = 1 final;
+action Step in A when b > 0 weight 0.5 {
+    b -= 1, pos.x := 1;
+}
+action Done in A when b == 0 {
+    goto B;
+}
+label done = mode == B && pos.y == 0;
+property p = P=? [ F "done" ];
+"""
+
+
+async def refused(request: Any) -> JsonRpcException:
+    """The error a request was answered with: LSP's RequestFailed, a message for people."""
+    with pytest.raises(JsonRpcException) as info:
+        await request
+    err = info.value
+    assert err.code == T.LSPErrorCodes.RequestFailed, (err.code, err.message, err.data)
+    assert err.data is None and "Traceback" not in err.message
+    return err
+
+
+@MODULE
+async def test_rename_refusals_are_request_failures_with_reasons(client: LanguageClient) -> None:
+    uri = (ROOT / "examples" / "rename_small.afsm").as_uri()
+    doc = T.TextDocumentIdentifier(uri=uri)
+    await open_doc(client, uri, SMALL)
+    step = position(SMALL, SMALL.index("Step"))
+
+    rng = await client.text_document_prepare_rename_async(T.PrepareRenameParams(
+        text_document=doc, position=step))
+    assert isinstance(rng, T.Range) and slice_of(SMALL, rng) == "Step"
+
+    def rename_to(name: str) -> Any:
+        return client.text_document_rename_async(T.RenameParams(
+            text_document=doc, position=step, new_name=name))
+
+    err = await refused(rename_to("Done"))
+    assert err.message == ("cannot rename action 'Step' to 'Done': 'Done' is already declared "
+                           "(as an action)")
+    # names the checker rejects (E202), in its words
+    err = await refused(rename_to("S"))
+    assert "'S' cannot name an action: it is reserved in PRISM or Storm" in err.message
+    err = await refused(rename_to("__afsmc_step"))
+    assert "afsmc's own" in err.message
+    err = await refused(rename_to("goto"))
+    assert "'goto' is not a name that can be declared" in err.message
+    at_label = position(SMALL, SMALL.index("done ="))
+    err = await refused(client.text_document_rename_async(T.RenameParams(
+        text_document=doc, position=at_label, new_name="S")))
+    assert "'S' cannot name a label" in err.message
+    # a mode may be called S (modes become numbers): only what the checker rejects is refused
+    at_mode = position(SMALL, SMALL.index("mode B") + len("mode "))
+    edit = await client.text_document_rename_async(T.RenameParams(
+        text_document=doc, position=at_mode, new_name="S"))
+    assert edit is not None and edit.changes is not None
+    assert "goto S;" in apply(SMALL, edit.changes[uri])
+
+    # prepareRename refuses, with the reason, what it can tell at once
+    field = position(SMALL, SMALL.index("pos.x") + len("pos."))
+    err = await refused(client.text_document_prepare_rename_async(T.PrepareRenameParams(
+        text_document=doc, position=field)))
+    assert "fields cannot be renamed" in err.message
+    assert await client.text_document_prepare_rename_async(T.PrepareRenameParams(
+        text_document=doc, position=position(SMALL, SMALL.index("weight") + 2))) is None
+
+    # and the server goes on: a good rename still works
+    edit = await rename_to("Walk")
+    assert edit is not None and edit.changes is not None
+    renamed = apply(SMALL, edit.changes[uri])
+    assert "action Walk in A" in renamed and "Step" not in renamed
+
+    # while the file does not parse, renaming is refused with the reason
+    await change(client, uri, SMALL.replace("action Done in A", "action Done in"))
+    err = await refused(client.text_document_prepare_rename_async(T.PrepareRenameParams(
+        text_document=doc, position=step)))
+    assert "does not parse" in err.message
+    await refused(rename_to("Walk"))
 
 
 @pytest.mark.slow

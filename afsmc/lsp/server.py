@@ -15,14 +15,17 @@ from __future__ import annotations
 
 import asyncio
 import functools
+import logging
 import re
 import time
 import traceback
+from collections import Counter
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any, TypeVar
 
 from lsprotocol import types as T
+from pygls.exceptions import JsonRpcException
 from pygls.lsp.server import LanguageServer
 from pygls.uris import to_fs_path
 from pygls.workspace import TextDocument
@@ -33,6 +36,7 @@ from afsmc.diagnostics import CompileError, Diagnostic, Severity
 from afsmc.lsp import index as I
 from afsmc.model import ir
 from afsmc.model.expr import FUNCTIONS
+from afsmc.model.names import AFSM_KEYWORDS
 from afsmc.model.resolve import resolve
 from afsmc.syntax import ast
 from afsmc.syntax.fmt import format_text
@@ -398,35 +402,126 @@ def _rename_target(ls: AfsmServer, uri: str, pos: T.Position) -> tuple[I.Index, 
     return idx, d, occ
 
 
-@server.feature(T.TEXT_DOCUMENT_PREPARE_RENAME)
-@guarded
-def prepare_rename(ls: AfsmServer, params: T.PrepareRenameParams) -> T.Range | None:
-    target = _rename_target(ls, params.text_document.uri, params.position)
-    if target is None:
+class RequestFailed(JsonRpcException):
+    """A request refused for a reason the user should read (LSP's RequestFailed): the client
+    shows the message; no traceback goes with it."""
+
+    CODE = int(T.LSPErrorCodes.RequestFailed)  # -32803
+
+
+class _QuietRefusals(logging.Filter):
+    # pygls logs every error answer with its traceback; a refusal is an answer, not a fault
+    def filter(self, record: logging.LogRecord) -> bool:
+        return not (record.exc_info and isinstance(record.exc_info[1], RequestFailed))
+
+
+logging.getLogger("pygls.protocol.json_rpc").addFilter(_QuietRefusals())
+
+
+def refusing(fn: F) -> F:
+    """A handler whose RequestFailed goes to the client; any other failure is logged and
+    refused in general terms (never a traceback in the answer)."""
+
+    @functools.wraps(fn)
+    def wrapper(ls: AfsmServer, params: Any) -> Any:
+        try:
+            return fn(ls, params)
+        except RequestFailed:
+            raise
+        except Exception:
+            ls.window_log_message(T.LogMessageParams(
+                type=T.MessageType.Error, message=f"afsmc: internal error in {fn.__name__}:\n"
+                + traceback.format_exc()))
+            raise RequestFailed("afsmc could not do this (an internal error; see the language "
+                                "server's log)") from None
+
+    return wrapper  # type: ignore[return-value]
+
+
+def _why_not_renameable(ls: AfsmServer, uri: str, pos: T.Position) -> str | None:
+    """Why the name at `pos` cannot be renamed, if there is a name there at all."""
+    st = ls.docs.get(uri)
+    doc = ls.workspace.get_text_document(uri)
+    if st is None or st.index is None:
         return None
+    if st.index.text != doc.source:
+        return "the file does not parse: fix the syntax error first"
+    found = _lookup(ls, uri, pos)
+    if found is None:
+        return None
+    idx, occ = found
+    d = idx.definition(occ)
+    if d is None:
+        return f"'{occ.name}' is not declared in this file"
+    if d.kind not in RENAMEABLE:
+        return "a tuple's fields cannot be renamed" if d.kind == "field" else \
+            f"{_article(d.kind)} {d.kind} cannot be renamed"
+    return None
+
+
+def _article(word: str) -> str:
+    return "an" if word[0] in "aeiou" else "a"
+
+
+@server.feature(T.TEXT_DOCUMENT_PREPARE_RENAME)
+@refusing
+def prepare_rename(ls: AfsmServer, params: T.PrepareRenameParams) -> T.Range | None:
+    uri = params.text_document.uri
+    target = _rename_target(ls, uri, params.position)
+    if target is None:
+        why = _why_not_renameable(ls, uri, params.position)
+        if why is not None:
+            raise RequestFailed(why)
+        return None  # not on a name
     idx, _, occ = target
-    return _range(_snapshot(ls, params.text_document.uri, idx.text), occ.start, occ.end)
+    return _range(_snapshot(ls, uri, idx.text), occ.start, occ.end)
 
 
-class RenameError(Exception):
-    pass
+def refusal(idx: I.Index, d: I.Definition, new: str, path: str) -> str | None:
+    """Why `d` cannot be renamed to `new`, in words for the user; None if it can."""
+    if not I.NAME_RE.match(new) or new in I.KEYWORDS or new in AFSM_KEYWORDS \
+            or new in FUNCTIONS or new == "w":
+        return f"'{new}' is not a name that can be declared"
+    if new == d.name:
+        return None
+    other = idx.defs.get((d.ns, new))
+    if other is not None:
+        return f"'{new}' is already declared (as {_article(other.kind)} {other.kind})"
+    # Whatever else the checker would reject (E202: reserved in PRISM or Storm, names of
+    # afsmc's own, ...): resolve the renamed text and look for errors it did not have.
+    refs = sorted(idx.references(d.ns, d.name), key=lambda o: o.start)
+    renamed, shift, moved = idx.text, 0, []
+    for o in refs:
+        start = o.start + shift
+        renamed = renamed[:start] + new + renamed[o.end + shift:]
+        moved.append((start, start + len(new)))
+        shift += len(new) - (o.end - o.start)
+    before = Counter(x.code for x in analyse_fast(idx.text, path).diagnostics if x.is_error)
+    after = [x for x in analyse_fast(renamed, path).diagnostics if x.is_error]
+    extra = Counter(x.code for x in after) - before
+    fresh = [x for x in after if x.code in extra]
+    if not fresh:
+        return None
+    at_new = [x for x in fresh if x.span is not None
+              and any(a <= x.span.start < b for a, b in moved)]
+    return (at_new or fresh)[0].message
 
 
 @server.feature(T.TEXT_DOCUMENT_RENAME)
+@refusing
 def rename(ls: AfsmServer, params: T.RenameParams) -> T.WorkspaceEdit | None:
     uri = params.text_document.uri
     target = _rename_target(ls, uri, params.position)
     if target is None:
-        return None
+        raise RequestFailed(_why_not_renameable(ls, uri, params.position)
+                            or "there is no name to rename here")
     idx, d, _ = target
-    new = params.new_name
-    # errors here are answers the user should read, so they are raised to the client
-    if not I.NAME_RE.match(new) or new in I.KEYWORDS or new in FUNCTIONS or new == "w":
-        raise RenameError(f"'{new}' is not a name that can be declared")
-    if (d.ns, new) in idx.defs and new != d.name:
-        raise RenameError(f"'{new}' is already declared")
+    why = refusal(idx, d, params.new_name, to_fs_path(uri) or uri)
+    if why is not None:
+        raise RequestFailed(f"cannot rename {d.kind} '{d.name}' to '{params.new_name}': {why}")
     doc = _snapshot(ls, uri, idx.text)
-    edits = [T.TextEdit(range=_range(doc, o.start, o.end), new_text=new) for o in idx.references(d.ns, d.name)]
+    edits = [T.TextEdit(range=_range(doc, o.start, o.end), new_text=params.new_name)
+             for o in idx.references(d.ns, d.name)]
     return T.WorkspaceEdit(changes={uri: edits})
 
 
