@@ -3,7 +3,7 @@ times and peak memory, per engine and with/without the exact reductions.
 
     .venv/bin/python benchmarks/run.py [--instances small,default,...] [--configs ...]
                                        [--timeout S] [--memory GB] [--out benchmarks/results.csv]
-                                       [--markdown docs/benchmarks.md]
+    .venv/bin/python benchmarks/report.py   # then: the tables of docs/benchmarks.md from the CSV
 
 Each configuration runs `afsmc verify --json` in its own process under a time cap and a
 memory cap (the process group is killed when its resident memory passes the cap), so a
@@ -220,12 +220,21 @@ def _n(v: object) -> str:
 
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--instances", default="4x4-obj2-t300,5x5-obj2-t400,scenario2")
-    ap.add_argument("--configs", default=",".join(CONFIGS))
+    ap.add_argument("--instances", default="4x4-obj2-t300,5x5-obj2-t400,scenario2",
+                    help="comma-separated, of: " + ", ".join(INSTANCES)
+                    + " (default: %(default)s)")
+    ap.add_argument("--configs", default=",".join(CONFIGS),
+                    help="comma-separated, of: " + ", ".join(CONFIGS) + " (default: all)")
     ap.add_argument("--timeout", type=float, default=1800, help="seconds per configuration")
     ap.add_argument("--memory", type=float, default=20, help="GB per configuration")
-    ap.add_argument("--out", default=os.path.join(ROOT, "benchmarks", "results.csv"))
+    ap.add_argument("--out", default=os.path.join(ROOT, "benchmarks", "results.csv"),
+                    help="the CSV the rows are appended to (default: %(default)s)")
     args = ap.parse_args()
+    for given, known, what in ((args.instances, INSTANCES, "instance"),
+                               (args.configs, CONFIGS, "configuration")):
+        unknown = [n for n in given.split(",") if n not in known]
+        if unknown:
+            ap.error(f"unknown {what} {', '.join(unknown)}; known: {', '.join(known)}")
     rows: list[dict[str, object]] = []
     if os.path.exists(args.out):
         with open(args.out, newline="", encoding="utf-8") as f:
