@@ -218,3 +218,10 @@ def test_json_shape() -> None:
         assert set(p) >= {"name", "estimate", "low", "high"}
         assert isinstance(p["estimate"], float) and 0.0 <= p["low"] <= p["high"] <= 1.0
 
+
+
+@pytest.mark.parametrize("command", ["simulate", "sim-check"])
+def test_a_negative_seed_is_a_usage_error(command: str) -> None:
+    # numpy takes no negative seed: it was a traceback (simulate) or blamed a simulator (E505)
+    r = run_cli(command, str(PATROL), "--seed", "-1", "--runs", "10")
+    assert r.code == 2 and "--seed: expected an integer >= 0, got '-1'" in r.err, r.err

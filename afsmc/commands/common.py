@@ -18,6 +18,21 @@ def add_file(p: argparse.ArgumentParser) -> None:
     p.add_argument("file", metavar="FILE", help="the .afsm file")
 
 
+def add_seed(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--seed", type=_seed, default=0, metavar="S",
+                   help="random seed, an integer >= 0 (default 0)")
+
+
+def _seed(text: str) -> int:
+    try:
+        n = int(text.replace("_", ""))
+    except ValueError:
+        n = -1
+    if n < 0:  # numpy's generators take no negative seed
+        raise argparse.ArgumentTypeError(f"expected an integer >= 0, got {text!r}")
+    return n
+
+
 def add_consts(p: argparse.ArgumentParser) -> None:
     p.add_argument("--const", "-c", action="append", default=[], metavar="NAME=VALUE",
                    help="give an open constant ('param') a value; repeatable, or NAME=V,NAME=V")

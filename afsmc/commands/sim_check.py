@@ -10,7 +10,7 @@ import os
 import sys
 import time
 
-from afsmc.commands.common import add_consts, fail, overrides, print_json, report
+from afsmc.commands.common import add_consts, add_seed, fail, overrides, print_json, report
 from afsmc.compiler import load, write_atomic
 from afsmc.diagnostics import CompileError, Diagnostic, Severity
 from afsmc.sim.evidence import Evidence, judge, rewrite
@@ -22,7 +22,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     add_consts(p)
     p.add_argument("--runs", type=int, default=10_000, metavar="N",
                    help="simulation runs per simulator (default 10000)")
-    p.add_argument("--seed", type=int, default=0, metavar="S", help="random seed (default 0)")
+    add_seed(p)
     p.add_argument("--update", action="store_true",
                    help="rewrite drifted constants in FILE in place, with a provenance comment")
     p.add_argument("--json", action="store_true", help="print the evidence as JSON")

@@ -11,7 +11,7 @@ import os
 import sys
 from typing import Any
 
-from afsmc.commands.common import add_consts, add_file, fail, overrides, print_json
+from afsmc.commands.common import add_consts, add_file, add_seed, fail, overrides, print_json
 from afsmc.compiler import check_writable, read_source, write_atomic
 from afsmc.diagnostics import CompileError, Diagnostic, Severity
 from afsmc.sim.compile import SimError
@@ -23,7 +23,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     add_consts(p)
     p.add_argument("--runs", type=int, default=100_000, metavar="N",
                    help="number of runs (default 100000)")
-    p.add_argument("--seed", type=int, default=0, metavar="S", help="random seed (default 0)")
+    add_seed(p)
     p.add_argument("--resolve", choices=STRATEGIES, default="uniform",
                    help="interval constants: uniform floor/ceil choice (default), always floor "
                         "or ceil; min/max = floor/ceil (a fixed strategy, not the MDP optimum)")
