@@ -94,6 +94,41 @@ def test_cli_in_place_check_and_stdin(tmp_path: Path, monkeypatch: pytest.Monkey
     assert res.code == 0 and res.out == format_text(original)
 
 
+MESSY = ("machine m;\nvar x:[0..2] init 0;\nmode A=0 initial;\naction Go in A when x<2 "
+         "{ x:=x+1; }  // count\naction Stay in A when x==2 { skip; }\n")
+
+
+def test_in_place_keeps_the_permission_bits(tmp_path: Path) -> None:
+    """write_atomic's keep_mode: a private file stays private (was reset to 0644)."""
+    path = tmp_path / "private.afsm"
+    path.write_text(MESSY)
+    for mode in (0o600, 0o755):
+        path.write_text(MESSY)
+        path.chmod(mode)
+        res = run_cli("fmt", str(path))
+        assert res.code == 0 and "reformatted" in res.err
+        assert path.read_text() == format_text(MESSY)
+        assert path.stat().st_mode & 0o7777 == mode
+
+
+def test_in_place_keeps_crlf_line_endings(tmp_path: Path) -> None:
+    """A CRLF file is rewritten with CRLF (as `sim-check --update` keeps them); LF stays LF;
+    line endings alone do not make a file unformatted."""
+    crlf = tmp_path / "crlf.afsm"
+    crlf.write_bytes(MESSY.replace("\n", "\r\n").encode())
+    assert run_cli("fmt", str(crlf)).code == 0
+    assert crlf.read_bytes() == format_text(MESSY).replace("\n", "\r\n").encode()
+    assert run_cli("fmt", "--check", str(crlf)).code == 0
+    before = crlf.stat().st_mtime_ns
+    res = run_cli("fmt", str(crlf))  # already formatted: not rewritten, not converted
+    assert res.code == 0 and "reformatted" not in res.err and crlf.stat().st_mtime_ns == before
+
+    lf = tmp_path / "lf.afsm"
+    lf.write_bytes(MESSY.encode())
+    assert run_cli("fmt", str(lf)).code == 0
+    assert lf.read_bytes() == format_text(MESSY).encode()
+
+
 def test_syntax_error_leaves_the_file_alone(tmp_path: Path) -> None:
     bad = tmp_path / "bad.afsm"
     bad.write_text("var x : [0..2] init 0\nmode A;\n")
