@@ -143,3 +143,36 @@ def test_syntax_error_leaves_the_file_alone(tmp_path: Path) -> None:
 def test_examples_are_formatted() -> None:
     res = run_cli("fmt", "--check", *map(str, sorted(EXAMPLES.glob("*.afsm"))))
     assert res.code == 0, f"not formatted:\n{res.out}"
+
+
+@pytest.mark.parametrize(("written", "printed"), [
+    ("-(-1.5)", "-(-1.5)"),          # was `--1.5`
+    ("-(-(1.5))", "-(-(1.5))"),      # was `--1.5`
+    ("-(2)", "-(2)"),                # was `-2`
+    ("- -3", "- -3"),                # was `--3`
+    ("--3", "- -3"),
+    ("-  - -1", "- - -1"),
+    ("2--(1)", "2 - -(1)"),
+    ("-(-a)", "-(-a)"),
+    ("- -a", "- -a"),                # was `--a`
+    ("((a))", "((a))"),              # was `(a)`
+    ("(((a)+1))*2", "(((a) + 1)) * 2"),
+    ("max((a),(((2))))", "max((a), (((2))))"),
+    ("(-(-(a)))", "(-(-(a)))"),
+])
+def test_parentheses_are_kept_and_minus_signs_stay_apart(written: str, printed: str) -> None:
+    """docs/editors.md: parentheses the author wrote are kept, none added or dropped; two
+    minus signs are never printed as `--`. The safety net checks the AST is the same."""
+    text = f"machine m;\nconst int a = 1;\nconst double D = {written};\nmode A = 0 initial final;\n"
+    out = format_text(text)
+    assert f"const double D = {printed};\n" in out
+    assert format_text(out) == out
+
+
+def test_parentheses_of_step_bounds_are_kept() -> None:
+    text = ("machine m;\nconst int a = 2;\nmode A = 0 initial final;\n"
+            "property p = P=? [ F<=((3)) mode == A ];\nproperty q = P=? [ F<=(a) mode == A ];\n"
+            "property r = P=? [ F<=a mode == A ];\nproperty s = P=? [ F<=(a+1) mode == A ];\n")
+    out = format_text(text)
+    for bound in ("F<=((3))", "F<=(a)", "F<=a", "F<=(a + 1)"):
+        assert f"[ {bound} mode == A ]" in out
