@@ -20,9 +20,10 @@ from afsmc.syntax import ast
 from afsmc.syntax.parser import parse
 
 
-def read_source(path: str) -> str:
+def read_source(path: str, *, newline: str | None = None) -> str:
+    """The file's text; line endings read as '\n' (`newline=""`: as they are)."""
     try:
-        with open(path, encoding="utf-8") as f:
+        with open(path, encoding="utf-8", newline=newline) as f:
             return f.read()
     except FileNotFoundError:
         raise CompileError([_io_error(path, "no such file")]) from None

@@ -94,6 +94,41 @@ def test_cli_in_place_check_and_stdin(tmp_path: Path, monkeypatch: pytest.Monkey
     assert res.code == 0 and res.out == format_text(original)
 
 
+MESSY = ("machine m;\nvar x:[0..2] init 0;\nmode A=0 initial;\naction Go in A when x<2 "
+         "{ x:=x+1; }  // count\naction Stay in A when x==2 { skip; }\n")
+
+
+def test_in_place_keeps_the_permission_bits(tmp_path: Path) -> None:
+    """write_atomic's keep_mode: a private file stays private (was reset to 0644)."""
+    path = tmp_path / "private.afsm"
+    path.write_text(MESSY)
+    for mode in (0o600, 0o755):
+        path.write_text(MESSY)
+        path.chmod(mode)
+        res = run_cli("fmt", str(path))
+        assert res.code == 0 and "reformatted" in res.err
+        assert path.read_text() == format_text(MESSY)
+        assert path.stat().st_mode & 0o7777 == mode
+
+
+def test_in_place_keeps_crlf_line_endings(tmp_path: Path) -> None:
+    """A CRLF file is rewritten with CRLF (as `sim-check --update` keeps them); LF stays LF;
+    line endings alone do not make a file unformatted."""
+    crlf = tmp_path / "crlf.afsm"
+    crlf.write_bytes(MESSY.replace("\n", "\r\n").encode())
+    assert run_cli("fmt", str(crlf)).code == 0
+    assert crlf.read_bytes() == format_text(MESSY).replace("\n", "\r\n").encode()
+    assert run_cli("fmt", "--check", str(crlf)).code == 0
+    before = crlf.stat().st_mtime_ns
+    res = run_cli("fmt", str(crlf))  # already formatted: not rewritten, not converted
+    assert res.code == 0 and "reformatted" not in res.err and crlf.stat().st_mtime_ns == before
+
+    lf = tmp_path / "lf.afsm"
+    lf.write_bytes(MESSY.encode())
+    assert run_cli("fmt", str(lf)).code == 0
+    assert lf.read_bytes() == format_text(MESSY).encode()
+
+
 def test_syntax_error_leaves_the_file_alone(tmp_path: Path) -> None:
     bad = tmp_path / "bad.afsm"
     bad.write_text("var x : [0..2] init 0\nmode A;\n")
@@ -108,3 +143,36 @@ def test_syntax_error_leaves_the_file_alone(tmp_path: Path) -> None:
 def test_examples_are_formatted() -> None:
     res = run_cli("fmt", "--check", *map(str, sorted(EXAMPLES.glob("*.afsm"))))
     assert res.code == 0, f"not formatted:\n{res.out}"
+
+
+@pytest.mark.parametrize(("written", "printed"), [
+    ("-(-1.5)", "-(-1.5)"),          # was `--1.5`
+    ("-(-(1.5))", "-(-(1.5))"),      # was `--1.5`
+    ("-(2)", "-(2)"),                # was `-2`
+    ("- -3", "- -3"),                # was `--3`
+    ("--3", "- -3"),
+    ("-  - -1", "- - -1"),
+    ("2--(1)", "2 - -(1)"),
+    ("-(-a)", "-(-a)"),
+    ("- -a", "- -a"),                # was `--a`
+    ("((a))", "((a))"),              # was `(a)`
+    ("(((a)+1))*2", "(((a) + 1)) * 2"),
+    ("max((a),(((2))))", "max((a), (((2))))"),
+    ("(-(-(a)))", "(-(-(a)))"),
+])
+def test_parentheses_are_kept_and_minus_signs_stay_apart(written: str, printed: str) -> None:
+    """docs/editors.md: parentheses the author wrote are kept, none added or dropped; two
+    minus signs are never printed as `--`. The safety net checks the AST is the same."""
+    text = f"machine m;\nconst int a = 1;\nconst double D = {written};\nmode A = 0 initial final;\n"
+    out = format_text(text)
+    assert f"const double D = {printed};\n" in out
+    assert format_text(out) == out
+
+
+def test_parentheses_of_step_bounds_are_kept() -> None:
+    text = ("machine m;\nconst int a = 2;\nmode A = 0 initial final;\n"
+            "property p = P=? [ F<=((3)) mode == A ];\nproperty q = P=? [ F<=(a) mode == A ];\n"
+            "property r = P=? [ F<=a mode == A ];\nproperty s = P=? [ F<=(a+1) mode == A ];\n")
+    out = format_text(text)
+    for bound in ("F<=((3))", "F<=(a)", "F<=a", "F<=(a + 1)"):
+        assert f"[ {bound} mode == A ]" in out

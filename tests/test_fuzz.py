@@ -1,6 +1,7 @@
 """Fuzzing: whatever the input, `afsmc check` answers with its own diagnostics and
 never with a Python exception. Inputs come from the grammar itself (hypothesis
-`from_lark`) and from mutating the examples."""
+`from_lark`) and from mutating the examples. `afsmc fmt` is fuzzed too: whatever parses,
+it formats (its safety net never fires), idempotently, keeping the author's parentheses."""
 
 from __future__ import annotations
 
@@ -13,7 +14,8 @@ from hypothesis.extra.lark import from_lark
 
 from afsmc.compiler import load
 from afsmc.diagnostics import CompileError, render_all
-from afsmc.syntax.parser import grammar_text
+from afsmc.syntax.fmt import format_text
+from afsmc.syntax.parser import grammar_text, parse
 from tests.conftest import EXAMPLES
 
 SETTINGS = settings(max_examples=100, deadline=None,
@@ -100,3 +102,52 @@ def test_mutated_examples_never_crash(text: str) -> None:
 @given(st.text(max_size=200))
 def test_arbitrary_text_never_crashes(text: str) -> None:
     _check(text)
+
+
+def _formats(text: str) -> str | None:
+    """The formatted text, or None if `text` does not parse; the formatter's own refusal
+    (E190: its output would not parse or would mean something else) fails the test."""
+    try:
+        parse(text, "fuzz.afsm")
+    except CompileError:
+        return None
+    out = format_text(text, "fuzz.afsm")
+    assert format_text(out, "fuzz.afsm") == out, "formatting is idempotent"
+    return out
+
+
+@SETTINGS
+@given(from_lark(GRAMMAR, explicit=EXPLICIT))
+def test_grammar_generated_files_format(text: str) -> None:
+    _formats(text)
+
+
+@st.composite
+def arithmetic(draw: st.DrawFn, depth: int = 0) -> str:
+    """Expression text with parentheses, minus signs and spacing as an author might write."""
+    space = draw(st.sampled_from(["", " ", "  "]))
+    kind = draw(st.sampled_from(["atom", "atom", "neg", "paren", "binary"] if depth < 4
+                                else ["atom"]))
+    if kind == "atom":
+        return draw(st.sampled_from(["1", "1.5", "0", "2e3", "a", "b", "max(a, 2)"]))
+    inner = draw(arithmetic(depth + 1))
+    if kind == "neg":
+        return "-" + space + inner
+    if kind == "paren":
+        return "(" + space + inner + space + ")"
+    op = draw(st.sampled_from(["+", "-", "*", "/"]))
+    return inner + space + op + space + draw(arithmetic(depth + 1))
+
+
+@settings(max_examples=200, deadline=None)
+@given(arithmetic())
+def test_fmt_keeps_parentheses_and_never_joins_minus_signs(e: str) -> None:
+    """`-(-1.5)` once came out as `--1.5` and `((a))` as `(a)` (docs/editors.md: the
+    parentheses the author wrote are kept, none added or dropped)."""
+    text = f"machine m;\nconst double a = 1;\nconst double b = 2;\nconst double D = {e};\n"
+    out = _formats(text)
+    assert out is not None, "every generated expression is afsm"
+    printed = out.split("const double D = ", 1)[1].split(";", 1)[0].lstrip()
+    assert "--" not in printed
+    assert printed.count("(") == e.count("(")
+    assert printed.replace(" ", "") == e.replace(" ", "")

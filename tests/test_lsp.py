@@ -149,6 +149,69 @@ async def test_half_typed_file_gives_a_syntax_diagnostic_and_keeps_navigation(
 
 
 @MODULE
+async def test_completion_in_a_file_that_has_never_parsed(client: LanguageClient) -> None:
+    """No last good parse to take the names from: they come from the text with the line
+    being typed left out (it once offered only keywords and functions, whatever the place)."""
+    text = UAV.read_text()
+    modes = set(re.findall(r"^mode (\w+)", text, re.M))
+    actions = set(re.findall(r"^(?:action|hazard) (\w+)", text, re.M))
+    labels = set(re.findall(r"^label (\w+)", text, re.M))
+    assert modes and actions and labels
+
+    async def complete(uri: str, typed: str, at: int | None = None) -> set[str]:
+        broken = text + "\n" + typed if at is None else text[:at] + typed + "\n" + text[at:]
+        diags = await open_doc(client, uri, broken)
+        assert diags and all(d.code.startswith("E1") for d in diags)  # type: ignore[union-attr]
+        cursor = len(broken) if at is None else at + len(typed)
+        items = await client.text_document_completion_async(T.CompletionParams(
+            text_document=T.TextDocumentIdentifier(uri=uri), position=position(broken, cursor)))
+        assert isinstance(items, T.CompletionList)
+        return {i.label for i in items.items}
+
+    # at the end of the file, and in the middle (the syntax error is then on the next line)
+    base = (ROOT / "examples" / "never_uav").as_posix()
+    assert await complete(f"file://{base}1.afsm", "action Zz in Search { goto ") == modes
+    middle = text.index("action Carry in")
+    assert await complete(f"file://{base}2.afsm", "action Zz in Search { goto ", middle) == modes
+    assert await complete(f"file://{base}3.afsm", "action Zz in ") == modes
+    assert await complete(f"file://{base}4.afsm", "action Zz in Search weight w(") == actions
+    assert await complete(f"file://{base}5.afsm", 'property q = P=? [ F "') == labels
+    # a block left open over several lines: the whole declaration is left out
+    assert await complete(f"file://{base}6.afsm", "action Zz in Search {\n    goto ") == modes
+    # anywhere else: every name in scope too, not only keywords and functions
+    names = await complete(f"file://{base}7.afsm", "formula f = b + ")
+    assert modes <= names and {"b", "T_MOVE", "B_LOW", "min"} <= names
+    # a second error elsewhere: that declaration is left out as well
+    damaged = text.replace("mode Search", "mode Search = ;", 1)
+    assert damaged != text
+    uri = f"file://{base}8.afsm"
+    broken = damaged + "\naction Zz in Search { goto "
+    await open_doc(client, uri, broken)
+    items = await client.text_document_completion_async(T.CompletionParams(
+        text_document=T.TextDocumentIdentifier(uri=uri), position=position(broken, len(broken))))
+    assert isinstance(items, T.CompletionList)
+    assert {i.label for i in items.items} == modes  # Search from a scan of the broken line
+
+
+def test_never_parsed_completion_falls_back_to_a_lexical_scan() -> None:
+    """When no text parses even with broken declarations left out, the declarations are
+    found by their look; on uav.afsm the scan finds exactly what the parser finds."""
+    from afsmc.lsp import index as I
+    from afsmc.syntax.parser import parse
+
+    text = UAV.read_text()
+    scanned = I.scan(text)
+    parsed = I.build(parse(text, "uav.afsm"), text)
+    assert {(k, d.kind) for k, d in scanned.defs.items()} == \
+        {(k, d.kind) for k, d in parsed.defs.items()}
+    garbage = "machine m; mode A = 0 initial; mode B; var t : (x: [0..2], y: bool);\n" \
+              "// mode Commented;\n" + "{" * 20 + "\naction Go in "
+    idx = I.recover(garbage, len(garbage), "g.afsm")
+    assert [d.name for d in idx.names(I.VALUE, ("mode",))] == ["A", "B"]
+    assert [d.name for d in idx.names(I.FIELD)] == ["t.x", "t.y"]
+
+
+@MODULE
 async def test_hover_definition_references(client: LanguageClient) -> None:
     text = UAV.read_text()
     code = code_only(text)

@@ -108,3 +108,19 @@ property p = P=? [ F "low" ];
     # At x = 1 the hazards preempt Run, so w(Run) = 0 and Halt (1) beats Stop (0.3).
     _, values = storm_prism(lower(model), tmp_path)  # type: ignore[arg-type]
     assert values["p"] == 1.0
+
+
+def test_unnumbered_modes_take_the_lowest_free_number() -> None:
+    """docs/language.md (Modes): unnumbered modes fill the gaps in declaration order, counting
+    the numbers written further down too; not "one more than the mode before"."""
+    text = """machine num;
+mode Idle = 0 initial; mode Search; mode Carry = 5; mode Back; mode Done = 9 final;
+mode Emerg final;
+action Go in Idle { goto Search; }
+action Pick in Search { goto Carry; }
+action Drop in Carry { goto Back; }
+action Home in Back { goto Done; }
+"""
+    model = load("num.afsm", text=text).model
+    assert {m.name: m.number for m in model.modes} == {
+        "Idle": 0, "Search": 1, "Back": 2, "Emerg": 3, "Carry": 5, "Done": 9}

@@ -2,6 +2,8 @@
 
 Files are rewritten in place, atomically; `-` reads standard input and prints the result.
 A file that does not parse is left untouched and its syntax error is reported.
+A rewritten file keeps its permission bits and its line endings (CRLF stays CRLF); line
+endings alone never make a file "not formatted".
 """
 
 from __future__ import annotations
@@ -25,7 +27,8 @@ def run(args: argparse.Namespace) -> int:
     status = 0
     for path in args.files:
         try:
-            text = sys.stdin.read() if path == "-" else read_source(path)
+            raw = sys.stdin.read() if path == "-" else read_source(path, newline="")
+            text = raw.replace("\r\n", "\n").replace("\r", "\n")
             out = format_text(text, "<stdin>" if path == "-" else path)
         except CompileError as exc:
             report(exc.diagnostics)
@@ -39,10 +42,17 @@ def run(args: argparse.Namespace) -> int:
             sys.stdout.write(out)
         elif out != text:
             try:
-                write_atomic(path, out)
+                # In place: keep the file's permission bits and its line endings.
+                write_atomic(path, out, newline=line_ending(raw), keep_mode=True)
             except CompileError as exc:
                 report(exc.diagnostics)
                 status = 1
                 continue
             print(f"reformatted {path}", file=sys.stderr)
     return status
+
+
+def line_ending(raw: str) -> str:
+    """The file's line ending: CRLF if most of its lines end so, else LF."""
+    crlf = raw.count("\r\n")
+    return "\r\n" if crlf and 2 * crlf >= raw.count("\n") else "\n"

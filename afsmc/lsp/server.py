@@ -7,8 +7,10 @@ mode graph: about a second and a half on uav.afsm, they enumerate states) run in
 thread once typing pauses (DEBOUNCE), exactly as `afsmc check` runs them, and replace the
 diagnostics when they finish if the text has not changed meanwhile.
 
-A file that does not parse keeps the navigation of its last good parse; nothing a client
-sends makes the server exit (every handler turns a failure into a log message).
+A file that does not parse keeps the navigation of its last good parse (completion in a
+file that has never parsed uses the text with its broken part left out, I.recover);
+nothing a client sends makes the server exit (every handler turns a failure into a log
+message).
 """
 
 from __future__ import annotations
@@ -54,6 +56,9 @@ class DocState:
     text: str = ""
     index: I.Index | None = None  # from the last text that parsed
     model: ir.Model | None = None  # from the last text that resolved
+    # completion before the first good parse: names from the text with its broken part
+    # blanked (I.recover), for the (text, line) it was computed for
+    recovered: tuple[str, int, I.Index] | None = None
     task: asyncio.Task[None] | None = None
 
 
@@ -169,6 +174,7 @@ def _changed(ls: AfsmServer, uri: str) -> None:
         fast = Fast(None, None, [_internal_diag("parse")])
     if fast.module is not None:
         st.index = I.build(fast.module, st.text)
+        st.recovered = None
     if fast.model is not None:
         st.model = fast.model
     if st.task is not None:
@@ -361,7 +367,16 @@ def completion(ls: AfsmServer, params: T.CompletionParams) -> T.CompletionList:
     offset = doc.offset_at_position(params.position)
     line_start = doc.source.rfind("\n", 0, offset) + 1
     st = ls.docs.get(uri)
-    items = completions(st.index if st else None, doc.source[line_start:offset])
+    idx = st.index if st is not None else None
+    if idx is None:  # never parsed: no last good parse to take the names from
+        if st is not None and st.recovered is not None \
+                and st.recovered[:2] == (doc.source, line_start):
+            idx = st.recovered[2]
+        else:
+            idx = I.recover(doc.source, offset, to_fs_path(uri) or uri)
+            if st is not None:
+                st.recovered = (doc.source, line_start, idx)
+    items = completions(idx, doc.source[line_start:offset])
     return T.CompletionList(is_incomplete=False, items=items)
 
 

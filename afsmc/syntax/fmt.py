@@ -3,7 +3,9 @@
 The layout is printed from the AST, so it is the same whatever spacing the author used:
 one declaration per line, blocks indented by four spaces, single spaces around binary
 operators, at most one blank line kept where the author left one. Parentheses the
-author wrote are kept (they are often there for the reader); none are added or dropped.
+author wrote are kept (they are often there for the reader), every pair of them, also
+inside a literal the parser folded a minus into (`-(-1.5)`); none are added or dropped.
+Two minus signs are printed apart (`- -a`): `--` would read as a decrement.
 
 Comments are not in the AST (the grammar ignores them), so they are found by lexing the
 text again with the grammar's own terminals and placed back by position: a comment at the
@@ -148,37 +150,58 @@ class _Formatter:
                 return t
         raise CompileError([_internal(self.module.span.source.path, f"found no {kind}")])
 
-    def _wrapped(self, span: Span) -> bool:
-        """Did the author put this expression in its own parentheses?"""
+    def _wraps(self, span: Span) -> int:
+        """How many pairs of parentheses the author put around this expression (`((a))`: 2);
+        the parentheses of a call are not the expression's."""
         i = self._index_at(span.start)
         j = self._index_at(span.end)  # the first token after the expression
-        if i == 0 or j >= len(self.code):
-            return False
-        before, after = self.code[i - 1], self.code[j]
-        if before.type != "LPAR" or after.type != "RPAR":
-            return False
-        if i >= 2 and self.code[i - 2].type in ("NAME", "MIN", "MAX"):
-            return False  # the parentheses of a call
         depth = 0
         for t in self.code[i:j]:
             depth += {"LPAR": 1, "RPAR": -1}.get(t.type, 0)
             if depth < 0:
-                return False
-        return depth == 0
+                return 0  # `(a) + (b)`: the parentheses around it are not one pair
+        if depth != 0:
+            return 0
+        n = 0
+        while (i - n >= 1 and j + n < len(self.code) and self.code[i - n - 1].type == "LPAR"
+               and self.code[j + n].type == "RPAR"):
+            if i - n >= 2 and self.code[i - n - 2].type in ("NAME", "MIN", "MAX"):
+                break  # the parentheses of a call
+            n += 1
+        return n
+
+    def _wrapped(self, span: Span) -> bool:
+        """Did the author put this expression in its own parentheses?"""
+        return self._wraps(span) > 0
 
     def _src(self, span: Span) -> str:
         return self.text[span.start:span.end]
 
     # -- expressions
     def expr(self, e: ast.Expr, ctx: int = 0) -> str:
+        """`e` with every pair of parentheses the author put around it, and one pair where
+        the context needs it and the author wrote none."""
         text, prec = self._core(e)
-        if prec < ctx or self._wrapped(e.span):
-            return f"({text})"
-        return text
+        n = self._wraps(e.span)
+        if n == 0 and prec < ctx:
+            n = 1
+        return "(" * n + text + ")" * n
+
+    def _number(self, e: ast.Num) -> str:
+        """A literal as written. The parser folds a minus into the literal (`-(-1.5)` is the
+        literal -(-1.5), text "--1.5"), so a folded one is printed from its tokens, keeping its
+        parentheses, and with a space between two minus signs (never `--1.5`)."""
+        i, j = self._index_at(e.span.start), self._index_at(e.span.end)
+        if j - i <= 1:
+            return e.text
+        out = ""
+        for t in self.code[i:j]:
+            out += (" " if out.endswith("-") and str(t) == "-" else "") + str(t)
+        return out
 
     def _core(self, e: ast.Expr) -> tuple[str, int]:
         if isinstance(e, ast.Num):
-            return e.text, _NEG if e.text.startswith("-") else _ATOM
+            return self._number(e), _NEG if e.text.startswith("-") else _ATOM
         if isinstance(e, ast.BoolLit):
             return ("true" if e.value else "false"), _ATOM
         if isinstance(e, ast.Name):
@@ -194,7 +217,8 @@ class _Formatter:
         if isinstance(e, ast.Unary):
             if e.op == "!":
                 return "!" + self.expr(e.operand, _NOT), _NOT
-            return "-" + self.expr(e.operand, _NEG), _NEG
+            operand = self.expr(e.operand, _NEG)
+            return ("- " if operand.startswith("-") else "-") + operand, _NEG  # not `--a`
         if isinstance(e, ast.Binary):
             p = _BINARY[e.op]
             if e.op == "=>":  # right-associative
@@ -212,9 +236,12 @@ class _Formatter:
         raise TypeError(type(e).__name__)
 
     def bound(self, e: ast.Expr) -> str:
-        if isinstance(e, (ast.Num, ast.Name)) and not self._wrapped(e.span):
-            return self._core(e)[0]
-        return f"({self._core(e)[0]})"
+        """A step bound: a number or a name as it is, anything else in parentheses (the
+        grammar's), with any further pairs the author wrote."""
+        n = self._wraps(e.span)
+        if n == 0 and not isinstance(e, (ast.Num, ast.Name)):
+            n = 1
+        return "(" * n + self._core(e)[0] + ")" * n
 
     def mode_set(self, ms: ast.ModeSet) -> str:
         items = ", ".join(self._mode_item(i) for i in ms.items)
