@@ -8,15 +8,17 @@ from __future__ import annotations
 
 from collections.abc import Callable
 
-from afsmc.check import distributions, modegraph, ranges, unused, weights
+from afsmc.check import distributions, modegraph, ranges, undefined, unused, weights
 from afsmc.check.search import Undecided
 from afsmc.diagnostics import Diagnostic, Reporter
 from afsmc.model import ir
+from afsmc.model.evaluate import EvalError
 from afsmc.sim.check_sources import check_sim_sources
 
 Rule = Callable[[ir.Model, Reporter], None]
 
 RULES: tuple[Rule, ...] = (
+    undefined.check_undefined,
     weights.check_weight_range,
     weights.check_weight_uniqueness,
     weights.check_deadlock,
@@ -40,7 +42,7 @@ def run(model: ir.Model) -> list[Diagnostic]:
     for rule in RULES:
         try:
             rule(model, rep)
-        except Undecided as exc:
+        except (Undecided, EvalError) as exc:
             # An unproven property is said, never passed over in silence.
             name = rule.__name__.removeprefix("check_").replace("_", " ")
             rep.warning("W309", f"the {name} check could not be completed: {exc}", None,

@@ -4,6 +4,7 @@ hazard can happen."""
 from __future__ import annotations
 
 from afsmc.check.search import find
+from afsmc.check.undefined import defined
 from afsmc.diagnostics import Reporter, Span
 from afsmc.model import expr as E
 from afsmc.model import ir
@@ -19,7 +20,7 @@ def _check(model: ir.Model, rep: Reporter, owner: str, when: dict[int, E.Expr],
         bad = E.disj(E.Binary("<", o.prob, E.lit(0), Type.BOOL),
                      E.Binary(">", o.prob, E.lit(1), Type.BOOL))
         for mode, cond in when.items():
-            wit = find(model, mode, E.conj(cond, bad))
+            wit = find(model, mode, E.conj(cond, defined(o.prob, model), bad))
             if wit is not None:
                 rep.error("E304", f"a probability of {owner} is outside [0, 1] in the state {wit}",
                           o.prob.span or o.span)
@@ -40,7 +41,7 @@ def _check(model: ir.Model, rep: Reporter, owner: str, when: dict[int, E.Expr],
     off = E.disj(E.Binary(">", total, E.lit(1 + EPSILON), Type.BOOL),
                  E.Binary("<", total, E.lit(1 - EPSILON), Type.BOOL))
     for mode, cond in when.items():
-        wit = find(model, mode, E.conj(cond, off))
+        wit = find(model, mode, E.conj(cond, defined(total, model), off))
         if wit is not None:
             rep.error("E305", f"the outcome probabilities of {owner} do not sum to 1 in the "
                       f"state {wit}", span, hint="make the last outcome '1 - ...' of the others")
@@ -57,7 +58,7 @@ def check_distributions(model: ir.Model, rep: Reporter) -> None:
         bad = E.disj(E.Binary("<", h.prob, E.lit(0), Type.BOOL),
                      E.Binary(">", h.prob, E.lit(1), Type.BOOL))
         for mode, cond in when.items():
-            wit = find(model, mode, E.conj(cond, bad))
+            wit = find(model, mode, E.conj(cond, defined(h.prob, model), bad))
             if wit is not None:
                 rep.error("E304", f"the probability of hazard {h.name} is outside [0, 1] in the "
                           f"state {wit}", h.prob.span or h.span)

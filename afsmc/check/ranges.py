@@ -6,9 +6,8 @@ floor/ceil choice of the interval constants it uses.
 
 from __future__ import annotations
 
-import itertools
-
 from afsmc.check.search import Witness, find
+from afsmc.check.undefined import defined, interval_choices
 from afsmc.diagnostics import Reporter
 from afsmc.model import expr as E
 from afsmc.model import ir
@@ -17,15 +16,6 @@ from afsmc.model.evaluate import Env, EvalError, evaluate
 from afsmc.model.expr import Type
 from afsmc.model.lower import enabled, fire_condition, inline
 from afsmc.model.pretty import number, show
-
-
-def _interval_choices(model: ir.Model, e: E.Expr) -> list[dict[str, int]]:
-    used = [c for c in model.interval_constants if c.name in E.consts_read(e)]
-    choices = []
-    for ends in itertools.product((0, 1), repeat=len(used)):
-        choices.append({c.name: c.interval[end] for c, end in zip(used, ends, strict=True)
-                        if c.interval is not None})
-    return choices
 
 
 def _value(model: ir.Model, e: E.Expr, w: Witness, mode: int, consts: dict[str, int]) -> str:
@@ -52,10 +42,11 @@ def _check_updates(model: ir.Model, rep: Reporter, when: dict[int, E.Expr],
             lo, hi = bounds(u.value, model)
             if var.lo <= lo and hi <= var.hi:
                 continue
-            out = E.disj(E.Binary("<", u.value, E.lit(var.lo), Type.BOOL),
-                         E.Binary(">", u.value, E.lit(var.hi), Type.BOOL))
+            out = E.conj(defined(u.value, model),  # undefined: E306
+                         E.disj(E.Binary("<", u.value, E.lit(var.lo), Type.BOOL),
+                                E.Binary(">", u.value, E.lit(var.hi), Type.BOOL)))
             done = False
-            for consts in _interval_choices(model, u.value):
+            for consts in interval_choices(model, u.value):
                 for mode, cond in when.items():
                     # `out` alone reads few variables: when no state at all leaves the range,
                     # the search under the (large) firing condition is not needed.

@@ -139,8 +139,8 @@ def _smt(model: ir.Model, mode: int, pred: E.Expr, variables: list[ir.Variable],
             solver.add(zvars[v.name] >= v.lo, zvars[v.name] <= v.hi)
     try:
         solver.add(_z3(pred, zvars, mode, consts))
-    except EvalError as exc:
-        raise Undecided(str(exc)) from None
+    except (EvalError, z3.Z3Exception) as exc:
+        raise Undecided(f"cannot translate it for the SMT solver ({exc})") from None
     answer = solver.check()
     if answer == z3.unknown:
         raise Undecided(f"the SMT solver gave up ({solver.reason_unknown()})")
@@ -164,6 +164,11 @@ def _z3(e: E.Expr, zvars: dict[str, Any], mode: int, consts: Mapping[str, Any]) 
             return z3.IntVal(v)
         return z3.RealVal(Fraction(v).limit_denominator(10**12))
 
+    def real(x: Any) -> Any:
+        # ToReal accepts integer terms only: a double (a real literal, constant or
+        # quotient) already is one.
+        return z3.ToReal(x) if z3.is_int(x) else x
+
     def go(n: E.Expr) -> Any:
         if isinstance(n, E.Lit):
             return lit(n.value)
@@ -185,7 +190,7 @@ def _z3(e: E.Expr, zvars: dict[str, Any], mode: int, consts: Mapping[str, Any]) 
             ops: dict[str, Any] = {
                 "&&": lambda: z3.And(a, b), "||": lambda: z3.Or(a, b),
                 "=>": lambda: z3.Implies(a, b), "+": lambda: a + b, "-": lambda: a - b,
-                "*": lambda: a * b, "/": lambda: z3.ToReal(a) / z3.ToReal(b),
+                "*": lambda: a * b, "/": lambda: real(a) / real(b),
                 "==": lambda: a == b, "!=": lambda: a != b, "<": lambda: a < b,
                 "<=": lambda: a <= b, ">": lambda: a > b, ">=": lambda: a >= b}
             return ops[n.op]()
@@ -197,9 +202,9 @@ def _z3(e: E.Expr, zvars: dict[str, Any], mode: int, consts: Mapping[str, Any]) 
                     out = z3.If(a < out, a, out) if n.func == "min" else z3.If(a > out, a, out)
                 return out
             if n.func == "floor":
-                return z3.ToInt(z3.ToReal(args[0]))
+                return z3.ToInt(real(args[0]))
             if n.func == "ceil":
-                return -z3.ToInt(-z3.ToReal(args[0]))
+                return -z3.ToInt(-real(args[0]))
             if n.func == "mod":
                 return args[0] % args[1]
             if n.func == "pow":

@@ -6,6 +6,7 @@ from __future__ import annotations
 import itertools
 
 from afsmc.check.search import Witness, find
+from afsmc.check.undefined import defined
 from afsmc.diagnostics import Related, Reporter
 from afsmc.model import expr as E
 from afsmc.model import ir
@@ -35,10 +36,9 @@ def check_weight_range(model: ir.Model, rep: Reporter) -> None:
             continue  # interval arithmetic is conservative: no state can leave [0, 1]
         for mode in a.modes:
             w = a.weight
-            # not (0 <= w <= 1) rather than w < 0 || w > 1: a NaN weight (0 / 0) is bad too
-            bad = E.Unary("!", E.conj(E.Binary(">=", w, E.lit(0), Type.BOOL),
-                                      E.Binary("<=", w, E.lit(1), Type.BOOL)), Type.BOOL)
-            wit = find(model, mode, E.conj(enabled(model, a, mode), bad))
+            # Where the weight is undefined (0 / 0) E306 says so; elsewhere it is a number.
+            bad = E.disj(E.Binary("<", w, E.lit(0), Type.BOOL), E.Binary(">", w, E.lit(1), Type.BOOL))
+            wit = find(model, mode, E.conj(enabled(model, a, mode), defined(w, model), bad))
             if wit is not None:
                 value = _value_at(model, w, wit, mode)
                 where = "" if value.startswith("undefined") or value == "nan" else ", outside [0, 1],"
@@ -59,6 +59,7 @@ def check_weight_uniqueness(model: ir.Model, rep: Reporter) -> None:
             if _apart(bounds(a.weight, model), bounds(b.weight, model)):
                 continue  # the weights' ranges do not meet: they cannot tie in any state
             tie = E.conj(enabled(model, a, m.number), enabled(model, b, m.number),
+                         *(defined(x, model) for x in (a.guard, b.guard, a.weight, b.weight)),
                          weights_tie(a.weight, b.weight))
             wit = find(model, m.number, tie)
             if wit is None:

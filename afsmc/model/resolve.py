@@ -363,6 +363,10 @@ class _Resolver:
             # `*` means every mode that can act: final modes are absorbing.
             everything = {m.number for m in self.modes.values() if not m.final}
             chosen = everything - chosen
+            if not chosen:
+                self.rep.warning("W603", f"{for_what} can never fire: its mode set is empty "
+                                 "('*' leaves out the final modes)", ms.span,
+                                 hint="name the modes it acts in, or remove it")
         else:
             for n in sorted(chosen):
                 if by_number[n].final:
