@@ -51,11 +51,12 @@ EXPLICIT |= {"NAME": NAMES.map(lambda n: f" {n} "), "WS": st.just(" "),
 
 
 def test_generated_files_are_mostly_parseable() -> None:
-    """The generator really exercises the checker, not just the syntax-error path."""
+    """The generator really exercises the checker, not just the syntax-error path (a fixed
+    seed: a random search of 500 examples sometimes found no such file)."""
     from hypothesis import find
 
     text = find(from_lark(GRAMMAR, explicit=EXPLICIT), lambda t: "action" in t and "mode" in t,
-                settings=settings(max_examples=500, database=None))
+                settings=settings(max_examples=2000, database=None, derandomize=True))
     lark.Lark(grammar_text(), parser="lalr").parse(text)
 
 
