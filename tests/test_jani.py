@@ -314,3 +314,19 @@ def test_compile_target_writes_jani(tmp_path: Path) -> None:
     res = run_cli("compile", str(EXAMPLES / "patrol.afsm"), "-t", "jani", "--resolve", "uniform",
                   "-o", "-")
     assert res.code == 0 and json.loads(res.out)["type"] == "dtmc"
+
+
+def test_next_via_jani_on_a_symbolic_engine_says_to_use_prism(tmp_path: Path) -> None:
+    # JANI writes X as a one-step bounded until, which only Storm's sparse engine takes.
+    model = tmp_path / "nx.afsm"
+    model.write_text("machine nx;\nvar x : [0..3] init 0;\nmode A = 0 initial;\n"
+                     "mode B = 1 final;\n"
+                     "action Go in A when x < 3 { 0.3: x := x + 1; 0.7: goto B; }\n"
+                     "action Stop in A when x >= 3 { goto B; }\n"
+                     "property nxt = P=? [ X x == 1 ];\n", encoding="utf-8")
+    r = run_cli("verify", str(model), "--engine", "hybrid", "--via", "jani")
+    assert r.code == 1 and "E404" in r.err and "use --via prism or --engine sparse" in r.err
+    for argv in (["--engine", "hybrid"], ["--via", "jani"]):
+        ok = run_cli("verify", str(model), *argv, "--json")
+        assert ok.code == 0, ok.err
+        assert json.loads(ok.out)["properties"][0]["value"] == pytest.approx(0.3)

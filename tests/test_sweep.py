@@ -270,3 +270,18 @@ def test_ctrl_c_prints_the_points_a_sweep_had(deadline: str, monkeypatch: pytest
     assert code == 130 and "afsmc: interrupted" in err
     assert "1 points were evaluated before this:" in err, err
     assert "\n0,steps,2.0," in err, err
+
+
+@pytest.mark.parametrize("command", ["sweep", "simulate"])
+def test_a_malformed_dask_address_is_a_usage_error(deadline: str, command: str) -> None:
+    # Dask's own parser failed only when connecting, with a traceback.
+    extra = ["--const", "D=1:2"] if command == "sweep" else []
+    r = run_cli(command, deadline, *extra, "--dask", "notanaddress")
+    assert r.code == 2 and "expected a Dask scheduler address" in r.err, r.err
+
+
+@pytest.mark.parametrize("engine", ["hybrid", "dd"])
+def test_bisim_on_a_symbolic_engine_is_refused_not_ignored(deadline: str, engine: str) -> None:
+    for argv in (["verify", deadline], ["sweep", deadline, "--const", "D=1:2"]):
+        r = run_cli(*argv, "--bisim", "--engine", engine)
+        assert r.code == 2 and "--bisim needs the sparse model" in r.err, r.err

@@ -346,3 +346,11 @@ def test_isolated_build_reports_progress(spec: Spec) -> None:
 def test_open_constant_required_value(spec: Spec) -> None:
     r = run_cli("verify", spec("geo", GEO), "-c", "NOPE=3")
     assert r.code == 1 and "E209" in r.err
+
+
+def test_the_max_states_hint_speaks_of_bytes_per_state_only_for_sparse(spec: Spec) -> None:
+    path = spec("deadline", DEADLINE)
+    sparse = run_cli("verify", path, "--max-states", "2", "--engine", "sparse")
+    dd = run_cli("verify", path, "--max-states", "2", "--engine", "dd")
+    assert sparse.code == dd.code == 1 and "E405" in sparse.err and "E405" in dd.err
+    assert "250 bytes per state" in sparse.err and "bytes per state" not in dd.err, dd.err

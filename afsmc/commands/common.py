@@ -33,6 +33,17 @@ def _seed(text: str) -> int:
     return n
 
 
+def dask_address(text: str) -> str:
+    """`--dask`: a scheduler address, `[scheme://]host:port` (Dask's own parser would fail
+    only when connecting, with a traceback)."""
+    import re
+
+    if not re.fullmatch(r"(?:[a-z]+://)?(?:\[[0-9a-fA-F:]+\]|[^\s:/\[\]]+):\d+", text):
+        raise argparse.ArgumentTypeError(
+            f"expected a Dask scheduler address such as tcp://127.0.0.1:8786, got {text!r}")
+    return text
+
+
 def add_consts(p: argparse.ArgumentParser) -> None:
     p.add_argument("--const", "-c", action="append", default=[], metavar="NAME=VALUE",
                    help="give an open constant ('param') a value; repeatable, or NAME=V,NAME=V")

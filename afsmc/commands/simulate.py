@@ -11,7 +11,15 @@ import os
 import sys
 from typing import Any
 
-from afsmc.commands.common import add_consts, add_file, add_seed, fail, overrides, print_json
+from afsmc.commands.common import (
+    add_consts,
+    add_file,
+    add_seed,
+    dask_address,
+    fail,
+    overrides,
+    print_json,
+)
 from afsmc.compiler import check_writable, read_source, write_atomic
 from afsmc.diagnostics import CompileError, Diagnostic, Severity
 from afsmc.sim.compile import SimError
@@ -34,7 +42,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                         "(default 100000)")
     p.add_argument("--jobs", "-j", type=int, default=1, metavar="J",
                    help="worker processes (default 1); the estimate does not depend on it")
-    p.add_argument("--dask", metavar="ADDRESS",
+    p.add_argument("--dask", metavar="ADDRESS", type=dask_address,
                    help="spread the batches over the Dask cluster at ADDRESS")
     p.add_argument("--batch-size", type=int, default=BATCH, metavar="B",
                    help=f"runs per batch, each with its own seed (default {BATCH})")

@@ -13,10 +13,15 @@ import os
 import sys
 
 from afsmc import verify as lib
-from afsmc.commands.common import add_file, fail, reductions, usage_error
-from afsmc.commands.verify import add_storm_options, positive, progress_printer
+from afsmc.commands.common import add_file, dask_address, fail, reductions, usage_error
+from afsmc.commands.verify import (
+    add_storm_options,
+    positive,
+    progress_printer,
+    refuse_bisim_on_symbolic,
+)
 from afsmc.compiler import check_writable, write_atomic
-from afsmc.diagnostics import CompileError
+from afsmc.diagnostics import CompileError, Diagnostic, Severity
 from afsmc.verify.sweep import Number, parse_values
 
 
@@ -35,7 +40,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    help="draw min, max and uniform curves (matplotlib)")
     p.add_argument("--jobs", "-j", type=positive, metavar="N",
                    help="parallel processes on this machine (default: the number of cores)")
-    p.add_argument("--dask", metavar="ADDRESS",
+    p.add_argument("--dask", metavar="ADDRESS", type=dask_address,
                    help="run the points on this Dask scheduler (e.g. tcp://10.0.0.5:8786); "
                         "its workers need afsmc installed")
 
@@ -81,6 +86,7 @@ def split_consts(items: list[str]) -> tuple[dict[str, str], dict[str, list[Numbe
 
 
 def run(args: argparse.Namespace) -> int:
+    refuse_bisim_on_symbolic(args)
     fixed, swept = split_consts(args.const)
     if args.bound is not None:
         if swept:
@@ -121,6 +127,11 @@ def run(args: argparse.Namespace) -> int:
                 progress(f"wrote {args.plot}")
     except CompileError as exc:
         return fail(exc, args.json, wrapped=True)
+    except OSError as exc:  # the Dask scheduler is unreachable
+        return fail(CompileError([Diagnostic("E413", Severity.ERROR, f"sweep failed: {exc}",
+                                             None, hint="is a Dask scheduler running at "
+                                             f"{args.dask}?" if args.dask else None)]),
+                    args.json)
     if args.json:
         print(json.dumps(res.to_json(), indent=2))
     elif not args.output and not args.plot:

@@ -16,6 +16,7 @@ from afsmc.commands.common import (
     overrides,
     reductions,
     report,
+    usage_error,
 )
 from afsmc.diagnostics import CompileError
 from afsmc.verify import VerifyResult
@@ -37,8 +38,9 @@ def add_storm_options(p: argparse.ArgumentParser) -> None:
     p.add_argument("--property", "-p", action="append", default=[], metavar="NAME",
                    help="check only this declared property; repeatable (default: all)")
     p.add_argument("--formula", "-f", action="append", default=[], metavar="PROPERTY",
-                   help="also check an ad-hoc property in .afsm syntax, e.g. "
-                        "'P=? [ F \"done\" ]'; repeatable")
+                   help="check an ad-hoc property in .afsm syntax, e.g. "
+                        "'P=? [ F \"done\" ]'; repeatable. With it, declared properties "
+                        "are checked only if named with --property")
     p.add_argument("--via", choices=VIAS, default="prism",
                    help="Storm's input language: PRISM text (default) or JANI JSON")
     p.add_argument("--engine", choices=ENGINES, default="auto",
@@ -146,7 +148,15 @@ def render(res: VerifyResult) -> str:
     return "\n".join(lines)
 
 
+def refuse_bisim_on_symbolic(args: argparse.Namespace) -> None:
+    if args.bisim and args.engine in ("hybrid", "dd"):
+        # Storm minimises only the sparse model; silently skipping it would mislead.
+        usage_error(f"--bisim needs the sparse model: use it with --engine sparse or auto, "
+                    f"not {args.engine}")
+
+
 def run(args: argparse.Namespace) -> int:
+    refuse_bisim_on_symbolic(args)
     try:
         res = lib.run(args.file, consts=overrides(args), properties=args.property,
                   formulas=args.formula, via=args.via, engine=args.engine,

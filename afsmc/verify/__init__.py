@@ -7,7 +7,8 @@ Storm's side) instead of letting a Storm exception escape.
 ``run(path, *, consts=None, properties=(), formulas=(), via="prism", engine="sparse",
 max_states=None, uniform=True, isolate=None, progress=None, text=None) -> VerifyResult``
     Load, check and lower the file, build it with Storm and check the properties: the ones
-    named in `properties` (default: every declared one) plus each ad-hoc formula in
+    named in `properties` (default: every declared one, unless there are ad-hoc formulas:
+    then none) plus each ad-hoc formula in
     `formulas` (afsm property syntax, e.g. ``'P=? [ F "done" ]'``, named ``adhoc``,
     ``adhoc2``...). `consts` gives open constants (``{"CELLS": "5"}``). For a machine with
     interval constants the floor/ceil MDP gives ``min``/``max`` and, unless

@@ -335,6 +335,12 @@ def failure_diagnostic(f: StormFailure, model: ir.Model, low: Lowered,
                      if line.strip() and set(line.strip()) != {"^"}) or "no message"
     engine_hint = (f"the {job.engine} engine supports fewer properties: try --engine sparse"
                    if job.engine != "sparse" else None)
+    if engine_hint and job.via == "jani" and prop is not None and isinstance(prop.path, ir.Path) \
+            and prop.path.kind == "X":
+        # JANI writes X as a step-bounded until ([1, 1]), which only Storm's sparse engine
+        # takes; from PRISM the symbolic engines check X.
+        engine_hint = (f"JANI has no X: afsmc writes it as an until bounded to one step, which "
+                       f"the {job.engine} engine cannot check; use --via prism or --engine sparse")
 
     def diag(code: str, msg: str, span: Span | None, hint: str | None = None) -> Diagnostic:
         return Diagnostic(code, Severity.ERROR, msg, span, hint)
@@ -360,8 +366,10 @@ def failure_diagnostic(f: StormFailure, model: ir.Model, low: Lowered,
                     f"{job.what}: {first}", prop.span if prop else None, engine_hint)
     if f.stage == "too-big":
         return diag("E405", first, None,
-                    "raise --max-states if the machine has the memory (the sparse engine needs "
-                    "about 250 bytes per state), or check a smaller instance with --const")
+                    "raise --max-states if the machine has the memory" + (
+                        " (the sparse engine needs about 250 bytes per state)"
+                        if job.engine in ("sparse", "auto") else "")
+                    + ", or check a smaller instance with --const")
     if f.stage == "memory":
         if job.engine in ("hybrid", "dd"):
             return diag("E406", first, None, "this one check needs more memory than the "
