@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import argparse
 import importlib
+import json
 import shlex
 import sys
 from collections.abc import Sequence
@@ -71,8 +72,13 @@ def main(argv: Sequence[str] | None = None) -> int:
         code: int = args._run(args)
     except KeyboardInterrupt as exc:
         print("afsmc: interrupted", file=sys.stderr)
-        for note in getattr(exc, "__notes__", []):  # e.g. the values verify had by then
+        notes = list(getattr(exc, "__notes__", []))  # e.g. the values verify had by then
+        for note in notes:
             print(f"afsmc: {note}", file=sys.stderr)
+        if getattr(args, "json", False):
+            # --json promises one JSON object on stdout, a Ctrl-C included
+            print(json.dumps({"interrupted": True, "diagnostics": [
+                {"code": "N412", "severity": "note", "message": n} for n in notes]}, indent=2))
         return 130
     except BrokenPipeError:
         return 0

@@ -444,6 +444,23 @@ def test_ctrl_c_prints_the_values_verify_had(monkeypatch: pytest.MonkeyPatch,
     assert f"success_min = {sparse.property('success').min!r} on the MDP" in err, err
 
 
+def test_ctrl_c_with_json_still_prints_one_json_object(monkeypatch: pytest.MonkeyPatch,
+                                                       capsys: pytest.CaptureFixture[str]) -> None:
+    from afsmc.cli import main
+    from afsmc.verify.guard import Interrupted
+
+    sparse = run(UAV, consts=SMALL["uav"], properties=["success"], engine="sparse",
+                 isolate=False, uniform=False)
+    _stop_after_first_answer(monkeypatch, lambda v: Interrupted(dict(v)))
+    code = main(["verify", UAV, "-p", "success", "--no-uniform", "--engine", "sparse", "--json",
+                 *[f"--const={k}={v}" for k, v in SMALL["uav"].items()]])
+    obj = json.loads(capsys.readouterr().out)
+    assert code == 130 and obj["interrupted"] is True
+    [note] = obj["diagnostics"]
+    assert note["code"] == "N412"
+    assert f"success_min = {sparse.property('success').min!r} on the MDP" in note["message"]
+
+
 def test_kept_values_give_each_pmax_from_its_complement() -> None:
     from afsmc.verify import core
 
