@@ -483,16 +483,21 @@ def _unanswered(queries: list[tuple[ir.Property, str]], vals: dict[str, float],
             and not (n in comp and comp[n].name in vals and TERMINATES in vals)]
 
 
-def _dual_names(props: Sequence[ir.Property]) -> dict[str, str]:
-    """The queries of the duals (`dual`) -> the queries of the bounded-G properties whose
-    values they give, as 1 - value."""
+def _duals(props: Sequence[ir.Property]) -> dict[str, tuple[str, str]]:
+    """The queries of the duals (`dual`) -> the query of the bounded-G property whose value
+    each gives, as 1 - value, and the progress lines' wording of it (from the property
+    itself: its own name may end in `_min`)."""
     out = {}
     for p in props:
         if _bounded_g(p):
-            out[DUAL + p.name] = p.name  # a DTMC, or an MDP property with Pmin/Pmax
+            # a DTMC, or an MDP property with Pmin/Pmax: the dual asks the other bound
+            asked = {"min": "max", "max": "min"}.get(p.opt or "", "")
+            out[DUAL + p.name] = (p.name, f"{p.name} as 1 - P{asked} [F<=k !φ]")
             if not p.opt:
-                out[f"{DUAL}{p.name}_min"] = f"{p.name}_max"
-                out[f"{DUAL}{p.name}_max"] = f"{p.name}_min"
+                out[f"{DUAL}{p.name}_min"] = (f"{p.name}_max",
+                                              f"{p.name}_max as 1 - Pmin [F<=k !φ]")
+                out[f"{DUAL}{p.name}_max"] = (f"{p.name}_min",
+                                              f"{p.name}_min as 1 - Pmax [F<=k !φ]")
     return out
 
 
@@ -515,20 +520,6 @@ def _kept(done: Sequence[tuple[str, dict[str, float]]], comp: Mapping[str, ir.Pr
         return []
     return [Diagnostic("N412", Severity.NOTE, "answered before this:\n" + "\n".join(lines),
                        None)]
-
-
-def _dual_texts(props: Sequence[ir.Property]) -> dict[str, str]:
-    """The queries of the duals -> what they give, worded from the properties themselves
-    (a property's own name may end in `_min`)."""
-    out = {}
-    for p in props:
-        if _bounded_g(p):
-            asked = {"min": "max", "max": "min"}.get(p.opt or "", "")
-            out[DUAL + p.name] = f"{p.name} as 1 - P{asked} [F<=k !φ]"
-            if not p.opt:
-                out[f"{DUAL}{p.name}_min"] = f"{p.name}_max as 1 - Pmin [F<=k !φ]"
-                out[f"{DUAL}{p.name}_max"] = f"{p.name}_min as 1 - Pmax [F<=k !φ]"
-    return out
 
 
 def _query_text(name: str, duals: Mapping[str, str]) -> str:
@@ -612,11 +603,12 @@ def check(model: ir.Model, props: Sequence[ir.Property], *, via: Via = "prism",
     out of memory, they follow one per process."""
     started = time.perf_counter()
     original = list(props)
-    texts = _dual_texts(original)
+    pairs = _duals(original)
+    duals = {q: gives for q, (gives, _) in pairs.items()}
+    texts = {q: text for q, (_, text) in pairs.items()}
     if progress is not None:
         say = progress
         progress = lambda text: say(_readable(text, texts))  # noqa: E731
-    duals = _dual_names(original)
     props = [dual(p) if _bounded_g(p) else p for p in props]
     preserve = [dual(p) if _bounded_g(p) else p for p in preserve]
     bound = upper_bound(model)

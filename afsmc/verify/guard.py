@@ -116,7 +116,6 @@ def _vmsize() -> int | None:
 def _child(conn: Any, job: Job, address_limit: int | None) -> None:
     """Runs in the child: report readiness and memory baseline, then the job's events."""
     import resource
-    import signal
 
     # A Ctrl-C reaches the whole process group: the parent stops this child and reports
     # what it had; the child's own KeyboardInterrupt would only print a traceback.
