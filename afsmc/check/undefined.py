@@ -97,11 +97,6 @@ def defined(e: E.Expr, model: ir.Model) -> E.Expr:
     return E.conj(*parts)
 
 
-def _state_free(e: E.Expr) -> bool:
-    return all(isinstance(n, (E.Lit, E.ConstRef, E.Unary, E.Binary, E.Call, E.Ite))
-               for n in E.walk(e))
-
-
 @dataclass(frozen=True)
 class Site:
     what: str  # "the guard of action Go"
@@ -176,7 +171,7 @@ def check_undefined(model: ir.Model, rep: Reporter) -> None:
                 reported.add(_key(p.node))
                 span = p.node.span if p.node.span is not None else site.expr.span
                 chosen = "".join(f", {k} = {v}" for k, v in consts.items())
-                if _state_free(p.divisor):
+                if E.state_free(p.divisor):
                     rep.error("E245", f"this expression cannot be compiled: {show(p.node)} is "
                               f"undefined ({p.why}), where {site.what} is evaluated", span,
                               hint="Storm fails on a constant part it cannot compute; "

@@ -171,6 +171,11 @@ def consts_read(e: Expr) -> set[str]:
     return {n.name for n in walk(e) if isinstance(n, ConstRef)}
 
 
+def state_free(e: Expr) -> bool:
+    """Made of numbers and constants only: the same value in every state."""
+    return all(isinstance(n, (Lit, ConstRef, Unary, Binary, Ite, Call)) for n in walk(e))
+
+
 # ---- small constructors used by the lowering and the backends ------------------
 
 TRUE = Lit(True, Type.BOOL)

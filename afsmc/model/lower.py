@@ -182,7 +182,7 @@ def fire_condition(model: ir.Model, action: ir.Action, mode: int, *,
         en_b = enabled(model, b, mode)
         wb = static_value(b.weight, model)
         if wa is not None and wb is not None:
-            if wb - wa <= TIE if ties else wb < wa:
+            if (wb - wa <= TIE) if ties else (wb < wa):
                 continue
             parts.append(E.neg(en_b))
         elif ties:

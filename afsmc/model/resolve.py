@@ -65,10 +65,6 @@ def unrepresentable(v: Any) -> str | None:
     return None
 
 
-def _state_free(x: E.Expr) -> bool:
-    return all(isinstance(n, (E.Lit, E.ConstRef, E.Unary, E.Binary, E.Call)) for n in E.walk(x))
-
-
 def _shown(v: int) -> str:
     """A huge integer, short: 1.00e300."""
     digits = str(abs(v))
@@ -466,7 +462,7 @@ class _Resolver:
 
     def _expr(self, e: ast.Expr, ctx: Ctx) -> E.Expr:
         x = self._build(e, ctx)
-        if isinstance(x, (E.Unary, E.Binary, E.Call)) and x.type.numeric and _state_free(x):
+        if isinstance(x, (E.Unary, E.Binary, E.Call)) and x.type.numeric and E.state_free(x):
             # Storm folds such parts itself, and fails on an infinite or too large result.
             why: str | None
             try:
