@@ -316,6 +316,43 @@ def test_reach_overlay_mdp_gives_min_and_max(tmp_path: Path) -> None:
     assert _reach(tmp_path / "u.svg")["E"] == f"P(reach) {1 / 2:.4g}"
 
 
+def test_reach_on_the_reduced_model_equals_storm_on_the_unreduced_one(tmp_path: Path) -> None:
+    # --reach checks the reduced model in verify's guard; the oracle is Storm itself on
+    # afsmc's unreduced PRISM (compile --no-reduce), one Pmin/Pmax per mode.
+    import stormpy
+
+    from afsmc.commands.diagram import mode_reachability
+    from afsmc.compiler import load
+
+    consts = {"WIDTH": "2", "HEIGHT": "2", "T_LIMIT": "100", "DEADLINE": "100"}
+    model = load(str(EXAMPLES / "uav.afsm"), consts).model
+    got, mdp = mode_reachability(model, "nondet")
+    assert mdp
+    r = run_cli("compile", str(EXAMPLES / "uav.afsm"), "--no-reduce", "-o",
+                str(tmp_path / "u.prism"), *[a for k, v in consts.items()
+                                             for a in ("--const", f"{k}={v}")])
+    assert r.code == 0, r.err
+    prog = stormpy.parse_prism_program(str(tmp_path / "u.prism"))
+    numbers = sorted(m.number for m in model.modes)
+    props = stormpy.parse_properties(
+        "; ".join(f"P{op}=? [ F mode={n} ]" for n in numbers for op in ("min", "max")), prog)
+    built = stormpy.build_model(prog, props)
+    init = built.initial_states[0]
+    want = [stormpy.model_checking(built, p).get_value(init) for p in props]
+    assert sorted(got) == numbers
+    for i, n in enumerate(numbers):
+        assert got[n] == pytest.approx((want[2 * i], want[2 * i + 1]), abs=1e-9), n
+    assert any(lo < hi for lo, hi in got.values())  # the intervals matter here
+
+
+def test_reach_stops_at_max_states_with_e405(tmp_path: Path) -> None:
+    out = tmp_path / "u.svg"
+    r = run_cli("diagram", str(EXAMPLES / "uav.afsm"), "--reach", "--max-states", "100",
+                "-o", str(out))
+    assert r.code == 1 and "error[E405]" in r.err and "--max-states 100" in r.err, r.err
+    assert "Traceback" not in r.err and not out.exists()
+
+
 def test_results_json_overlay(tmp_path: Path) -> None:
     # the shape `afsmc verify --json` writes: null for what was not asked
     results = {"machine": "patrol", "properties": [

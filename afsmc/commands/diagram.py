@@ -13,7 +13,6 @@ import json
 import math
 import os
 import sys
-import tempfile
 import time
 from typing import Any
 
@@ -31,10 +30,13 @@ from afsmc.commands.common import (
     report,
     usage_error,
 )
-from afsmc.compiler import load, write_atomic
+from afsmc.commands.verify import positive
+from afsmc.compiler import load, lowered, write_atomic
 from afsmc.diagnostics import CompileError, Diagnostic, Severity
 from afsmc.model import ir
-from afsmc.model.lower import Resolution, lower
+from afsmc.model.lower import Resolution
+from afsmc.verify.guard import Progress, default_max_states, run_job, upper_bound
+from afsmc.verify.storm import Job
 
 FORMATS = ("svg", "png", "pdf")
 
@@ -49,6 +51,9 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    help="compute with Storm the probability of ever reaching each mode and "
                         "write it into the mode's box")
     add_resolve(p)
+    p.add_argument("--max-states", type=positive, metavar="N",
+                   help="with --reach: stop (exit 1) if the model has more states than N "
+                        "(default: what 70%% of the free memory holds, at most 50 M)")
     p.add_argument("--results", metavar="JSON",
                    help="overlay the results of `afsmc verify --json` (a box of property values; "
                         "per-mode numbers from its \"modes\" list, if any)")
@@ -121,49 +126,54 @@ def read_results(path: str, model: ir.Model) -> Overlay:
     return Overlay(modes=modes, notes=notes)
 
 
-def mode_reachability(model: ir.Model, resolution: Resolution
+def mode_reachability(model: ir.Model, resolution: Resolution, *,
+                      max_states: int | None = None, progress: Progress | None = None
                       ) -> tuple[dict[int, tuple[float, float]], bool]:
     """Storm: (min, max) probability of ever reaching each mode (equal for a DTMC), and
-    whether the model is an MDP."""
-    import stormpy
-
-    low = lower(model, resolution)
-    text = emit(low).model
+    whether the model is an MDP. Built once for all modes, with verify's guard: a model
+    that may be large is built in a watched process and stopped at `max_states` (default:
+    what the free memory holds) or when the memory runs short, with E405/E406."""
+    low = lowered(model, resolution)  # the reductions keep every mode's reachability
     mdp = low.kind == "mdp"
     unreachable = set(analyse(model).unreachable)
     numbers = [m.number for m in sorted(model.modes, key=lambda m: m.number)
                if m.number not in unreachable]
-    ops = ("Pmin", "Pmax") if mdp else ("P",)
-    formulas = [f"{op}=? [ F mode={n} ]" for n in numbers for op in ops]
-    with tempfile.TemporaryDirectory(prefix="afsmc-reach-") as tmp:
-        path = os.path.join(tmp, f"{model.name}.prism")
-        with open(path, "w", encoding="utf-8") as f:
-            f.write(text)
-        try:
-            t0 = time.monotonic()
-            print(f"reach: building the {low.kind.upper()} with Storm ...", file=sys.stderr)
-            prog = stormpy.parse_prism_program(path)
-            props = stormpy.parse_properties("; ".join(formulas), prog)
-            built = stormpy.build_model(prog, props)
-            print(f"reach: {built.nr_states} states, {built.nr_transitions} transitions "
-                  f"({time.monotonic() - t0:.1f} s); checking {len(numbers)} modes",
-                  file=sys.stderr)
-            init = built.initial_states[0]
-            values = []
-            for i, prop in enumerate(props):
-                if built.nr_states >= 100_000 and i % len(ops) == 0:
-                    n = numbers[i // len(ops)]
-                    print(f"reach: mode {model.mode_by_number(n).name} ({i // len(ops) + 1}/"
-                          f"{len(numbers)})", file=sys.stderr)
-                # only_initial_states: Storm may skip work for states we never read
-                res = stormpy.model_checking(built, prop, only_initial_states=True)
-                values.append(float(res.get_value(init)))
-        except Exception as exc:  # stormpy raises RuntimeError and its own types
-            raise _error("E612", f"Storm could not compute the reachability of the modes: {exc}",
-                         hint="check the model with `afsmc compile -t prism`") from None
+    ops = ("min", "max") if mdp else ("",)
+    names = tuple(f"reach_{n}{'_' + op if op else ''}" for n in numbers for op in ops)
+    props = "".join(f'"reach_{n}{"_" + op if op else ""}": P{op}=? [ F mode={n} ];\n'
+                    for n in numbers for op in ops)
+    limit = default_max_states() if max_states is None else max_states
+    job = Job("prism", emit(low).model, props, names, "sparse", limit,
+              f"{low.kind.upper()} (--reach)")
+    say = progress or (lambda text: None)
+
+    def relay(text: str) -> None:
+        # One line per finished query would be one per mode; the guard's periodic lines
+        # ("checking ...: 15 s") still show a slow one.
+        if not text.startswith("checked "):
+            say("reach: " + text)
+    say(f"reach: building the {low.kind.upper()} with Storm and checking {len(numbers)} "
+        f"modes ...")
+    t0 = time.monotonic()
+    res = run_job(job, upper_bound(model), isolate=None, progress=relay)
+    if res.failure is not None:
+        f = res.failure
+        if f.stage == "too-big":
+            raise _error("E405", " ".join(f.message.split()),
+                         "raise --max-states if the machine has the memory (the sparse engine "
+                         "needs about 250 bytes per state), or draw a smaller instance with "
+                         "--const")
+        if f.stage == "memory":
+            raise _error("E406", " ".join(f.message.split()),
+                         "draw a smaller instance with --const")
+        raise _error("E612", f"Storm could not compute the reachability of the modes: "
+                     f"{' '.join(f.message.split()) or f.stage}",
+                     hint="check the model with `afsmc compile -t prism`")
+    say(f"reach: {res.states:,} states, {res.transitions:,} transitions, "
+        f"{len(names)} checks in {time.monotonic() - t0:.1f} s")
     out: dict[int, tuple[float, float]] = {n: (0.0, 0.0) for n in unreachable}
-    for i, n in enumerate(numbers):
-        vs = values[i * len(ops):(i + 1) * len(ops)]
+    for n in numbers:
+        vs = [res.values[f"reach_{n}{'_' + op if op else ''}"] for op in ops]
         out[n] = (min(vs), max(vs))
     return out, mdp
 
@@ -199,6 +209,10 @@ def render(g: graphviz.Digraph, fmt: str) -> bytes:
     return data
 
 
+def _say(text: str) -> None:
+    print(text, file=sys.stderr, flush=True)
+
+
 def run(args: argparse.Namespace) -> int:
     path, fmt = output_path(args)
     try:
@@ -213,7 +227,8 @@ def run(args: argparse.Namespace) -> int:
             modes.update(ov.modes)
             notes += ov.notes
         if args.reach:
-            ov = reach_overlay(*mode_reachability(model, args.resolve))
+            ov = reach_overlay(*mode_reachability(model, args.resolve,
+                                                  max_states=args.max_states, progress=_say))
             modes.update(ov.modes)
             caption = ov.caption
         data = render(diagram(model, Overlay(modes, notes, caption)), fmt)
