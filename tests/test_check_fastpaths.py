@@ -7,12 +7,12 @@ from pathlib import Path
 
 import pytest
 
-from afsmc.check.search import exists, find
 from afsmc.compiler import load
 from afsmc.model import expr as E
 from afsmc.model import ir
 from afsmc.model.bounds import bounds
-from afsmc.model.lower import enabled, fire_condition
+from afsmc.model.search import exists, find
+from afsmc.model.semantics import enabled, fire_condition
 
 ROOT = Path(__file__).resolve().parent.parent
 EXAMPLES = sorted((ROOT / "examples").glob("*.afsm"))
@@ -67,7 +67,7 @@ def test_the_smt_solver_decides_ties_as_enumeration_does(
     """A tie (weights within 1e-12, E301) and the mode graph's view of it are the same
     whether the states are enumerated or left to Z3."""
     from afsmc import check
-    from afsmc.check import search
+    from afsmc.model import search
 
     path = str(ROOT / "tests" / "cases" / case / "input.afsm")
 

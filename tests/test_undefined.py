@@ -8,10 +8,9 @@ from pathlib import Path
 import pytest
 
 from afsmc import check
-from afsmc.check import search
 from afsmc.compiler import load
 from afsmc.diagnostics import Reporter
-from afsmc.model import ir
+from afsmc.model import ir, search
 from afsmc.model.evaluate import EvalError
 from tests.conftest import ROOT, run_cli
 

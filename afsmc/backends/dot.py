@@ -29,8 +29,9 @@ from afsmc import __version__
 from afsmc.check.modegraph import ModeGraph, analyse, compact
 from afsmc.model import expr as E
 from afsmc.model import ir
-from afsmc.model.lower import Lowered, static_value
+from afsmc.model.lower import Lowered
 from afsmc.model.pretty import Printer
+from afsmc.model.semantics import static_value
 
 FONT = "Helvetica,Arial,sans-serif"
 INK = "#3d4f66"  # borders and ordinary edges

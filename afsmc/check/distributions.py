@@ -3,13 +3,13 @@ hazard can happen."""
 
 from __future__ import annotations
 
-from afsmc.check.search import find
 from afsmc.check.undefined import defined
 from afsmc.diagnostics import Reporter, Span
 from afsmc.model import expr as E
 from afsmc.model import ir
 from afsmc.model.expr import Type
-from afsmc.model.lower import enabled, static_value
+from afsmc.model.search import find
+from afsmc.model.semantics import enabled, static_value
 
 EPSILON = 1e-9
 

@@ -4,7 +4,7 @@ Nodes are modes; an edge `M -> N` exists when some action (or hazard) can fire i
 one of its outcomes moves to N (an outcome without `goto` stays: a self-loop). Only
 actions that can fire contribute edges: an action fires in a mode iff some state of the
 mode satisfies `fire_condition` (enabled, and beating every enabled competitor), decided
-exactly by `afsmc.check.search.find`. A tie of weights (E301) counts as a state where
+exactly by `afsmc.model.search.find`. A tie of weights (E301) counts as a state where
 either action may fire, so that no warning here contradicts the tie. Probabilistic hazards are woven into the commands
 of their modes, so they move a mode only where some action of it fires. Final modes are
 absorbing: nothing leaves them. Outcomes whose probability is the constant 0 are dropped.
@@ -32,11 +32,11 @@ from typing import Any, Literal
 
 import networkx as nx
 
-from afsmc.check.search import exists
 from afsmc.diagnostics import Reporter, Span
 from afsmc.model import expr as E
 from afsmc.model import ir
-from afsmc.model.lower import competitors, enabled, fire_condition, static_value
+from afsmc.model.search import exists
+from afsmc.model.semantics import competitors, enabled, fire_condition, static_value
 
 EdgeKind = Literal["action", "preemptive", "hazard"]
 

@@ -6,7 +6,6 @@ floor/ceil choice of the interval constants it uses.
 
 from __future__ import annotations
 
-from afsmc.check.search import Witness, find
 from afsmc.check.undefined import defined, interval_choices
 from afsmc.diagnostics import Reporter
 from afsmc.model import expr as E
@@ -14,8 +13,9 @@ from afsmc.model import ir
 from afsmc.model.bounds import bounds
 from afsmc.model.evaluate import Env, EvalError, evaluate
 from afsmc.model.expr import Type
-from afsmc.model.lower import enabled, fire_condition, inline
 from afsmc.model.pretty import number, show
+from afsmc.model.search import Witness, find
+from afsmc.model.semantics import enabled, fire_condition, inline
 
 
 def _value(model: ir.Model, e: E.Expr, w: Witness, mode: int, consts: dict[str, int]) -> str:

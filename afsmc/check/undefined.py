@@ -16,14 +16,14 @@ import itertools
 from collections.abc import Iterator
 from dataclasses import dataclass
 
-from afsmc.check.search import find
 from afsmc.diagnostics import Reporter
 from afsmc.model import expr as E
 from afsmc.model import ir
 from afsmc.model.bounds import bounds
 from afsmc.model.expr import Type
-from afsmc.model.lower import enabled, fire_condition, inline
 from afsmc.model.pretty import show
+from afsmc.model.search import find
+from afsmc.model.semantics import enabled, fire_condition, inline
 
 
 @dataclass(frozen=True)

@@ -5,7 +5,6 @@ from __future__ import annotations
 
 import itertools
 
-from afsmc.check.search import Witness, find
 from afsmc.check.undefined import defined
 from afsmc.diagnostics import Related, Reporter
 from afsmc.model import expr as E
@@ -13,8 +12,9 @@ from afsmc.model import ir
 from afsmc.model.bounds import bounds
 from afsmc.model.evaluate import Env, EvalError, evaluate
 from afsmc.model.expr import Type
-from afsmc.model.lower import TIE, competitors, enabled, inline, stuck, weights_tie
 from afsmc.model.pretty import number
+from afsmc.model.search import Witness, deadlock_witness, find
+from afsmc.model.semantics import TIE, competitors, enabled, inline, weights_tie
 
 
 def _value_at(model: ir.Model, e: E.Expr, w: Witness, mode: int) -> str:
@@ -80,16 +80,6 @@ def check_weight_uniqueness(model: ir.Model, rep: Reporter) -> None:
 def _apart(a: tuple[float, float], b: tuple[float, float]) -> bool:
     # Weights equal within TIE count as a tie: keep a margin.
     return a[1] < b[0] - 1e-9 or b[1] < a[0] - 1e-9
-
-
-def deadlock_witness(model: ir.Model, mode: int) -> Witness | None:
-    """A state of the (non-final) mode where no action is enabled, or None. The lowering
-    asks too (it makes such states absorbing), so the answer is kept on the model."""
-    memo = model.cache.setdefault("deadlocks", {})
-    assert isinstance(memo, dict)
-    if mode not in memo:
-        memo[mode] = find(model, mode, stuck(model, mode))
-    return memo[mode]  # type: ignore[no-any-return]
 
 
 def check_deadlock(model: ir.Model, rep: Reporter) -> None:

@@ -25,7 +25,8 @@ from dataclasses import dataclass, replace
 from afsmc.model import expr as E
 from afsmc.model import ir
 from afsmc.model.bounds import bounds, static
-from afsmc.model.lower import Branch, Command, Lowered, inline
+from afsmc.model.lower import Branch, Command, Lowered
+from afsmc.model.semantics import inline
 
 
 @dataclass(frozen=True)

@@ -21,10 +21,11 @@ from afsmc.diagnostics import CompileError, Diagnostic, Related, Severity, Sourc
 from afsmc.model import expr as E
 from afsmc.model import ir
 from afsmc.model.evaluate import Env, EvalError, evaluate
-from afsmc.model.lower import Lowered, inline
+from afsmc.model.lower import Lowered
 from afsmc.model.names import did_you_mean
 from afsmc.model.pretty import show
 from afsmc.model.reduce import Reductions
+from afsmc.model.semantics import inline
 from afsmc.syntax.parser import parse, parse_property
 from afsmc.verify.guard import (
     Interrupted,

@@ -19,8 +19,8 @@ import numpy as np
 from afsmc.model import expr as E
 from afsmc.model import ir
 from afsmc.model.evaluate import Env, EvalError, evaluate
-from afsmc.model.lower import inline
 from afsmc.model.pretty import number
+from afsmc.model.semantics import inline, stuck
 
 ENUMERATION_LIMIT = 4_000_000  # states enumerated at once before switching to Z3
 
@@ -61,6 +61,16 @@ def exists(model: ir.Model, mode: int, pred: E.Expr,
                 return True  # a sampled state is a state: the answer is exact
             break
     return _search(model, mode, inlined, variables, values) is not None
+
+
+def deadlock_witness(model: ir.Model, mode: int) -> Witness | None:
+    """A state of the (non-final) mode where no action is enabled, or None. The lowering
+    asks too (it makes such states absorbing), so the answer is kept on the model."""
+    memo = model.cache.setdefault("deadlocks", {})
+    assert isinstance(memo, dict)
+    if mode not in memo:
+        memo[mode] = find(model, mode, stuck(model, mode))
+    return memo[mode]  # type: ignore[no-any-return]
 
 
 def _prepare(model: ir.Model, pred: E.Expr, consts: Mapping[str, Any] | None
