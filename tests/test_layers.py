@@ -1,6 +1,7 @@
 """The pipeline's layering (docs/architecture.md): the early stages, afsmc.syntax and
-afsmc.model, never import a later one, not even inside a function (a late import hides a
-cycle; it does not remove it). Read from the source with `ast`, so nothing is executed."""
+afsmc.model, never import a later one, and the checks import no stage after them, not even
+inside a function (a late import hides a cycle; it does not remove it). Read from the
+source with `ast`, so nothing is executed."""
 
 from __future__ import annotations
 
@@ -57,6 +58,19 @@ def test_the_early_layers_have_modules() -> None:
 @pytest.mark.parametrize("path", EARLY_FILES, ids=lambda p: str(p.relative_to(PACKAGE)))
 def test_early_layers_import_no_later_stage(path: Path) -> None:
     bad = sorted(m for m in imported(path) if any(_is_within(m, p) for p in LATER))
+    assert not bad, f"{_module_name(path)} imports a later stage: {', '.join(bad)}"
+
+
+# The checks may use the simulator registry (afsmc.simlib: which simulators exist, for
+# `from sim` constants), but no stage that consumes their verdict.
+AFTER_CHECK = ("afsmc.backends", "afsmc.verify", "afsmc.sim", "afsmc.commands", "afsmc.cli",
+               "afsmc.lsp", "afsmc.compiler")
+CHECK_FILES = sorted((PACKAGE / "check").rglob("*.py"))
+
+
+@pytest.mark.parametrize("path", CHECK_FILES, ids=lambda p: str(p.relative_to(PACKAGE)))
+def test_checks_import_no_later_stage(path: Path) -> None:
+    bad = sorted(m for m in imported(path) if any(_is_within(m, p) for p in AFTER_CHECK))
     assert not bad, f"{_module_name(path)} imports a later stage: {', '.join(bad)}"
 
 

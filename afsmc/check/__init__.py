@@ -9,11 +9,11 @@ from __future__ import annotations
 from collections.abc import Callable
 
 from afsmc.check import distributions, modegraph, ranges, undefined, unused, weights
+from afsmc.check.sim_sources import check_sim_sources
 from afsmc.diagnostics import Diagnostic, Reporter
 from afsmc.model import ir
 from afsmc.model.evaluate import EvalError
 from afsmc.model.search import Undecided
-from afsmc.sim.check_sources import check_sim_sources
 
 Rule = Callable[[ir.Model, Reporter], None]
 

@@ -13,9 +13,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from afsmc.check.sim_sources import INTERVAL, NUMBER, PROBABILITY, policy_of
 from afsmc.model import ir
 from afsmc.sim import stats
-from afsmc.sim.check_sources import INTERVAL, NUMBER, PROBABILITY, policy_of
 from afsmc.simlib import registry
 from afsmc.syntax import ast
 from afsmc.syntax.parser import parse
