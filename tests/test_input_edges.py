@@ -166,3 +166,18 @@ def test_storm_refuses_the_names_afsmc_reserves_for_it(tmp_path: Path) -> None:
         except RuntimeError:
             refused.append(name)
     assert refused == names
+
+
+def test_a_comment_between_a_policy_minus_and_its_number_keeps_the_number() -> None:
+    # Found by the grammar fuzzer: the number was read from the source text, comment and all.
+    from afsmc.syntax import ast
+    from afsmc.syntax.parser import parse
+
+    def policy(text: str) -> list[float]:
+        module = parse("machine m;\nconst int a = 3 from sim uav.move.duration with "
+                       f"confidence = {text};\n", "m.afsm")
+        decl = module.decls[0]
+        assert isinstance(decl, ast.ConstDecl) and decl.source is not None
+        return [value for _, value in decl.source.policy]
+
+    assert policy("- // c\n 0.5") == policy("- /* c */ 0.5") == policy("-0.5") == [-0.5]

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 
-from afsmc.check import distributions, modegraph, ranges, undefined, unused, weights
+from afsmc.check import distributions, modegraph, overflow, ranges, undefined, unused, weights
 from afsmc.check.sim_sources import check_sim_sources
 from afsmc.diagnostics import Diagnostic, Reporter
 from afsmc.model import ir
@@ -18,6 +18,7 @@ from afsmc.model.search import Undecided
 Rule = Callable[[ir.Model, Reporter], None]
 
 RULES: tuple[Rule, ...] = (
+    overflow.check_overflow,
     undefined.check_undefined,
     weights.check_weight_range,
     weights.check_weight_uniqueness,
@@ -37,12 +38,22 @@ def register(rule: Rule) -> None:
         RULES = (*RULES, rule)
 
 
+# Rules that read the model's structure only. After an integer overflow (E307) only these
+# run: the others search states with 64-bit arithmetic and would report what the wrapped
+# values make of the model (a deadlock, an update out of range) that is not there.
+STRUCTURAL: tuple[Rule, ...] = (unused.check_unused, check_sim_sources)
+
+
 def run(model: ir.Model) -> list[Diagnostic]:
     rep = Reporter()
     for rule in RULES:
+        if rule is not overflow.check_overflow and rule not in STRUCTURAL and any(
+                d.code == "E307" for d in rep.diagnostics):
+            continue
         try:
             rule(model, rep)
-        except (Undecided, EvalError) as exc:
+        except (Undecided, EvalError, OverflowError) as exc:
+            # OverflowError: a value beyond numpy's int64 (E307 says where).
             # An unproven property is said, never passed over in silence.
             name = rule.__name__.removeprefix("check_").replace("_", " ")
             rep.warning("W309", f"the {name} check could not be completed: {exc}", None,

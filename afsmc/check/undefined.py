@@ -104,7 +104,8 @@ class Site:
     when: dict[int, E.Expr]  # mode -> where in it the expression is evaluated
 
 
-def _sites(model: ir.Model) -> Iterator[Site]:
+def sites(model: ir.Model) -> Iterator[Site]:
+    """Every expression the machine evaluates, with the modes (and conditions) where."""
     all_modes: dict[int, E.Expr] = {m.number: E.TRUE for m in model.modes}
     for a in model.actions:
         kind = "hazard" if a.kind == "preemptive" else "action"
@@ -155,7 +156,7 @@ def _key(n: E.Expr) -> tuple[int, int] | int:
 
 def check_undefined(model: ir.Model, rep: Reporter) -> None:
     reported: set[tuple[int, int] | int] = set()
-    for site in _sites(model):
+    for site in sites(model):
         x = inline(site.expr, model)
         for p in partials(x):
             if _key(p.node) in reported or _never_zero(p, model):

@@ -60,7 +60,27 @@ def bounds(e: E.Expr, model: ir.Model, env: dict[str, Bounds] | None = None,
         lo, hi = bounds(e.args[0], model, env, generated)
         return (float(math.floor(lo)) if math.isfinite(lo) else lo,
                 float(math.ceil(hi)) if math.isfinite(hi) else hi)
+    if isinstance(e, E.Call) and e.func == "pow" and e.type is E.Type.INT:
+        (bl, bh), (kl, kh) = (bounds(x, model, env, generated) for x in e.args)
+        if kl >= 0 and all(map(math.isfinite, (bl, bh, kl, kh))):
+            return _int_pow(bl, bh, kl, kh)
     return -inf, inf
+
+
+def _int_pow(bl: float, bh: float, kl: float, kh: float) -> Bounds:
+    """b ** k for b in [bl, bh], integer k in [kl, kh], k >= 0. For b >= 0 the extremes lie
+    at the corners (monotone in each argument); a negative base may flip the sign, so then
+    +- the largest magnitude."""
+    def p(b: float, k: float) -> float:
+        try:
+            return float(float(b) ** k)
+        except OverflowError:
+            return math.inf
+    if bl >= 0:
+        corners = [p(b, k) for b in (bl, bh) for k in (kl, kh)]
+        return min(corners), max(corners)
+    top = max(p(abs(bl), kh), p(abs(bh), kh), p(abs(bl), kl), p(abs(bh), kl), 1.0)
+    return -top, top
 
 
 def static(e: E.Expr, model: ir.Model,

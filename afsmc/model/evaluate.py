@@ -185,7 +185,7 @@ def _call(e: Call, env: Env) -> Array:
                 and isinstance(power, (int, np.integer)) and power >= 0):
             # Exact on scalars (constants), where numpy's int64 would wrap around unseen.
             b, k = int(base), int(power)
-            if abs(b) > 1 and k >= 64:
+            if (abs(b) > 1 and k >= 64) or not -(2**63) <= b**k < 2**63:
                 raise RangeError(f"pow({b}, {k}) does not fit in a 64-bit integer")
             return b**k
         exp = np.asarray(args[1])

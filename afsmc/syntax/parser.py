@@ -398,8 +398,10 @@ class _Builder(Transformer[Token, Any]):
         return (self._id(c[0]), c[1])
 
     def signed_number(self, meta: Any, c: list[Token]) -> float:
-        text = self.source.text[meta.start_pos:meta.end_pos].replace(" ", "")
-        return float(text)
+        # The minus is an anonymous token; comments and line breaks may stand between it and
+        # the number, so only the number's own text is converted.
+        value = float(c[-1])
+        return -value if self.source.text[meta.start_pos:meta.end_pos].startswith("-") else value
 
     def dotted_name(self, meta: Any, c: list[Token]) -> ast.Ident:
         return ast.Ident(".".join(str(t) for t in c), self._s(meta))

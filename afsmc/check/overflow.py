@@ -1,0 +1,66 @@
+"""No integer expression leaves 64 bits: `x * BIG` or `pow(2, n)` whose value, by the
+ranges of the variables it reads, can pass 2^63 - 1 (or fall below -2^63).
+
+Storm and the simulator compute integers with 64 bits and wrap around without a word, so
+such an expression would silently turn a guard or an update into another one (and the
+exact state search of the other checks would disagree with both). Constant-only parts are
+E245 already (resolve). The test is interval arithmetic over the variables' ranges, which
+is exact for independent operands; an interval that interval arithmetic cannot bound (a
+division near zero, which E306 covers) is not taken as an overflow.
+"""
+
+from __future__ import annotations
+
+import math
+
+from afsmc.check.undefined import sites
+from afsmc.diagnostics import Reporter
+from afsmc.model import expr as E
+from afsmc.model import ir
+from afsmc.model.bounds import bounds
+from afsmc.model.expr import Type
+from afsmc.model.pretty import show
+from afsmc.model.resolve import INT64
+from afsmc.model.semantics import inline
+
+
+def _computed(n: E.Expr) -> bool:
+    """An integer the machine computes (not a variable, constant or literal, whose own
+    ranges are checked where they are declared)."""
+    return n.type is Type.INT and isinstance(n, (E.Unary, E.Binary, E.Call)) \
+        and not E.state_free(n)
+
+
+def _beyond(lo: float, hi: float) -> float | None:
+    """The end of [lo, hi] that lies outside 64 bits (finite), or None."""
+    if math.isfinite(hi) and hi > INT64[1]:
+        return hi
+    if math.isfinite(lo) and lo < INT64[0]:
+        return lo
+    return None
+
+
+def check_overflow(model: ir.Model, rep: Reporter) -> None:
+    reported: set[tuple[int, int] | int] = set()
+    for site in sites(model):
+        x = inline(site.expr, model)
+        # Inner parts first: an outer expression overflows because an inner one does.
+        for n in reversed(list(E.walk(x))):
+            key = (n.span.start, n.span.end) if n.span is not None else id(n)
+            if key in reported or not _computed(n):
+                continue
+            if any(((m.span.start, m.span.end) if m.span is not None else id(m)) in reported
+                   for m in E.walk(n)):
+                continue
+            end = _beyond(*bounds(n, model))
+            if end is None:
+                continue
+            reported.add(key)
+            ranges = ", ".join(f"{v.display} in [{v.lo}..{v.hi}]" for v in model.variables
+                               if v.name in E.vars_read(n))
+            rep.error("E307", f"{show(n)} can reach {end:.3g} ({ranges}), beyond a 64-bit "
+                      f"integer, where {site.what} is evaluated",
+                      n.span if n.span is not None else site.expr.span,
+                      hint="Storm and the simulator compute integers with 64 bits and would "
+                           "wrap around silently; bound the operands with min/max, or compute "
+                           "in doubles (e.g. '1.0 * x * BIG')")
