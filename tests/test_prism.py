@@ -185,3 +185,12 @@ def test_compile_refusing_one_output_writes_none(tmp_path: Path) -> None:
     assert r.code == 1 and "refusing to overwrite the input" in r.err, r.err
     assert sorted(p.name for p in tmp_path.iterdir()) == ["z.props"]
     assert "wrote" not in r.err
+
+
+def test_compile_with_an_unwritable_second_output_writes_none(tmp_path: Path) -> None:
+    # A directory where the .props would go: found before the .prism is written.
+    (tmp_path / "patrol.props").mkdir()
+    r = run_cli("compile", str(EXAMPLES / "patrol.afsm"), "-o", str(tmp_path))
+    assert r.code == 1 and "error[E003]" in r.err and "it is a directory" in r.err, r.err
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["patrol.props"]
+    assert "wrote" not in r.err

@@ -186,6 +186,15 @@ def test_outputs_are_checked_before_any_point(deadline: str, tmp_path: Path,
         assert "Traceback" not in r.err
 
 
+def test_csv_and_plot_on_the_same_file_is_a_usage_error(deadline: str, tmp_path: Path,
+                                                         no_points: None) -> None:
+    same = tmp_path / "s.svg"
+    r = run_cli("sweep", deadline, "--const", "D=1:3", "-o", str(same), "--plot",
+                str(tmp_path / "." / "s.svg"))
+    assert r.code == 2 and "-o and --plot name the same file" in r.err, r.err
+    assert not same.exists()
+
+
 def test_failure_at_a_point_is_a_diagnostic(deadline: str) -> None:
     r = run_cli("sweep", deadline, "--const", "D=1:2", "-p", "nope", "--jobs", "1")
     assert r.code == 1 and "E407" in r.err and "Traceback" not in r.err

@@ -354,3 +354,27 @@ def test_the_max_states_hint_speaks_of_bytes_per_state_only_for_sparse(spec: Spe
     dd = run_cli("verify", path, "--max-states", "2", "--engine", "dd")
     assert sparse.code == dd.code == 1 and "E405" in sparse.err and "E405" in dd.err
     assert "250 bytes per state" in sparse.err and "bytes per state" not in dd.err, dd.err
+
+
+HAZARDS_IN_ORDER = """machine hz;
+mode S = 0 initial;
+mode E1 = 1 final;
+mode E2 = 2 final;
+mode D = 3 final;
+action Go in S { goto D; }
+hazard H1 from {S} with probability 0.3 { goto E1; }
+hazard H2 from {S} with probability 0.3 { goto E2; }
+property e1 = P=? [ F mode == E1 ];
+property e2 = P=? [ F mode == E2 ];
+property d = P=? [ F mode == D ];
+"""
+
+
+@pytest.mark.parametrize("via", ["prism", "jani"])
+def test_hazards_of_a_mode_apply_in_declaration_order(tmp_path: Path, via: str) -> None:
+    # docs/language.md: each hazard takes its share of what the earlier ones left.
+    path = tmp_path / "hz.afsm"
+    path.write_text(HAZARDS_IN_ORDER)
+    res = run(str(path), via=via)  # type: ignore[arg-type]
+    got = {p.name: p.value for p in res.properties}
+    assert got == pytest.approx({"e1": 0.3, "e2": 0.7 * 0.3, "d": 0.7 * 0.7}, abs=1e-12)

@@ -18,7 +18,7 @@ from afsmc.commands.common import (
     reductions,
     report,
 )
-from afsmc.compiler import load, lowered, refuse_inputs, write_atomic
+from afsmc.compiler import check_writable, load, lowered, write_atomic
 from afsmc.diagnostics import CompileError
 from afsmc.model.lower import Lowered
 
@@ -73,7 +73,9 @@ def run(args: argparse.Namespace) -> int:
                 sys.stdout.write(text)
             return 0
         paths = outputs_for(args.file, args.output, list(files))
-        refuse_inputs(list(paths.values()), (args.file,))
+        # Every output is checked before the first is written: nothing half-done.
+        for path in paths.values():
+            check_writable(path, protect=(args.file,))
         for suffix, text in files.items():
             write_atomic(paths[suffix], text, protect=(args.file,))
             print(f"wrote {paths[suffix]}", file=sys.stderr)

@@ -105,6 +105,9 @@ def run(args: argparse.Namespace) -> int:
         kind = "const"
     if args.plot and os.path.splitext(args.plot)[1].lower() not in (".png", ".svg"):
         usage_error(f"--plot {args.plot}: the name must end in .png or .svg")
+    if args.plot and args.output and os.path.realpath(args.plot) == os.path.realpath(args.output):
+        usage_error(f"-o and --plot name the same file ({args.output}): the plot would replace "
+                    "the CSV")
     progress = progress_printer(args)
     try:
         # A sweep can take hours: an output it could not write is said before it starts.
