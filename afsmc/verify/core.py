@@ -585,11 +585,13 @@ def check(model: ir.Model, props: Sequence[ir.Property], *, via: Via = "prism",
           isolate: bool | None = None, progress: Progress | None = None,
           reductions: Reductions | None = None, bisimulation: bool = False,
           split: bool = False, memory_budget: int | None = None,
-          preserve: Sequence[ir.Property] = ()) -> Checks:
+          preserve: Sequence[ir.Property] = (), all_states: bool = False) -> Checks:
     """Check `props` (uniquely named) on a loaded model; raises CompileError on failure.
 
     `preserve`: further properties that the reductions keep exact but that are not checked
     (a sweep's other points, so that every chunk of it builds the same model).
+    `all_states`: Storm builds every reachable state even for one property (Job.all_states),
+    so that the state counts do not depend on how the properties are split over processes.
     `max_states`: None is the default limit, which the sparse engine only has: there the
     state count predicts the memory. The symbolic engines' memory is held by the guard
     instead (85% of the free memory), and "auto" picks hybrid only for a model whose
@@ -695,6 +697,8 @@ def check(model: ir.Model, props: Sequence[ir.Property], *, via: Via = "prism",
                            memory_budget, only=tuple(mine),
                            hybrid_skip=tuple(n for n in mine if n not in first),
                            hybrid_extra=extra)
+            if all_states:
+                job = dataclasses.replace(job, all_states=True)
             complementary = any(n.startswith(REST) for _, n in unit) and all(
                 n.startswith(REST) or n == TERMINATES for _, n in unit)
             # The probabilities' process (its complementary targets need the larger tables;

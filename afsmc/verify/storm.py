@@ -55,6 +55,10 @@ class Job:
     # memory is better spent on the explicit vectors of the hybrid engine. A model whose
     # diagrams need more makes Sylvan exit; the guard then retries with DD_MEMORY_RETRY.
     dd_memory_mb: int = 1024
+    # Build every reachable state even for a single property: given exactly one, Storm makes
+    # its target states absorbing (fewer states, same answer), so the states reported would
+    # depend on how many properties a process checks (a sweep's chunks, --jobs).
+    all_states: bool = False
 
     @property
     def wanted(self) -> tuple[str, ...]:
@@ -202,7 +206,8 @@ def _execute(job: Job, notify: Notify) -> JobResult:
                 sprog.substitute_functions()  # JANI: in place
             env = stormpy.Environment()
             env.dd().sylvan().maximal_memory = job.dd_memory_mb
-            model: Any = stormpy.build_symbolic_model(sprog, props, environment=env)
+            model: Any = stormpy.build_symbolic_model(sprog, _for_builder(props, job),
+                                                      environment=env)
             if engine_name == "auto":
                 # The symbolic build counts the states exactly at little memory; the sparse
                 # engine is much faster to check but needs ~260 bytes per state.
@@ -217,7 +222,7 @@ def _execute(job: Job, notify: Notify) -> JobResult:
                                             if budget else ""))
                     notify("phase", "build")
                     del model
-                    model = stormpy.build_model(program, props)
+                    model = stormpy.build_model(program, _for_builder(props, job))
                     symbolic = False
                 else:
                     engine_name = "hybrid"
@@ -229,7 +234,7 @@ def _execute(job: Job, notify: Notify) -> JobResult:
                         res.engine_reason += "; queries grouped by the tables they need"
         else:
             names, props = _keep(names, props, job.hybrid_extra)
-            model = stormpy.build_model(program, props)
+            model = stormpy.build_model(program, _for_builder(props, job))
     except RuntimeError as exc:
         res.failure = StormFailure("build", _message(exc))
         return res
@@ -286,6 +291,12 @@ def _execute(job: Job, notify: Notify) -> JobResult:
         notify("value", (name, float(value)))
     res.check_time = time.perf_counter() - t0
     return res
+
+
+def _for_builder(props: list[Any], job: Job) -> list[Any]:
+    """The properties to build for: a single one twice under `all_states` (Storm derives
+    absorbing target states only from exactly one)."""
+    return props * 2 if job.all_states and len(props) == 1 else props
 
 
 def _keep(names: list[str], props: list[Any],

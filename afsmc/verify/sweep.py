@@ -285,7 +285,8 @@ def _checks(model: ir.Model, props: list[ir.Property], task: Task,
     # loaded with.
     return check(model, props, via=task.via, engine=task.engine, max_states=task.max_states,
                  uniform=task.uniform, isolate=task.isolate, reductions=task.reductions,
-                 bisimulation=task.bisimulation, split=task.split, preserve=preserve)
+                 bisimulation=task.bisimulation, split=task.split, preserve=preserve,
+                 all_states=True)  # the same states whatever the chunks
 
 
 @dataclass
