@@ -1,5 +1,5 @@
 """No expression is undefined where it is evaluated: a division by zero (`2 / x` at x = 0,
-likewise `mod(a, 0)` and `pow(0, -1)`) in a guard, weight, probability, update, label,
+likewise `mod(a, 0)`, `pow(0, -1)` and `pow(-8, 0.5)`) in a guard, weight, probability, update, label,
 reward or property.
 
 Storm computes such a value as infinite or NaN and goes on (`!(2 / x > 0)` is false at
@@ -24,6 +24,9 @@ from afsmc.model.expr import Type
 from afsmc.model.pretty import show
 from afsmc.model.search import find
 from afsmc.model.semantics import enabled, fire_condition, inline
+
+ZERO_POWER = "zero to a negative power"
+FRACTIONAL_POWER = "a negative number to a fractional power"
 
 
 @dataclass(frozen=True)
@@ -76,12 +79,19 @@ def partials(e: E.Expr, context: E.Expr = E.TRUE) -> Iterator[Partial]:
     elif isinstance(e, E.Call) and e.func == "pow":
         base, power = e.args
         yield Partial(e, base, E.conj(_is_zero(base), E.Binary("<", power, E.lit(0), Type.BOOL)),
-                      context, "zero to a negative power")
+                      context, ZERO_POWER)
+        if power.type is Type.DOUBLE:
+            # NaN in Storm (and numpy): pow(-8, 1/3) is no real number here.
+            fractional = E.Binary("!=", E.Call("floor", (power,), Type.INT), power, Type.BOOL)
+            yield Partial(e, base, E.conj(E.Binary("<", base, E.lit(0), Type.BOOL), fractional),
+                          context, FRACTIONAL_POWER)
 
 
 def _never_zero(p: Partial, model: ir.Model) -> bool:
     """Interval arithmetic says the operation is defined in every state (the fast path)."""
-    if isinstance(p.node, E.Call) and p.node.func == "pow" and bounds(p.node.args[1], model)[0] >= 0:
+    if p.why == FRACTIONAL_POWER:
+        return bounds(p.divisor, model)[0] >= 0
+    if p.why == ZERO_POWER and bounds(p.node.args[1], model)[0] >= 0:  # type: ignore[union-attr]
         return True
     lo, hi = bounds(p.divisor, model)
     return lo > 0 or hi < 0
@@ -179,9 +189,10 @@ def check_undefined(model: ir.Model, rep: Reporter) -> None:
                                    "check the constants it uses")
                 else:
                     d = show(p.divisor)
+                    ok, bad = (">= 0", "< 0") if p.why == FRACTIONAL_POWER else ("!= 0", "== 0")
                     rep.error("E306", f"{show(p.node)} is undefined ({p.why}) in the state "
                               f"{hit[1]}{chosen}, where {site.what} is evaluated", span,
                               hint="Storm would go on with an infinite or NaN value and verify "
                                    "another model than the simulator runs; exclude the state, "
-                                   f"e.g. '{d} != 0 && ...' or '{d} == 0 ? ... : ...'")
+                                   f"e.g. '{d} {ok} && ...' or '{d} {bad} ? ... : ...'")
                 break
