@@ -8,6 +8,7 @@ a Python traceback.
 from __future__ import annotations
 
 import json
+import unicodedata
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, field
 from enum import StrEnum
@@ -206,17 +207,30 @@ def render(diag: Diagnostic, color: bool = False) -> str:
     return "\n".join(lines)
 
 
+TAB = "    "
+
+
+def _shown(text: str) -> str:
+    return text.replace("\t", TAB)
+
+
+def _cells(text: str) -> int:
+    """Terminal columns of `text` as shown: a tab is four, a wide (CJK) character two."""
+    return sum(2 if unicodedata.east_asian_width(c) in "WF" else 1 for c in _shown(text))
+
+
 def _excerpt(span: Span, paint: object) -> list[str]:
     text = span.source.line(span.line)
     if not text and span.start == span.end == 0:
         return []
     gutter = str(span.line)
-    width = 1
-    if span.end_line == span.line:
-        width = max(1, span.end_column - span.column)
-    caret = " " * (span.column - 1) + "^" * min(width, max(1, len(text) - span.column + 1))
+    start = min(span.column - 1, len(text))
+    end = span.end_column - 1 if span.end_line == span.line else start + 1
+    end = min(max(end, start + 1), max(len(text), start + 1))
+    # The caret sits under the characters as a terminal draws them (columns, not characters).
+    caret = " " * _cells(text[:start]) + "^" * max(1, _cells(text[start:end]))
     pad = " " * len(gutter)
-    return [f" {pad} |", f" {gutter} | {text}", f" {pad} | {caret}"]
+    return [f" {pad} |", f" {gutter} | {_shown(text)}", f" {pad} | {caret}"]
 
 
 def render_all(diags: Iterable[Diagnostic], color: bool = False) -> str:

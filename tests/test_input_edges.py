@@ -181,3 +181,33 @@ def test_a_comment_between_a_policy_minus_and_its_number_keeps_the_number() -> N
         return [value for _, value in decl.source.policy]
 
     assert policy("- // c\n 0.5") == policy("- /* c */ 0.5") == policy("-0.5") == [-0.5]
+
+
+@pytest.mark.parametrize("before", ["\t", "\t  ", "漢字 ", "é"])
+def test_the_caret_sits_under_the_mistake_after_tabs_and_wide_characters(
+        tmp_path: Path, before: str) -> None:
+    path = tmp_path / "t.afsm"
+    path.write_text("machine t;\nmode A = 0 initial;\n"
+                    f"action Go in A when /*{before}*/\tx > 0 {{ goto A; }}\n", encoding="utf-8")
+    r = run_cli("check", str(path))
+    assert r.code == 1 and "error[E203]" in r.err, r.err
+    lines = r.err.splitlines()
+    i = next(k for k, line in enumerate(lines) if line.startswith(" 3 | "))
+    shown, caret = lines[i][len(" 3 | "):], lines[i + 1][len(" 3 | "):]
+    assert "\t" not in shown and caret.strip() == "^"
+    # the caret's terminal column is that of the x (wide characters take two columns)
+    col = sum(2 if "\u4e00" <= c <= "\u9fff" else 1 for c in shown[:shown.index("x > 0")])
+    assert len(caret) - 1 == col
+
+
+@pytest.mark.parametrize(("name", "value"), [("N", "1_0"), ("N", "١٢"), ("D", "0_5"),
+                                             ("D", "٠.٥"), ("N", "0x10")])
+def test_numbers_on_the_command_line_are_written_as_in_the_language(
+        tmp_path: Path, name: str, value: str) -> None:
+    # Python's int() and float() read digit separators and non-ASCII digits; afsm does not.
+    path = tmp_path / "weighted.afsm"
+    path.write_text(WEIGHTED)
+    r = run_cli("check", str(path), "--const", f"{name}={value}")
+    assert r.code == 1 and f"error[E208]: --const {name}={value}: not a" in r.err, r.err
+    for ok in ("N=+3", "D=.5", "D=5e-1", "D=0."):
+        assert run_cli("check", str(path), "--const", ok).code == 0, ok

@@ -7,6 +7,7 @@ becomes a placeholder of the expected type so that checking can go on.
 from __future__ import annotations
 
 import math
+import re
 from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
@@ -51,6 +52,7 @@ def parse_override(text: str) -> tuple[str, str]:
 
 
 INT64 = (-(2**63), 2**63 - 1)
+_NUMBER = re.compile(r"[+-]?(?:[0-9]+(?:\.[0-9]*)?|\.[0-9]+)(?:[eE][+-]?[0-9]+)?")
 _NUMBERS_HINT = "PRISM and Storm compute with 64-bit integers and finite doubles"
 
 
@@ -253,6 +255,11 @@ class _Resolver:
                 if text not in ("true", "false"):
                     raise ValueError
                 return text == "true"
+            # Python also reads 1_0, ١٢ and " 3 "; the command line takes numbers as the
+            # language writes them (ASCII digits, no separators).
+            if not _NUMBER.fullmatch(text) and text.lower().lstrip("+-") not in ("inf", "nan",
+                                                                                 "infinity"):
+                raise ValueError
             value: int | float = int(text) if t is Type.INT else float(text)
         except ValueError:
             self.rep.error("E208", f"--const {name}={text}: not {_a(t.value)}", span)
