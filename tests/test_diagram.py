@@ -373,7 +373,15 @@ def test_results_json_overlay(tmp_path: Path) -> None:
     assert nodes["m1"] == "Dock | 1 | P(reach) 0.75"
     for bad, said in (("{not json", "is not JSON"), ('{"x": 1}', '"properties" list'),
                       ('{"properties": [1]}', '"properties" list'),
-                      (json.dumps({**results, "machine": "uav"}), "results of machine uav")):
+                      (json.dumps({**results, "machine": "uav"}), "results of machine uav"),
+                      (json.dumps({**results, "modes": [{"mode": "Nowhere", "value": 1}]}),
+                       "machine patrol has no mode 'Nowhere'"),
+                      (json.dumps({**results, "modes": [{"mode": "Dock", "min": "abc"}]}),
+                       "mode Dock has min 'abc', not a number"),
+                      (json.dumps({**results, "modes": [{"number": 1, "value": 1.5}]}),
+                       "mode Dock has value 1.5, not a probability"),
+                      (json.dumps({"properties": [{"name": "p", "max": True}]}),
+                       "property p has max True, not a number")):
         rj.write_text(bad)
         r = run_cli("diagram", str(EXAMPLES / "patrol.afsm"), "--results", str(rj), "-o",
                     str(out))

@@ -93,6 +93,24 @@ def _value(entry: dict[str, Any]) -> str:
     return text
 
 
+MODES_HINT = 'each entry is {"mode": NAME or "number": N, then "min"/"max" or "value"}'
+
+
+def _check_numbers(path: str, entry: dict[str, Any], what: str,
+                   probability: bool = False) -> None:
+    """E611 unless each value is null or a number (a probability for a mode's P(reach))."""
+    for key in ("min", "max", "value", "uniform"):
+        v = entry.get(key)
+        if v is None:
+            continue
+        if isinstance(v, bool) or not isinstance(v, (int, float)):
+            raise _error("E611", f"{path}: {what} has {key} {v!r}, not a number",
+                         hint="pass the output of `afsmc verify --json`")
+        if probability and not 0 <= v <= 1:
+            raise _error("E611", f"{path}: {what} has {key} {v!r}, not a probability",
+                         hint="a mode's number is the probability of reaching it, in [0, 1]")
+
+
 def read_results(path: str, model: ir.Model) -> Overlay:
     """The overlay of an `afsmc verify --json` file (see docs/diagrams.md)."""
     try:
@@ -113,16 +131,25 @@ def read_results(path: str, model: ir.Model) -> Overlay:
                      hint=f"run `afsmc verify --json` on the file of machine {model.name}")
     notes: list[str] = []
     for entry in data.get("properties", []):
-        if isinstance(entry, dict) and "name" in entry:
-            notes.append(f"{entry['name']}: {_value(entry)}")
+        _check_numbers(path, entry, f"property {entry['name']}")
+        notes.append(f"{entry['name']}: {_value(entry)}")
     by_name = {m.name: m.number for m in model.modes}
     modes: dict[int, str] = {}
-    for entry in data.get("modes", []) or []:
+    listed = data.get("modes", []) or []
+    if not isinstance(listed, list):
+        raise _error("E611", f"{path}: \"modes\" is not a list", hint=MODES_HINT)
+    for entry in listed:
         if not isinstance(entry, dict):
-            continue
+            raise _error("E611", f"{path}: an entry of \"modes\" is not an object",
+                         hint=MODES_HINT)
         number = entry.get("number", by_name.get(str(entry.get("mode"))))
-        if isinstance(number, int) and number in model.mode_names:
-            modes[number] = f"P(reach) {_value(entry)}"
+        if isinstance(number, bool) or not isinstance(number, int) or \
+                number not in model.mode_names:
+            which = entry.get("mode", entry.get("number"))
+            raise _error("E611", f"{path}: machine {model.name} has no mode {which!r}",
+                         hint="modes are named as in the .afsm file, or numbered")
+        _check_numbers(path, entry, f"mode {model.mode_names[number]}", probability=True)
+        modes[number] = f"P(reach) {_value(entry)}"
     return Overlay(modes=modes, notes=notes)
 
 
