@@ -58,6 +58,12 @@ def test_a_constant_given_twice_is_a_usage_error() -> None:
         assert r.code == 2 and "--const CELLS is given twice" in r.err, r.err
 
 
+def test_a_constant_without_a_name_is_a_usage_error() -> None:
+    for value in ("=3", "CELLS=3,=4", " =3"):
+        r = run_cli("check", str(EXAMPLES / "patrol.afsm"), "--const", value)
+        assert r.code == 2 and "expected NAME=VALUE" in r.err and "(no name)" in r.err, r.err
+
+
 def test_sweep_a_range_replaces_a_preset_value_but_not_a_second_value() -> None:
     fixed, swept = split_consts(["OBJECTS=2", "DEADLINE=500", "DEADLINE=150:500:50"])
     assert fixed == {"OBJECTS": "2"} and swept == {"DEADLINE": [150, 200, 250, 300, 350, 400, 450, 500]}

@@ -48,6 +48,8 @@ def parse_override(text: str) -> tuple[str, str]:
     if "=" not in text:
         raise ValueError(f"expected NAME=VALUE, got {text!r}")
     name, value = text.split("=", 1)
+    if not name.strip():
+        raise ValueError(f"expected NAME=VALUE, got {text!r} (no name)")
     return name.strip(), value.strip()
 
 
