@@ -128,6 +128,12 @@ def test_in_place_keeps_crlf_line_endings(tmp_path: Path) -> None:
     assert run_cli("fmt", str(lf)).code == 0
     assert lf.read_bytes() == format_text(MESSY).encode()
 
+    cr = tmp_path / "cr.afsm"  # old Mac line endings: kept too
+    cr.write_bytes(MESSY.replace("\n", "\r").encode())
+    assert run_cli("fmt", str(cr)).code == 0
+    assert cr.read_bytes() == format_text(MESSY).replace("\n", "\r").encode()
+    assert run_cli("fmt", "--check", str(cr)).code == 0
+
 
 def test_syntax_error_leaves_the_file_alone(tmp_path: Path) -> None:
     bad = tmp_path / "bad.afsm"

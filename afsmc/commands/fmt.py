@@ -53,6 +53,7 @@ def run(args: argparse.Namespace) -> int:
 
 
 def line_ending(raw: str) -> str:
-    """The file's line ending: CRLF if most of its lines end so, else LF."""
+    """The file's line ending: the one most of its lines end with (CRLF, CR or LF)."""
     crlf = raw.count("\r\n")
-    return "\r\n" if crlf and 2 * crlf >= raw.count("\n") else "\n"
+    counts = {"\r\n": crlf, "\r": raw.count("\r") - crlf, "\n": raw.count("\n") - crlf}
+    return max(("\n", "\r\n", "\r"), key=lambda e: counts[e])  # ties: LF first
