@@ -23,6 +23,7 @@ import os
 from typing import Any
 
 from afsmc.backends.prism import describe, property_variants
+from afsmc.backends.storm_safe import signed_pow
 from afsmc.diagnostics import CompileError, Diagnostic, Severity, Span
 from afsmc.model import expr as E
 from afsmc.model import ir
@@ -94,6 +95,9 @@ class _Exprs:
         if isinstance(e, E.Ite):
             return {"op": "ite", "if": self(e.cond), "then": self(e.then), "else": self(e.other)}
         if isinstance(e, E.Call):
+            safe = signed_pow(e, self.low)
+            if safe is not None:
+                return self(safe)
             args = [self(a) for a in e.args]
             if e.func in ("floor", "ceil"):
                 return {"op": e.func, "exp": args[0]}

@@ -3,7 +3,7 @@
 The checks enumerate state spaces with it and the Monte Carlo simulator advances
 thousands of runs with it, so it evaluates one expression over whole arrays of states.
 Scalars work too (constants). Semantics follow PRISM: `/` is real division, `floor` and
-`ceil` give integers, `=>` is implication.
+`ceil` give integers, `=>` is implication; `mod` is Storm's (`storm_mod`).
 """
 
 from __future__ import annotations
@@ -193,8 +193,31 @@ def _call(e: Call, env: Env) -> Array:
             return np.power(np.asarray(args[0], dtype=np.int64), exp.astype(np.int64))
         return np.power(np.asarray(args[0], dtype=float), exp)
     if f == "mod":
-        return _masked(np.mod, args[0], args[1], "mod by zero")
+        a, d = args
+        r = np.asarray(d)
+        if r.ndim == 0 and np.ndim(a) == 0:
+            if r == 0:
+                raise EvalError("mod by zero")
+            return storm_mod(a, d)
+        zero = r == 0
+        if not np.any(zero):
+            return storm_mod(a, d)
+        return np.where(zero, np.nan, storm_mod(a, np.where(zero, 1, r)))  # see _masked
     raise EvalError(f"unknown function {f}")
+
+
+def storm_mod(a: Array, b: Array) -> Array:
+    """`mod(a, b)` of integers as Storm computes it (sparse and symbolic engines, from
+    PRISM and from JANI alike): the C++ remainder (truncated division, the sign of `a`),
+    plus `b` where `a` is negative. So mod(7, 3) = 1, mod(-7, 3) = 2, mod(7, -3) = 1,
+    mod(-7, -3) = -4 and mod(-6, 3) = 3: not numpy's (sign of `b`) nor Python's. `b` != 0."""
+    if isinstance(a, (int, np.integer)) and isinstance(b, (int, np.integer)):
+        x, y = int(a), int(b)  # exact on scalars
+        r = abs(x) % abs(y)
+        return r if x >= 0 else y - r
+    left, right = np.asarray(a), np.asarray(b)
+    rem = np.fmod(left, right)
+    return np.where(left >= 0, rem, rem + right)
 
 
 def _masked(fn: Any, left: Array, right: Array, what: str) -> Array:

@@ -215,8 +215,9 @@ def _z3(e: E.Expr, zvars: dict[str, Any], mode: int, consts: Mapping[str, Any]) 
                 return z3.ToInt(real(args[0]))
             if n.func == "ceil":
                 return -z3.ToInt(-real(args[0]))
-            if n.func == "mod":
-                return args[0] % args[1]
+            if n.func == "mod":  # Storm's (evaluate.storm_mod); z3's % is Euclidean
+                x, y = args
+                return z3.If(x >= 0, x % y, y - ((-x) % y))
             if n.func == "pow":
                 return args[0] ** args[1]
         raise EvalError(f"cannot translate {type(n).__name__} for the SMT solver")

@@ -17,7 +17,7 @@ from typing import Any
 import numpy as np
 
 from afsmc.model import expr as E
-from afsmc.model.evaluate import Env, EvalError, evaluate
+from afsmc.model.evaluate import Env, EvalError, evaluate, storm_mod
 from afsmc.model.expr import Type
 
 Frame = Mapping[str, Any]  # flat variable name (and "mode") -> array of the runs
@@ -176,8 +176,12 @@ def _call(e: E.Call) -> Fn:
     if name == "pow":
         a, b = fs
         if e.type is Type.INT:
-            return lambda fr: np.power(np.asarray(a(fr), dtype=np.int64),
-                                       np.asarray(b(fr), dtype=np.int64))
+            def ipow(fr: Frame) -> Any:
+                k = np.asarray(b(fr))
+                if np.any(k < 0):  # a fraction, as Storm and evaluate() compute it
+                    return np.power(np.asarray(a(fr), dtype=float), k)
+                return np.power(np.asarray(a(fr), dtype=np.int64), k.astype(np.int64))
+            return ipow
         return lambda fr: np.power(np.asarray(a(fr), dtype=float), b(fr))
     if name == "mod":
         a, b = fs
@@ -186,7 +190,7 @@ def _call(e: E.Call) -> Fn:
             d = b(fr)
             if np.any(np.asarray(d) == 0):
                 raise SimError("mod by zero")
-            return np.mod(a(fr), d)
+            return storm_mod(a(fr), d)
         return mod
     raise SimError(f"unknown function {name}")
 
