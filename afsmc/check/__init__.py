@@ -8,7 +8,16 @@ from __future__ import annotations
 
 from collections.abc import Callable
 
-from afsmc.check import distributions, modegraph, overflow, ranges, undefined, unused, weights
+from afsmc.check import (
+    distributions,
+    int_pow,
+    modegraph,
+    overflow,
+    ranges,
+    undefined,
+    unused,
+    weights,
+)
 from afsmc.check.sim_sources import check_sim_sources
 from afsmc.diagnostics import Diagnostic, Reporter
 from afsmc.model import ir
@@ -20,6 +29,7 @@ Rule = Callable[[ir.Model, Reporter], None]
 RULES: tuple[Rule, ...] = (
     overflow.check_overflow,
     undefined.check_undefined,
+    int_pow.check_int_pow,
     weights.check_weight_range,
     weights.check_weight_uniqueness,
     weights.check_deadlock,

@@ -112,6 +112,7 @@ class Site:
     what: str  # "the guard of action Go"
     expr: E.Expr
     when: dict[int, E.Expr]  # mode -> where in it the expression is evaluated
+    target: str | None = None  # the variable an update assigns
 
 
 def sites(model: ir.Model) -> Iterator[Site]:
@@ -157,7 +158,7 @@ def _outcome_sites(owner: str, outcomes: tuple[ir.Outcome, ...],
         yield Site(f"an outcome probability of {owner}", o.prob, when)
         for u in o.updates:
             if u.var != "mode":
-                yield Site(f"an update of {owner}", u.value, when)
+                yield Site(f"an update of {owner}", u.value, when, u.var)
 
 
 def _key(n: E.Expr) -> tuple[int, int] | int:
