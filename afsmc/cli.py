@@ -14,6 +14,8 @@ import sys
 from collections.abc import Sequence
 
 from afsmc import __version__
+from afsmc.diagnostics import CompileError, Diagnostic, Severity
+from afsmc.stack import run_deep
 
 # name -> one-line help; the module afsmc.commands.<name> implements it
 COMMANDS: dict[str, str] = {
@@ -33,6 +35,21 @@ class _Parser(argparse.ArgumentParser):
     """`afsmc verify uav.afsm @scenario1.args`: arguments from a file, one or more per
     line, split as a shell would (quotes group, `#` starts a comment); used for the
     scenario presets in examples/."""
+
+    def _read_args_from_files(self, arg_strings: list[str]) -> list[str]:
+        # argparse reports a missing file as a usage error, but lets a file that is not
+        # text in the locale's encoding raise UnicodeDecodeError: the same usage error.
+        for arg in arg_strings:
+            if arg[:1] and arg[0] in (self.fromfile_prefix_chars or ""):
+                try:
+                    with open(arg[1:]) as f:  # as argparse opens it
+                        f.read()
+                except UnicodeDecodeError as exc:
+                    self.error(f"the argument file {arg[1:]!r} is not text ({exc.reason} at "
+                               f"byte {exc.start})")
+                except OSError:
+                    pass  # argparse says it
+        return super()._read_args_from_files(arg_strings)
 
     def convert_arg_line_to_args(self, arg_line: str) -> list[str]:
         try:
@@ -62,6 +79,23 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+def _run(args: argparse.Namespace) -> int:
+    try:
+        code: int = args._run(args)
+    except RecursionError:
+        # A backstop: the parser (E113) and the resolver (E246) refuse what nests too deeply
+        # for the recursion limit of afsmc.stack, so this should not happen.
+        from afsmc.commands.common import fail
+
+        return fail(CompileError([Diagnostic(
+            "E114", Severity.ERROR, f"{getattr(args, 'file', 'the input')}: an expression is "
+            "nested too deeply for afsmc", None,
+            hint="shorten the longest expressions (long chains of operators or formulas "
+            "that use each other)")]), getattr(args, "json", False),
+            wrapped=args.command in ("verify", "sweep"))
+    return code
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
@@ -69,7 +103,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         parser.print_help(sys.stderr)
         return 2
     try:
-        code: int = args._run(args)
+        code: int = run_deep(lambda: _run(args))
     except KeyboardInterrupt as exc:
         print("afsmc: interrupted", file=sys.stderr)
         notes = list(getattr(exc, "__notes__", []))  # e.g. the values verify had by then

@@ -402,3 +402,14 @@ def test_vscode_grammar() -> None:
             pytest.skip(f"npm ci failed (offline?): {ci.stderr[-300:]}")
     run = subprocess.run([npm, "test"], cwd=VSCODE, capture_output=True, text=True, timeout=300)
     assert run.returncode == 0, run.stdout[-3000:] + run.stderr[-3000:]
+
+
+@MODULE
+async def test_a_2000_term_expression_gets_diagnostics_not_a_crash(client: LanguageClient) -> None:
+    # afsmc lsp runs in afsmc.stack's deep thread, as every command does (review 9)
+    chain = " +\n    ".join(["x * 0.00005"] * 2000)
+    text = (f"machine long;\nvar x : [0..3] init 0;\nmode S = 0 initial;\nmode D = 1 final;\n"
+            f"action Go in S weight ({chain}) {{ 0.5: goto D; 0.5: x := min(x + 1, 3); }}\n"
+            f"action Stay in S weight ({chain}) {{ skip; }}\n")
+    diags = await open_doc(client, "file:///tmp/long2000.afsm", text)
+    assert [d.code for d in diags] == ["E301"], diags  # the two weights tie; no E999

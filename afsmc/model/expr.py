@@ -139,9 +139,28 @@ def children(e: Expr) -> tuple[Expr, ...]:
 
 
 def walk(e: Expr) -> Iterator[Expr]:
-    yield e
-    for c in children(e):
-        yield from walk(c)
+    """Every node of `e`, parents before children, left to right. Iterative: a recursive
+    generator would pass each node up through every level above it (cubic work on a long
+    chain like `a + b + c + ...`)."""
+    stack = [e]
+    while stack:
+        n = stack.pop()
+        yield n
+        stack.extend(reversed(children(n)))
+
+
+def depth(e: Expr, formulas: Callable[[str], int] | None = None) -> int:
+    """How deeply `e` nests (a leaf is 1); with `formulas`, a formula reference counts as
+    deep as `formulas(name)` says (its value once inlined). Iterative."""
+    best = 0
+    stack = [(e, 1)]
+    while stack:
+        n, d = stack.pop()
+        if formulas is not None and isinstance(n, FormulaRef):
+            d += formulas(n.name) - 1
+        best = max(best, d)
+        stack.extend((c, d + 1) for c in children(n))
+    return best
 
 
 def transform(e: Expr, fn: Callable[[Expr], Expr | None]) -> Expr:

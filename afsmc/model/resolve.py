@@ -25,7 +25,11 @@ from afsmc.model.names import (
     safe_identifier,
 )
 from afsmc.syntax import ast
-from afsmc.syntax.parser import flat_text, tokens
+from afsmc.syntax.parser import MAX_DEPTH, flat_text, tokens
+
+# How deeply a formula may nest once the formulas it uses are inlined (E246): the checks
+# and the JANI backend inline them, recursively (see afsmc.stack).
+MAX_INLINED_DEPTH = 2 * MAX_DEPTH
 
 
 @dataclass(frozen=True)
@@ -100,12 +104,15 @@ class _Resolver:
         self.formulas: dict[str, ir.Formula] = {}
         self.formula_decls: dict[str, ast.FormulaDecl] = {}
         self.formula_stack: list[str] = []
+        self.formula_depth: dict[str, int] = {}  # inlined (E246)
+        self.reward_structs: dict[str, ir.RewardStruct] = {}
         self.action_names: dict[str, Span] = {}
         self.label_names: dict[str, Span] = {}
         self.reward_names: dict[str, Span] = {}
         # one namespace for everything an expression can name
         self.value_names: dict[str, tuple[str, Span]] = {}
         self.used: set[str] = set()  # constants and formulas referenced anywhere
+        self._free: dict[int, tuple[E.Expr, bool]] = {}  # id -> (node, state-free)
 
     # ---- driver ------------------------------------------------------------------
     def run(self) -> ir.Model:
@@ -134,6 +141,7 @@ class _Resolver:
         labels = [ir.Label(d.name.text, self._bool(d.value, Ctx("a label")), d.span)
                   for d in decls if isinstance(d, ast.LabelDecl)]
         rewards = [self._rewards(d) for d in decls if isinstance(d, ast.RewardsDecl)]
+        self.reward_structs = {r.name: r for r in rewards}
         props = [self._property(d) for d in decls if isinstance(d, ast.PropertyDecl)]
         self._check_query_names(props)
         self._check_weight_cycles(actions)
@@ -449,6 +457,15 @@ class _Resolver:
         self.formula_stack.append(name)
         value = self._expr(d.value, Ctx("a formula"))
         self.formula_stack.pop()
+        depth = E.depth(value, lambda n: self.formula_depth.get(n, 1))
+        self.formula_depth[name] = depth
+        if depth > MAX_INLINED_DEPTH:
+            self.rep.error("E246", f"formula '{name}' nests {depth} levels deep once the "
+                           f"formulas it uses are inlined; afsmc supports {MAX_INLINED_DEPTH}",
+                           d.name.span, hint="shorten it or the formulas it uses (each "
+                           "operator of a chain like 'a + b + c' is one level)")
+            if value.type.numeric or value.type is Type.BOOL:  # no more inlining of it
+                value = E.Lit(False if value.type is Type.BOOL else 0, value.type, d.value.span)
         f = ir.Formula(name, value, d.span)
         self.formulas[name] = f
         return f
@@ -471,7 +488,7 @@ class _Resolver:
 
     def _expr(self, e: ast.Expr, ctx: Ctx) -> E.Expr:
         x = self._build(e, ctx)
-        if isinstance(x, (E.Unary, E.Binary, E.Call)) and x.type.numeric and E.state_free(x):
+        if isinstance(x, (E.Unary, E.Binary, E.Call)) and x.type.numeric and self._state_free(x):
             # Storm folds such parts itself, and fails on an infinite or too large result.
             why: str | None
             try:
@@ -488,6 +505,18 @@ class _Resolver:
                                hint=_NUMBERS_HINT)
                 return E.Lit(0 if x.type is Type.INT else 0.0, x.type, e.span)
         return x
+
+    def _state_free(self, x: E.Expr) -> bool:
+        """E.state_free, remembered for the nodes built so far: each node of a long chain
+        asks it, and walking the chain below every node would take quadratic time."""
+        known = self._free.get(id(x))
+        if known is not None and known[0] is x:
+            return known[1]
+        free = isinstance(x, (E.Lit, E.ConstRef, E.Unary, E.Binary, E.Ite, E.Call)) and all(
+            self._state_free(c) if id(c) in self._free else E.state_free(c)
+            for c in E.children(x))
+        self._free[id(x)] = (x, free)
+        return free
 
     def _build(self, e: ast.Expr, ctx: Ctx) -> E.Expr:
         s = e.span
@@ -873,6 +902,14 @@ class _Resolver:
             x = self._expr(b, Ctx("a step bound", state=False))
             if x.type is not Type.INT:
                 self.rep.error("E241", "a step bound must be an int", b.span)
+                return x
+            try:
+                k = scalar(x, self._const_env())
+            except (EvalError, ArithmeticError):
+                return x  # reported where it is computed (E245)
+            if isinstance(k, int) and k < 0:
+                self.rep.error("E241", f"a step bound must be an int >= 0, not {k}", b.span,
+                               hint="it counts steps; Storm refuses a negative one")
             return x
 
         if isinstance(q, ast.PQuery):
@@ -908,6 +945,17 @@ class _Resolver:
             path = ir.RewardPath("C", bound=bound(rp.bound))
         else:
             path = ir.RewardPath("I", bound=bound(rp.at))
+            rs = self.reward_structs.get(reward or "")
+            if rs is not None and not any(it.action is None for it in rs.items):
+                # Every Storm engine refuses it ("a reward model that does not define any
+                # state-rewards"), and the whole Storm run with it.
+                self.rep.error(
+                    "E247", f"R{{\"{rs.name}\"}}[I=k] is always 0: \"{rs.name}\" has no "
+                    "state rewards, and an instantaneous reward counts only those", q.span,
+                    hint=f"Storm refuses it; add a state reward ('condition : value;') to "
+                    f"\"{rs.name}\", or ask R{{\"{rs.name}\"}}=? [ C<=k ] for the action "
+                    "rewards of the first k steps",
+                    related=[Related(f"reward structure \"{rs.name}\"", rs.span)])
         return ir.Property(d.name.text, "R", q.opt, path, reward, d.span, *_written(q))
 
 

@@ -71,6 +71,14 @@ _EXAMPLES: dict[tuple[str, str], list[str]] = {
 }
 
 
+# How deeply an expression may nest: each operator of a chain `a + b + c ...` (or `- - x`,
+# `!!b`, ...) is one level. Every stage walks expressions recursively; afsmc.stack gives them
+# the stack for this (E113 beyond it).
+MAX_DEPTH = 5000
+# The grammar's expression rules (the ones that build an operator node).
+_EXPR_RULES = frozenset({"arith", "compare", "and_", "or_", "implies", "ite", "neg", "not_",
+                         "call", "mode_in"})
+
 # The grammar's start rules: a whole file, and one property (`verify --formula`).
 _STARTS = ["start", "prop"]
 _CLOSERS = {"{": ("}", "RBRACE"), "(": (")", "RPAR"), "[": ("]", "RSQB")}
@@ -111,6 +119,8 @@ def _parse(text: str, path: str, start: str) -> Any:
     except UnexpectedInput as exc:
         _report_syntax_error(exc, source, reporter, formula=start == "prop")
         raise CompileError(reporter.diagnostics) from None
+    if _too_deep(tree, source, reporter):
+        raise CompileError(reporter.diagnostics)
     builder = _Builder(source, reporter)
     try:
         node = builder.transform(tree)
@@ -121,6 +131,31 @@ def _parse(text: str, path: str, start: str) -> Any:
     if reporter.has_errors:
         raise CompileError(reporter.diagnostics)
     return node
+
+
+def _too_deep(tree: lark.Tree[Token], source: Source, reporter: Reporter) -> bool:
+    """E113 for each expression nested deeper than MAX_DEPTH (iterative, before the
+    recursive tree-to-AST step would fail on it)."""
+    # (node, its depth within the outermost expression around it, that expression)
+    stack: list[tuple[lark.Tree[Token], int, lark.Tree[Token] | None]] = [(tree, 0, None)]
+    reported: set[int] = set()
+    while stack:
+        node, depth, top = stack.pop()
+        if node.data in _EXPR_RULES:
+            top = top or node
+            depth += 1
+        if depth > MAX_DEPTH and top is not None:
+            if id(top) not in reported:
+                reported.add(id(top))
+                reporter.error(
+                    "E113", f"this expression nests more than {MAX_DEPTH} levels deep",
+                    Span.at_offset(source, top.meta.start_pos),
+                    hint=f"afsmc supports expressions up to {MAX_DEPTH} levels: each operator "
+                    "of a chain like 'a + b + c' or '- - x' is one; shorten it (e.g. "
+                    "'x * 0.1 + x * 0.1' is 'x * 0.2')")
+            continue
+        stack.extend((c, depth, top) for c in node.children if isinstance(c, lark.Tree))
+    return bool(reported)
 
 
 @dataclass

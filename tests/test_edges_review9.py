@@ -1,0 +1,168 @@
+"""Review 9: long flat expressions through every command, argument files that are not
+text, negative step bounds, instantaneous rewards of action-only reward structures."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+
+from afsmc.syntax.parser import MAX_DEPTH
+from tests.conftest import run_cli
+
+
+def _chain(terms: int, term: str = "x * 0.00005") -> str:
+    return " +\n    ".join([term] * terms)
+
+
+def _long(terms: int) -> str:
+    return f"""machine long;
+var x : [0..3] init 0;
+mode S = 0 initial;
+mode D = 1 final;
+formula f = {_chain(terms)};
+action Go in S weight ({_chain(terms)}) {{ 0.5: goto D; 0.5: x := min(x + 1, 3); }}
+label done = mode == D && f >= 0;
+property p = P=? [ F<=5 "done" ];
+"""
+
+
+@pytest.fixture(scope="module")
+def long_file(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    path = tmp_path_factory.mktemp("long") / "long.afsm"
+    path.write_text(_long(2000), encoding="utf-8")
+    return path
+
+
+@pytest.mark.parametrize("argv", [
+    ["check"], ["check", "--json"], ["compile", "-t", "prism"], ["compile", "-t", "jani"],
+    ["compile", "-t", "dot"], ["simulate", "--runs", "50"], ["fmt", "--check"],
+], ids=lambda a: " ".join(a))
+def test_a_2000_term_expression_goes_through_every_command(long_file: Path, tmp_path: Path,
+                                                           argv: list[str]) -> None:
+    extra = ["-o", str(tmp_path / "out")] if argv[0] == "compile" else []
+    r = run_cli(*argv, str(long_file), *extra)
+    assert "Traceback" not in r.err and "RecursionError" not in r.err, r.err[-2000:]
+    assert r.code == (1 if argv[0] == "fmt" else 0), r.err[-2000:]  # fmt: would reformat
+
+
+def test_a_2000_term_expression_verifies(long_file: Path) -> None:
+    r = run_cli("verify", str(long_file), "--via", "jani", "--json")
+    assert r.code == 0, r.err[-2000:]
+    values = {p["name"]: p for p in json.loads(r.out)["properties"]}
+    assert values["p"]["value"] == pytest.approx(1 - 0.5 ** 5)
+
+
+def test_an_expression_deeper_than_the_limit_is_a_diagnostic(tmp_path: Path) -> None:
+    path = tmp_path / "deep.afsm"
+    path.write_text(_long(MAX_DEPTH + 5), encoding="utf-8")
+    r = run_cli("check", str(path))
+    assert r.code == 1 and "Traceback" not in r.err
+    assert f"{path}:5:13: error[E113]" in r.out + r.err
+    minus = tmp_path / "minus.afsm"
+    minus.write_text("machine m;\nmode S = 0 initial;\nmode D = 1 final;\n"
+                     "action Go in S { " + "- " * (MAX_DEPTH + 600) + "0.5: goto D; 0.5: skip; }\n")
+    r = run_cli("compile", "-t", "prism", str(minus), "-o", str(tmp_path / "m.prism"))
+    assert r.code == 1 and "error[E113]" in r.out + r.err and "Traceback" not in r.err
+
+
+def test_600_minus_signs_parse(tmp_path: Path) -> None:
+    path = tmp_path / "minus.afsm"
+    path.write_text("machine m;\nmode S = 0 initial;\nmode D = 1 final;\n"
+                    "action Go in S { " + "- - " * 300 + "0.5: goto D; 0.5: skip; }\n")
+    assert run_cli("check", str(path)).code == 0
+
+
+def test_formulas_nesting_too_deeply_once_inlined_are_a_diagnostic(tmp_path: Path) -> None:
+    n = MAX_DEPTH - 10
+    path = tmp_path / "chain.afsm"
+    path.write_text(f"""machine fc;
+var x : [0..3] init 0;
+mode S = 0 initial;
+mode D = 1 final;
+formula f1 = {_chain(n, "x")};
+formula f2 = f1 + {_chain(n, "x")};
+formula f3 = f2 + {_chain(n, "x")};
+action Go in S weight f3 / 100000 {{ 0.5: goto D; 0.5: x := min(x + 1, 3); }}
+""", encoding="utf-8")
+    r = run_cli("check", str(path))
+    assert r.code == 1 and "Traceback" not in r.err
+    assert "error[E246]: formula 'f3'" in r.out + r.err
+    assert "'f2'" not in r.out + r.err
+
+
+def test_an_argument_file_that_is_not_text_is_a_usage_error(tmp_path: Path) -> None:
+    args = tmp_path / "bin.args"
+    args.write_bytes(b"\xff\xfe")
+    r = run_cli("check", "examples/patrol.afsm", f"@{args}")
+    assert r.code == 2 and "Traceback" not in r.err and "is not text" in r.err
+    r = run_cli(f"@{args}")
+    assert r.code == 2 and "is not text" in r.err
+
+
+NEG = """machine nb;
+param int K = 2;
+mode S = 0 initial;
+mode D = 1 final;
+action Go in S { 0.5: goto D; 0.5: skip; }
+rewards r { true : 1; }
+property ok = P=? [ F<=K mode == D ];
+"""
+
+
+@pytest.mark.parametrize("prop", ["P=? [ F<=(0 - 1) mode == D ]", "R{\"r\"}=? [ I=(K - 3) ]",
+                                  "R{\"r\"}=? [ C<=(-1) ]", "P=? [ true U<=(K - 5) mode == D ]",
+                                  "P=? [ G<=(0 - 1) mode == S ]"])
+def test_a_negative_step_bound_is_an_error(tmp_path: Path, prop: str) -> None:
+    path = tmp_path / "nb.afsm"
+    path.write_text(NEG + f"property bad = {prop};\n", encoding="utf-8")
+    r = run_cli("check", str(path))
+    assert r.code == 1 and "error[E241]: a step bound must be an int >= 0" in r.err
+    path.write_text(NEG, encoding="utf-8")
+    assert run_cli("check", str(path)).code == 0
+    r = run_cli("verify", str(path), "--formula", prop)
+    assert r.code == 1 and "--formula:1:" in r.out + r.err and "E241" in r.out + r.err
+    r = run_cli("simulate", str(path), "--runs", "10", "-c", "K=-1")
+    assert r.code == 1 and "E241" in r.out + r.err
+
+
+def test_sweep_refuses_negative_bounds(tmp_path: Path) -> None:
+    path = tmp_path / "nb.afsm"
+    path.write_text(NEG, encoding="utf-8")
+    r = run_cli("sweep", str(path), "--bound=-1,2")
+    assert r.code == 1 and "E410" in r.out + r.err
+
+
+AC = """machine ac;
+mode S = 0 initial;
+mode D = 1 final;
+action Go in S { 0.5: goto D; 0.5: skip; }
+rewards ac { [Go] true : 1; }
+rewards both { [Go] true : 1; mode == S : 1; }
+label done = mode == D;
+"""
+
+
+def test_an_instantaneous_reward_of_action_rewards_only_is_an_error(tmp_path: Path) -> None:
+    path = tmp_path / "ac.afsm"
+    path.write_text(AC + 'property i = R{"ac"}=? [ I=3 ];\n', encoding="utf-8")
+    r = run_cli("check", str(path))
+    assert r.code == 1 and "error[E247]" in r.err
+    path.write_text(AC, encoding="utf-8")
+    r = run_cli("verify", str(path), "--formula", 'R{"ac"}=? [ I=3 ]')
+    assert r.code == 1 and "E247" in r.out + r.err and "E404" not in r.out + r.err
+
+
+@pytest.mark.parametrize("via", ["prism", "jani"])
+def test_the_reward_queries_storm_answers_stay_allowed(tmp_path: Path, via: str) -> None:
+    # Storm answers these on action-only and mixed structures (checked on every engine
+    # by hand; C unbounded is the sparse engine's only); E247 leaves them alone.
+    path = tmp_path / "ac.afsm"
+    path.write_text(AC, encoding="utf-8")
+    r = run_cli("verify", str(path), "--via", via, "--engine", "sparse", "--json",
+                "--formula", 'R{"ac"}=? [ C<=3 ]', "--formula", 'R{"ac"}=? [ F "done" ]',
+                "--formula", 'R{"ac"}=? [ C ]', "--formula", 'R{"both"}=? [ I=2 ]')
+    assert r.code == 0, r.out + r.err
+    values = [p["value"] for p in json.loads(r.out)["properties"]]
+    assert values == pytest.approx([1.75, 2.0, 2.0, 0.25])
