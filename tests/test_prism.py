@@ -194,3 +194,25 @@ def test_compile_with_an_unwritable_second_output_writes_none(tmp_path: Path) ->
     assert r.code == 1 and "error[E003]" in r.err and "it is a directory" in r.err, r.err
     assert sorted(p.name for p in tmp_path.iterdir()) == ["patrol.props"]
     assert "wrote" not in r.err
+
+
+EMPTY_REWARDS = """machine er;
+mode S = 0 initial;
+mode D = 1 final;
+action Go in S { 0.5: goto D; 0.5: skip; }
+rewards r { }
+property q = R{"r"}=? [ F mode == D ];
+property c = R{"r"}=? [ C<=3 ];
+"""
+
+
+@pytest.mark.parametrize(("via", "engine"), [("prism", "sparse"), ("prism", "hybrid"),
+                                             ("jani", "sparse")])
+def test_an_empty_reward_structure_is_zero(tmp_path: Path, via: str, engine: str) -> None:
+    # Storm's PRISM parser refuses `rewards "r" endrewards`: the backend writes `true : 0`.
+    from afsmc.verify import run
+
+    path = tmp_path / "er.afsm"
+    path.write_text(EMPTY_REWARDS)
+    res = run(str(path), via=via, engine=engine)  # type: ignore[arg-type]
+    assert {p.name: p.value for p in res.properties} == {"q": 0.0, "c": 0.0}

@@ -158,6 +158,8 @@ def emit(low: Lowered) -> PrismOutput:
         for it in r.items:
             act = f"[{it.action}] " if it.action else ""
             w(f"  {act}{p(it.guard)} : {p(it.value)};")
+        if not r.items:
+            w("  true : 0; // an empty structure: Storm's PRISM parser needs an item")
         w("endrewards")
     w("")
 
