@@ -580,6 +580,20 @@ def choose_engine(engine: Engine, bound: int) -> tuple[Engine, str]:
     return engine, ""
 
 
+def _refuse_total_rewards(props: Sequence[ir.Property], engine: Engine) -> None:
+    """E404 before any build: Storm's symbolic engines return no result for an unbounded
+    total reward `R [ C ]` (docs/verification.md), which they would say only after building."""
+    if engine not in ("hybrid", "dd"):
+        return
+    bad = [p for p in props if isinstance(p.path, ir.RewardPath) and p.path.kind == "C"
+           and p.path.bound is None]
+    if bad:
+        raise CompileError([Diagnostic(
+            "E404", Severity.ERROR, f"the {engine} engine cannot check the total reward "
+            f"'{p.name}' (R [ C ], unbounded): Storm returns no result for it", p.span,
+            hint="use --engine sparse, a step bound (C<=k), or R [ F target ]") for p in bad])
+
+
 def check(model: ir.Model, props: Sequence[ir.Property], *, via: Via = "prism",
           engine: Engine = "sparse", max_states: int | None = None, uniform: bool = True,
           isolate: bool | None = None, progress: Progress | None = None,
@@ -616,6 +630,7 @@ def check(model: ir.Model, props: Sequence[ir.Property], *, via: Via = "prism",
     preserve = [dual(p) if _bounded_g(p) else p for p in preserve]
     bound = upper_bound(model)
     engine, reason = choose_engine(engine, bound)
+    _refuse_total_rewards(props, engine)
     # Only the hybrid engine needs them ("auto" may still pick it after counting states).
     comp = complements(model, props) if engine in ("hybrid", "auto") else {}
     model = dataclasses.replace(model, properties=tuple(props) + tuple(
