@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import math
 
-from afsmc.check.undefined import sites
+from afsmc.check.undefined import node_key, sites
 from afsmc.diagnostics import Reporter
 from afsmc.model import expr as E
 from afsmc.model import ir
@@ -46,11 +46,10 @@ def check_overflow(model: ir.Model, rep: Reporter) -> None:
         x = inline(site.expr, model)
         # Inner parts first: an outer expression overflows because an inner one does.
         for n in reversed(list(E.walk(x))):
-            key = (n.span.start, n.span.end) if n.span is not None else id(n)
+            key = node_key(n)
             if key in reported or not _computed(n):
                 continue
-            if any(((m.span.start, m.span.end) if m.span is not None else id(m)) in reported
-                   for m in E.walk(n)):
+            if any(node_key(m) in reported for m in E.walk(n)):
                 continue
             end = _beyond(*bounds(n, model))
             if end is None:

@@ -161,7 +161,9 @@ def _outcome_sites(owner: str, outcomes: tuple[ir.Outcome, ...],
                 yield Site(f"an update of {owner}", u.value, when, u.var)
 
 
-def _key(n: E.Expr) -> tuple[int, int] | int:
+def node_key(n: E.Expr) -> tuple[int, int] | int:
+    """One key per node as written: the same source part reached through two sites (a
+    formula used twice) is reported once."""
     return (n.span.start, n.span.end) if n.span is not None else id(n)
 
 
@@ -170,9 +172,9 @@ def check_undefined(model: ir.Model, rep: Reporter) -> None:
     for site in sites(model):
         x = inline(site.expr, model)
         for p in partials(x):
-            if _key(p.node) in reported or _never_zero(p, model):
+            if node_key(p.node) in reported or _never_zero(p, model):
                 continue
-            if any(_key(n) in reported for n in E.walk(p.node)):
+            if any(node_key(n) in reported for n in E.walk(p.node)):
                 continue  # undefined because an inner part is, which is said already
             for consts in interval_choices(model, x):
                 hit = next(((m, w) for m, cond in site.when.items()
@@ -180,7 +182,7 @@ def check_undefined(model: ir.Model, rep: Reporter) -> None:
                             is not None), None)
                 if hit is None:
                     continue
-                reported.add(_key(p.node))
+                reported.add(node_key(p.node))
                 span = p.node.span if p.node.span is not None else site.expr.span
                 chosen = "".join(f", {k} = {v}" for k, v in consts.items())
                 if E.state_free(p.divisor):

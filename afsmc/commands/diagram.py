@@ -166,9 +166,11 @@ def mode_reachability(model: ir.Model, resolution: Resolution, *,
     numbers = [m.number for m in sorted(model.modes, key=lambda m: m.number)
                if m.number not in unreachable]
     ops = ("min", "max") if mdp else ("",)
-    names = tuple(f"reach_{n}{'_' + op if op else ''}" for n in numbers for op in ops)
-    props = "".join(f'"reach_{n}{"_" + op if op else ""}": P{op}=? [ F mode={n} ];\n'
-                    for n in numbers for op in ops)
+
+    def query(n: int, op: str) -> str:
+        return f"reach_{n}_{op}" if op else f"reach_{n}"
+    names = tuple(query(n, op) for n in numbers for op in ops)
+    props = "".join(f'"{query(n, op)}": P{op}=? [ F mode={n} ];\n' for n in numbers for op in ops)
     limit = default_max_states() if max_states is None else max_states
     job = Job("prism", emit(low).model, props, names, "sparse", limit,
               f"{low.kind.upper()} (--reach)")
@@ -200,7 +202,7 @@ def mode_reachability(model: ir.Model, resolution: Resolution, *,
         f"{len(names)} checks in {time.monotonic() - t0:.1f} s")
     out: dict[int, tuple[float, float]] = {n: (0.0, 0.0) for n in unreachable}
     for n in numbers:
-        vs = [res.values[f"reach_{n}{'_' + op if op else ''}"] for op in ops]
+        vs = [res.values[query(n, op)] for op in ops]
         out[n] = (min(vs), max(vs))
     return out, mdp
 
