@@ -155,6 +155,29 @@ def test_auto_with_hybrid_groups_the_queries_in_two_processes(tmp_path: object) 
     _close(_values(roomy), _values(sparse), 1e-9)
 
 
+def test_auto_with_hybrid_refuses_total_rewards_before_checking(tmp_path: Path) -> None:
+    # When "auto" picks hybrid, an unbounded R [ C ] has no answer there: the process says so
+    # (E404) as soon as it knows the engine, not after the queries checked before it.
+    from afsmc.diagnostics import CompileError
+
+    path = tmp_path / "wide.afsm"
+    path.write_text(WIDE + 'property total = R{"steps"}=? [ C ];\n', encoding="utf-8")
+    said: list[str] = []
+    with pytest.raises(CompileError) as info:
+        run(str(path), properties=["steps", "total"], engine="auto", memory_budget=1,
+            progress=said.append)
+    [d] = info.value.diagnostics
+    assert d.code == "E404" and "too many for the sparse engine" in d.message, d.message
+    assert "cannot check an unbounded total reward" in d.message and d.span is not None
+    assert d.hint is not None and "C<=k" in d.hint, d.hint
+    assert not any(s.startswith("checked") for s in said), said
+    # with room for the sparse engine, "auto" checks it, as the sparse engine does
+    roomy = run(str(path), properties=["total"], engine="auto", memory_budget=1 << 40)
+    sparse = run(str(path), properties=["total"], engine="sparse", isolate=False)
+    assert roomy.model.engine == "sparse"
+    _close(_values(roomy), _values(sparse), 1e-12)
+
+
 def test_auto_with_hybrid_checks_probabilities_only_in_one_process(tmp_path: object) -> None:
     # With no expected reward, the process where "auto" counted the states also asks the
     # complementary queries that give each Pmax: no second build.

@@ -336,7 +336,10 @@ def failure_diagnostic(f: StormFailure, model: ir.Model, low: Lowered,
                      if line.strip() and set(line.strip()) != {"^"}) or "no message"
     engine_hint = (f"the {job.engine} engine supports fewer properties: try --engine sparse"
                    if job.engine != "sparse" else None)
-    if engine_hint and job.via == "jani" and prop is not None and isinstance(prop.path, ir.Path) \
+    if engine_hint and prop is not None and _total_reward(prop):
+        engine_hint = ("use a step bound (C<=k) or R [ F target ]; --engine sparse checks "
+                       "R [ C ] where the machine has the memory")
+    elif engine_hint and job.via == "jani" and prop is not None and isinstance(prop.path, ir.Path) \
             and prop.path.kind == "X":
         # JANI writes X as a step-bounded until ([1, 1]), which only Storm's sparse engine
         # takes; from PRISM the symbolic engines check X.
@@ -580,13 +583,18 @@ def choose_engine(engine: Engine, bound: int) -> tuple[Engine, str]:
     return engine, ""
 
 
+def _total_reward(p: ir.Property) -> bool:
+    """An unbounded `R [ C ]`: Storm's symbolic engines return no result for it."""
+    return isinstance(p.path, ir.RewardPath) and p.path.kind == "C" and p.path.bound is None
+
+
 def _refuse_total_rewards(props: Sequence[ir.Property], engine: Engine) -> None:
     """E404 before any build: Storm's symbolic engines return no result for an unbounded
-    total reward `R [ C ]` (docs/verification.md), which they would say only after building."""
+    total reward `R [ C ]` (docs/verification.md), which they would say only after building.
+    ("auto" learns its engine in the Storm process: Job.symbolic_refused.)"""
     if engine not in ("hybrid", "dd"):
         return
-    bad = [p for p in props if isinstance(p.path, ir.RewardPath) and p.path.kind == "C"
-           and p.path.bound is None]
+    bad = [p for p in props if _total_reward(p)]
     if bad:
         raise CompileError([Diagnostic(
             "E404", Severity.ERROR, f"the {engine} engine cannot check the total reward "
@@ -714,6 +722,9 @@ def check(model: ir.Model, props: Sequence[ir.Property], *, via: Via = "prism",
                            hybrid_extra=extra)
             if all_states:
                 job = dataclasses.replace(job, all_states=True)
+            if job_engine == "auto":
+                job = dataclasses.replace(job, symbolic_refused=tuple(
+                    n for p, n in unit if _total_reward(p)))
             complementary = any(n.startswith(REST) for _, n in unit) and all(
                 n.startswith(REST) or n == TERMINATES for _, n in unit)
             # The probabilities' process (its complementary targets need the larger tables;

@@ -59,6 +59,9 @@ class Job:
     # its target states absorbing (fewer states, same answer), so the states reported would
     # depend on how many properties a process checks (a sweep's chunks, --jobs).
     all_states: bool = False
+    # Queries Storm's symbolic engines give no result for (an unbounded total reward): if
+    # "auto" picks hybrid, the process fails on them at once, before checking any query.
+    symbolic_refused: tuple[str, ...] = ()
 
     @property
     def wanted(self) -> tuple[str, ...]:
@@ -232,6 +235,17 @@ def _execute(job: Job, notify: Notify) -> JobResult:
                     if job.hybrid_skip:
                         names, props = _keep(names, props, job.hybrid_skip)
                         res.engine_reason += "; queries grouped by the tables they need"
+                    refused = [n for n in names if n in job.symbolic_refused]
+                    if refused:
+                        res.engine = engine_name
+                        res.states = int(model.nr_states)
+                        res.failure = StormFailure(
+                            "check", f"its {res.states:,} states are too many for the "
+                            f"sparse engine (about {need / 1e9:.1f} GB as sparse matrices), "
+                            "and the hybrid engine cannot check an unbounded total reward "
+                            "R [ C ]",
+                            prop=refused[0])
+                        return res
         else:
             names, props = _keep(names, props, job.hybrid_extra)
             model = stormpy.build_model(program, _for_builder(props, job))
