@@ -171,6 +171,17 @@ def test_auto_with_hybrid_refuses_total_rewards_before_checking(tmp_path: Path) 
     assert "cannot check an unbounded total reward" in d.message and d.span is not None
     assert d.hint is not None and "C<=k" in d.hint, d.hint
     assert not any(s.startswith("checked") for s in said), said
+    # one query per process: the processes after the one where "auto" picked hybrid refuse
+    # it before they build, and the answers so far are kept
+    said.clear()
+    with pytest.raises(CompileError) as info:
+        run(str(path), properties=["steps", "total"], engine="auto", memory_budget=1,
+            split=True, progress=said.append)
+    e404, kept = info.value.diagnostics
+    assert e404.code == "E404" and "cannot check the total reward 'total'" in e404.message, \
+        e404.message
+    assert kept.code == "N412" and "steps_min = " in kept.message, kept.message
+    assert sum(s.startswith("built the MDP") for s in said) == 2, said  # steps' min and max
     # with room for the sparse engine, "auto" checks it, as the sparse engine does
     roomy = run(str(path), properties=["total"], engine="auto", memory_budget=1 << 40)
     sparse = run(str(path), properties=["total"], engine="sparse", isolate=False)

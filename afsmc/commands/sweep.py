@@ -130,7 +130,8 @@ def run(args: argparse.Namespace) -> int:
                 progress(f"wrote {args.plot}")
     except CompileError as exc:
         return fail(exc, args.json, wrapped=True)
-    except OSError as exc:  # the Dask scheduler is unreachable
+    except OSError as exc:  # the Dask scheduler is unreachable, or no process could start
+        # (writing the outputs fails as E003 in write_atomic)
         return fail(CompileError([Diagnostic("E413", Severity.ERROR, f"sweep failed: {exc}",
                                              None, hint="is a Dask scheduler running at "
                                              f"{args.dask}?" if args.dask else None)]),

@@ -709,6 +709,12 @@ def check(model: ir.Model, props: Sequence[ir.Property], *, via: Via = "prism",
                 break
             unit = units[i]
             group = list(dict.fromkeys(p for p, _ in unit))
+            if job_engine == "hybrid":
+                # "auto" picked hybrid in an earlier process (--split): refuse before building
+                try:
+                    _refuse_total_rewards(group, job_engine)
+                except CompileError as exc:
+                    raise CompileError([*exc.diagnostics, *kept(what, vals)]) from None
             limit = max_states if max_states is not None else (
                 default_max_states() if job_engine == "sparse" else None)
             # "auto" checks what the hybrid engine would check first, if it picks that: with
