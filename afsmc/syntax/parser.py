@@ -170,7 +170,9 @@ class _Scan:
 
 def tokens(text: str, start: int = 0, end: int | None = None) -> Iterator[tuple[int, int]]:
     """(start, end) of each token of text[start:end], skipping whitespace and comments.
-    Only positions and brackets matter to its users: `<=` may come out as two tokens."""
+    Only positions and brackets matter to its users: `<=` may come out as two tokens.
+    Not the grammar's lexer (which fmt uses): this one must go on through text that does not
+    lex, as it scans the input of a syntax error."""
     end = len(text) if end is None else end
     i = start
     while i < end:
