@@ -571,3 +571,18 @@ def test_a_real_ctrl_c_stops_the_watched_storm_process(tmp_path: Path) -> None:
         ps = subprocess.run(["ps", "-o", "pid,args", "-g", str(proc.pid)], text=True,
                             capture_output=True).stdout
         raise AssertionError(f"processes of the group outlived the interrupt:\n{ps}")
+
+
+def test_progress_lines_thin_out_as_a_phase_goes_on() -> None:
+    # An hour's check would otherwise log a line every 5 s (700 lines).
+    from afsmc.verify.guard import report_interval
+
+    assert [report_interval(s, 5.0) for s in (0, 59, 60, 599, 600, 3600)] == \
+        [5.0, 5.0, 30.0, 30.0, 60.0, 60.0]
+    lines = 0
+    t = 0.0
+    while t < 3600:  # one line per interval, as the guard reports them
+        t += report_interval(t, 5.0)
+        lines += 1
+    assert 75 <= lines <= 85, lines
+    assert report_interval(100, 45.0) == 45.0  # never more often than asked

@@ -175,6 +175,13 @@ def run_isolated(job: Job, progress: Progress | None, *, every: float = 5.0,
     return res
 
 
+def report_interval(in_phase: float, every: float) -> float:
+    """Seconds to the next progress line of a phase (a build, a check) that has run for
+    `in_phase` s: `every` at first, then sparser, so that an hour's check leaves a log of
+    some 80 lines rather than 700."""
+    return every if in_phase < 60 else max(every, 30.0) if in_phase < 600 else max(every, 60.0)
+
+
 class Interrupted(KeyboardInterrupt):
     """Ctrl-C while a Storm process ran: carries the values it had sent."""
 
@@ -204,6 +211,7 @@ def _run_isolated(job: Job, progress: Progress | None, every: float,
     next_report = start + first
     baseline: int | None = None
     phase = "start"
+    phase_start = start
     peak = 0
     result: JobResult | None = None
     answered: dict[str, float] = {}  # values the child sent before it may die
@@ -224,7 +232,7 @@ def _run_isolated(job: Job, progress: Progress | None, every: float,
                 if event == "ready":
                     baseline = data
                 elif event == "phase":
-                    phase = data
+                    phase, phase_start = data, time.monotonic()
                 elif event == "engine":
                     engine = data
                 elif event == "built":
@@ -263,13 +271,14 @@ def _run_isolated(job: Job, progress: Progress | None, every: float,
                     "memory", f"stopped the {job.what} after {now - start:.0f} s: it used "
                     f"{rss / 2**30:.1f} GB, 85% of the memory that was available")), None
             if now >= next_report:
-                next_report = now + every
+                next_report = now + report_interval(now - phase_start, every)
                 if phase == "build":
                     est = (f", about {human(explored)} states so far (estimated from memory use)"
                            if job.engine == "sparse" else f", {rss / 2**30:.1f} GB")
                     say(f"building the {job.what}: {now - start:.0f} s{est}")
                 elif phase.startswith("check "):
-                    say(f"checking {phase[6:]} on the {job.what}: {now - start:.0f} s")
+                    say(f"checking {phase[6:]} on the {job.what}: {now - start:.0f} s, "
+                        f"{rss / 2**30:.1f} GB")
     except KeyboardInterrupt as exc:
         raise Interrupted(dict(answered)) from exc
     finally:
