@@ -123,13 +123,20 @@ def values(latest: dict[tuple[str, str], dict[str, str]]) -> str:
         row = max(done, key=lambda r: (len(json.loads(r["properties"])),
                                        bool(r.get("uniform_check_s"))))
         props = json.loads(row["properties"])
+        # Storm's check time of each answer, where the run recorded it
+        secs = json.loads(row.get("property_seconds") or "{}")
         out.append(f"**{inst}** (`{row['config']}`):\n")
-        out.append("| property | min | max | uniform |")
-        out.append("|---|---|---|---|")
+        head = "| property | min | max | uniform |"
+        out.append(head + (" check s (min, max, uniform) |" if secs else ""))
+        out.append("|---|---|---|---|" + ("---|" if secs else ""))
         for name, (lo, hi, uni, val) in props.items():
             if val is not None:
                 lo = hi = uni = val
             cells = [name] + ["" if x is None else f"{x:.4f}" for x in (lo, hi, uni)]
+            if secs:
+                t = secs.get(name, [None] * 4)
+                cells.append(", ".join("-" if x is None else f"{x:.0f}" for x in
+                                       ([t[3]] if t[3] is not None else t[:3])))
             out.append("| " + " | ".join(cells) + " |")
         out.append("")
     return "\n".join(out).strip()

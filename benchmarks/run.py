@@ -81,7 +81,8 @@ for _p in UAV_PROPERTIES:
 
 FIELDS = ["instance", "config", "status", "compile_s", "states", "transitions", "choices",
           "quotient_states", "build_s", "check_s", "uniform_states", "uniform_build_s",
-          "uniform_check_s", "total_s", "peak_gb", "engine", "properties", "progress", "when"]
+          "uniform_check_s", "total_s", "peak_gb", "engine", "properties", "progress", "when",
+          "property_seconds"]
 
 
 @dataclass
@@ -192,6 +193,10 @@ def run_one(instance: str, config: str, timeout: float, memory_gb: float) -> dic
                    uniform_check_s=round(t.get("uniform_check", 0), 2))
     row["properties"] = json.dumps({p["name"]: [p["min"], p["max"], p["uniform"], p["value"]]
                                     for p in data["properties"]}, separators=(",", ":"))
+    # Storm's check time of each answer, in the same order
+    row["property_seconds"] = json.dumps(
+        {p["name"]: [p.get("seconds", {}).get(k) for k in ("min", "max", "uniform", "value")]
+         for p in data["properties"]}, separators=(",", ":"))
     return row
 
 

@@ -231,6 +231,11 @@ def test_json_shape(spec: Spec) -> None:
     for p in obj["properties"]:
         assert set(p) >= {"name", "formula", "min", "max", "uniform", "value"}
         assert p["value"] is None and isinstance(p["min"], float)
+        # Storm's time for each answer (the hybrid engine asks each Pmax as 1 - Pmin: its
+        # time is that query's)
+        assert set(p["seconds"]) == {"min", "max", "uniform"}, p
+        assert all(isinstance(v, float) and 0 <= v <= obj["timings"]["total"]
+                   for v in p["seconds"].values()), p
     assert {"build", "check", "total"} <= set(obj["timings"])
     assert obj["engine"] == "hybrid" and obj["via"] == "prism"
     assert r.err == ""  # silent under --json

@@ -153,6 +153,9 @@ def test_auto_with_hybrid_groups_the_queries_in_two_processes(tmp_path: object) 
     assert roomy.model.engine == "sparse" and roomy.model.processes == 1
     _close(_values(tight), _values(sparse), 1e-6)
     _close(_values(roomy), _values(sparse), 1e-9)
+    # each answer has its check time, the Pmax asked as 1 - Pmin included
+    for res in (tight, roomy, sparse):
+        assert all(set(p.seconds) == {"min", "max", "uniform"} for p in res.properties), res
 
 
 def test_auto_with_hybrid_refuses_total_rewards_before_checking(tmp_path: Path) -> None:

@@ -138,6 +138,25 @@ class _Formatter:
         self.code = [t for t in toks if t.type != "COMMENT"]
         self.code_starts = [t.start_pos or 0 for t in self.code]
         self.ends = sorted(t.end_pos or 0 for t in toks)
+        # Parenthesis depth before each code token, and a sparse table of its range minima:
+        # whether an expression's tokens are balanced is then O(1), not a scan per node
+        # (quadratic on deeply nested expressions).
+        depth = [0]
+        for t in self.code:
+            depth.append(depth[-1] + {"LPAR": 1, "RPAR": -1}.get(t.type, 0))
+        self.depth = depth
+        self.minima = [depth]
+        k = 1
+        while 2 * k <= len(depth):
+            last = self.minima[-1]
+            self.minima.append([min(last[a], last[a + k]) for a in range(len(depth) - 2 * k + 1)])
+            k *= 2
+
+    def _min_depth(self, lo: int, hi: int) -> int:
+        """The least depth over depth[lo..hi] (inclusive)."""
+        level = (hi - lo + 1).bit_length() - 1
+        row = self.minima[level]
+        return min(row[lo], row[hi - (1 << level) + 1])
 
     # -- tokens
     def _index_at(self, offset: int) -> int:
@@ -155,12 +174,8 @@ class _Formatter:
         the parentheses of a call are not the expression's."""
         i = self._index_at(span.start)
         j = self._index_at(span.end)  # the first token after the expression
-        depth = 0
-        for t in self.code[i:j]:
-            depth += {"LPAR": 1, "RPAR": -1}.get(t.type, 0)
-            if depth < 0:
-                return 0  # `(a) + (b)`: the parentheses around it are not one pair
-        if depth != 0:
+        # `(a) + (b)` dips below its start: the parentheses around it are not one pair
+        if self.depth[j] != self.depth[i] or (j > i and self._min_depth(i, j) < self.depth[i]):
             return 0
         n = 0
         while (i - n >= 1 and j + n < len(self.code) and self.code[i - n - 1].type == "LPAR"

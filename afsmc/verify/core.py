@@ -91,6 +91,9 @@ class PropertyResult:
     max: float | None = None
     uniform: float | None = None
     value: float | None = None
+    # Storm's time for each of the above, s: its check, or that of the query asked instead
+    # (a Pmax as 1 - Pmin, a bounded G as its dual). Builds are in the model's build time.
+    seconds: dict[str, float] = field(default_factory=dict)
 
     def to_json(self) -> dict[str, object]:
         out: dict[str, object] = {"name": self.name, "formula": self.formula}
@@ -102,6 +105,7 @@ class PropertyResult:
                 infinite.append(key)
         if infinite:
             out["infinite"] = infinite  # JSON has no infinity: these are null above
+        out["seconds"] = {k: round(v, 3) for k, v in self.seconds.items()}
         return out
 
 
@@ -652,6 +656,7 @@ def check(model: ir.Model, props: Sequence[ir.Property], *, via: Via = "prism",
         lows.append(("nondet", lowered(model, "nondet", reductions), "DTMC"))
     stats: list[ModelStats] = []
     values: list[dict[str, float]] = []
+    timings: list[dict[str, float]] = []  # each query's check time, as `values`
 
     def kept(what: str, vals: dict[str, float]) -> list[Diagnostic]:
         """The note of what the finished models and this one have answered."""
@@ -680,6 +685,7 @@ def check(model: ir.Model, props: Sequence[ir.Property], *, via: Via = "prism",
         units = plan(queries, engine == "hybrid")
         merged: ModelStats | None = None
         vals: dict[str, float] = {}
+        secs: dict[str, float] = {}
         job_engine = engine
         # Once the guard reran one complementary Pmin query with full tables, the later ones
         # start with them: they share their shape, Pmin [F final & !target] (on scenario 1
@@ -692,12 +698,14 @@ def check(model: ir.Model, props: Sequence[ir.Property], *, via: Via = "prism",
             if i == len(units) and TERMINATES in vals:
                 # Pmax = 1 - Pmin of the rest, if every path ends; else ask Pmax itself.
                 ends = vals.pop(TERMINATES) == 1.0
+                secs.pop(TERMINATES, None)  # a graph analysis, shared by every Pmax
                 direct = []
                 for name, rest in use.items():
                     if rest.name in vals:
                         v = vals.pop(rest.name)
                         if ends:
                             vals[name] = 1.0 - v
+                            secs[name] = secs.pop(rest.name, 0.0)
                         else:
                             direct.append(by_name[name])
                 if ends and progress is not None:
@@ -769,6 +777,7 @@ def check(model: ir.Model, props: Sequence[ir.Property], *, via: Via = "prism",
                 # A process for several queries failed: keep what it answered and plan the
                 # others again.
                 vals |= res.values
+                secs |= res.seconds
                 # its time counts as checking: it answered some of the queries
                 lost, lost_processes = lost + res.elapsed, lost_processes + 1
                 left = _unanswered(unit, vals, use)
@@ -806,6 +815,7 @@ def check(model: ir.Model, props: Sequence[ir.Property], *, via: Via = "prism",
             one = _stats(res, resolution)
             merged = one if merged is None else _add(merged, one)
             vals |= res.values
+            secs |= res.seconds
             i += 1
             if job_engine == "auto" and res.engine == "hybrid":
                 # "auto" chose hybrid: the queries it left (Job.hybrid_skip) and any later
@@ -822,11 +832,18 @@ def check(model: ir.Model, props: Sequence[ir.Property], *, via: Via = "prism",
         stats.append(dataclasses.replace(merged, check_time=merged.check_time + lost,
                                          processes=merged.processes + lost_processes))
         values.append(vals)
+        timings.append(secs)
     # a bounded G's query -> its dual's, whose value it is 1 minus (min and max swapped)
     asked_as = {query: its for its, query in duals.items()}
 
     def value(vals: dict[str, float], name: str) -> float:
         return 1.0 - vals[asked_as[name]] if name in asked_as else vals[name]
+
+    def timed(r: PropertyResult, key: str, which: int, name: str) -> None:
+        setattr(r, key, value(values[which], name))
+        secs = timings[which].get(asked_as.get(name, name))
+        if secs is not None:
+            r.seconds[key] = secs
 
     results = []
     for p in original:
@@ -834,11 +851,11 @@ def check(model: ir.Model, props: Sequence[ir.Property], *, via: Via = "prism",
         low = lows[0][1]
         if low.kind == "mdp":
             for name, opt in property_variants(low, p):
-                setattr(r, opt, value(values[0], name))
+                timed(r, opt, 0, name)
             if len(values) > 1:
-                r.uniform = value(values[1], p.name)
+                timed(r, "uniform", 1, p.name)
         else:
-            r.value = value(values[0], p.name)
+            timed(r, "value", 0, p.name)
         results.append(r)
     return Checks(stats[0], stats[1] if len(stats) > 1 else None, results)
 

@@ -161,7 +161,7 @@ def run_isolated(job: Job, progress: Progress | None, *, every: float = 5.0,
             progress(note)
         else:  # Sylvan has said "Unique table full" on stderr: say what it means there too
             print(f"afsmc: {note}", file=sys.stderr, flush=True)
-        done = res.values
+        done, first_seconds = res.values, res.seconds
         rest = tuple(n for n in job.names if n not in done)
         extra = tuple(n for n in job.hybrid_extra if n not in done)
         try:
@@ -171,6 +171,7 @@ def run_isolated(job: Job, progress: Progress | None, *, every: float = 5.0,
             exc.values = done | exc.values  # the first attempt's answers count too
             raise
         res.values = done | res.values
+        res.seconds = first_seconds | res.seconds
         res.dd_retried = True
     return res
 
@@ -215,6 +216,7 @@ def _run_isolated(job: Job, progress: Progress | None, every: float,
     peak = 0
     result: JobResult | None = None
     answered: dict[str, float] = {}  # values the child sent before it may die
+    seconds: dict[str, float] = {}  # and how long each took
     built = 0  # states, once the child has built the model
     engine = ""  # the engine it checks with ("auto" decides after building)
 
@@ -241,8 +243,10 @@ def _run_isolated(job: Job, progress: Progress | None, every: float,
                     say(f"built the {job.what}: {states:,} states, {transitions:,} transitions "
                         f"in {secs:.1f} s")
                 elif event == "value":
-                    answered[data[0]] = data[1]
-                    say(f"checked {data[0]} on the {job.what}: {time.monotonic() - start:.0f} s")
+                    name, value, secs = data
+                    answered[name], seconds[name] = value, secs
+                    say(f"checked {name} on the {job.what} in {seconds[name]:.0f} s "
+                        f"({time.monotonic() - start:.0f} s into this process)")
                 elif event == "result":
                     result = data
                 continue
@@ -266,7 +270,8 @@ def _run_isolated(job: Job, progress: Progress | None, every: float,
             if cap is not None and rss > cap:
                 proc.kill()
                 proc.join()
-                return JobResult(states=built, values=answered, elapsed=now - start,
+                return JobResult(states=built, values=answered, seconds=seconds,
+                                 elapsed=now - start,
                                  engine=engine, failure=StormFailure(
                     "memory", f"stopped the {job.what} after {now - start:.0f} s: it used "
                     f"{rss / 2**30:.1f} GB, 85% of the memory that was available")), None
@@ -295,7 +300,8 @@ def _run_isolated(job: Job, progress: Progress | None, every: float,
         why += (f" (with decision-diagram tables of {job.dd_memory_mb} MB; Sylvan exits when "
                 "they are full)")
     gb = f"; it had used {peak / 2**30:.1f} GB" if peak else ""
-    return JobResult(states=built, values=answered, elapsed=time.monotonic() - start,
+    return JobResult(states=built, values=answered, seconds=seconds,
+                     elapsed=time.monotonic() - start,
                      engine=engine, failure=StormFailure(
         "memory" if code is not None and code < 0 else "internal",
         f"the Storm process building the {job.what} {why}{gb}")), code

@@ -96,6 +96,7 @@ class JobResult:
     build_time: float = 0.0
     check_time: float = 0.0
     values: dict[str, float] = field(default_factory=dict)
+    seconds: dict[str, float] = field(default_factory=dict)  # each query's check, wall time
     engine: str = ""  # the engine that checked ("auto" resolves to sparse or hybrid)
     engine_reason: str = ""  # why "auto" chose it
     quotient_states: int | None = None  # states after bisimulation
@@ -283,6 +284,7 @@ def _execute(job: Job, notify: Notify) -> JobResult:
     engine = {"dd": stormpy.Engine.DD, "hybrid": stormpy.Engine.HYBRID}.get(engine_name)
     for name, prop in zip(names, props, strict=True):
         notify("phase", f"check {name}")
+        started = time.perf_counter()
         try:
             if symbolic:
                 r = stormpy.model_checking(model, prop, only_initial_states=True, engine=engine)
@@ -301,8 +303,9 @@ def _execute(job: Job, notify: Notify) -> JobResult:
         res.values[name] = float(value)
         del r  # before the next check: the result holds decision diagrams of this model
         _give_back()
+        res.seconds[name] = time.perf_counter() - started
         # A process that dies later (memory) has still answered this one: the watcher keeps it.
-        notify("value", (name, float(value)))
+        notify("value", (name, float(value), res.seconds[name]))
     res.check_time = time.perf_counter() - t0
     return res
 
