@@ -339,8 +339,9 @@ class SweepResult:
                 "transitions": pt.transitions,
                 "uniform_states": pt.uniform_states,
                 "uniform_transitions": pt.uniform_transitions,
+                # no check times: a sweep's output is the same however it was split
                 "properties": [{k: v for k, v in r.to_json().items()
-                                if k not in ("formula",) or self.kind == "bound"}
+                                if k != "seconds" and (k != "formula" or self.kind == "bound")}
                                for r in pt.properties],
             } for pt in self.points],
         }
