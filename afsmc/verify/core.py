@@ -702,10 +702,9 @@ def check(model: ir.Model, props: Sequence[ir.Property], *, via: Via = "prism",
                 direct = []
                 for name, rest in use.items():
                     if rest.name in vals:
-                        v = vals.pop(rest.name)
+                        v, t = vals.pop(rest.name), secs.pop(rest.name, 0.0)
                         if ends:
-                            vals[name] = 1.0 - v
-                            secs[name] = secs.pop(rest.name, 0.0)
+                            vals[name], secs[name] = 1.0 - v, t
                         else:
                             direct.append(by_name[name])
                 if ends and progress is not None:
