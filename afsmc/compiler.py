@@ -16,6 +16,7 @@ from afsmc.model import ir
 from afsmc.model.lower import Lowered, Resolution, lower
 from afsmc.model.reduce import Reductions, reduce
 from afsmc.model.resolve import resolve
+from afsmc.stack import deep
 from afsmc.syntax import ast
 from afsmc.syntax.parser import parse
 
@@ -49,6 +50,7 @@ class Checked:
     diagnostics: list[Diagnostic]  # warnings and notes; errors raise instead
 
 
+@deep
 def load(path: str, overrides: Mapping[str, str] | None = None, *, text: str | None = None,
          run_checks: bool = True) -> Checked:
     """Parse, resolve and check one file. Raises CompileError if anything is an error."""

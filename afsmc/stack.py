@@ -15,12 +15,15 @@ inlined (E246); a RecursionError that still gets through is E114 (afsmc.cli).
 
 from __future__ import annotations
 
+import functools
 import resource
 import sys
+import threading
 from collections.abc import Callable
-from typing import TypeVar
+from typing import ParamSpec, TypeVar
 
 T = TypeVar("T")
+P = ParamSpec("P")
 
 STACK_BYTES = 64 * 2**20  # the kernel keeps at least 128 MB free below the main stack
 FRAME_BYTES = 1024  # generous: ~150 measured
@@ -43,7 +46,11 @@ def _stack_bytes() -> int:
 
 def run_deep(fn: Callable[[], T]) -> T:
     """`fn()` on this thread with room for RECURSION_LIMIT frames (fewer if the stack
-    cannot be made that large)."""
+    cannot be made that large). Only the main thread's stack grows: on another thread the
+    limits stay as they are (a higher recursion limit there would crash the process where
+    a RecursionError is raised now)."""
+    if threading.current_thread() is not threading.main_thread():
+        return fn()
     old_limit = sys.getrecursionlimit()
     frames = min(RECURSION_LIMIT, _stack_bytes() // FRAME_BYTES)
     sys.setrecursionlimit(max(old_limit, frames))
@@ -51,3 +58,12 @@ def run_deep(fn: Callable[[], T]) -> T:
         return fn()
     finally:
         sys.setrecursionlimit(old_limit)
+
+
+def deep(fn: Callable[P, T]) -> Callable[P, T]:
+    """The Python API's entry points (afsmc.compiler.load, afsmc.verify.run and sweep) run
+    with the room the commands have, so deep expressions work there too."""
+    @functools.wraps(fn)
+    def wrapper(*args: P.args, **kwargs: P.kwargs) -> T:
+        return run_deep(lambda: fn(*args, **kwargs))
+    return wrapper

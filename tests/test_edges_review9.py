@@ -54,6 +54,42 @@ def test_a_2000_term_expression_verifies(long_file: Path) -> None:
     assert values["p"]["value"] == pytest.approx(1 - 0.5 ** 5)
 
 
+def test_the_python_api_takes_deep_expressions_as_the_commands_do(long_file: Path) -> None:
+    # load, run and sweep have the commands' room for deep expressions (the grammar fuzzer
+    # found a RecursionError in load on a mutated 5050-level case cut below the limit).
+    import sys
+    import threading
+
+    from afsmc.compiler import load
+    from afsmc.verify import run, sweep
+
+    limit = sys.getrecursionlimit()
+    text = "machine m;\nmode S = 0 initial;\nmode D = 1 final;\naction Go in S weight (" \
+        + "- " * (MAX_DEPTH - 10) + "1) { goto D; }\n"
+    assert load("deep.afsm", text=text).model is not None
+    res = run(str(long_file), via="jani")
+    assert res.property("p").value == pytest.approx(1 - 0.5 ** 5)
+    fig = sweep(str(long_file), "bound", [1, 2], kind="bound", properties=["p"], jobs=1)
+    assert fig.curve("p", "value") == pytest.approx([0.5, 0.75])
+    assert sys.getrecursionlimit() == limit  # given back afterwards
+
+    # On another thread the limits stay as they are, since a thread's stack cannot grow:
+    # the file may fail there with a RecursionError, but the process must not crash.
+    seen: list[BaseException | None] = []
+
+    def other() -> None:
+        try:
+            load("deep.afsm", text=text)
+            seen.append(None)
+        except RecursionError as exc:
+            seen.append(exc)
+
+    t = threading.Thread(target=other)
+    t.start()
+    t.join()
+    assert len(seen) == 1
+
+
 def test_an_expression_deeper_than_the_limit_is_a_diagnostic(tmp_path: Path) -> None:
     path = tmp_path / "deep.afsm"
     path.write_text(_long(MAX_DEPTH + 5), encoding="utf-8")

@@ -26,6 +26,7 @@ from afsmc.model.names import did_you_mean
 from afsmc.model.pretty import show
 from afsmc.model.reduce import Reductions
 from afsmc.model.semantics import inline
+from afsmc.stack import deep
 from afsmc.syntax.parser import parse, parse_property
 from afsmc.verify.guard import (
     Interrupted,
@@ -859,6 +860,7 @@ def check(model: ir.Model, props: Sequence[ir.Property], *, via: Via = "prism",
     return Checks(stats[0], stats[1] if len(stats) > 1 else None, results)
 
 
+@deep
 def run(path: str, *, consts: Mapping[str, str] | None = None, properties: Sequence[str] = (),
         formulas: Sequence[str] = (), via: Via = "prism", engine: Engine = "sparse",
         max_states: int | None = None, uniform: bool = True, isolate: bool | None = None,

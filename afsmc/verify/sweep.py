@@ -26,6 +26,7 @@ from afsmc.model import expr as E
 from afsmc.model import ir
 from afsmc.model.lower import lower
 from afsmc.model.reduce import Reductions
+from afsmc.stack import deep
 from afsmc.verify.core import PropertyResult, check, load_with_formulas, select, shown
 from afsmc.verify.guard import Progress
 from afsmc.verify.storm import Engine, Via, finite
@@ -406,6 +407,7 @@ def _chunks(xs: Sequence[Number], n: int) -> list[tuple[Number, ...]]:
     return [tuple(xs[i:i + size]) for i in range(0, len(xs), size)]
 
 
+@deep
 def sweep(path: str, variable: str, values: Sequence[Number], *, kind: Kind = "const",
           consts: dict[str, str] | None = None, properties: Sequence[str] = (),
           formulas: Sequence[str] = (), via: Via = "prism", engine: Engine = "sparse",
