@@ -54,6 +54,15 @@ def test_a_2000_term_expression_verifies(long_file: Path) -> None:
     assert values["p"]["value"] == pytest.approx(1 - 0.5 ** 5)
 
 
+def test_a_2000_term_expression_sweeps_in_worker_processes(long_file: Path) -> None:
+    # Each worker process gives deep expressions the room one process has (was E114).
+    r = run_cli("sweep", str(long_file), "--bound", "1:2:1", "-p", "p", "--jobs", "2",
+                "--json")
+    assert r.code == 0, r.err[-2000:]
+    points = json.loads(r.out)["points"]
+    assert [pt["properties"][0]["value"] for pt in points] == pytest.approx([0.5, 0.75])
+
+
 def test_the_python_api_takes_deep_expressions_as_the_commands_do(long_file: Path) -> None:
     # load, run and sweep have the commands' room for deep expressions (the grammar fuzzer
     # found a RecursionError in load on a mutated 5050-level case cut below the limit).

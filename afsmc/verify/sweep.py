@@ -148,6 +148,7 @@ def _with_bound(p: ir.Property, k: int, name: str) -> ir.Property:
                                text=text, bound_site=None)
 
 
+@deep  # in a worker process too: deep expressions get the room they have in one process
 def evaluate(task: Task) -> tuple[list[SweepPoint], list[Diagnostic]]:
     """Run one task; failures are returned (diagnostics pickle, CompileError does not)."""
     try:
