@@ -193,16 +193,7 @@ def _call(e: Call, env: Env) -> Array:
             return np.power(np.asarray(args[0], dtype=np.int64), exp.astype(np.int64))
         return np.power(np.asarray(args[0], dtype=float), exp)
     if f == "mod":
-        a, d = args
-        r = np.asarray(d)
-        if r.ndim == 0 and np.ndim(a) == 0:
-            if r == 0:
-                raise EvalError("mod by zero")
-            return storm_mod(a, d)
-        zero = r == 0
-        if not np.any(zero):
-            return storm_mod(a, d)
-        return np.where(zero, np.nan, storm_mod(a, np.where(zero, 1, r)))  # see _masked
+        return _masked(storm_mod, args[0], args[1], "mod by zero")
     raise EvalError(f"unknown function {f}")
 
 
@@ -231,9 +222,8 @@ def _masked(fn: Any, left: Array, right: Array, what: str) -> Array:
     zero = r == 0
     if not np.any(zero):
         return fn(left, right)
-    out = np.full(np.broadcast(np.asarray(left), r).shape, np.nan)
-    fn(left, r, out=out, where=~zero)
-    return out
+    # `fn` sees 1 where `right` is 0, so it needs no ufunc `where=` (storm_mod has none)
+    return np.where(zero, np.nan, fn(left, np.where(zero, 1, r)))
 
 
 def _to_int(v: Array) -> Array:
