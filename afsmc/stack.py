@@ -61,8 +61,9 @@ def run_deep(fn: Callable[[], T]) -> T:
 
 
 def deep(fn: Callable[P, T]) -> Callable[P, T]:
-    """The Python API's entry points (afsmc.compiler.load, afsmc.verify.run and sweep) run
-    with the room the commands have, so deep expressions work there too."""
+    """The Python API's entry points (afsmc.compiler.load, afsmc.verify.run and sweep) and
+    a sweep's worker task run with the room the commands have, so deep expressions work
+    there too."""
     @functools.wraps(fn)
     def wrapper(*args: P.args, **kwargs: P.kwargs) -> T:
         return run_deep(lambda: fn(*args, **kwargs))
