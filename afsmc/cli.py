@@ -10,8 +10,11 @@ import argparse
 import importlib
 import json
 import shlex
+import signal
 import sys
+import threading
 from collections.abc import Sequence
+from typing import Any
 
 from afsmc import __version__
 from afsmc.diagnostics import CompileError, Diagnostic, Severity
@@ -102,10 +105,12 @@ def main(argv: Sequence[str] | None = None) -> int:
     if not getattr(args, "command", None):
         parser.print_help(sys.stderr)
         return 2
+    previous = _on_sigterm()
     try:
         code: int = run_deep(lambda: _run(args))
     except KeyboardInterrupt as exc:
-        print("afsmc: interrupted", file=sys.stderr)
+        terminated = _by_sigterm(exc)
+        print("afsmc: terminated" if terminated else "afsmc: interrupted", file=sys.stderr)
         notes = list(getattr(exc, "__notes__", []))  # e.g. the values verify had by then
         for note in notes:
             print(f"afsmc: {note}", file=sys.stderr)
@@ -113,10 +118,40 @@ def main(argv: Sequence[str] | None = None) -> int:
             # --json promises one JSON object on stdout, a Ctrl-C included
             print(json.dumps({"interrupted": True, "diagnostics": [
                 {"code": "N412", "severity": "note", "message": n} for n in notes]}, indent=2))
-        return 130
+        return 128 + signal.SIGTERM if terminated else 130
     except BrokenPipeError:
         return 0
+    finally:
+        if previous is not None:
+            signal.signal(signal.SIGTERM, previous)
     return code
+
+
+class Terminated(KeyboardInterrupt):
+    """SIGTERM (`kill`, a CI timeout): stop as for a Ctrl-C, so that the Storm process is
+    stopped and the answers verify had by then are printed, not lost."""
+
+
+def _by_sigterm(exc: BaseException) -> bool:
+    """Was this interrupt a SIGTERM? (The guard re-raises it as its own Interrupted.)"""
+    seen: BaseException | None = exc
+    while seen is not None:
+        if isinstance(seen, Terminated):
+            return True
+        seen = seen.__cause__ or seen.__context__
+    return False
+
+
+def _raise_terminated(signum: int, frame: object) -> None:
+    raise Terminated
+
+
+def _on_sigterm() -> Any:
+    """Handle SIGTERM like SIGINT while a command runs; returns the handler to restore
+    (None where Python lets only the main thread set one)."""
+    if threading.current_thread() is not threading.main_thread():
+        return None
+    return signal.signal(signal.SIGTERM, _raise_terminated)
 
 
 if __name__ == "__main__":

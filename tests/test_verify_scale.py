@@ -576,6 +576,68 @@ def test_a_real_ctrl_c_stops_the_watched_storm_process(tmp_path: Path) -> None:
         raise AssertionError(f"processes of the group outlived the interrupt:\n{ps}")
 
 
+def _group_ends(pgid: int, seconds: float = 10.0) -> None:
+    """Wait for every process of the group to end; fail with their list if they do not."""
+    import os
+    import subprocess
+    import time
+
+    deadline = time.monotonic() + seconds  # multiprocessing's resource tracker ends on its own
+    while time.monotonic() < deadline:
+        try:
+            os.killpg(pgid, 0)
+        except ProcessLookupError:
+            return
+        time.sleep(0.2)
+    ps = subprocess.run(["ps", "-o", "pid,args", "-g", str(pgid)], text=True,
+                        capture_output=True).stdout
+    os.killpg(pgid, 9)
+    raise AssertionError(f"processes of the group outlived afsmc:\n{ps}")
+
+
+def _verify_building(tmp_path: Path) -> subprocess.Popen[str]:
+    """`afsmc verify` on an instance big enough for the guard's child, once it builds."""
+    import subprocess
+    import sys
+
+    argv = [sys.executable, "-m", "afsmc", "verify", UAV, "--json", "--progress",
+            "--const", "WIDTH=5,HEIGHT=5,OBJECTS=2,T_LIMIT=400"]
+    proc = subprocess.Popen(argv, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                            start_new_session=True, cwd=str(tmp_path))
+    assert proc.stderr is not None
+    for line in proc.stderr:  # the child has started once it reports its build
+        if "building the MDP" in line:
+            break
+    return proc
+
+
+def test_a_killed_afsmc_leaves_no_storm_process_behind(tmp_path: Path) -> None:
+    # SIGKILL to afsmc alone (no handler runs): its Storm child must not go on for an hour.
+    import os
+    import signal
+
+    proc = _verify_building(tmp_path)
+    os.kill(proc.pid, signal.SIGKILL)
+    proc.communicate(timeout=60)
+    assert proc.returncode == -signal.SIGKILL
+    _group_ends(proc.pid)
+
+
+def test_sigterm_stops_verify_like_a_ctrl_c(tmp_path: Path) -> None:
+    # `kill PID` (a CI timeout, a batch system): one JSON object, the Storm process stopped,
+    # exit 128 + 15 as a shell reports a SIGTERM.
+    import os
+    import signal
+
+    proc = _verify_building(tmp_path)
+    os.kill(proc.pid, signal.SIGTERM)
+    out, err = proc.communicate(timeout=60)
+    assert proc.returncode == 143, err
+    assert json.loads(out)["interrupted"] is True
+    assert "Traceback" not in err and "afsmc: terminated" in err
+    _group_ends(proc.pid)
+
+
 def test_progress_lines_thin_out_as_a_phase_goes_on() -> None:
     # An hour's check would otherwise log a line every 5 s (700 lines).
     from afsmc.verify.guard import report_interval

@@ -9,6 +9,7 @@ order, so an estimate never depends on how many workers computed it.
 from __future__ import annotations
 
 import math
+import os
 import sys
 import time
 from collections.abc import Callable, Mapping
@@ -18,6 +19,7 @@ from typing import Any, Literal
 import numpy as np
 
 from afsmc.compiler import load
+from afsmc.lifetime import die_with_parent
 from afsmc.model.lower import lower
 from afsmc.sim import stats
 from afsmc.sim.engine import BatchResult, Program, build, simulate_batch
@@ -121,7 +123,8 @@ def simulate(job: Job, runs: int, seed: int, *, confidence: float = 0.999, jobs:
         from concurrent.futures import as_completed as cf_completed
 
         ctx = multiprocessing.get_context("fork" if sys.platform == "linux" else "spawn")
-        with ProcessPoolExecutor(max_workers=jobs, mp_context=ctx) as pool:
+        with ProcessPoolExecutor(max_workers=jobs, mp_context=ctx, initializer=die_with_parent,
+                                 initargs=(os.getpid(),)) as pool:
             futs = {pool.submit(run_batch, job, n, s, trace if i == 0 else 0): i
                     for i, (n, s) in enumerate(plan)}
             for f in cf_completed(futs):

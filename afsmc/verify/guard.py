@@ -22,6 +22,7 @@ from dataclasses import replace
 from decimal import Decimal
 from typing import Any
 
+from afsmc.lifetime import die_with_parent
 from afsmc.model import ir
 from afsmc.verify.storm import DD_MEMORY_RETRY, Job, JobResult, StormFailure, execute
 
@@ -113,10 +114,11 @@ def _vmsize() -> int | None:
     return None
 
 
-def _child(conn: Any, job: Job, address_limit: int | None) -> None:
+def _child(conn: Any, job: Job, address_limit: int | None, parent: int) -> None:
     """Runs in the child: report readiness and memory baseline, then the job's events."""
     import resource
 
+    die_with_parent(parent)
     # A Ctrl-C reaches the whole process group: the parent stops this child and reports
     # what it had; the child's own KeyboardInterrupt would only print a traceback.
     signal.signal(signal.SIGINT, signal.SIG_IGN)
@@ -205,7 +207,8 @@ def _run_isolated(job: Job, progress: Progress | None, every: float,
     if job.engine == "sparse":
         # Symbolic engines reserve large address ranges up front (Sylvan), so only sparse.
         address_limit = max(2 << 30, 3 * (budget or 0), cap or 0)
-    proc = ctx.Process(target=_child, args=(child_end, job, address_limit), daemon=True)
+    proc = ctx.Process(target=_child, args=(child_end, job, address_limit, os.getpid()),
+                       daemon=True)
     proc.start()
     child_end.close()
     start = time.monotonic()
@@ -304,7 +307,8 @@ def _run_isolated(job: Job, progress: Progress | None, every: float,
                      elapsed=time.monotonic() - start,
                      engine=engine, failure=StormFailure(
         "memory" if code is not None and code < 0 else "internal",
-        f"the Storm process building the {job.what} {why}{gb}")), code
+        f"the Storm process {'checking' if phase.startswith('check') else 'building'} the "
+        f"{job.what} {why}{gb}")), code
 
 
 def run_job(job: Job, bound: int, *, isolate: bool | None, progress: Progress | None) -> JobResult:

@@ -22,6 +22,7 @@ from typing import Any, Literal
 from afsmc.backends.prism import emit as prism_emit
 from afsmc.compiler import read_source, write_atomic
 from afsmc.diagnostics import CompileError, Diagnostic, Severity
+from afsmc.lifetime import die_with_parent
 from afsmc.model import expr as E
 from afsmc.model import ir
 from afsmc.model.lower import lower
@@ -535,7 +536,8 @@ def _run(tasks: list[Task], jobs: int, dask: Any, progress: Progress | None, tot
         import multiprocessing
 
         ctx = multiprocessing.get_context("spawn")  # safe even if the caller has threads
-        with ProcessPoolExecutor(max_workers=min(jobs, len(tasks)), mp_context=ctx) as pool:
+        with ProcessPoolExecutor(max_workers=min(jobs, len(tasks)), mp_context=ctx,
+                                 initializer=die_with_parent, initargs=(os.getpid(),)) as pool:
             futs = {pool.submit(evaluate, t): i for i, t in enumerate(tasks)}
             for f in as_completed(futs):
                 done(futs[f], f.result())
