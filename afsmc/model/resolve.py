@@ -107,6 +107,9 @@ class _Resolver:
         self.formula_depth: dict[str, int] = {}  # inlined (E246)
         self.reward_structs: dict[str, ir.RewardStruct] = {}
         self.action_names: dict[str, Span] = {}
+        # probabilistic hazards: a branch of each action of their modes, not an action with
+        # a weight or a PRISM command of its own (E248)
+        self.branch_hazards: set[str] = set()
         self.label_names: dict[str, Span] = {}
         self.reward_names: dict[str, Span] = {}
         # one namespace for everything an expression can name
@@ -169,6 +172,8 @@ class _Resolver:
                 self._declare_value(d.name, "formula")
             elif isinstance(d, (ast.ActionDecl, ast.HazardDecl)):
                 self._declare_in(self.action_names, d.name, "action")
+                if isinstance(d, ast.HazardDecl) and d.kind == "probabilistic":
+                    self.branch_hazards.add(d.name.text)
             elif isinstance(d, ast.LabelDecl):
                 self._declare_in(self.label_names, d.name, "label")
             elif isinstance(d, ast.RewardsDecl):
@@ -534,6 +539,9 @@ class _Resolver:
         if isinstance(e, ast.Name):
             return self._name(e.name, ctx, s)
         if isinstance(e, ast.FieldRef):
+            if not ctx.state and self.value_names.get(e.base.text, (None,))[0] == "variable":
+                # a constant: the tuples are not resolved yet, and no field could be used
+                return self._var("", ctx, s, f"{e.base.text}.{e.field.text}")
             if e.base.text not in self.tuples:
                 if e.base.text in self.value_names:
                     self.rep.error("E223", f"'{e.base.text}' has no fields", e.span)
@@ -544,7 +552,8 @@ class _Resolver:
                 self.rep.error("E223", f"'{e.base.text}' has no field '{e.field.text}'", e.field.span,
                                hint=did_you_mean(e.field.text, self.tuples[e.base.text]))
                 return E.Lit(0, Type.INT, s)
-            return self._var(f"{e.base.text}_{e.field.text}", ctx, s)
+            return self._var(f"{e.base.text}_{e.field.text}", ctx, s,
+                             f"{e.base.text}.{e.field.text}")
         if isinstance(e, ast.ModeRef):
             if not ctx.state:
                 self.rep.error("E224", f"{ctx.what} cannot depend on the mode", s)
@@ -654,7 +663,7 @@ class _Resolver:
                 self.rep.error("E230", f"'{n}' is a tuple; name a field, e.g. {n}.{self.tuples[n][0]}",
                                s)
                 return E.Lit(0, Type.INT, s)
-            return self._var(n, ctx, s)
+            return self._var(n, ctx, s, n)
         if kind == "mode":
             mode = self.modes.get(n)
             return E.ModeVal(n, mode.number if mode else 0, s)
@@ -667,12 +676,15 @@ class _Resolver:
             return E.Lit(0, Type.INT, s)
         return E.FormulaRef(n, f.value.type, s)
 
-    def _var(self, flat: str, ctx: Ctx, s: Span) -> E.Expr:
+    def _var(self, flat: str, ctx: Ctx, s: Span, display: str) -> E.Expr:
+        # Before the variables are resolved (constants come first), and for a variable with
+        # errors, `self.vars` lacks it: E224 must not depend on that.
+        if not ctx.state:
+            self.rep.error("E224", f"{ctx.what} cannot depend on variable '{display}'", s)
+            return E.Lit(0, Type.INT, s)
         v = self.vars.get(flat)
         if v is None:  # a variable with errors
             return E.Lit(0, Type.INT, s)
-        if not ctx.state:
-            self.rep.error("E224", f"{ctx.what} cannot depend on variable '{v.display}'", s)
         return E.VarRef(flat, v.type, s)
 
     def _call(self, e: ast.Call, ctx: Ctx) -> E.Expr:
@@ -689,6 +701,11 @@ class _Resolver:
             if target.text not in self.action_names:
                 self.rep.error("E203", f"'{target.text}' is not an action", target.span,
                                hint=did_you_mean(target.text, self.action_names))
+                return E.Lit(0, Type.INT, s)
+            if target.text in self.branch_hazards:
+                self.rep.error("E248", f"'{target.text}' is a probabilistic hazard: it has no "
+                               "weight, it is a branch of every action of its modes", target.span,
+                               hint="w(...) names an action or a hazard with a condition (when)")
                 return E.Lit(0, Type.INT, s)
             return E.WeightRef(target.text, s)
         if f not in E.FUNCTIONS:
@@ -873,6 +890,12 @@ class _Resolver:
             if it.action is not None and it.action.text not in self.action_names:
                 self.rep.error("E203", f"'{it.action.text}' is not an action", it.action.span,
                                hint=did_you_mean(it.action.text, self.action_names))
+            elif it.action is not None and it.action.text in self.branch_hazards:
+                self.rep.error("E248", f"an action reward cannot name the probabilistic hazard "
+                               f"'{it.action.text}': it is a branch of every action of its "
+                               "modes, and an action reward counts whole actions",
+                               it.action.span, hint="reward the hazard's target mode with a state "
+                               "reward, e.g. 'mode == Target : 1'")
             guard = self._bool(it.guard, Ctx("a reward's condition"))
             value = self._num(it.value, Ctx("a reward"))
             items.append(ir.RewardItem(it.action.text if it.action else None, guard, value, it.span))

@@ -344,6 +344,9 @@ def failure_diagnostic(f: StormFailure, model: ir.Model, low: Lowered,
     if engine_hint and prop is not None and _total_reward(prop):
         engine_hint = ("use a step bound (C<=k) or R [ F target ]; --engine sparse checks "
                        "R [ C ] where the machine has the memory")
+    elif engine_hint and prop is not None and symbolic_gap(prop, model, job.engine):
+        engine_hint = ("--engine dd checks it (slowly), --engine sparse where the machine has "
+                       "the memory")
     elif engine_hint and job.via == "jani" and prop is not None and isinstance(prop.path, ir.Path) \
             and prop.path.kind == "X":
         # JANI writes X as a step-bounded until ([1, 1]), which only Storm's sparse engine
@@ -593,18 +596,47 @@ def _total_reward(p: ir.Property) -> bool:
     return isinstance(p.path, ir.RewardPath) and p.path.kind == "C" and p.path.bound is None
 
 
-def _refuse_total_rewards(props: Sequence[ir.Property], engine: Engine) -> None:
-    """E404 before any build: Storm's symbolic engines return no result for an unbounded
-    total reward `R [ C ]` (docs/verification.md), which they would say only after building.
-    ("auto" learns its engine in the Storm process: Job.symbolic_refused.)"""
+def _bounded_state_cumulative(p: ir.Property, model: ir.Model) -> bool:
+    """`R [ C<=k ]` of a structure with state rewards on an MDP: Storm's hybrid engine
+    returns a wrong minimum for it (the reward of the first step only; sparse and dd are
+    right, and so is hybrid on a DTMC or with action rewards only)."""
+    if not (model.is_nondeterministic and isinstance(p.path, ir.RewardPath)
+            and p.path.kind == "C" and p.path.bound is not None):
+        return False
+    rs = next((r for r in model.rewards if r.name == p.reward), None)
+    return rs is None or any(it.action is None for it in rs.items)
+
+
+def symbolic_gap(p: ir.Property, model: ir.Model, engine: Engine) -> str | None:
+    """Why Storm's `engine` (hybrid, dd; "auto" if it may pick hybrid) cannot be trusted
+    with `p`, or None."""
+    if engine not in ("hybrid", "dd", "auto"):
+        return None
+    if _total_reward(p):
+        return "an unbounded total reward (R [ C ]): Storm returns no result for it"
+    if engine != "dd" and _bounded_state_cumulative(p, model):
+        return ("a step-bounded cumulative reward (R [ C<=k ]) of state rewards on an MDP: "
+                "Storm's hybrid engine gets its minimum wrong")
+    return None
+
+
+def _refuse_symbolic(props: Sequence[ir.Property], model: ir.Model, engine: Engine) -> None:
+    """E404 before any build, for what Storm's symbolic engines cannot check (symbolic_gap),
+    which they would say only after building, or not at all. ("auto" learns its engine in
+    the Storm process: Job.symbolic_refused.)"""
     if engine not in ("hybrid", "dd"):
         return
-    bad = [p for p in props if _total_reward(p)]
+    bad = [(p, why) for p in props if (why := symbolic_gap(p, model, engine)) is not None]
     if bad:
         raise CompileError([Diagnostic(
-            "E404", Severity.ERROR, f"the {engine} engine cannot check the total reward "
-            f"'{p.name}' (R [ C ], unbounded): Storm returns no result for it", p.span,
-            hint="use --engine sparse, a step bound (C<=k), or R [ F target ]") for p in bad])
+            "E404", Severity.ERROR, f"the {engine} engine cannot check '{p.name}', {why}",
+            p.span, hint=_symbolic_hint(p)) for p, why in bad])
+
+
+def _symbolic_hint(p: ir.Property) -> str:
+    if _total_reward(p):
+        return "use --engine sparse, a step bound (C<=k), or R [ F target ]"
+    return "use --engine sparse or --engine dd"
 
 
 def check(model: ir.Model, props: Sequence[ir.Property], *, via: Via = "prism",
@@ -643,7 +675,7 @@ def check(model: ir.Model, props: Sequence[ir.Property], *, via: Via = "prism",
     preserve = [dual(p) if _bounded_g(p) else p for p in preserve]
     bound = upper_bound(model)
     engine, reason = choose_engine(engine, bound)
-    _refuse_total_rewards(props, engine)
+    _refuse_symbolic(props, model, engine)
     # Only the hybrid engine needs them ("auto" may still pick it after counting states).
     comp = complements(model, props) if engine in ("hybrid", "auto") else {}
     model = dataclasses.replace(model, properties=tuple(props) + tuple(
@@ -720,7 +752,7 @@ def check(model: ir.Model, props: Sequence[ir.Property], *, via: Via = "prism",
             if job_engine == "hybrid":
                 # "auto" picked hybrid in an earlier process (--split): refuse before building
                 try:
-                    _refuse_total_rewards(group, job_engine)
+                    _refuse_symbolic(group, model, job_engine)
                 except CompileError as exc:
                     raise CompileError([*exc.diagnostics, *kept(what, vals)]) from None
             limit = max_states if max_states is not None else (
@@ -738,7 +770,7 @@ def check(model: ir.Model, props: Sequence[ir.Property], *, via: Via = "prism",
                 job = dataclasses.replace(job, all_states=True)
             if job_engine == "auto":
                 job = dataclasses.replace(job, symbolic_refused=tuple(
-                    n for p, n in unit if _total_reward(p)))
+                    n for p, n in unit if symbolic_gap(p, model, "auto") is not None))
             complementary = any(n.startswith(REST) for _, n in unit) and all(
                 n.startswith(REST) or n == TERMINATES for _, n in unit)
             # The probabilities' process (its complementary targets need the larger tables;

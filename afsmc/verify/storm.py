@@ -59,8 +59,8 @@ class Job:
     # its target states absorbing (fewer states, same answer), so the states reported would
     # depend on how many properties a process checks (a sweep's chunks, --jobs).
     all_states: bool = False
-    # Queries Storm's symbolic engines give no result for (an unbounded total reward): if
-    # "auto" picks hybrid, the process fails on them at once, before checking any query.
+    # Queries Storm's hybrid engine gives no result, or a wrong one, for (core.symbolic_gap):
+    # if "auto" picks hybrid, the process fails on them at once, before checking any query.
     symbolic_refused: tuple[str, ...] = ()
 
     @property
@@ -243,8 +243,8 @@ def _execute(job: Job, notify: Notify) -> JobResult:
                         res.failure = StormFailure(
                             "check", f"its {res.states:,} states are too many for the "
                             f"sparse engine (about {need / 1e9:.1f} GB as sparse matrices), "
-                            "and the hybrid engine cannot check an unbounded total reward "
-                            "R [ C ]",
+                            "and the hybrid engine cannot check this property "
+                            "(docs/verification.md, \"Engines and routes\")",
                             prop=refused[0])
                         return res
         else:
