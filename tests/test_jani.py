@@ -330,3 +330,54 @@ def test_next_via_jani_on_a_symbolic_engine_says_to_use_prism(tmp_path: Path) ->
         ok = run_cli("verify", str(model), *argv, "--json")
         assert ok.code == 0, ok.err
         assert json.loads(ok.out)["properties"][0]["value"] == pytest.approx(0.3)
+
+
+NEVER_ASSIGNED = """machine cv;
+var cfg : [0..2] init 1;
+var n : [0..3] init 0;
+mode A = 0 initial;
+mode E = 1 final;
+action Go in A when n < 3 { 0.5: n := n + 1; 0.5: skip; }
+action Fin in A when n == 3 { goto E; }
+rewards r { cfg == 1 : 1; }
+property g  = P=? [ G cfg == 1 ];
+property f  = P=? [ F mode == E && cfg == 1 ];
+property rf = R{"r"}=? [ F cfg == 1 ];
+"""
+
+ONE_MODE = """machine fi;
+var x : [0..2] init 1;
+mode A = 0 initial final;
+rewards r { x == 1 : 2; }
+property c = R{"r"}=? [ C<=5 ];
+property i = R{"r"}=? [ I=3 ];
+property g = P=? [ G x == 1 ];
+"""
+
+
+@pytest.mark.parametrize("text", [NEVER_ASSIGNED, ONE_MODE], ids=["never-assigned", "one-mode"])
+def test_variables_that_never_change_give_the_same_values_via_jani(
+        text: str, tmp_path: Path) -> None:
+    # Storm's JANI builder drops a variable that no edge assigns and then evaluated `G cfg == 1`
+    # as 0 (and the reward as infinite); afsmc writes such variables as JANI constants.
+    path = tmp_path / "m.afsm"
+    path.write_text(text, encoding="utf-8")
+    got = {}
+    for via in ("prism", "jani"):
+        r = run_cli("verify", str(path), "--via", via, "--engine", "sparse", "--json")
+        assert r.code == 0, r.err
+        got[via] = {p["name"]: p["value"] for p in json.loads(r.out)["properties"]}
+    assert got["jani"] == pytest.approx(got["prism"])
+    assert got["jani"]["g"] == 1.0, got  # the variable keeps its initial value by construction
+
+
+def test_a_model_whose_variables_never_change_is_refused_by_the_symbolic_engines(
+        tmp_path: Path) -> None:
+    # Storm's symbolic build counts no state for it, and its hybrid engine then died with a
+    # segmentation fault on C<=k and I=k (exit 139, no diagnostic).
+    path = tmp_path / "m.afsm"
+    path.write_text(ONE_MODE, encoding="utf-8")
+    for engine in ("hybrid", "dd"):
+        r = run_cli("verify", str(path), "--engine", engine, "-p", "c")
+        assert r.code == 1 and "error[E403]" in r.err and "no states" in r.err, r.err
+        assert "--engine sparse" in r.err

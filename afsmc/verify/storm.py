@@ -260,6 +260,13 @@ def _execute(job: Job, notify: Notify) -> JobResult:
     res.choices = int(getattr(model, "nr_choices", res.transitions) or 0) if not symbolic else 0
     res.kind = "mdp" if str(model.model_type).upper().endswith("MDP") else "dtmc"
     notify("built", (res.states, res.transitions, res.build_time))
+    if symbolic and res.states == 0:
+        # A model whose variables all keep their values: Storm's symbolic builder counts no
+        # state, and its hybrid engine then crashes (segmentation fault) on some properties.
+        res.failure = StormFailure("build", f"Storm's symbolic build of the {job.what} has no "
+                                   "states (no variable ever changes its value, which Storm's "
+                                   "decision diagrams do not represent)")
+        return res
     if job.max_states is not None and res.states > job.max_states:
         res.failure = StormFailure("too-big", f"the {job.what} has {res.states:,} states, more "
                                    f"than --max-states {job.max_states:,}", states=res.states)
