@@ -217,3 +217,12 @@ def test_numbers_on_the_command_line_are_written_as_in_the_language(
     assert r.code == 1 and f"error[E208]: --const {name}={value}: not a" in r.err, r.err
     for ok in ("N=+3", "D=.5", "D=5e-1", "D=0."):
         assert run_cli("check", str(path), "--const", ok).code == 0, ok
+
+
+def test_compile_to_an_empty_output_name_is_a_usage_error(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    # `-o ''` wrote ./.prism and ./.props, hidden files named by the suffix alone.
+    monkeypatch.chdir(tmp_path)
+    r = run_cli("compile", str(EXAMPLES / "patrol.afsm"), "-o", "")
+    assert r.code == 2 and "-o: an empty name" in r.err, r.err
+    assert list(tmp_path.iterdir()) == []

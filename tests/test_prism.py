@@ -216,3 +216,16 @@ def test_an_empty_reward_structure_is_zero(tmp_path: Path, via: str, engine: str
     path.write_text(EMPTY_REWARDS)
     res = run(str(path), via=via, engine=engine)  # type: ignore[arg-type]
     assert {p.name: p.value for p in res.properties} == {"q": 0.0, "c": 0.0}
+
+
+def test_the_smallest_64_bit_int_is_prism_that_storm_reads(tmp_path: Path) -> None:
+    # Storm's PRISM parser reads -9223372036854775808 as minus an overflowing literal (E411);
+    # afsmc writes it as (-9223372036854775807 - 1). Both routes agree, and x > K holds.
+    path = tmp_path / "m.afsm"
+    path.write_text("machine m;\nmode A = 0 initial final;\nconst int K = -9223372036854775808;\n"
+                    "var x : [-9223372036854775808..1] init 0;\nlabel l = x > K;\n"
+                    'property p = P=? [ F "l" ];\n', encoding="utf-8")
+    for via in ("prism", "jani"):
+        r = run_cli("verify", str(path), "--via", via, "--json")
+        assert r.code == 0, r.err
+        assert json.loads(r.out)["properties"][0]["value"] == 1.0

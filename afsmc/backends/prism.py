@@ -38,11 +38,24 @@ class PrismPrinter(Printer):
         return super().show(e if safe is None else safe, ctx)
 
     def atom(self, e: E.Expr) -> str:
+        if isinstance(e, E.Lit):
+            return pnum(e.value)
         if isinstance(e, E.ModeVal):
-            return str(e.number)
+            return pnum(e.number)
         if isinstance(e, E.WeightRef):
             return self.weight_names[e.action]
         return super().atom(e)
+
+
+INT64_MIN = -(2**63)
+
+
+def pnum(v: int | float | bool) -> str:
+    """A number as PRISM reads it: Storm's parser takes the literal without its sign, so
+    -2^63 overflows as written ("expecting <no 64-bit integer overflow>")."""
+    if isinstance(v, int) and not isinstance(v, bool) and v == INT64_MIN:
+        return f"({INT64_MIN + 1} - 1)"
+    return number(v)
 
 
 def describe(cmd: Command, modes: str) -> str:
@@ -101,11 +114,11 @@ def emit(low: Lowered) -> PrismOutput:
     for c in consts:
         t = "int" if c.type is E.Type.INT else "double" if c.type is E.Type.DOUBLE else "bool"
         kind = "param, " if c.is_param else ""
-        w(f"const {t} {c.name} = {number(c.value)}; // {kind}{where(c.span)}")
+        w(f"const {t} {c.name} = {pnum(c.value)}; // {kind}{where(c.span)}")
     for gen, (src, value) in sorted(low.bounds.items(), key=lambda kv: (kv[1][0], kv[1][1])):
         c = model.constant(src)
         assert c.interval is not None
-        w(f"const int {gen} = {value}; // {src} in [{c.interval[0]}, {c.interval[1]}], "
+        w(f"const int {gen} = {pnum(value)}; // {src} in [{c.interval[0]}, {c.interval[1]}], "
           f"{where(c.span)}")
     if model.formulas:
         w("")
@@ -123,13 +136,14 @@ def emit(low: Lowered) -> PrismOutput:
     modes = ", ".join(f"{m.name}={m.number}" for m in model.modes)
     w(f"  // modes: {modes}")
     numbers = [m.number for m in model.modes]
-    w(f"  mode : [{min(numbers)}..{max(numbers)}] init {model.initial_mode.number};")
+    w(f"  mode : [{pnum(min(numbers))}..{pnum(max(numbers))}] init "
+      f"{pnum(model.initial_mode.number)};")
     for v in model.variables:
         note = f" // {v.display}, {where(v.span)}" + (", clamped" if v.clamp else "")
         if v.type is E.Type.BOOL:
             w(f"  {v.name} : bool init {number(bool(v.init))};{note}")
         else:
-            w(f"  {v.name} : [{v.lo}..{v.hi}] init {v.init};{note}")
+            w(f"  {v.name} : [{pnum(v.lo)}..{pnum(v.hi)}] init {pnum(v.init)};{note}")
     last = None
     for cmd in low.commands:
         if cmd.span != last:

@@ -17,6 +17,7 @@ from afsmc.commands.common import (
     overrides,
     reductions,
     report,
+    usage_error,
 )
 from afsmc.compiler import check_writable, load, lowered, write_atomic
 from afsmc.diagnostics import CompileError
@@ -63,6 +64,8 @@ def outputs_for(path: str, output: str | None, suffixes: list[str]) -> dict[str,
 
 
 def run(args: argparse.Namespace) -> int:
+    if args.output == "":
+        usage_error("-o: an empty name (give a directory, a file name, or '-' for stdout)")
     try:
         checked = load(args.file, overrides(args))
         report(checked.diagnostics)
