@@ -23,12 +23,7 @@ from afsmc.model.pretty import show
 from afsmc.model.resolve import INT64
 from afsmc.model.semantics import inline
 
-
-def _computed(n: E.Expr) -> bool:
-    """An integer the machine computes (not a variable, constant or literal, whose own
-    ranges are checked where they are declared)."""
-    return n.type is Type.INT and isinstance(n, (E.Unary, E.Binary, E.Call)) \
-        and not E.state_free(n)
+_STATE_FREE = (E.Lit, E.ConstRef, E.Unary, E.Binary, E.Ite, E.Call)
 
 
 def _beyond(lo: float, hi: float) -> float | None:
@@ -44,17 +39,28 @@ def check_overflow(model: ir.Model, rep: Reporter) -> None:
     reported: set[tuple[int, int] | int] = set()
     for site in sites(model):
         x = inline(site.expr, model)
-        # Inner parts first: an outer expression overflows because an inner one does.
+        # One pass, inner parts first (an outer expression overflows because an inner one
+        # does), with each node's facts computed from its children's: linear in the size
+        # of the expression (a 2000-term sum took 12 s when each node walked its subtree).
+        memo: dict[int, tuple[float, float]] = {}
+        free: dict[int, bool] = {}  # made of numbers and constants only
+        tainted: dict[int, bool] = {}  # holds a node already reported
         for n in reversed(list(E.walk(x))):
+            kids = E.children(n)
+            free[id(n)] = isinstance(n, _STATE_FREE) and all(free[id(c)] for c in kids)
             key = node_key(n)
-            if key in reported or not _computed(n):
+            below = key in reported or any(tainted[id(c)] for c in kids)
+            tainted[id(n)] = below
+            # An integer the machine computes (not a variable, constant or literal, whose
+            # own ranges are checked where they are declared).
+            if below or n.type is not Type.INT or free[id(n)] or not isinstance(
+                    n, (E.Unary, E.Binary, E.Call)):
                 continue
-            if any(node_key(m) in reported for m in E.walk(n)):
-                continue
-            end = _beyond(*bounds(n, model))
+            end = _beyond(*bounds(n, model, memo=memo))
             if end is None:
                 continue
             reported.add(key)
+            tainted[id(n)] = True
             ranges = ", ".join(f"{v.display} in [{v.lo}..{v.hi}]" for v in model.variables
                                if v.name in E.vars_read(n))
             rep.error("E307", f"{show(n)} can reach {end:.3g} ({ranges}), beyond a 64-bit "

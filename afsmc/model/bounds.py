@@ -12,9 +12,23 @@ Bounds = tuple[float, float]
 
 
 def bounds(e: E.Expr, model: ir.Model, env: dict[str, Bounds] | None = None,
-           generated: dict[str, tuple[str, int]] | None = None) -> Bounds:
+           generated: dict[str, tuple[str, int]] | None = None,
+           memo: dict[int, Bounds] | None = None) -> Bounds:
     """A conservative interval of the values of `e` over every state (interval arithmetic).
-    `generated`: the lowering's interval-bound constants (`Lowered.bounds`)."""
+    `generated`: the lowering's interval-bound constants (`Lowered.bounds`). `memo` (by node
+    identity; the nodes must outlive it): for a caller that asks for every subexpression of
+    one expression, so that this is linear rather than quadratic in its size."""
+    if memo is None:
+        return _bounds(e, model, env, generated, None)
+    got = memo.get(id(e))
+    if got is None:
+        got = memo[id(e)] = _bounds(e, model, env, generated, memo)
+    return got
+
+
+def _bounds(e: E.Expr, model: ir.Model, env: dict[str, Bounds] | None,
+            generated: dict[str, tuple[str, int]] | None,
+            memo: dict[int, Bounds] | None) -> Bounds:
     inf = float("inf")
     env = env if env is not None else {v.name: (float(v.lo), float(v.hi)) for v in model.variables}
     if isinstance(e, E.Lit):
@@ -32,14 +46,14 @@ def bounds(e: E.Expr, model: ir.Model, env: dict[str, Bounds] | None = None,
     if isinstance(e, E.VarRef):
         return env.get(e.name, (-inf, inf))
     if isinstance(e, E.FormulaRef):
-        return bounds(model.formula(e.name).value, model, env, generated)
+        return bounds(model.formula(e.name).value, model, env, generated, memo)
     if isinstance(e, E.ModeVal):
         return float(e.number), float(e.number)
     if isinstance(e, E.Unary) and e.op == "-":
-        lo, hi = bounds(e.operand, model, env, generated)
+        lo, hi = bounds(e.operand, model, env, generated, memo)
         return -hi, -lo
     if isinstance(e, E.Binary) and e.op in ("+", "-", "*"):
-        a, b = bounds(e.left, model, env, generated), bounds(e.right, model, env, generated)
+        a, b = bounds(e.left, model, env, generated, memo), bounds(e.right, model, env, generated, memo)
         if e.op == "+":
             return _sane(a[0] + b[0], a[1] + b[1])
         if e.op == "-":
@@ -47,21 +61,21 @@ def bounds(e: E.Expr, model: ir.Model, env: dict[str, Bounds] | None = None,
         prods = [x * y for x in a for y in b if not ((abs(x) == inf and y == 0) or (abs(y) == inf and x == 0))]
         return (min(prods), max(prods)) if prods else (-inf, inf)
     if isinstance(e, E.Ite):
-        a, b = bounds(e.then, model, env, generated), bounds(e.other, model, env, generated)
+        a, b = bounds(e.then, model, env, generated, memo), bounds(e.other, model, env, generated, memo)
         return min(a[0], b[0]), max(a[1], b[1])
     if isinstance(e, E.Call) and e.func in ("min", "max"):
-        parts = [bounds(x, model, env, generated) for x in e.args]
+        parts = [bounds(x, model, env, generated, memo) for x in e.args]
         pick = min if e.func == "min" else max
         lo, hi = pick(p[0] for p in parts), pick(p[1] for p in parts)
         if e.func == "max" and _is_abs(e):
             lo = max(lo, 0.0)  # max(a - b, b - a) = |a - b|
         return lo, hi
     if isinstance(e, E.Call) and e.func in ("floor", "ceil"):
-        lo, hi = bounds(e.args[0], model, env, generated)
+        lo, hi = bounds(e.args[0], model, env, generated, memo)
         return (float(math.floor(lo)) if math.isfinite(lo) else lo,
                 float(math.ceil(hi)) if math.isfinite(hi) else hi)
     if isinstance(e, E.Call) and e.func == "pow" and e.type is E.Type.INT:
-        (bl, bh), (kl, kh) = (bounds(x, model, env, generated) for x in e.args)
+        (bl, bh), (kl, kh) = (bounds(x, model, env, generated, memo) for x in e.args)
         if kl >= 0 and all(map(math.isfinite, (bl, bh, kl, kh))):
             return _int_pow(bl, bh, kl, kh)
     return -inf, inf
