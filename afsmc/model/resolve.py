@@ -60,6 +60,11 @@ def parse_override(text: str) -> tuple[str, str]:
 INT64 = (-(2**63), 2**63 - 1)
 _NUMBER = re.compile(r"[+-]?(?:[0-9]+(?:\.[0-9]*)?|\.[0-9]+)(?:[eE][+-]?[0-9]+)?")
 _NUMBERS_HINT = "PRISM and Storm compute with 64-bit integers and finite doubles"
+# What a variable (the mode included) may hold: Storm's explicit builder stored values
+# beyond this wrongly (x : [0..2^49] init 2^49 started elsewhere, so P [F x = 2^49] was 0),
+# and larger magnitudes were wrong even in small ranges (at 2^58).
+STATE_INT = (-(2**48), 2**48 - 1)
+_STATE_INT_HINT = "Storm's state encoding holds these wrongly; rescale the variable"
 
 
 def unrepresentable(v: Any) -> str | None:
@@ -324,6 +329,15 @@ class _Resolver:
         used: dict[int, ast.ModeDecl] = {}
         for d in decls:
             if d.number is not None:
+                why = unrepresentable(d.number)
+                if why is not None or not STATE_INT[0] <= d.number <= STATE_INT[1]:
+                    self.rep.error(
+                        "E245" if why is not None else "E249", f"mode number {d.number} " + (
+                            why or f"goes beyond what Storm stores in a state ({STATE_INT[0]}.."
+                            f"{STATE_INT[1]}, ±2^48)"), d.number_span or d.span,
+                        hint=_NUMBERS_HINT if why is not None else "number the modes with "
+                        "smaller numbers")
+                    continue  # numbered as if it had no number
                 if d.number in used:
                     self.rep.error("E212", f"mode number {d.number} is used twice",
                                    d.number_span or d.span,
@@ -443,6 +457,13 @@ class _Resolver:
         if lo > hi:
             self.rep.error("E219", f"range [{lo}..{hi}] of '{display}' is empty", t.span)
             hi = lo
+        if not (STATE_INT[0] <= lo and hi <= STATE_INT[1]):
+            self.rep.error("E249", f"range [{lo}..{hi}] of '{display}' goes beyond what Storm "
+                           f"stores in a state ({STATE_INT[0]}..{STATE_INT[1]}, ±2^48)", t.span,
+                           hint=_STATE_INT_HINT)
+            # go on with a range Storm holds, and no second error about the initial value
+            lo, hi = (min(max(v, STATE_INT[0]), STATE_INT[1]) for v in (lo, hi))
+            init = None
         iv = lo if init is None else self._const_value(init, Type.INT)
         if not isinstance(iv, int) or not lo <= iv <= hi:
             self.rep.error("E220", f"initial value {iv} of '{display}' is outside [{lo}..{hi}]",
