@@ -124,3 +124,17 @@ action Home in Back { goto Done; }
     model = load("num.afsm", text=text).model
     assert {m.name: m.number for m in model.modes} == {
         "Idle": 0, "Search": 1, "Back": 2, "Emerg": 3, "Carry": 5, "Done": 9}
+
+
+def test_two_operands_in_a_row_outside_a_property_are_not_called_nested_temporal(
+        tmp_path: Path) -> None:
+    # The parser state after `x` is the same in a label and after `F` in a property: E115
+    # only where a temporal operator stands before the failing token (it said E103 before).
+    from tests.conftest import run_cli
+
+    path = tmp_path / "m.afsm"
+    path.write_text('machine m;\nmode A = 0 initial;\nvar x : [0..1];\nlabel a = x "l";\n',
+                    encoding="utf-8")
+    r = run_cli("check", str(path))
+    assert r.code == 1 and "error[E101]: unexpected" in r.err, r.err
+    assert "E115" not in r.err and "E103" not in r.err

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import re
 from collections.abc import Iterator
 from dataclasses import dataclass, field
 from functools import cache
@@ -42,6 +43,13 @@ _EXAMPLES: dict[tuple[str, str], list[str]] = {
         "formula f = x = 1;",
         "action A in S when x = 1 { skip; }",
         "action A in S weight x = 1 { skip; }",
+    ],
+    ("E115", "temporal operators (F, G, X, U) do not nest: one applies to state formulas "
+             "(labels, comparisons, and/or/not of them)"): [
+        'property p = P=? [ F F "l" ];',
+        'property p = P=? [ X X "l" ];',
+        'property p = P=? [ G F "l" ];',
+        'property p = P=? [ F G x > 1 ];',
     ],
     ("E104", "a bounded integer is written [low..high]"): [
         "var x : [0, 3];",
@@ -241,6 +249,10 @@ def _scan(text: str, upto: int) -> _Scan:
     return out
 
 
+# A temporal operator (F, G, X, possibly step-bounded) right before a position
+_TEMPORAL_BEFORE = re.compile(r"\b[FGX](?:\s*<=\s*[\w.]+)?\s*$")
+
+
 def _report_syntax_error(exc: UnexpectedInput, source: Source, reporter: Reporter,
                          formula: bool = False) -> None:
     text = source.text
@@ -269,6 +281,11 @@ def _report_syntax_error(exc: UnexpectedInput, source: Source, reporter: Reporte
     if scan.open and _unclosed(exc, source, reporter, scan, accepts, formula):
         return
     matched = _match_example(exc)
+    if matched is not None and matched[0] == "E115" and not _TEMPORAL_BEFORE.search(
+            text, 0, pos):
+        # The parser state is the one after any operand (`label a = x "l";`): only a
+        # temporal operator just before the failing token makes it a nested one.
+        matched = None
     if matched is not None and not (formula and matched[0] == "E102"):
         code, message = matched
         if code == "E102":
