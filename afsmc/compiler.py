@@ -7,6 +7,7 @@ collected, so a caller renders them once.
 from __future__ import annotations
 
 import os
+import tempfile
 from collections.abc import Mapping
 from dataclasses import dataclass
 
@@ -105,6 +106,12 @@ def check_writable(path: str, *, protect: tuple[str, ...] = ()) -> None:
         raise cannot(f"{directory} is not a directory")
     if not os.access(directory, os.W_OK | os.X_OK):
         raise cannot(f"permission denied in {directory}")
+    # os.access does not know every refusal (root in /proc, a read-only mount): try it.
+    try:
+        probe = tempfile.mkdtemp(prefix=".afsmc-probe-", dir=directory)
+        os.rmdir(probe)
+    except OSError as exc:
+        raise cannot(f"cannot create files in {directory} ({exc.strerror or exc})") from None
 
 
 def write_atomic(path: str, content: str | bytes, *, protect: tuple[str, ...] = (),

@@ -323,3 +323,18 @@ def test_the_csv_does_not_depend_on_jobs(tmp_path: Path, sweep_args: list[str]) 
         outs.append(r.out)
     assert outs[0] == outs[1] == outs[2]
     assert {row["states"] for row in rows(outs[0])} == {"6"}
+
+
+def test_an_output_in_a_directory_that_takes_no_files_is_refused_before_any_point() -> None:
+    # /proc passes os.access for root but takes no new file: the sweep computed every point
+    # and then failed, losing them. The path is now tried before any work.
+    import os
+
+    if not os.path.isdir("/proc"):
+        pytest.skip("needs Linux's /proc")
+    for flag, name in (("-o", "x.csv"), ("--plot", "x.png")):
+        r = run_cli("sweep", str(EXAMPLES / "patrol.afsm"), "--bound", "2:4", "-p",
+                    "finish_soon", flag, f"/proc/{name}", "--progress")
+        assert r.code == 1 and "error[E003]" in r.err and "cannot create files in /proc" \
+            in r.err, r.err
+        assert "N412" not in r.err and "point" not in r.err.lower().replace("e003", ""), r.err
