@@ -138,3 +138,14 @@ def test_two_operands_in_a_row_outside_a_property_are_not_called_nested_temporal
     r = run_cli("check", str(path))
     assert r.code == 1 and "error[E101]: unexpected" in r.err, r.err
     assert "E115" not in r.err and "E103" not in r.err
+
+
+def test_verify_of_an_empty_file_names_the_file(tmp_path: Path) -> None:
+    # E213 had no file:1:1 in verify (check had it), with or without --formula.
+    from tests.conftest import run_cli
+
+    path = tmp_path / "empty.afsm"
+    path.write_text("", encoding="utf-8")
+    for extra in ((), ("-f", "P=? [ F true ]")):
+        r = run_cli("verify", str(path), *extra)
+        assert r.code == 1 and f"{path}:1:1: error[E213]" in r.err, r.err

@@ -236,8 +236,10 @@ def load_with_formulas(path: str, overrides: Mapping[str, str] | None = None,
 
 def _remap(d: Diagnostic, limit: int, where: list[tuple[int, int, int, str]]) -> Diagnostic:
     def span(s: Span | None) -> Span | None:
-        if s is None or s.start < limit:
+        if s is None or s.start < limit or not where:
             return s
+        if limit == 0 and s.start == 0:  # the whole of an empty file (E213)
+            return Span.at_offset(Source(s.source.path, ""), 0, 0)
         for head, start, end, f in where:
             if head <= s.start <= end:  # the formula, its `property NAME =` head, or ';'
                 src = Source("--formula", f)
