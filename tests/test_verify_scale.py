@@ -541,46 +541,9 @@ def test_a_users_address_space_limit_is_kept_not_raised(tmp_path: Path) -> None:
     assert res["properties"][0]["value"] == pytest.approx(1.0)
 
 
-def test_a_real_ctrl_c_stops_the_watched_storm_process(tmp_path: Path) -> None:
-    # SIGINT to the whole process group, as a terminal sends it, while the guard's child
-    # builds: exit 130, one JSON object, no traceback and no Storm process left behind.
-    import os
-    import signal
-    import subprocess
-    import sys
-
-    argv = [sys.executable, "-m", "afsmc", "verify", UAV, "--json", "--progress",
-            "--const", "WIDTH=5,HEIGHT=5,OBJECTS=2,T_LIMIT=400"]
-    proc = subprocess.Popen(argv, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-                            start_new_session=True, cwd=str(tmp_path))
-    assert proc.stderr is not None
-    for line in proc.stderr:  # the child has started once it reports its build
-        if "building the MDP" in line:
-            break
-    os.killpg(proc.pid, signal.SIGINT)
-    out, err = proc.communicate(timeout=60)
-    assert proc.returncode == 130, err
-    assert json.loads(out)["interrupted"] is True
-    assert "Traceback" not in err and "afsmc: interrupted" in err
-    import time
-
-    deadline = time.monotonic() + 10  # multiprocessing's resource tracker ends on its own
-    while time.monotonic() < deadline:
-        try:
-            os.killpg(proc.pid, 0)
-        except ProcessLookupError:
-            break
-        time.sleep(0.2)
-    else:
-        ps = subprocess.run(["ps", "-o", "pid,args", "-g", str(proc.pid)], text=True,
-                            capture_output=True).stdout
-        raise AssertionError(f"processes of the group outlived the interrupt:\n{ps}")
-
-
 def _group_ends(pgid: int, seconds: float = 10.0) -> None:
     """Wait for every process of the group to end; fail with their list if they do not."""
     import os
-    import subprocess
     import time
 
     deadline = time.monotonic() + seconds  # multiprocessing's resource tracker ends on its own
@@ -598,7 +561,6 @@ def _group_ends(pgid: int, seconds: float = 10.0) -> None:
 
 def _verify_building(tmp_path: Path) -> subprocess.Popen[str]:
     """`afsmc verify` on an instance big enough for the guard's child, once it builds."""
-    import subprocess
     import sys
 
     argv = [sys.executable, "-m", "afsmc", "verify", UAV, "--json", "--progress",
@@ -610,6 +572,21 @@ def _verify_building(tmp_path: Path) -> subprocess.Popen[str]:
         if "building the MDP" in line:
             break
     return proc
+
+
+def test_a_real_ctrl_c_stops_the_watched_storm_process(tmp_path: Path) -> None:
+    # SIGINT to the whole process group, as a terminal sends it, while the guard's child
+    # builds: exit 130, one JSON object, no traceback and no Storm process left behind.
+    import os
+    import signal
+
+    proc = _verify_building(tmp_path)
+    os.killpg(proc.pid, signal.SIGINT)
+    out, err = proc.communicate(timeout=60)
+    assert proc.returncode == 130, err
+    assert json.loads(out)["interrupted"] is True
+    assert "Traceback" not in err and "afsmc: interrupted" in err
+    _group_ends(proc.pid)
 
 
 def test_a_killed_afsmc_leaves_no_storm_process_behind(tmp_path: Path) -> None:
