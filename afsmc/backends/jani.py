@@ -125,26 +125,24 @@ def _jani_type(t: E.Type) -> str:
     return {E.Type.INT: "int", E.Type.DOUBLE: "real", E.Type.BOOL: "bool"}[t]
 
 
-def _unassigned(low: Lowered) -> list[ir.Variable]:
-    """The variables (`mode` included, as a stand-in) that no command assigns. Storm's JANI
-    builder drops such a variable and then evaluates the expressions that read it wrongly
-    (`G cfg == 1` gave 0 for `cfg` that stays 1), so they are written as constants of their
-    initial value, which is what they are."""
+def _never_assigned(low: Lowered) -> set[str]:
+    """The variables (`mode` too) that no command assigns. Storm's JANI builder drops such a
+    variable and then evaluates the expressions that read it wrongly (`G cfg == 1` gave 0
+    for `cfg` that stays 1), so they are written as constants of their initial value, which
+    is what they are."""
     assigned = {var for c in low.commands for b in c.branches for var, _ in b.updates}
-    return [v for v in low.model.variables if v.name not in assigned]
-
-
-def _mode_assigned(low: Lowered) -> bool:
-    return any(var == "mode" for c in low.commands for b in c.branches for var, _ in b.updates)
+    return {v.name for v in low.model.variables if v.name not in assigned} | (
+        set() if "mode" in assigned else {"mode"})
 
 
 def _constants(low: Lowered) -> list[Json]:
     model = low.model
     out: list[Json] = []
-    if not _mode_assigned(low):
+    fixed = _never_assigned(low)
+    if "mode" in fixed:
         out.append({"name": "mode", "type": "int", "value": model.initial_mode.number,
-                    "comment": "the mode, never changed: a constant (see _unassigned)"})
-    for v in _unassigned(low):
+                    "comment": "the mode, never changed: a constant (see _never_assigned)"})
+    for v in (v for v in model.variables if v.name in fixed):
         out.append({"name": v.name, "type": _jani_type(v.type), "value": _num(v.init, v.type),
                     "comment": f"{v.display}, {_where(v.span)}, never assigned: a constant"})
     for c in model.constants:
@@ -163,16 +161,16 @@ def _constants(low: Lowered) -> list[Json]:
 def _variables(low: Lowered, names: _Names) -> list[Json]:
     model = low.model
     numbers = [m.number for m in model.modes]
-    out: list[Json] = [{
+    fixed = _never_assigned(low)  # written as constants
+    out: list[Json] = [] if "mode" in fixed else [{
         "name": "mode",
         "type": {"kind": "bounded", "base": "int", "lower-bound": min(numbers),
                  "upper-bound": max(numbers)},
         "initial-value": model.initial_mode.number,
         "comment": "modes: " + ", ".join(f"{m.name}={m.number}" for m in model.modes),
-    }] if _mode_assigned(low) else []
-    constant = {v.name for v in _unassigned(low)}
+    }]
     for v in model.variables:
-        if v.name in constant:
+        if v.name in fixed:
             continue
         note = f"{v.display}, {_where(v.span)}" + (", clamped" if v.clamp else "")
         if v.type is E.Type.BOOL:

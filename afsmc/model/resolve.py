@@ -65,6 +65,8 @@ _NUMBERS_HINT = "PRISM and Storm compute with 64-bit integers and finite doubles
 # and larger magnitudes were wrong even in small ranges (at 2^58).
 STATE_INT = (-(2**48), 2**48 - 1)
 _STATE_INT_HINT = "Storm's state encoding holds these wrongly; rescale the variable"
+_BEYOND_STATE_INT = (f"goes beyond what Storm stores in a state ({STATE_INT[0]}..{STATE_INT[1]}, "
+                     "±2^48)")
 
 
 def unrepresentable(v: Any) -> str | None:
@@ -333,8 +335,7 @@ class _Resolver:
                 if why is not None or not STATE_INT[0] <= d.number <= STATE_INT[1]:
                     self.rep.error(
                         "E245" if why is not None else "E249", f"mode number {d.number} " + (
-                            why or f"goes beyond what Storm stores in a state ({STATE_INT[0]}.."
-                            f"{STATE_INT[1]}, ±2^48)"), d.number_span or d.span,
+                            why or _BEYOND_STATE_INT), d.number_span or d.span,
                         hint=_NUMBERS_HINT if why is not None else "number the modes with "
                         "smaller numbers")
                     continue  # numbered as if it had no number
@@ -458,9 +459,8 @@ class _Resolver:
             self.rep.error("E219", f"range [{lo}..{hi}] of '{display}' is empty", t.span)
             hi = lo
         if not (STATE_INT[0] <= lo and hi <= STATE_INT[1]):
-            self.rep.error("E249", f"range [{lo}..{hi}] of '{display}' goes beyond what Storm "
-                           f"stores in a state ({STATE_INT[0]}..{STATE_INT[1]}, ±2^48)", t.span,
-                           hint=_STATE_INT_HINT)
+            self.rep.error("E249", f"range [{lo}..{hi}] of '{display}' {_BEYOND_STATE_INT}",
+                           t.span, hint=_STATE_INT_HINT)
             # go on with a range Storm holds, and no second error about the initial value
             lo, hi = (min(max(v, STATE_INT[0]), STATE_INT[1]) for v in (lo, hi))
             init = None
@@ -562,7 +562,7 @@ class _Resolver:
         if isinstance(e, ast.FieldRef):
             if not ctx.state and self.value_names.get(e.base.text, (None,))[0] == "variable":
                 # a constant: the tuples are not resolved yet, and no field could be used
-                return self._var("", ctx, s, f"{e.base.text}.{e.field.text}")
+                return self._stateless(ctx, s, f"{e.base.text}.{e.field.text}")
             if e.base.text not in self.tuples:
                 if e.base.text in self.value_names:
                     self.rep.error("E223", f"'{e.base.text}' has no fields", e.span)
@@ -697,12 +697,16 @@ class _Resolver:
             return E.Lit(0, Type.INT, s)
         return E.FormulaRef(n, f.value.type, s)
 
+    def _stateless(self, ctx: Ctx, s: Span, display: str) -> E.Expr:
+        """E224: a variable where only constants may stand."""
+        self.rep.error("E224", f"{ctx.what} cannot depend on variable '{display}'", s)
+        return E.Lit(0, Type.INT, s)
+
     def _var(self, flat: str, ctx: Ctx, s: Span, display: str) -> E.Expr:
         # Before the variables are resolved (constants come first), and for a variable with
         # errors, `self.vars` lacks it: E224 must not depend on that.
         if not ctx.state:
-            self.rep.error("E224", f"{ctx.what} cannot depend on variable '{display}'", s)
-            return E.Lit(0, Type.INT, s)
+            return self._stateless(ctx, s, display)
         v = self.vars.get(flat)
         if v is None:  # a variable with errors
             return E.Lit(0, Type.INT, s)
