@@ -1,7 +1,8 @@
 """The `afsmc` command line. Thin: each subcommand lives in afsmc/commands/<name>.py
 with `add_arguments(parser)` and `run(args) -> int`.
 
-Exit codes: 0 ok, 1 diagnostics (errors in the input, a failed check), 2 usage.
+Exit codes: 0 ok, 1 diagnostics (errors in the input, a failed check), 2 usage, 3 a bug in
+afsmc (an internal error; its traceback goes to a file).
 """
 
 from __future__ import annotations
@@ -9,10 +10,13 @@ from __future__ import annotations
 import argparse
 import importlib
 import json
+import os
 import shlex
 import signal
 import sys
+import tempfile
 import threading
+import traceback
 from collections.abc import Sequence
 from typing import Any
 
@@ -121,10 +125,30 @@ def main(argv: Sequence[str] | None = None) -> int:
         return 128 + signal.SIGTERM if terminated else 130
     except BrokenPipeError:
         return 0
+    except Exception as exc:  # a bug in afsmc: a report, not a traceback
+        if os.environ.get("AFSMC_TRACEBACK"):
+            raise
+        return _internal_error(exc, getattr(args, "json", False))
     finally:
         if previous is not None:
             signal.signal(signal.SIGTERM, previous)
     return code
+
+
+def _internal_error(exc: Exception, as_json: bool) -> int:
+    """A bug in afsmc, not in the input: say so in one line, keep the traceback in a file
+    for the report (AFSMC_TRACEBACK=1 prints it instead), exit 3."""
+    fd, path = tempfile.mkstemp(prefix="afsmc-crash-", suffix=".txt")
+    with os.fdopen(fd, "w", encoding="utf-8") as f:
+        f.write(f"afsmc {__version__}, argv {sys.argv!r}\n")
+        traceback.print_exception(exc, file=f)
+    message = (f"internal error (a bug in afsmc, not in your input): {type(exc).__name__}: "
+               f"{exc}; the traceback is in {path}; please report it with that file")
+    print(f"afsmc: {message}", file=sys.stderr)
+    if as_json:
+        print(json.dumps({"diagnostics": [
+            {"code": "E009", "severity": "error", "message": message}]}, indent=2))
+    return 3
 
 
 class Terminated(KeyboardInterrupt):

@@ -4,6 +4,7 @@ or non-finite constants, numbers beyond 64 bits, names PRISM or Storm reserve.""
 from __future__ import annotations
 
 import math
+import re
 from pathlib import Path
 
 import pytest
@@ -226,3 +227,27 @@ def test_compile_to_an_empty_output_name_is_a_usage_error(
     r = run_cli("compile", str(EXAMPLES / "patrol.afsm"), "-o", "")
     assert r.code == 2 and "-o: an empty name" in r.err, r.err
     assert list(tmp_path.iterdir()) == []
+
+
+def test_a_bug_in_afsmc_is_one_line_and_a_traceback_file(monkeypatch: pytest.MonkeyPatch) -> None:
+    """An exception that escapes a command is afsmc's bug, not the user's: exit 3, one line
+    on stderr naming a file that holds the traceback, and no traceback on the terminal."""
+    import afsmc.commands.check as check
+
+    def broken(args: object) -> int:
+        raise ValueError("an impossible state")
+
+    monkeypatch.delenv("AFSMC_TRACEBACK", raising=False)
+    monkeypatch.setattr(check, "run", broken)
+    result = run_cli("check", "examples/patrol.afsm")
+    assert result.code == 3
+    assert "Traceback" not in result.err
+    match = re.search(r"internal error .*ValueError: an impossible state; the traceback is in "
+                      r"(\S+); please report it", result.err)
+    assert match, result.err
+    saved = Path(match.group(1))
+    try:
+        text = saved.read_text()
+        assert "Traceback" in text and "an impossible state" in text
+    finally:
+        saved.unlink()

@@ -30,7 +30,7 @@ from afsmc.check.modegraph import ModeGraph, analyse, compact
 from afsmc.model import expr as E
 from afsmc.model import ir
 from afsmc.model.lower import Lowered
-from afsmc.model.pretty import Printer
+from afsmc.model.pretty import with_names
 from afsmc.model.semantics import static_value
 
 FONT = "Helvetica,Arial,sans-serif"
@@ -69,7 +69,7 @@ def _html(text: str) -> str:
 def _prob_text(prob: E.Expr, model: ir.Model) -> str:
     v = static_value(prob, model)
     if v is None:
-        text = Printer()(prob)
+        text = with_names(model.display_names())(prob)
         return text if len(text) <= 24 else text[:23] + "…"
     if abs(v - 1.0) < 1e-12:
         return ""
@@ -213,7 +213,7 @@ def diagram(model: ir.Model, overlay: Overlay | None = None) -> graphviz.Digraph
 
 
 def _tooltip(arc: _Arc, model: ir.Model) -> str:
-    p = Printer()
+    p = with_names(model.display_names())
     if arc.kind == "hazard":
         h = next(h for h in model.hazards if h.name == arc.via)
         return f"hazard {h.name}: probability {p(h.prob)}"

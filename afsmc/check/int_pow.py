@@ -17,7 +17,7 @@ from afsmc.model import expr as E
 from afsmc.model import ir
 from afsmc.model.bounds import bounds
 from afsmc.model.expr import Type
-from afsmc.model.pretty import show
+from afsmc.model.pretty import with_names
 from afsmc.model.search import find
 from afsmc.model.semantics import inline
 
@@ -41,6 +41,7 @@ def _powers(e: E.Expr) -> Iterator[E.Call]:
 
 
 def check_int_pow(model: ir.Model, rep: Reporter) -> None:
+    show = with_names(model.display_names())
     for site in sites(model):
         if site.target is None or model.variable(site.target).type is not Type.INT:
             continue

@@ -19,7 +19,7 @@ from afsmc.model import expr as E
 from afsmc.model import ir
 from afsmc.model.bounds import bounds
 from afsmc.model.expr import Type
-from afsmc.model.pretty import show
+from afsmc.model.pretty import with_names
 from afsmc.model.resolve import INT64
 from afsmc.model.semantics import inline
 
@@ -36,6 +36,7 @@ def _beyond(lo: float, hi: float) -> float | None:
 
 
 def check_overflow(model: ir.Model, rep: Reporter) -> None:
+    show = with_names(model.display_names())
     reported: set[tuple[int, int] | int] = set()
     for site in sites(model):
         x = inline(site.expr, model)

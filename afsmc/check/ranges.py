@@ -13,7 +13,7 @@ from afsmc.model import ir
 from afsmc.model.bounds import bounds
 from afsmc.model.evaluate import Env, EvalError, evaluate
 from afsmc.model.expr import Type
-from afsmc.model.pretty import number, show
+from afsmc.model.pretty import number, with_names
 from afsmc.model.search import Witness, find
 from afsmc.model.semantics import enabled, fire_condition, inline
 
@@ -30,6 +30,7 @@ def _value(model: ir.Model, e: E.Expr, w: Witness, mode: int, consts: dict[str, 
 
 def _check_updates(model: ir.Model, rep: Reporter, when: dict[int, E.Expr],
                    outcomes: tuple[ir.Outcome, ...]) -> None:
+    show = with_names(model.display_names())
     for o in outcomes:
         for u in o.updates:
             if u.var == "mode":

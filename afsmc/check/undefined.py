@@ -21,7 +21,7 @@ from afsmc.model import expr as E
 from afsmc.model import ir
 from afsmc.model.bounds import bounds
 from afsmc.model.expr import Type
-from afsmc.model.pretty import show
+from afsmc.model.pretty import with_names
 from afsmc.model.search import find
 from afsmc.model.semantics import enabled, fire_condition, inline
 
@@ -168,6 +168,7 @@ def node_key(n: E.Expr) -> tuple[int, int] | int:
 
 
 def check_undefined(model: ir.Model, rep: Reporter) -> None:
+    show = with_names(model.display_names())
     reported: set[tuple[int, int] | int] = set()
     for site in sites(model):
         x = inline(site.expr, model)

@@ -15,7 +15,7 @@ from typing import Any
 from afsmc.diagnostics import CompileError, Source, Span
 from afsmc.model import ir
 from afsmc.model.expr import Type
-from afsmc.model.pretty import number, show
+from afsmc.model.pretty import number, with_names
 from afsmc.syntax import ast
 from afsmc.syntax.parser import parse
 
@@ -291,6 +291,7 @@ def hover(d: Definition, text: str, model: ir.Model | None) -> str:
 
 
 def _facts(d: Definition, model: ir.Model) -> list[str]:
+    show = with_names(model.display_names())
     try:
         if d.kind == "constant":
             c = model.constant(d.name)

@@ -193,6 +193,10 @@ class Model:
     def variable(self, name: str) -> Variable:
         return next(v for v in self.variables if v.name == name)
 
+    def display_names(self) -> dict[str, str]:
+        """Flat variable name (`pos_x`) -> as written (`pos.x`), for messages."""
+        return {v.name: v.display for v in self.variables}
+
     def mode(self, name: str) -> Mode:
         return next(m for m in self.modes if m.name == name)
 

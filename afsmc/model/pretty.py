@@ -6,7 +6,7 @@ Backends with other syntaxes (PRISM) reuse :class:`Printer` with their own table
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from typing import ClassVar
 
 from afsmc.model import expr as E
@@ -88,3 +88,9 @@ class Printer:
 
 
 show = Printer()
+
+
+def with_names(display: Mapping[str, str]) -> Printer:
+    """A printer for messages: variables as the author writes them (`pos.x`, not the flat
+    `pos_x` of the IR). `display` maps flat names to written ones."""
+    return Printer(lambda e: display.get(e.name) if isinstance(e, E.VarRef) else None)

@@ -107,6 +107,8 @@ class _Resolver:
         self.consts: dict[str, ir.Constant] = {}
         self.vars: dict[str, ir.Variable] = {}
         self.tuples: dict[str, tuple[str, ...]] = {}  # tuple var -> its field names
+        # fields left out after their own E201 (`pos.x` clashing with `pos_x`): no E223 on use
+        self.dropped_fields: set[tuple[str, str]] = set()
         self.modes: dict[str, ir.Mode] = {}
         self.formulas: dict[str, ir.Formula] = {}
         self.formula_decls: dict[str, ast.FormulaDecl] = {}
@@ -427,7 +429,11 @@ class _Resolver:
                 flat = f"{d.name.text}_{f.name.text}"
                 if flat in self.value_names:
                     self.rep.error("E201", f"field {d.name.text}.{f.name.text} would be named "
-                                   f"'{flat}' in PRISM, which is already declared", f.span)
+                                   f"'{flat}' in PRISM, which is already declared", f.span,
+                                   hint=f"rename the field or the other '{flat}'",
+                                   related=[Related(f"'{flat}' is declared here",
+                                                    self.value_names[flat][1])])
+                    self.dropped_fields.add((d.name.text, f.name.text))
                     continue
                 if f.name.text in names:
                     self.rep.error("E201", f"field '{f.name.text}' is declared twice", f.span)
@@ -570,6 +576,8 @@ class _Resolver:
                     self._undefined(e.base, ctx)
                 return E.Lit(0, Type.INT, s)
             if e.field.text not in self.tuples[e.base.text]:
+                if (e.base.text, e.field.text) in self.dropped_fields:
+                    return E.Lit(0, Type.INT, s)
                 self.rep.error("E223", f"'{e.base.text}' has no field '{e.field.text}'", e.field.span,
                                hint=did_you_mean(e.field.text, self.tuples[e.base.text]))
                 return E.Lit(0, Type.INT, s)
@@ -820,6 +828,8 @@ class _Resolver:
             t = u.target
             if t.field is None and t.name.text in self.tuples:
                 fields = self.tuples[t.name.text]
+                if any(base == t.name.text for base, _ in self.dropped_fields):
+                    continue  # its shape is unknown after an E201 on one of its fields
                 if u.op != ":=":
                     self.rep.error("E237", f"'{u.op}' needs a number; '{t.name.text}' is a tuple",
                                    u.span)
@@ -838,6 +848,8 @@ class _Resolver:
                 kind = self.value_names.get(t.name.text, (None, None))[0]
                 if kind is None or (t.field is not None and t.name.text not in self.tuples):
                     self._undefined(t.name, uctx)
+                elif t.field is not None and (t.name.text, t.field.text) in self.dropped_fields:
+                    pass
                 elif t.field is not None:
                     self.rep.error("E223", f"'{t.name.text}' has no field '{t.field.text}'",
                                    t.field.span)

@@ -38,6 +38,14 @@ _EXAMPLES: dict[tuple[str, str], list[str]] = {
         "formula f = 1\nlabel b = true;",
         "machine m\nmode A;",
     ],
+    # Before '}': the last outcome of an action or hazard body lacks its ';'.
+    ("E116", "missing ';' at the end of the outcome"): [
+        "action A in S { goto B }",
+        "action A in S { x := 1, goto B }",
+        "action A in S { 0.5: goto B; 0.5: skip }",
+        "action A in S { skip }",
+        "hazard H from * with probability 0.1 { goto B }",
+    ],
     ("E103", "'=' is not a comparison; write '==' to compare"): [
         "label a = x = 1;",
         "formula f = x = 1;",
@@ -257,6 +265,9 @@ def _report_syntax_error(exc: UnexpectedInput, source: Source, reporter: Reporte
                          formula: bool = False) -> None:
     text = source.text
     the_end = "end of the formula" if formula else "end of file"
+    where = exc.token.start_pos if isinstance(exc, UnexpectedToken) else exc.pos_in_stream
+    if where is not None and _unterminated(text, where, source, reporter):
+        return
     if isinstance(exc, UnexpectedCharacters):
         pos = len(text) if exc.pos_in_stream is None else exc.pos_in_stream
         char = text[pos] if pos < len(text) else "?"
@@ -288,17 +299,43 @@ def _report_syntax_error(exc: UnexpectedInput, source: Source, reporter: Reporte
         matched = None
     if matched is not None and not (formula and matched[0] == "E102"):
         code, message = matched
-        if code == "E102":
+        if code in ("E102", "E116"):
             # The mistake is before the token that revealed it: point just after the
             # previous token, where the ';' belongs.
-            hint = ("add ';' here; the file ends after this declaration" if at_end else
-                    f"add ';' here; the next line starts with {str(tok)!r}")
+            if at_end:
+                hint = "add ';' here; the file ends after this declaration"
+            elif text.count("\n", scan.last_end, pos):
+                hint = f"add ';' here; the next line starts with {str(tok)!r}"
+            else:
+                hint = f"add ';' here, before {str(tok)!r}"
             reporter.error(code, message, after_last, hint=hint)
             return
         reporter.error(code, message, span, hint=f"found {_found(tok, the_end)}")
         return
     reporter.error("E101", f"unexpected {_found(tok, the_end)}", span,
                    hint=_expected_hint(accepts, the_end))
+
+
+def _unterminated(text: str, pos: int, source: Source, reporter: Reporter) -> bool:
+    """E117 for a label name or block comment that is opened at `pos` and never closed:
+    the lexer only sees an odd character there, and would say so."""
+    if text.startswith("*", pos) and text.startswith("/*", pos - 1):
+        pos -= 1  # '/' lexed as division, then '*' failed
+    if text.startswith("/*", pos) and text.find("*/", pos + 2) < 0:
+        reporter.error("E117", "this comment is not closed", Span.at_offset(source, pos, pos + 2),
+                       hint="close it with '*/'; everything after '/*' is part of it until then")
+        return True
+    if text.startswith('"', pos):
+        j = pos + 1
+        while j < len(text) and text[j] not in '"\n':
+            j += 2 if text[j] == "\\" else 1
+        if j >= len(text) or text[j] == "\n":
+            reporter.error("E117", "this label name is not closed",
+                           Span.at_offset(source, pos, pos + 1),
+                           hint="close it with '\"' on the same line; a quoted name does not "
+                           "span lines")
+            return True
+    return False
 
 
 def _found(tok: Token, the_end: str) -> str:
@@ -508,12 +545,16 @@ class _Builder(Transformer[Token, Any]):
                 number_span = _span(self.source, item)
                 number = self._int(item)
             else:
+                if item in attrs:
+                    self.reporter.error("E118", f"'{item!s}' is given twice for mode {name.text}",
+                                        _span(self.source, item),
+                                        hint=f"write '{item!s}' once")
                 attrs.append(item)
         return ast.ModeDecl(name, number, number_span, "initial" in attrs, "final" in attrs,
                             self._s(meta))
 
-    def mode_attr(self, meta: Any, c: list[Token]) -> str:
-        return str(c[0])
+    def mode_attr(self, meta: Any, c: list[Token]) -> Token:
+        return c[0]  # a Token (a str) keeps its position for E118
 
     def _int(self, tok: Token) -> int:
         text = str(tok)
