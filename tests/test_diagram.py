@@ -381,11 +381,28 @@ def test_results_json_overlay(tmp_path: Path) -> None:
                       (json.dumps({**results, "modes": [{"number": 1, "value": 1.5}]}),
                        "mode Dock has value 1.5, not a probability"),
                       (json.dumps({"properties": [{"name": "p", "max": True}]}),
-                       "property p has max True, not a number")):
+                       "property p has max True, not a number"),
+                      (json.dumps({"properties": [{"name": "p", "min": 0.6, "max": 0.4}]}),
+                       "property p has min 0.6 above its max 0.4"),
+                      (json.dumps({**results, "modes": [{"mode": "Dock", "value": 0.5},
+                                                        {"number": 1, "value": 0.25}]}),
+                       "mode Dock is listed twice")):
         rj.write_text(bad)
         r = run_cli("diagram", str(EXAMPLES / "patrol.afsm"), "--results", str(rj), "-o",
                     str(out))
         assert r.code == 1 and "error[E611]" in r.err and said in r.err, (bad, r.err)
+
+
+@pytest.mark.parametrize("option", [["--resolve", "uniform"], ["--max-states", "1000"]])
+def test_reach_options_without_reach_are_usage_errors(tmp_path: Path, option: list[str]) -> None:
+    """--resolve and --max-states only change what --reach computes: given alone they would
+    be ignored, so the command line is refused (exit 2) and nothing is drawn."""
+    out = tmp_path / "p.svg"
+    r = run_cli("diagram", str(EXAMPLES / "patrol.afsm"), *option, "-o", str(out))
+    assert r.code == 2 and f"{option[0]} only applies to --reach" in r.err, r.err
+    assert not out.exists()
+    r = run_cli("diagram", str(EXAMPLES / "patrol.afsm"), *option, "--reach", "-o", str(out))
+    assert r.code == 0 and out.exists(), r.err
 
 
 # The arrows of the paper's Figure 1 (the tikz \path list), by mode number.

@@ -49,10 +49,13 @@ def add_consts(p: argparse.ArgumentParser) -> None:
                    help="give an open constant ('param') a value; repeatable, or NAME=V,NAME=V")
 
 
-def add_resolve(p: argparse.ArgumentParser) -> None:
-    p.add_argument("--resolve", choices=RESOLUTIONS, default="nondet",
+def add_resolve(p: argparse.ArgumentParser, default: str | None = "nondet",
+                extra: str = "") -> None:
+    """`default=None` lets a command tell whether --resolve was given."""
+    p.add_argument("--resolve", choices=RESOLUTIONS, default=default,
                    help="interval constants [lo, hi]: nondeterministic choice (MDP, min/max "
-                        "bounds; default), uniform random choice (DTMC), or always lo / hi")
+                        "bounds; default), uniform random choice (DTMC), or always lo / hi"
+                        + extra)
 
 
 def add_reductions(p: argparse.ArgumentParser) -> None:

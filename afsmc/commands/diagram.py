@@ -50,7 +50,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--reach", action="store_true",
                    help="compute with Storm the probability of ever reaching each mode and "
                         "write it into the mode's box")
-    add_resolve(p)
+    add_resolve(p, default=None, extra="; with --reach")
     p.add_argument("--max-states", type=positive, metavar="N",
                    help="with --reach: stop (exit 1) if the model has more states than N "
                         "(default: what 70%% of the free memory holds, at most 50 M)")
@@ -109,6 +109,10 @@ def _check_numbers(path: str, entry: dict[str, Any], what: str,
         if probability and not 0 <= v <= 1:
             raise _error("E611", f"{path}: {what} has {key} {v!r}, not a probability",
                          hint="a mode's number is the probability of reaching it, in [0, 1]")
+    low, high = entry.get("min"), entry.get("max")
+    if isinstance(low, (int, float)) and isinstance(high, (int, float)) and low > high:
+        raise _error("E611", f"{path}: {what} has min {low!r} above its max {high!r}",
+                     hint="pass the output of `afsmc verify --json`")
 
 
 def read_results(path: str, model: ir.Model) -> Overlay:
@@ -148,6 +152,9 @@ def read_results(path: str, model: ir.Model) -> Overlay:
             which = entry.get("mode", entry.get("number"))
             raise _error("E611", f"{path}: machine {model.name} has no mode {which!r}",
                          hint="modes are named as in the .afsm file, or numbered")
+        if number in modes:
+            raise _error("E611", f"{path}: mode {model.mode_names[number]} is listed twice in "
+                         "\"modes\"", hint="give each mode one entry")
         _check_numbers(path, entry, f"mode {model.mode_names[number]}", probability=True)
         modes[number] = f"P(reach) {_value(entry)}"
     return Overlay(modes=modes, notes=notes)
@@ -244,6 +251,13 @@ def _say(text: str) -> None:
 
 def run(args: argparse.Namespace) -> int:
     path, fmt = output_path(args)
+    if not args.reach:
+        given = [o for o, v in (("--resolve", args.resolve), ("--max-states", args.max_states))
+                 if v is not None]
+        if given:
+            verb = "only applies" if len(given) == 1 else "only apply"
+            usage_error(f"{' and '.join(given)} {verb} to --reach (the probabilities "
+                        "Storm computes); add --reach, or leave them out")
     try:
         checked = load(args.file, overrides(args))
         report(checked.diagnostics)
@@ -256,7 +270,7 @@ def run(args: argparse.Namespace) -> int:
             modes.update(ov.modes)
             notes += ov.notes
         if args.reach:
-            ov = reach_overlay(*mode_reachability(model, args.resolve,
+            ov = reach_overlay(*mode_reachability(model, args.resolve or "nondet",
                                                   max_states=args.max_states, progress=_say))
             modes.update(ov.modes)
             caption = ov.caption
