@@ -131,6 +131,29 @@ def test_undecided_runs_widen_the_interval() -> None:
     assert finish["high"] > 0.63
 
 
+def test_a_reward_interval_needs_two_finished_runs() -> None:
+    """One run, or no run that finishes, gives no sample variance: the interval of an
+    expected reward is unbounded (not the zero width of a variance taken as 0), and with
+    no finished run there is no estimate at all; the text says what to raise."""
+    one = sim_json(PATROL, "--runs", "1")
+    steps = next(p for p in one["properties"] if p["name"] == "duration")  # type: ignore[union-attr]
+    assert steps["low"] == "-inf" and steps["high"] == "inf" and steps["estimate"] > 0
+    none = sim_json(UAV, "--runs", "20", "--max-steps", "1")  # no UAV mission ends in 1 step
+    drops = next(p for p in none["properties"] if p["name"] == "drops")  # type: ignore[union-attr]
+    assert drops["undecided"] == 20 and drops["estimate"] is None
+    assert drops["low"] == "-inf" and drops["high"] == "inf"
+    two = sim_json(PATROL, "--runs", "2")
+    steps = next(p for p in two["properties"] if p["name"] == "duration")  # type: ignore[union-attr]
+    assert math.isfinite(steps["low"]) and math.isfinite(steps["high"])
+    text = run_cli("simulate", str(PATROL), "--runs", "1")
+    assert text.code == 0
+    line = next(x for x in text.out.splitlines() if x.strip().startswith("duration"))
+    assert "[-inf, inf]" in line and "raise --runs" in line, line
+    text = run_cli("simulate", str(UAV), "--runs", "20", "--max-steps", "1")
+    line = next(x for x in text.out.splitlines() if x.strip().startswith("drops"))
+    assert "n/a  [-inf, inf]" in line and "raise --max-steps" in line, line
+
+
 def test_traces_in_mission_terms(tmp_path: Path) -> None:
     out = tmp_path / "traces.json"
     r = run_cli("simulate", str(MISSION), "--runs", "100", "--traces", "2",

@@ -106,6 +106,8 @@ def run(args: argparse.Namespace) -> int:
 
 
 def _num(v: float) -> Any:
+    if math.isnan(v):
+        return None  # an expected reward no run finished: no estimate
     return v if math.isfinite(v) else ("inf" if v > 0 else "-inf")
 
 
@@ -129,8 +131,16 @@ def _print(out: Outcome, args: argparse.Namespace) -> None:
           f"{args.confidence:g} confidence")
     width = max([len(e.name) for e in out.estimates] + [8])
     for e in out.estimates:
-        und = f"  ({e.undecided} undecided at --max-steps)" if e.undecided else ""
-        print(f"  {e.name.ljust(width)}  {e.estimate:.6g}  [{e.low:.6g}, {e.high:.6g}]{und}")
+        why = [f"{e.undecided} undecided at --max-steps"] if e.undecided else []
+        if e.kind == "R" and e.low == -math.inf and e.high == math.inf:
+            # fewer than two runs with a value (see combine)
+            raise_ = [o for o, short in (("--runs", out.runs < 2),
+                                         ("--max-steps", e.undecided > 0)) if short]
+            why.append(f"no interval from fewer than 2 finished runs: raise "
+                       f"{' and '.join(raise_)}")
+        value = "n/a" if math.isnan(e.estimate) else f"{e.estimate:.6g}"
+        note = f"  ({'; '.join(why)})" if why else ""
+        print(f"  {e.name.ljust(width)}  {value}  [{e.low:.6g}, {e.high:.6g}]{note}")
     if not out.estimates:
         print("  (no properties declared)")
     rate = out.runs / out.seconds * 60 if out.seconds > 0 else 0.0

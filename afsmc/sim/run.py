@@ -157,10 +157,14 @@ def combine(prog: Program, results: list[BatchResult], confidence: float) -> lis
         if inf:
             out.append(Estimate(mo.name, "R", math.inf, math.inf, math.inf, und))
             continue
-        mean = total / m if m else 0.0
-        var = max(sq / m - mean * mean, 0.0) * m / (m - 1) if m > 1 else 0.0
+        mean = total / m if m else math.nan  # no run got a value: nothing to estimate
+        if m < 2:
+            # A sample variance needs two values: one run says nothing about the spread.
+            out.append(Estimate(mo.name, "R", mean, -math.inf, math.inf, und))
+            continue
+        var = max(sq / m - mean * mean, 0.0) * m / (m - 1)
         z = stats.normal_quantile(0.5 + confidence / 2)
-        half = z * math.sqrt(var / m) if m else math.inf
+        half = z * math.sqrt(var / m)
         # An undecided run's reward is only known to be at least its partial sum.
         out.append(Estimate(mo.name, "R", mean, mean - half, math.inf if und else mean + half, und))
     return out
