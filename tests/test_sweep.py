@@ -93,6 +93,34 @@ def test_constant_in_the_model_rebuilds_per_point(deadline: str) -> None:
         assert r.uniform == pytest.approx(want, rel=1e-5)
 
 
+NOT_MONOTONE = """machine nm;
+param int K = 1;
+var x : [0..K * (2 - K) + 1] init 0 clamp;
+mode Run = 0 initial;
+mode End = 1 final;
+action Inc in Run when x < 5 weight 1 { 0.5: x += 1; 0.5: goto End; }
+label top = x == 2;
+property top = P=? [ F "top" ];
+"""
+
+
+@pytest.mark.parametrize("values", ["0:2", "1,2,1"])
+def test_a_model_equal_at_the_ends_but_not_between_is_built_per_point(
+        tmp_path: Path, values: str) -> None:
+    """The model reads K, but is the same at both ends of the sweep (x's range is 0..1 at
+    K = 0 and K = 2, 0..2 at K = 1): every point still equals verify at that K
+    (P [F x = 2] = 0.25 at K = 1, 0 otherwise), not the first point's model."""
+    path = tmp_path / "nm.afsm"
+    path.write_text(NOT_MONOTONE)
+    res = sweep(str(path), "K", parse_values(values), properties=["top"], jobs=1)
+    for pt in res.points:
+        got = pt.property("top").value
+        r = run_cli("verify", str(path), "--const", f"K={int(pt.x)}", "--json", "-p", "top")
+        want = json.loads(r.out)["properties"][0]["value"]
+        assert got == pytest.approx(want, abs=1e-12), pt.x
+        assert got == pytest.approx(0.25 if pt.x == 1 else 0.0, abs=1e-12), pt.x
+
+
 def test_bound_sweep_matches_closed_form(tmp_path: Path) -> None:
     p = tmp_path / "geo.afsm"
     p.write_text(GEO)
