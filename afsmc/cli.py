@@ -43,9 +43,20 @@ class _Parser(argparse.ArgumentParser):
     line, split as a shell would (quotes group, `#` starts a comment); used for the
     scenario presets in examples/."""
 
+    _reading: tuple[str, ...] = ()  # the argument files being expanded, outermost first
+
     def _read_args_from_files(self, arg_strings: list[str]) -> list[str]:
         # argparse reports a missing file as a usage error, but lets a file that is not
         # text in the locale's encoding raise UnicodeDecodeError: the same usage error.
+        # argparse expands an argument file's own @FILE lines recursively: a file that names
+        # itself (or a cycle) would recurse until Python's limit.
+        chars = self.fromfile_prefix_chars or ""
+        files = [a[1:] for a in arg_strings if a[:1] and a[0] in chars]
+        for name in files:
+            real = os.path.realpath(name)
+            if real in self._reading:
+                self.error(f"the argument file {name!r} includes itself (through "
+                           f"{' -> '.join(os.path.basename(f) for f in self._reading)})")
         for arg in arg_strings:
             if arg[:1] and arg[0] in (self.fromfile_prefix_chars or ""):
                 try:
@@ -56,7 +67,21 @@ class _Parser(argparse.ArgumentParser):
                                f"byte {exc.start})")
                 except OSError:
                     pass  # argparse says it
-        return super()._read_args_from_files(arg_strings)
+        if not files:
+            return super()._read_args_from_files(arg_strings)
+        # Expanding one list at a time: the files of this list are the ones being read for
+        # the nested calls argparse makes on their contents.
+        outer = self._reading
+        out: list[str] = []
+        try:
+            for arg in arg_strings:
+                if arg[:1] and arg[0] in chars:
+                    self._reading = (*outer, os.path.realpath(arg[1:]))
+                out += super()._read_args_from_files([arg])
+                self._reading = outer
+        finally:
+            self._reading = outer
+        return out
 
     def convert_arg_line_to_args(self, arg_line: str) -> list[str]:
         try:
