@@ -43,7 +43,8 @@ def test_parse_values() -> None:
     assert parse_values("0:1:0.25") == [0, 0.25, 0.5, 0.75, 1]
     assert parse_values("3") == [3]
     assert parse_values("1, 2,5") == [1, 2, 5]
-    for bad in ("0:10:0", "5:1", "a:b", "1,x", "", "0:1000000"):
+    assert parse_values("30,10,20") == [10, 20, 30]  # the curves join neighbours
+    for bad in ("0:10:0", "5:1", "a:b", "1,x", "", "0:1000000", "3,3", "1,2.0,2"):
         with pytest.raises(ValueError):
             parse_values(bad)
 
@@ -104,15 +105,13 @@ property top = P=? [ F "top" ];
 """
 
 
-@pytest.mark.parametrize("values", ["0:2", "1,2,1"])
-def test_a_model_equal_at_the_ends_but_not_between_is_built_per_point(
-        tmp_path: Path, values: str) -> None:
+def test_a_model_equal_at_the_ends_but_not_between_is_built_per_point(tmp_path: Path) -> None:
     """The model reads K, but is the same at both ends of the sweep (x's range is 0..1 at
     K = 0 and K = 2, 0..2 at K = 1): every point still equals verify at that K
     (P [F x = 2] = 0.25 at K = 1, 0 otherwise), not the first point's model."""
     path = tmp_path / "nm.afsm"
     path.write_text(NOT_MONOTONE)
-    res = sweep(str(path), "K", parse_values(values), properties=["top"], jobs=1)
+    res = sweep(str(path), "K", parse_values("0:2"), properties=["top"], jobs=1)
     for pt in res.points:
         got = pt.property("top").value
         r = run_cli("verify", str(path), "--const", f"K={int(pt.x)}", "--json", "-p", "top")
@@ -305,7 +304,7 @@ def test_ctrl_c_prints_the_points_a_sweep_had(deadline: str, monkeypatch: pytest
     code = main(["sweep", deadline, "--const", "P_FAIL=0,0.25", "-p", "steps", "--jobs", "1"])
     err = capsys.readouterr().err
     assert code == 130 and "afsmc: interrupted" in err
-    assert "1 points were evaluated before this:" in err, err
+    assert "1 point was evaluated before this:" in err, err
     assert "\n0,steps,2.0," in err, err
 
 
@@ -366,3 +365,26 @@ def test_an_output_in_a_directory_that_takes_no_files_is_refused_before_any_poin
         assert r.code == 1 and "error[E003]" in r.err and "cannot create files in /proc" \
             in r.err, r.err
         assert "N412" not in r.err and "point" not in r.err.lower().replace("e003", ""), r.err
+
+
+def test_output_format_follows_the_name_and_dash_is_stdout(deadline: str, tmp_path: Path) -> None:
+    """-o x.json writes the JSON of --json (not CSV under a .json name); -o - prints the
+    CSV, as compile -o - does, even beside --plot, instead of a file named '-'."""
+    as_json = tmp_path / "points.json"
+    assert run_cli("sweep", deadline, "--const", "D=1:2", "-o", str(as_json)).code == 0
+    data = json.loads(as_json.read_text())
+    printed = run_cli("sweep", deadline, "--const", "D=1:2", "--json")
+    assert data == json.loads(printed.out)
+    plot = tmp_path / "p.png"
+    r = run_cli("sweep", deadline, "--const", "D=1:2", "-o", "-", "--plot", str(plot))
+    assert r.code == 0 and plot.exists()
+    assert sorted({row["D"] for row in rows(r.out)}) == ["1", "2"]
+    assert not Path("-").exists()
+    assert run_cli("sweep", deadline, "--const", "D=1:2", "-o", "-", "--json").code == 2
+
+
+def test_an_unknown_property_is_reported_once_before_any_point(deadline: str,
+                                                              no_points: None) -> None:
+    r = run_cli("sweep", deadline, "--const", "D=1:30", "-p", "nope")
+    assert r.code == 1 and r.err.count("error[E407]") == 1, r.err
+

@@ -34,7 +34,9 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    help="sweep the step bound k of the properties (F<=k, G<=k, U<=k, C<=k, I=k; "
                         "each must have one) instead")
     add_storm_options(p)
-    p.add_argument("-o", "--output", metavar="FILE.csv", help="write the points as CSV")
+    p.add_argument("-o", "--output", metavar="FILE",
+                   help="write the points to FILE: JSON if it ends in .json, else CSV; "
+                        "'-' is stdout")
     p.add_argument("--json", action="store_true", help="print the points as one JSON object")
     p.add_argument("--plot", metavar="FILE.png|FILE.svg",
                    help="draw min, max and uniform curves (matplotlib)")
@@ -108,6 +110,14 @@ def run(args: argparse.Namespace) -> int:
     if args.plot and args.output and os.path.realpath(args.plot) == os.path.realpath(args.output):
         usage_error(f"-o and --plot name the same file ({args.output}): the plot would replace "
                     "the CSV")
+    to_stdout = args.output == "-"
+    if to_stdout:
+        if args.json:
+            usage_error("-o - and --json both print to stdout; give one")
+        args.output = None  # stdout, as without -o
+    elif args.output is not None and not args.output:
+        usage_error("-o needs a file name ('-' for stdout)")
+    as_json = args.json or (args.output or "").lower().endswith(".json")
     progress = progress_printer(args)
     try:
         # A sweep can take hours: an output it could not write is said before it starts.
@@ -121,7 +131,8 @@ def run(args: argparse.Namespace) -> int:
                         progress=progress, reductions=reductions(args),
                         bisimulation=args.bisim, split=args.split)
         if args.output:
-            write_atomic(args.output, res.to_csv(), protect=(args.file,))
+            text = json.dumps(res.to_json(), indent=2) + "\n" if as_json else res.to_csv()
+            write_atomic(args.output, text, protect=(args.file,))
             if progress:
                 progress(f"wrote {args.output}")
         if args.plot:
@@ -138,7 +149,7 @@ def run(args: argparse.Namespace) -> int:
                     args.json)
     if args.json:
         print(json.dumps(res.to_json(), indent=2))
-    elif not args.output and not args.plot:
+    elif to_stdout or (not args.output and not args.plot):
         sys.stdout.write(res.to_csv())
     if progress:
         progress(f"{len(res.points)} points in {res.seconds:.1f} s")

@@ -38,7 +38,8 @@ MAX_POINTS = 10_000
 
 
 def parse_values(text: str) -> list[Number]:
-    """`start:stop:step` (stop included when the steps reach it) or `a,b,c`.
+    """`start:stop:step` (stop included when the steps reach it) or `a,b,c` (sorted; a
+    value given twice is an error).
 
     Integers stay integers; decimals are stepped exactly (0:1:0.1 has 11 points)."""
     text = text.strip()
@@ -72,7 +73,13 @@ def parse_values(text: str) -> list[Number]:
         if not d.is_finite():
             raise ValueError(f"not a finite number: {part.strip()!r}")
         out.append(_number(d))
-    return out
+    seen: set[Number] = set()
+    for x in out:
+        if x in seen:
+            raise ValueError(f"{fmt(x)} is given twice in {text!r}")
+        seen.add(x)
+    # In increasing order, as a range: the curves join neighbouring points.
+    return sorted(out)
 
 
 def _number(d: Decimal) -> Number:
@@ -427,6 +434,7 @@ def sweep(path: str, variable: str, values: Sequence[Number], *, kind: Kind = "c
     consts = dict(consts or {})
     if kind == "const":
         consts.pop(variable, None)
+        _check_names(path, source, consts | {variable: fmt(values[0])}, properties, formulas)
     else:
         _check_bounds(path, source, consts, properties, formulas, values)
     jobs = jobs or os.cpu_count() or 1
@@ -493,13 +501,29 @@ def _check_bounds(path: str, text: str, consts: dict[str, str], properties: Sequ
         raise loaded.remap_error(CompileError(diags))
 
 
+def _check_names(path: str, text: str, consts: dict[str, str], properties: Sequence[str],
+                 formulas: Sequence[str]) -> None:
+    """E407 (no such property, none declared) once, before any point: the names do not
+    depend on the swept constant, and every point would report them. Other errors may
+    depend on it; the points report those."""
+    try:
+        loaded = load_with_formulas(path, consts, formulas, text=text, run_checks=False)
+    except CompileError:
+        return
+    try:
+        select(loaded.model, properties, loaded.adhoc)
+    except CompileError as exc:
+        raise loaded.remap_error(exc) from None
+
+
 def _kept(path: str, variable: str, kind: Kind, points: list[SweepPoint]) -> list[Diagnostic]:
     """A note with the points evaluated before a failure or a Ctrl-C, as CSV."""
     if not points:
         return []
     points = sorted(points, key=lambda pt: pt.x)
     part = SweepResult(path, variable, kind, "", points)
-    return [Diagnostic("N412", Severity.NOTE, f"{len(points)} points were evaluated before "
+    return [Diagnostic("N412", Severity.NOTE, f"{len(points)} point{'s' if len(points) != 1 else ''} "
+                       f"{'were' if len(points) != 1 else 'was'} evaluated before "
                        "this:\n" + part.to_csv().rstrip("\n"), None)]
 
 
