@@ -371,6 +371,9 @@ def test_results_json_overlay(tmp_path: Path) -> None:
     nodes, _, _ = svg_graph(out)
     assert nodes["results"] == "finish: 0.25 – 0.5 (uniform 0.375) | fault: 0.125 | steps: 3 – inf"
     assert nodes["m1"] == "Dock | 1 | P(reach) 0.75"
+    rj.write_text(json.dumps({**results, "constants": {"CELLS": 4, "ROUNDS": 3}}))
+    r = run_cli("diagram", str(EXAMPLES / "patrol.afsm"), "--results", str(rj), "-o", str(out))
+    assert r.code == 0, r.err  # the constants drawn
     for bad, said in (("{not json", "is not JSON"), ('{"x": 1}', '"properties" list'),
                       ('{"properties": [1]}', '"properties" list'),
                       (json.dumps({**results, "machine": "uav"}), "results of machine uav"),
@@ -384,6 +387,11 @@ def test_results_json_overlay(tmp_path: Path) -> None:
                        "property p has max True, not a number"),
                       (json.dumps({"properties": [{"name": "p", "min": 0.6, "max": 0.4}]}),
                        "property p has min 0.6 above its max 0.4"),
+                      (json.dumps({**results, "constants": {"CELLS": 6, "ROUNDS": 3}}),
+                       "holds results for CELLS=6; the diagram is of CELLS=4"),
+                      (json.dumps({"file": "p.afsm", "variable": "CELLS", "points": [],
+                                   "properties": [{"name": "finish"}]}),
+                       "is the output of `afsmc sweep`"),
                       (json.dumps({**results, "modes": [{"mode": "Dock", "value": 0.5},
                                                         {"number": 1, "value": 0.25}]}),
                        "mode Dock is listed twice")):

@@ -74,6 +74,21 @@ def test_a_wrong_constant_fails_at_its_line(tmp_path: Path) -> None:
     assert r.err.count("E502") == 1  # only that constant
 
 
+def test_json_carries_the_drift_and_errors_are_one_object(tmp_path: Path) -> None:
+    """--json: the drifted constant's E502 is in the object (it went nowhere before), and
+    an error that stops sim-check is {"diagnostics": [...]}, as for verify and simulate."""
+    path, _, _ = _drifted(tmp_path)
+    r = run_cli("sim-check", str(path), "--json")
+    data = json.loads(r.out)
+    assert r.code == 1 and [d["code"] for d in data["diagnostics"]] == ["E502"]
+    assert "T_AP" in data["diagnostics"][0]["message"]
+    for command in ("sim-check", "simulate"):
+        r = run_cli(command, str(MISSION), "--json", "--const", "NOPE=1")
+        data = json.loads(r.out)
+        assert r.code == 1 and isinstance(data, dict), (command, r.out)
+        assert data["diagnostics"] and all(d["code"].startswith("E") for d in data["diagnostics"])
+
+
 def test_a_wrong_probability_fails(tmp_path: Path) -> None:
     path = tmp_path / "p.afsm"
     path.write_text(MISSION.read_text().replace("P_DROP = 0.011 from", "P_DROP = 0.2 from"))

@@ -129,10 +129,25 @@ def read_results(path: str, model: ir.Model) -> Overlay:
             isinstance(e, dict) and isinstance(e.get("name"), str) for e in data["properties"]):
         raise _error("E611", f"{path}: expected an object with a \"properties\" list of "
                      "named results", hint="pass the output of `afsmc verify --json`")
+    if "points" in data:
+        raise _error("E611", f"{path} is the output of `afsmc sweep`, a value per point: the "
+                     "diagram takes one result per property",
+                     hint="pass the output of `afsmc verify --json` at the constants drawn")
     machine = data.get("machine")
     if isinstance(machine, str) and machine != model.name:
         raise _error("E611", f"{path} holds the results of machine {machine}, not {model.name}",
                      hint=f"run `afsmc verify --json` on the file of machine {model.name}")
+    given = data.get("constants")
+    if isinstance(given, dict):
+        # The diagram shows no constants: numbers of another instance would pass unnoticed.
+        here = {c.name: c.value for c in model.constants if c.is_param}
+        differ = sorted(n for n in set(given) | set(here)
+                        if n not in here or n not in given or given[n] != here[n])
+        if differ:
+            theirs = ", ".join(f"{n}={given.get(n, 'unset')}" for n in differ)
+            mine = ", ".join(f"{n}={here.get(n, 'unset')}" for n in differ)
+            raise _error("E611", f"{path} holds results for {theirs}; the diagram is of {mine}",
+                         hint="pass the --const values the results were computed with")
     notes: list[str] = []
     for entry in data.get("properties", []):
         _check_numbers(path, entry, f"property {entry['name']}")

@@ -49,7 +49,7 @@ def run(args: argparse.Namespace) -> int:
     try:
         checked = load(args.file, overrides(args), text=text)
     except CompileError as exc:
-        return fail(exc, args.json)
+        return fail(exc, args.json, wrapped=True)
     model = checked.model
     sourced = [c for c in model.constants if c.source is not None]
     results: list[Evidence] = []
@@ -63,7 +63,7 @@ def run(args: argparse.Namespace) -> int:
         except Exception as exc:  # a broken third-party simulator: report, don't crash
             return fail(CompileError([Diagnostic(
                 "E505", Severity.ERROR, f"simulator '{c.source.ref}' failed: {exc}",
-                c.source.span)]), args.json)
+                c.source.span)]), args.json, wrapped=True)
     by_name = {c.name: c for c in sourced}
     drifted = [e for e in results if not e.consistent]
     updated = False
@@ -75,10 +75,17 @@ def run(args: argparse.Namespace) -> int:
         # Rewriting the input is the point here: no `protect`; keep its line endings and mode.
         write_atomic(args.file, rewrite(text, args.file, changes), newline=None, keep_mode=True)
         updated = True
+    diags = [] if updated else [Diagnostic(
+        "E502", Severity.ERROR,
+        f"constant '{e.name}' = {e.declared} has drifted from simulation '{e.ref}' "
+        f"(mean {e.mean:.4g}; the rule accepts {e.accept})", by_name[e.name].span,
+        hint=f"the simulation suggests {e.suggestion}; `afsmc sim-check --update` rewrites it")
+        for e in drifted]
     if args.json:
         print_json({"file": args.file, "runs": args.runs, "seed": args.seed,
                     "updated": [e.name for e in drifted] if updated else [],
-                    "constants": [e.to_json() for e in results]})
+                    "constants": [e.to_json() for e in results],
+                    "diagnostics": [d.to_json() for d in diags]})
     else:
         _table(results)
     if not sourced:
@@ -89,12 +96,6 @@ def run(args: argparse.Namespace) -> int:
               + ", ".join(f"{e.name} = {e.suggestion}" for e in drifted), file=sys.stderr)
         return 0
     if drifted:
-        diags = [Diagnostic(
-            "E502", Severity.ERROR,
-            f"constant '{e.name}' = {e.declared} has drifted from simulation '{e.ref}' "
-            f"(mean {e.mean:.4g}; the rule accepts {e.accept})", by_name[e.name].span,
-            hint=f"the simulation suggests {e.suggestion}; `afsmc sim-check --update` rewrites it")
-            for e in drifted]
         if not args.json:
             report(diags)
         return 1

@@ -91,13 +91,15 @@ def run(args: argparse.Namespace) -> int:
             write_atomic(args.traces_out, json.dumps(out.traces, indent=1) + "\n",
                          protect=(args.file,))
     except CompileError as exc:
-        return fail(exc, args.json)
+        return fail(exc, args.json, wrapped=True)
     except SimError as exc:
         return fail(CompileError([Diagnostic("E506", Severity.ERROR,
-                                             f"cannot simulate {args.file}: {exc}", None)]))
+                                             f"cannot simulate {args.file}: {exc}", None)]),
+                    args.json, wrapped=True)
     except OSError as exc:  # e.g. the Dask scheduler is unreachable
         return fail(CompileError([Diagnostic("E507", Severity.ERROR,
-                                             f"simulation failed: {exc}", None)]))
+                                             f"simulation failed: {exc}", None)]),
+                    args.json, wrapped=True)
     if args.json:
         print_json(_json(out, args))
     else:
