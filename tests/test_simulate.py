@@ -248,3 +248,17 @@ def test_a_negative_seed_is_a_usage_error(command: str) -> None:
     # numpy takes no negative seed: it was a traceback (simulate) or blamed a simulator (E505)
     r = run_cli(command, str(PATROL), "--seed", "-1", "--runs", "10")
     assert r.code == 2 and "--seed: expected an integer >= 0, got '-1'" in r.err, r.err
+
+
+def test_options_that_would_be_ignored_are_refused_or_honoured() -> None:
+    """More traces than runs, --jobs beside --dask, and --list with a FILE are usage errors
+    (each was silently ignored); --json keeps the traces --traces asked for."""
+    assert run_cli("simulate", str(PATROL), "--runs", "3", "--traces", "5").code == 2
+    assert run_cli("simulate", str(PATROL), "--dask", "tcp://127.0.0.1:1", "--jobs", "2").code == 2
+    r = run_cli("sim-check", "--list", str(PATROL))
+    assert r.code == 2 and "takes no FILE" in r.err
+    data = sim_json(PATROL, "--runs", "20", "--traces", "2")
+    traces = data["traces"]
+    assert isinstance(traces, list) and len(traces) == 2
+    assert all(isinstance(t, list) and t for t in traces)
+    assert "traces" not in sim_json(PATROL, "--runs", "20")

@@ -32,6 +32,10 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     if args.list:
+        if args.file is not None:
+            print(f"afsmc sim-check: error: --list lists every simulator output; it takes no "
+                  f"FILE (got {args.file})", file=sys.stderr)
+            return 2
         for ref in registry.available():
             print(f"{ref}  ({registry.kind(ref)})")
         return 0

@@ -64,6 +64,14 @@ def run(args: argparse.Namespace) -> int:
     if not 0.0 < args.confidence < 1.0:
         print("afsmc simulate: error: --confidence must be in (0, 1)", file=sys.stderr)
         return 2
+    if args.traces > args.runs:
+        print(f"afsmc simulate: error: --traces {args.traces} asks for more sample runs than "
+              f"--runs {args.runs} makes", file=sys.stderr)
+        return 2
+    if args.dask and args.jobs != 1:
+        print("afsmc simulate: error: --jobs sets local worker processes; with --dask the "
+              "cluster's workers run the batches: give one of them", file=sys.stderr)
+        return 2
     try:
         if args.traces_out:  # said before the runs, not after them
             check_writable(args.traces_out, protect=(args.file,))
@@ -122,6 +130,7 @@ def _json(out: Outcome, args: argparse.Namespace) -> dict[str, Any]:
         "properties": [{"name": e.name, "estimate": _num(e.estimate), "low": _num(e.low),
                         "high": _num(e.high), "undecided": e.undecided}
                        for e in out.estimates],
+        **({"traces": out.traces} if args.traces else {}),  # as --traces-out writes them
     }
 
 
