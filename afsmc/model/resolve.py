@@ -138,6 +138,7 @@ class _Resolver:
         for d in decls:
             if isinstance(d, ast.VarDecl):
                 self._variable(d)
+        self._check_action_vs_variable()
         self.formula_decls = {d.name.text: d for d in decls if isinstance(d, ast.FormulaDecl)}
         for d in decls:
             if isinstance(d, ast.FormulaDecl):
@@ -213,9 +214,25 @@ class _Resolver:
         table[name.text] = name.span
 
     def _check_internal(self, name: ast.Ident, kind: str) -> None:
-        if name.text.startswith("__afsmc"):  # the queries and names afsmc generates
+        # __afsmc...: the queries and names afsmc generates; any other __ name: Storm's
+        # parsers refuse it ("illegal identifier").
+        if name.text.startswith("__"):
             self.rep.error("E202", f"'{name.text}' cannot name {_a(kind)}: names that start "
-                           "with __afsmc are afsmc's own", name.span, hint="choose another name")
+                           "with __ are reserved for Storm and afsmc", name.span,
+                           hint=f"choose another name, e.g. '{name.text.lstrip('_')}'"
+                           if name.text.strip("_") else "choose another name")
+
+    def _check_action_vs_variable(self) -> None:
+        """An action (or hazard) named like a variable: PRISM takes it, but Storm's symbolic
+        engines (hybrid, dd; `auto` on a large model) cannot build it ("a meta variable
+        already exists"), so the sparse engine would be the only one left."""
+        for name, span in self.action_names.items():
+            var = self.vars.get(name)
+            if var is not None:
+                self.rep.error("E201", f"'{name}' names both an action and the variable "
+                               f"{var.display}: Storm's symbolic engines need them distinct",
+                               span, hint=f"rename the action, e.g. '{name}_act'",
+                               related=[Related(f"{var.display} is declared here", var.span)])
 
     def _check_reserved(self, name: ast.Ident, kind: str, reserved: frozenset[str] = RESERVED) -> None:
         self._check_internal(name, kind)
