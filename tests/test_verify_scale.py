@@ -629,3 +629,36 @@ def test_progress_lines_thin_out_as_a_phase_goes_on() -> None:
         lines += 1
     assert 75 <= lines <= 85, lines
     assert report_interval(100, 45.0) == 45.0  # never more often than asked
+
+
+def test_sigterm_stops_a_small_model_with_a_huge_step_bound(tmp_path: Path) -> None:
+    """A 7-state model with F<=10^11 checks for hours. In afsmc's own process Storm's check
+    would not see Ctrl-C or SIGTERM, so such a check runs in a child process: SIGTERM ends
+    the command (exit 143) within seconds, and no Storm process is left."""
+    import os
+    import signal
+    import sys
+    import time
+
+    path = tmp_path / "long.afsm"
+    path.write_text("var x : [0..5] init 0 clamp;\nmode A initial;\nmode B final;\n"
+                    "action a in A when x < 5 { 0.5: x += 1; 0.5: skip; }\n"
+                    "action b in A when x >= 5 { goto B; }\nlabel done = mode == B;\n"
+                    "property p = P=? [ F<=99999999999 \"done\" ];\n")
+    proc = subprocess.Popen([sys.executable, "-m", "afsmc", "verify", str(path), "--engine",
+                             "sparse"], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                            text=True, start_new_session=True)
+    assert proc.stderr is not None
+    for line in proc.stderr:
+        if "built the" in line:
+            break
+    time.sleep(1.0)
+    os.kill(proc.pid, signal.SIGTERM)  # afsmc only, as `kill PID` does
+    try:
+        _, err = proc.communicate(timeout=30)
+    except subprocess.TimeoutExpired:
+        os.killpg(proc.pid, signal.SIGKILL)
+        raise AssertionError("SIGTERM did not stop the check") from None
+    assert proc.returncode == 143, err
+    assert "afsmc: terminated" in err and "Traceback" not in err
+    _group_ends(proc.pid)

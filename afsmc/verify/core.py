@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import dataclasses
 import importlib
+import math
 import os
 import re
 import time
@@ -25,7 +26,7 @@ from afsmc.model.lower import Lowered
 from afsmc.model.names import did_you_mean
 from afsmc.model.pretty import show
 from afsmc.model.reduce import Reductions
-from afsmc.model.semantics import inline
+from afsmc.model.semantics import inline, static_value
 from afsmc.stack import deep
 from afsmc.syntax.parser import parse, parse_property
 from afsmc.verify.guard import (
@@ -635,6 +636,17 @@ def _refuse_symbolic(props: Sequence[ir.Property], model: ir.Model, engine: Engi
             p.span, hint=_symbolic_hint(p)) for p, why in bad])
 
 
+# Above this many state-steps (states x step bound), a check runs in a child process.
+IN_PROCESS_WORK = 500_000_000
+
+
+def _steps(p: ir.Property, model: ir.Model) -> int:
+    """The step bound of `p` (F<=k, C<=k, I=k, ...), or 1 if it has none."""
+    k = p.path.bound
+    v = static_value(k, model) if k is not None else None
+    return max(1, int(v)) if v is not None and math.isfinite(v) else 1
+
+
 def _symbolic_hint(p: ir.Property) -> str:
     if _total_reward(p):
         return "use --engine sparse, a step bound (C<=k), or R [ F target ]"
@@ -787,6 +799,10 @@ def check(model: ir.Model, props: Sequence[ir.Property], *, via: Via = "prism",
             # A fresh process per unit when there are several, except where no child
             # process may be started (isolate=False: Dask workers).
             fresh = isolate if isolate is False or len(units) == 1 else True
+            if fresh is None and bound * max(_steps(p, model) for p in group) > IN_PROCESS_WORK:
+                # A small model with a huge step bound (F<=10^11) checks for hours, and a
+                # check in this process ignores Ctrl-C and SIGTERM; a child can be stopped.
+                fresh = True
             if progress is not None and len(units) > 1:
                 # Long runs (scenario 1: over an hour) say how far they are.
                 where = ("in its own Storm process" if len(unit) == 1 else
