@@ -35,6 +35,13 @@ def _beyond(lo: float, hi: float) -> float | None:
     return None
 
 
+def _min_mod_minus_one(n: E.Expr, model: ir.Model, memo: dict[int, tuple[float, float]]) -> bool:
+    if not (isinstance(n, E.Call) and n.func == "mod" and n.type is Type.INT):
+        return False
+    a, b = (bounds(arg, model, memo=memo) for arg in n.args)
+    return a[0] <= INT64[0] and b[0] <= -1 <= b[1]
+
+
 def check_overflow(model: ir.Model, rep: Reporter) -> None:
     show = with_names(model.display_names())
     reported: set[tuple[int, int] | int] = set()
@@ -52,6 +59,17 @@ def check_overflow(model: ir.Model, rep: Reporter) -> None:
             key = node_key(n)
             below = key in reported or any(tainted[id(c)] for c in kids)
             tainted[id(n)] = below
+            if not below and _min_mod_minus_one(n, model, memo):
+                # -2^63 mod -1 is 0, but the 64-bit division behind it traps: Storm's JANI
+                # route dies of SIGFPE (constants too: no other check sees them so).
+                reported.add(key)
+                tainted[id(n)] = True
+                rep.error("E307", f"{show(n)} divides -2^63 by -1 in some state, which "
+                          f"overflows a 64-bit integer (Storm stops with a floating-point "
+                          f"exception), where {site.what} is evaluated",
+                          n.span if n.span is not None else site.expr.span,
+                          hint="keep the first operand above -2^63 or the second away from -1")
+                continue
             # An integer the machine computes (not a variable, constant or literal, whose
             # own ranges are checked where they are declared).
             if below or n.type is not Type.INT or free[id(n)] or not isinstance(
