@@ -11,6 +11,7 @@ from collections.abc import Callable
 from afsmc.check import (
     distributions,
     int_pow,
+    mode_numbers,
     modegraph,
     overflow,
     ranges,
@@ -37,6 +38,7 @@ RULES: tuple[Rule, ...] = (
     ranges.check_update_ranges,
     unused.check_unused,
     check_sim_sources,
+    mode_numbers.check_mode_numbers,
     modegraph.check_unreachable, modegraph.check_cannot_end, modegraph.check_never_fires,
 )
 
@@ -51,7 +53,8 @@ def register(rule: Rule) -> None:
 # Rules that read the model's structure only. After an integer overflow (E307) only these
 # run: the others search states with 64-bit arithmetic and would report what the wrapped
 # values make of the model (a deadlock, an update out of range) that is not there.
-STRUCTURAL: tuple[Rule, ...] = (unused.check_unused, check_sim_sources)
+STRUCTURAL: tuple[Rule, ...] = (unused.check_unused, check_sim_sources,
+                                 mode_numbers.check_mode_numbers)
 
 
 def run(model: ir.Model) -> list[Diagnostic]:
