@@ -437,6 +437,8 @@ class _Resolver:
                 inits = [None] * len(d.type.fields)
             elif isinstance(d.init, ast.TupleLit) and len(d.init.items) == len(d.type.fields):
                 inits = list(d.init.items)
+            elif len(d.type.fields) == 1 and not isinstance(d.init, ast.TupleLit):
+                inits = [d.init]  # `(1)` is the number 1: one field takes a plain value
             else:
                 self.rep.error("E217", f"'{d.name.text}' has {len(d.type.fields)} fields; "
                                "give one initial value per field", d.init.span)
@@ -676,9 +678,17 @@ class _Resolver:
                     self.rep.error("E215", f"'{item.name.text}' is not a mode", item.span,
                                    hint=did_you_mean(item.name.text, by_name))
             elif isinstance(item, ast.ModeNumber):
-                out.add(item.number)
+                # as in an action's mode set: a number no mode has is a typo, not `false`
+                if item.number in by_name.values():
+                    out.add(item.number)
+                else:
+                    self.rep.error("E215", f"no mode has number {item.number}", item.span)
             else:
-                out |= set(range(item.lo, item.hi + 1))
+                hit = {n for n in by_name.values() if item.lo <= n <= item.hi}
+                if not hit:
+                    self.rep.error("E215", f"no mode has a number in {item.lo}..{item.hi}",
+                                   item.span)
+                out |= hit
         numbers = set(by_name.values())
         return tuple(sorted((numbers - out) if ms.every else (out & numbers)))
 
@@ -914,6 +924,9 @@ class _Resolver:
             src = value.name.text
             return [E.VarRef(f"{src}_{f}", self.vars[f"{src}_{f}"].type, value.span)
                     for f in fields if f"{src}_{f}" in self.vars]
+        if len(fields) == 1 and not (isinstance(value, ast.Name) and value.name.text in
+                                     self.tuples):
+            return [self._expr(value, ctx)]  # one field: `p := 2`, `p := (2)`
         return None
 
     def _check_weight_cycles(self, actions: list[ir.Action]) -> None:

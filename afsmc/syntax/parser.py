@@ -611,6 +611,11 @@ class _Builder(Transformer[Token, Any]):
         return ("preemptive", c[0])
 
     def body(self, meta: Any, c: list[Any]) -> ast.Body:
+        if not c:
+            # `{ }` read as `{ skip; }` would hide a body left unwritten
+            self.reporter.error("E119", "an empty body: say what the action does",
+                                self._s(meta), hint="write '{ skip; }' for an action that "
+                                "changes nothing")
         outcomes = [x for x in c if x.prob is not None]
         plain = [x for x in c if x.prob is None]
         if outcomes and plain:
