@@ -353,7 +353,7 @@ async def test_rename_refusals_are_request_failures_with_reasons(client: Languag
     err = await refused(rename_to("S"))
     assert "'S' cannot name an action: it is reserved in PRISM or Storm" in err.message
     err = await refused(rename_to("__afsmc_step"))
-    assert "afsmc's own" in err.message
+    assert "reserved for Storm and afsmc" in err.message
     err = await refused(rename_to("goto"))
     assert "'goto' is not a name that can be declared" in err.message
     at_label = position(SMALL, SMALL.index("done ="))
