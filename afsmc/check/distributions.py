@@ -3,6 +3,7 @@ hazard can happen."""
 
 from __future__ import annotations
 
+from afsmc.check.ranges import value_at
 from afsmc.check.undefined import defined
 from afsmc.diagnostics import Reporter, Span
 from afsmc.model import expr as E
@@ -22,7 +23,8 @@ def _check(model: ir.Model, rep: Reporter, owner: str, when: dict[int, E.Expr],
         for mode, cond in when.items():
             wit = find(model, mode, E.conj(cond, defined(o.prob, model), bad))
             if wit is not None:
-                rep.error("E304", f"a probability of {owner} is outside [0, 1] in the state {wit}",
+                rep.error("E304", f"a probability of {owner} is "
+                          f"{value_at(model, o.prob, wit, mode)}, outside [0, 1], in the state {wit}",
                           o.prob.span or o.span)
                 break
     total: E.Expr = outcomes[0].prob
@@ -60,7 +62,8 @@ def check_distributions(model: ir.Model, rep: Reporter) -> None:
         for mode, cond in when.items():
             wit = find(model, mode, E.conj(cond, defined(h.prob, model), bad))
             if wit is not None:
-                rep.error("E304", f"the probability of hazard {h.name} is outside [0, 1] in the "
+                rep.error("E304", f"the probability of hazard {h.name} is "
+                          f"{value_at(model, h.prob, wit, mode)}, outside [0, 1], in the "
                           f"state {wit}", h.prob.span or h.span)
                 break
         _check(model, rep, f"hazard {h.name}", when, h.outcomes, h.span)

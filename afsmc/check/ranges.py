@@ -18,10 +18,12 @@ from afsmc.model.search import Witness, find
 from afsmc.model.semantics import enabled, fire_condition, inline
 
 
-def _value(model: ir.Model, e: E.Expr, w: Witness, mode: int, consts: dict[str, int]) -> str:
+def value_at(model: ir.Model, e: E.Expr, w: Witness, mode: int,
+             consts: dict[str, int] | None = None) -> str:
+    """`e`'s value in a witness state, for a message ("?" if it cannot be computed)."""
     by_display = {v.display: v.name for v in model.variables}
     env = Env(vars={by_display[n]: val for n, val in w.values}, mode=mode,
-              consts=model.const_values | consts)
+              consts=model.const_values | (consts or {}))
     try:
         return number(evaluate(inline(e, model), env))
     except (EvalError, KeyError):
@@ -60,7 +62,7 @@ def _check_updates(model: ir.Model, rep: Reporter, when: dict[int, E.Expr],
                     rep.error(
                         "E303",
                         f"this update can take {var.display} out of its range [{var.lo}..{var.hi}]: "
-                        f"{show(u.value)} = {_value(model, u.value, wit, mode, consts)} in the "
+                        f"{show(u.value)} = {value_at(model, u.value, wit, mode, consts)} in the "
                         f"state {wit}{chosen}",
                         u.span,
                         hint=f"guard the action, bound the value with min/max, or declare "

@@ -109,6 +109,8 @@ class _Resolver:
         self.tuples: dict[str, tuple[str, ...]] = {}  # tuple var -> its field names
         # fields left out after their own E201 (`pos.x` clashing with `pos_x`): no E223 on use
         self.dropped_fields: set[tuple[str, str]] = set()
+        self.placeholders: set[int] = set()  # ids of _placeholder's stand-ins
+        self.kept: list[E.Expr] = []
         self.modes: dict[str, ir.Mode] = {}
         self.formulas: dict[str, ir.Formula] = {}
         self.formula_decls: dict[str, ast.FormulaDecl] = {}
@@ -478,11 +480,14 @@ class _Resolver:
             return
         lo = self._const_value(t.lo, Type.INT)
         hi = self._const_value(t.hi, Type.INT)
+        broken = False  # the range is reported: no E220 against a range never written
         if not (isinstance(lo, int) and isinstance(hi, int)):
-            lo, hi = 0, 0
+            lo, hi, broken = 0, 0, True
         if lo > hi:
             self.rep.error("E219", f"range [{lo}..{hi}] of '{display}' is empty", t.span)
-            hi = lo
+            hi, broken = lo, True
+        if broken:
+            init = None
         if not (STATE_INT[0] <= lo and hi <= STATE_INT[1]):
             self.rep.error("E249", f"range [{lo}..{hi}] of '{display}' {_BEYOND_STATE_INT}",
                            t.span, hint=_STATE_INT_HINT)
@@ -522,8 +527,18 @@ class _Resolver:
         return f
 
     # ---- expressions ---------------------------------------------------------------
+    def _placeholder(self, s: Span) -> E.Expr:
+        """What an expression that was just reported stands for: no type error follows
+        from it (a missing field in `F p.z` is E223, not also E222)."""
+        x = E.Lit(0, Type.INT, s)
+        self.placeholders.add(id(x))
+        self.kept.append(x)  # keeps its id from being reused
+        return x
+
     def _bool(self, e: ast.Expr, ctx: Ctx) -> E.Expr:
         x = self._expr(e, ctx)
+        if id(x) in self.placeholders:
+            return E.TRUE
         if x.type is not Type.BOOL:
             self.rep.error("E222", f"{ctx.what} must be true or false, not {_a(x.type.value)}", e.span,
                            hint="compare it, e.g. 'x > 0'")
@@ -532,7 +547,7 @@ class _Resolver:
 
     def _num(self, e: ast.Expr, ctx: Ctx) -> E.Expr:
         x = self._expr(e, ctx)
-        if not x.type.numeric:
+        if not x.type.numeric and id(x) not in self.placeholders:
             self.rep.error("E222", f"{ctx.what} must be a number, not {_a(x.type.value)}", e.span)
             return E.Lit(0, Type.INT, e.span)
         return x
@@ -593,13 +608,13 @@ class _Resolver:
                     self.rep.error("E223", f"'{e.base.text}' has no fields", e.span)
                 else:
                     self._undefined(e.base, ctx)
-                return E.Lit(0, Type.INT, s)
+                return self._placeholder(s)
             if e.field.text not in self.tuples[e.base.text]:
                 if (e.base.text, e.field.text) in self.dropped_fields:
-                    return E.Lit(0, Type.INT, s)
+                    return self._placeholder(s)
                 self.rep.error("E223", f"'{e.base.text}' has no field '{e.field.text}'", e.field.span,
                                hint=did_you_mean(e.field.text, self.tuples[e.base.text]))
-                return E.Lit(0, Type.INT, s)
+                return self._placeholder(s)
             return self._var(f"{e.base.text}_{e.field.text}", ctx, s,
                              f"{e.base.text}.{e.field.text}")
         if isinstance(e, ast.ModeRef):
@@ -701,14 +716,14 @@ class _Resolver:
                                hint=f"its weight is written w({n})" if ctx.weights else None)
             else:
                 self._undefined(ident, ctx)
-            return E.Lit(0, Type.INT, s)
+            return self._placeholder(s)
         if kind in ("constant", "formula"):
             self.used.add(n)
         if kind == "constant":
             c = self.consts.get(n)
             if c is None:
                 self.rep.error("E228", f"constant '{n}' is used before its declaration", s)
-                return E.Lit(0, Type.INT, s)
+                return self._placeholder(s)
             if c.is_interval and not ctx.intervals:
                 self.rep.error(
                     "E229", f"interval constant '{n}' can only be used in updates, not in {ctx.what}",
@@ -718,7 +733,7 @@ class _Resolver:
             if n in self.tuples:
                 self.rep.error("E230", f"'{n}' is a tuple; name a field, e.g. {n}.{self.tuples[n][0]}",
                                s)
-                return E.Lit(0, Type.INT, s)
+                return self._placeholder(s)
             return self._var(n, ctx, s, n)
         if kind == "mode":
             mode = self.modes.get(n)
@@ -726,16 +741,16 @@ class _Resolver:
         # formula
         if ctx.constant_only:
             self.rep.error("E231", f"{ctx.what} cannot use formula '{n}'", s)
-            return E.Lit(0, Type.INT, s)
+            return self._placeholder(s)
         f = self._formula(n) if n in self.formula_decls else None
         if f is None:
-            return E.Lit(0, Type.INT, s)
+            return self._placeholder(s)
         return E.FormulaRef(n, f.value.type, s)
 
     def _stateless(self, ctx: Ctx, s: Span, display: str) -> E.Expr:
         """E224: a variable where only constants may stand."""
         self.rep.error("E224", f"{ctx.what} cannot depend on variable '{display}'", s)
-        return E.Lit(0, Type.INT, s)
+        return self._placeholder(s)
 
     def _var(self, flat: str, ctx: Ctx, s: Span, display: str) -> E.Expr:
         # Before the variables are resolved (constants come first), and for a variable with
@@ -744,7 +759,7 @@ class _Resolver:
             return self._stateless(ctx, s, display)
         v = self.vars.get(flat)
         if v is None:  # a variable with errors
-            return E.Lit(0, Type.INT, s)
+            return self._placeholder(s)
         return E.VarRef(flat, v.type, s)
 
     def _call(self, e: ast.Call, ctx: Ctx) -> E.Expr:
@@ -753,32 +768,32 @@ class _Resolver:
         if f == "w":
             if len(e.args) != 1 or not isinstance(e.args[0], ast.Name):
                 self.rep.error("E232", "w(...) takes one action name", s)
-                return E.Lit(0, Type.INT, s)
+                return self._placeholder(s)
             target = e.args[0].name
             if not ctx.weights:
                 self.rep.error("E232", f"w({target.text}) can only be used in a weight", s)
-                return E.Lit(0, Type.INT, s)
+                return self._placeholder(s)
             if target.text not in self.action_names:
                 self.rep.error("E203", f"'{target.text}' is not an action", target.span,
                                hint=did_you_mean(target.text, self.action_names))
-                return E.Lit(0, Type.INT, s)
+                return self._placeholder(s)
             if target.text in self.branch_hazards:
                 self.rep.error("E248", f"'{target.text}' is a probabilistic hazard: it has no "
                                "weight, it is a branch of every action of its modes", target.span,
                                hint="w(...) names an action or a hazard with a condition (when)")
-                return E.Lit(0, Type.INT, s)
+                return self._placeholder(s)
             return E.WeightRef(target.text, s)
         if f not in E.FUNCTIONS:
             self.rep.error("E233", f"unknown function '{f}'", e.func.span,
                            hint=did_you_mean(f, [*E.FUNCTIONS, "w"]) or
                            "functions: " + ", ".join(sorted(E.FUNCTIONS)) + ", w(Action)")
-            return E.Lit(0, Type.INT, s)
+            return self._placeholder(s)
         args = tuple(self._num(a, ctx) for a in e.args)
         arity = {"floor": 1, "ceil": 1, "pow": 2, "mod": 2}.get(f)
         if (arity is not None and len(args) != arity) or (arity is None and len(args) < 2):
             want = f"{arity}" if arity else "at least 2"
             self.rep.error("E234", f"{f} takes {want} argument(s), not {len(args)}", s)
-            return E.Lit(0, Type.INT, s)
+            return self._placeholder(s)
         if f in ("floor", "ceil"):
             t = Type.INT
         elif f == "mod":

@@ -76,6 +76,11 @@ _EXAMPLES: dict[tuple[str, str], list[str]] = {
         "action A in S { 0.5: goto B x := 1; }",
         "action A in S { goto B x := 1; }",
     ],
+    ("E120", "the guard comes before the weight: 'action NAME in MODES when GUARD "
+             "weight W { ... }'"): [
+        "action A in S weight 1 when x > 1 { skip; }",
+        "action A in * weight x when x > 1 { skip; }",
+    ],
     ("E108", "an action needs its modes: 'action NAME in MODE { ... }'"): [
         "action A { skip; }",
         "action A when x > 1 { skip; }",
@@ -259,6 +264,8 @@ def _scan(text: str, upto: int) -> _Scan:
 
 # A temporal operator (F, G, X, possibly step-bounded) right before a position
 _TEMPORAL_BEFORE = re.compile(r"\b[FGX](?:\s*<=\s*[\w.]+)?\s*$")
+# ... in brackets at the start of a path formula: `[ (F` (`F (F` is a nested one)
+_BRACKETED_TEMPORAL = re.compile(r"\[\s*(?:\(\s*)+[FGX](?:\s*<=\s*[\w.]+)?\s*$")
 
 
 def _report_syntax_error(exc: UnexpectedInput, source: Source, reporter: Reporter,
@@ -297,6 +304,11 @@ def _report_syntax_error(exc: UnexpectedInput, source: Source, reporter: Reporte
         # The parser state is the one after any operand (`label a = x "l";`): only a
         # temporal operator just before the failing token makes it a nested one.
         matched = None
+    if matched is not None and matched[0] == "E115" and _BRACKETED_TEMPORAL.search(
+            text, 0, pos):
+        # `P=? [ (F "done") ]`: nothing is nested, the operator is in brackets
+        matched = ("E115", "a temporal operator (F, G, X, U) cannot stand in brackets: it "
+                   "applies to the whole path formula, 'P=? [ F \"done\" ]'")
     if matched is not None and not (formula and matched[0] == "E102"):
         code, message = matched
         if code in ("E102", "E116"):
