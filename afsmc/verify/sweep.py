@@ -276,8 +276,8 @@ def model_text(path: str, text: str, consts: dict[str, str]) -> str:
 def independent(path: str, text: str, consts: dict[str, str], variable: str,
                 values: Sequence[Number]) -> bool:
     """Whether the model (not its properties) is the same at every value. Every one is
-    compared (about 0.06 s each for the UAV): the model may depend on the constant between
-    equal endpoints (`3,5,3`), or not monotonically."""
+    compared (about 0.06 s each for the UAV): a model can be equal at both ends and differ
+    between them (a range `[0..K * (2 - K)]` over K = 0..2)."""
     if len(values) < 2:
         return False
     try:
