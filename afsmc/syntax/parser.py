@@ -211,15 +211,23 @@ def tokens(text: str, start: int = 0, end: int | None = None) -> Iterator[tuple[
             continue
         j = i + 1
         if c == '"':
-            while j < end and text[j] not in '"\n':
-                j += 2 if text[j] == "\\" else 1
-            j += 1
+            j = _string_end(text, i, end) + 1
         elif c.isalnum() or c == "_":
             while j < end and (text[j].isalnum() or text[j] == "_"):
                 j += 1
         j = min(j, end)
         yield i, j
         i = j
+
+
+def _string_end(text: str, start: int, end: int | None = None) -> int:
+    """Where the label name opened by the '"' at `start` closes: the offset of its closing
+    '"', or of the newline or end that comes first (a quoted name does not span lines)."""
+    end = len(text) if end is None else end
+    j = start + 1
+    while j < end and text[j] not in '"\n':
+        j += 2 if text[j] == "\\" else 1
+    return j
 
 
 def flat_text(text: str, start: int, end: int,
@@ -338,9 +346,7 @@ def _unterminated(text: str, pos: int, source: Source, reporter: Reporter) -> bo
                        hint="close it with '*/'; everything after '/*' is part of it until then")
         return True
     if text.startswith('"', pos):
-        j = pos + 1
-        while j < len(text) and text[j] not in '"\n':
-            j += 2 if text[j] == "\\" else 1
+        j = _string_end(text, pos)
         if j >= len(text) or text[j] == "\n":
             reporter.error("E117", "this label name is not closed",
                            Span.at_offset(source, pos, pos + 1),
