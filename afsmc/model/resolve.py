@@ -109,8 +109,8 @@ class _Resolver:
         self.tuples: dict[str, tuple[str, ...]] = {}  # tuple var -> its field names
         # fields left out after their own E201 (`pos.x` clashing with `pos_x`): no E223 on use
         self.dropped_fields: set[tuple[str, str]] = set()
-        self.placeholders: set[int] = set()  # ids of _placeholder's stand-ins
-        self.kept: list[E.Expr] = []
+        # _placeholder's stand-ins by id (held here, so no other object takes their id)
+        self.placeholders: dict[int, E.Expr] = {}
         self.modes: dict[str, ir.Mode] = {}
         self.formulas: dict[str, ir.Formula] = {}
         self.formula_decls: dict[str, ast.FormulaDecl] = {}
@@ -531,8 +531,7 @@ class _Resolver:
         """What an expression that was just reported stands for: no type error follows
         from it (a missing field in `F p.z` is E223, not also E222)."""
         x = E.Lit(0, Type.INT, s)
-        self.placeholders.add(id(x))
-        self.kept.append(x)  # keeps its id from being reused
+        self.placeholders[id(x)] = x
         return x
 
     def _bool(self, e: ast.Expr, ctx: Ctx) -> E.Expr:
