@@ -53,20 +53,17 @@ class _Parser(argparse.ArgumentParser):
         chars = self.fromfile_prefix_chars or ""
         files = [a[1:] for a in arg_strings if a[:1] and a[0] in chars]
         for name in files:
-            real = os.path.realpath(name)
-            if real in self._reading:
+            if os.path.realpath(name) in self._reading:
                 self.error(f"the argument file {name!r} includes itself (through "
                            f"{' -> '.join(os.path.basename(f) for f in self._reading)})")
-        for arg in arg_strings:
-            if arg[:1] and arg[0] in (self.fromfile_prefix_chars or ""):
-                try:
-                    with open(arg[1:]) as f:  # as argparse opens it
-                        f.read()
-                except UnicodeDecodeError as exc:
-                    self.error(f"the argument file {arg[1:]!r} is not text ({exc.reason} at "
-                               f"byte {exc.start})")
-                except OSError:
-                    pass  # argparse says it
+            try:
+                with open(name) as f:  # as argparse opens it
+                    f.read()
+            except UnicodeDecodeError as exc:
+                self.error(f"the argument file {name!r} is not text ({exc.reason} at "
+                           f"byte {exc.start})")
+            except OSError:
+                pass  # argparse says it
         if not files:
             return super()._read_args_from_files(arg_strings)
         # Expanding one list at a time: the files of this list are the ones being read for
