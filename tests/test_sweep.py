@@ -388,3 +388,11 @@ def test_an_unknown_property_is_reported_once_before_any_point(deadline: str,
     r = run_cli("sweep", deadline, "--const", "D=1:30", "-p", "nope")
     assert r.code == 1 and r.err.count("error[E407]") == 1, r.err
 
+
+
+def test_json_on_stdout_keeps_a_csv_file_csv(deadline: str, tmp_path: Path) -> None:
+    """--json sets what goes to stdout; -o out.csv stays CSV beside it."""
+    out = tmp_path / "points.csv"
+    r = run_cli("sweep", deadline, "--const", "D=1:2", "--json", "-o", str(out))
+    assert r.code == 0 and json.loads(r.out)["points"]
+    assert rows(out.read_text())[0]["D"] == "1"

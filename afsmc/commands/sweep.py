@@ -117,7 +117,8 @@ def run(args: argparse.Namespace) -> int:
         args.output = None  # stdout, as without -o
     elif args.output is not None and not args.output:
         usage_error("-o needs a file name ('-' for stdout)")
-    as_json = args.json or (args.output or "").lower().endswith(".json")
+    # The file's format follows its name; --json is what goes to stdout.
+    file_json = (args.output or "").lower().endswith(".json")
     progress = progress_printer(args)
     try:
         # A sweep can take hours: an output it could not write is said before it starts.
@@ -131,7 +132,7 @@ def run(args: argparse.Namespace) -> int:
                         progress=progress, reductions=reductions(args),
                         bisimulation=args.bisim, split=args.split)
         if args.output:
-            text = json.dumps(res.to_json(), indent=2) + "\n" if as_json else res.to_csv()
+            text = json.dumps(res.to_json(), indent=2) + "\n" if file_json else res.to_csv()
             write_atomic(args.output, text, protect=(args.file,))
             if progress:
                 progress(f"wrote {args.output}")
