@@ -137,7 +137,10 @@ def test_check_reports_kind_mismatch_and_policy_keys(tmp_path: Path) -> None:
     r = run_cli("check", str(path))
     assert r.code == 1
     assert re.search(r"k\.afsm:2:\d+: error\[E503\]: 'uav.grab.fail' is a probability", r.err)
-    assert re.search(r"k\.afsm:3:\d+: error\[E504\]: unknown policy key 'coverag'", r.err)
+    # the caret is on the key, not on the whole `from sim ...` clause
+    col = "const int TAP = [1, 4] from sim uav.approach.duration with coverag".index("coverag")
+    assert f"k.afsm:3:{col + 1}: error[E504]: unknown policy key 'coverag'" in r.err, r.err
+    assert "\n   | " + " " * col + "^^^^^^^\n" in r.err, r.err
     assert "did you mean 'coverage'?" in r.err
     assert re.search(r"k\.afsm:4:\d+: error\[E504\]: policy key 'tolerance' does not apply", r.err)
 

@@ -262,3 +262,18 @@ def test_options_that_would_be_ignored_are_refused_or_honoured() -> None:
     assert isinstance(traces, list) and len(traces) == 2
     assert all(isinstance(t, list) and t for t in traces)
     assert "traces" not in sim_json(PATROL, "--runs", "20")
+
+
+def test_the_header_names_the_resolution_only_for_a_model_with_intervals(tmp_path: Path) -> None:
+    """`--resolve floor` on a model without interval constants used to print 'interval
+    constants floor', as if the choice had changed the runs."""
+    f = tmp_path / "plain.afsm"
+    f.write_text("machine plain;\nvar x : [0..3] init 0;\nmode A = 0 initial;\n"
+                 "mode B = 1 final;\naction Go in A when x < 3 { 0.5: x += 1; 0.5: goto B; }\n"
+                 "action Stop in A when x == 3 { goto B; }\nlabel top = x == 3;\n"
+                 "property top = P=? [ F \"top\" ];\n")
+    r = run_cli("simulate", str(f), "--runs", "10", "--resolve", "floor")
+    assert r.code == 0, r.err
+    assert "plain.afsm: 10 runs, no interval constants, seed 0" in r.out, r.out
+    r = run_cli("simulate", str(PATROL), "--runs", "10", "--resolve", "floor")
+    assert "patrol.afsm: 10 runs, interval constants floor, seed 0" in r.out, r.out

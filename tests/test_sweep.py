@@ -396,3 +396,22 @@ def test_json_on_stdout_keeps_a_csv_file_csv(deadline: str, tmp_path: Path) -> N
     r = run_cli("sweep", deadline, "--const", "D=1:2", "--json", "-o", str(out))
     assert r.code == 0 and json.loads(r.out)["points"]
     assert rows(out.read_text())[0]["D"] == "1"
+
+
+def test_an_int_constant_swept_over_doubles_is_e208_once(deadline: str, no_points: None) -> None:
+    """`D=1e0:3` used to be swept as 1, 2, 3 while `verify --const D=1e0` is E208: a value
+    is an int only as written so, and an int constant refuses the others before any point."""
+    assert parse_values("1e0:2") == [1.0, 2.0] and isinstance(parse_values("1e0:2")[0], float)
+    assert all(isinstance(x, int) for x in parse_values("1:3") + parse_values("4,2"))
+    for spec, shown in (("D=1e0:3", "1.0, 2.0, 3.0 are not ints"), ("D=1,2.5", "2.5 is not an int")):
+        r = run_cli("sweep", deadline, "--const", spec)
+        assert r.code == 1 and r.err.count("error[E208]") == 1, r.err
+        assert f"--const D: {shown}" in r.err and ":3:1:" in r.err, r.err
+    r = run_cli("verify", deadline, "--const", "D=1e0")
+    assert r.code == 1 and "error[E208]" in r.err
+
+
+def test_a_double_constant_takes_every_number(deadline: str) -> None:
+    r = run_cli("sweep", deadline, "--const", "P_FAIL=0:0.5:0.25", "-p", "steps")
+    assert r.code == 0, r.err
+    assert [row["P_FAIL"] for row in rows(r.out)] == ["0.0", "0.25", "0.5"]

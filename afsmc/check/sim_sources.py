@@ -87,26 +87,27 @@ def check_sim_sources(model: ir.Model, rep: Reporter) -> None:
             if kind == "probability" and shape == NUMBER:
                 shape = PROBABILITY
         seen: set[str] = set()
-        for key, value in src.policy:
+        for i, (key, value) in enumerate(src.policy):
+            at = src.keys[i] if i < len(src.keys) else src.span
             if key in seen:
-                rep.error("E504", f"policy key '{key}' is given twice", src.span)
+                rep.error("E504", f"policy key '{key}' is given twice", at)
                 continue
             seen.add(key)
             if key not in POLICY_KEYS:
                 close = difflib.get_close_matches(key, list(POLICY_KEYS), n=1, cutoff=0.5)
-                rep.error("E504", f"unknown policy key '{key}' for constant '{c.name}'", src.span,
+                rep.error("E504", f"unknown policy key '{key}' for constant '{c.name}'", at,
                           hint=(f"did you mean '{close[0]}'? " if close else "")
                           + "known keys: " + ", ".join(sorted(POLICY_KEYS)))
                 continue
             shapes, meaning = POLICY_KEYS[key]
             if shape not in shapes:
                 rep.error("E504", f"policy key '{key}' does not apply to {_shape_text(shape)} "
-                          f"'{c.name}'", src.span, hint=f"'{key}': {meaning}; it applies to "
+                          f"'{c.name}'", at, hint=f"'{key}': {meaning}; it applies to "
                           + " and ".join(_shape_text(s) for s in sorted(shapes)))
             elif key in ("coverage", "confidence") and not 0.0 < value < 1.0:
-                rep.error("E504", f"policy '{key} = {value}' is not in (0, 1)", src.span)
+                rep.error("E504", f"policy '{key} = {value}' is not in (0, 1)", at)
             elif key == "tolerance" and value < 0:
-                rep.error("E504", f"policy 'tolerance = {value}' is negative", src.span)
+                rep.error("E504", f"policy 'tolerance = {value}' is negative", at)
 
 
 def _shape_text(shape: str) -> str:

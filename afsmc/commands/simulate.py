@@ -92,6 +92,7 @@ def run(args: argparse.Namespace) -> int:
                 last[0] = pct // 10
                 print(f"simulate: {done}/{total} runs ({pct}%)", file=sys.stderr)
 
+        intervals = program(job).model.is_nondeterministic
         out = simulate(job, args.runs, args.seed, confidence=args.confidence, jobs=args.jobs,
                        dask=args.dask, trace=args.traces, batch_size=args.batch_size,
                        progress=progress)
@@ -111,7 +112,7 @@ def run(args: argparse.Namespace) -> int:
     if args.json:
         print_json(_json(out, args))
     else:
-        _print(out, args)
+        _print(out, args, intervals)
     return 0
 
 
@@ -134,11 +135,13 @@ def _json(out: Outcome, args: argparse.Namespace) -> dict[str, Any]:
     }
 
 
-def _print(out: Outcome, args: argparse.Namespace) -> None:
+def _print(out: Outcome, args: argparse.Namespace, intervals: bool) -> None:
     if args.traces:
         print(_traces_text(out.traces))
     name = os.path.basename(args.file)
-    print(f"{name}: {out.runs} runs, interval constants {args.resolve}, seed {args.seed}, "
+    # --resolve means nothing to a model without interval constants: do not suggest it did
+    resolved = f"interval constants {args.resolve}" if intervals else "no interval constants"
+    print(f"{name}: {out.runs} runs, {resolved}, seed {args.seed}, "
           f"{args.confidence:g} confidence")
     width = max([len(e.name) for e in out.estimates] + [8])
     for e in out.estimates:

@@ -41,7 +41,9 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--plot", metavar="FILE.png|FILE.svg",
                    help="draw min, max and uniform curves (matplotlib)")
     p.add_argument("--jobs", "-j", type=positive, metavar="N",
-                   help="parallel processes on this machine (default: the number of cores)")
+                   help="parallel processes on this machine (default: the number of cores); "
+                        "with --dask, it sizes the tasks instead: points that share one model "
+                        "go out in N chunks (4 x N for a time bound), others one per point")
     p.add_argument("--dask", metavar="ADDRESS", type=dask_address,
                    help="run the points on this Dask scheduler (e.g. tcp://10.0.0.5:8786); "
                         "its workers need afsmc installed")

@@ -21,6 +21,7 @@ class SimSource:
     ref: str
     policy: tuple[tuple[str, float], ...]
     span: Span
+    keys: tuple[Span, ...] = ()  # where each policy key is written, for E504's caret
 
 
 @dataclass(frozen=True)

@@ -286,7 +286,8 @@ class _Resolver:
                 value = self._const_value(expr, t)
         if isinstance(d, ast.ConstDecl) and d.source is not None:
             source = ir.SimSource(d.source.ref.text,
-                                  tuple((k.text, v) for k, v in d.source.policy), d.source.span)
+                                  tuple((k.text, v) for k, v in d.source.policy), d.source.span,
+                                  tuple(k.span for k, _ in d.source.policy))
         if d.type == "prob" and not (0.0 <= float(value) <= 1.0):
             self.rep.error("E207", f"probability '{name}' = {value} is not in [0, 1]", d.span)
         self.consts[name] = ir.Constant(name, t, value, interval, is_param, source, d.span, d.type)

@@ -12,6 +12,7 @@ import csv
 import dataclasses
 import io
 import os
+import re
 import time
 from collections.abc import Sequence
 from concurrent.futures import ProcessPoolExecutor, as_completed
@@ -63,7 +64,8 @@ def parse_values(text: str) -> list[Number]:
         count = int((stop - start) / step) + 1
         if count > MAX_POINTS:
             raise ValueError(f"{text!r} has {count:,} points; at most {MAX_POINTS:,}")
-        return [_number(start + i * step) for i in range(count)]
+        whole = all(_INT.fullmatch(x.strip()) for x in parts)
+        return [_number(start + i * step, whole) for i in range(count)]
     out = []
     for part in text.split(","):
         try:
@@ -72,7 +74,7 @@ def parse_values(text: str) -> list[Number]:
             raise ValueError(f"not a number: {part.strip()!r}") from None
         if not d.is_finite():
             raise ValueError(f"not a finite number: {part.strip()!r}")
-        out.append(_number(d))
+        out.append(_number(d, bool(_INT.fullmatch(part.strip()))))
     seen: set[Number] = set()
     for x in out:
         if x in seen:
@@ -82,8 +84,13 @@ def parse_values(text: str) -> list[Number]:
     return sorted(out)
 
 
-def _number(d: Decimal) -> Number:
-    return int(d) if d == d.to_integral_value() else float(d)
+# A value is an int only as written so (`1e0` and `2.0` are doubles), as verify's --const
+# reads it: an int constant swept over `1e0:2` is refused (E208) there too.
+_INT = re.compile(r"[+-]?[0-9]+")
+
+
+def _number(d: Decimal, whole: bool) -> Number:
+    return int(d) if whole and d == d.to_integral_value() else float(d)
 
 
 def fmt(x: Number) -> str:
@@ -434,7 +441,7 @@ def sweep(path: str, variable: str, values: Sequence[Number], *, kind: Kind = "c
     consts = dict(consts or {})
     if kind == "const":
         consts.pop(variable, None)
-        _check_names(path, source, consts | {variable: fmt(values[0])}, properties, formulas)
+        _check_names(path, source, consts, variable, values, properties, formulas)
     else:
         _check_bounds(path, source, consts, properties, formulas, values)
     jobs = jobs or os.cpu_count() or 1
@@ -492,7 +499,9 @@ def _check_bounds(path: str, text: str, consts: dict[str, str], properties: Sequ
                   formulas: Sequence[str], values: Sequence[Number]) -> None:
     """A bound sweep's errors, once and before any point is computed (every chunk would
     otherwise find them, after the others' points were checked)."""
-    bad = [fmt(x) for x in values if not isinstance(x, int) or x < 0]
+    # the values that are wrong whatever their spelling first; `1.0` only if that is all
+    bad = [fmt(x) for x in values if x < 0 or x != int(x)] \
+        or [fmt(x) for x in values if isinstance(x, float)]
     if bad:
         raise CompileError([Diagnostic("E410", Severity.ERROR,
                                        f"--bound {', '.join(bad)}: step bounds are integers >= 0",
@@ -504,15 +513,32 @@ def _check_bounds(path: str, text: str, consts: dict[str, str], properties: Sequ
         raise loaded.remap_error(CompileError(diags))
 
 
-def _check_names(path: str, text: str, consts: dict[str, str], properties: Sequence[str],
+def _check_names(path: str, text: str, consts: dict[str, str], variable: str,
+                 values: Sequence[Number], properties: Sequence[str],
                  formulas: Sequence[str]) -> None:
-    """E407 (no such property, none declared) once, before any point: the names do not
-    depend on the swept constant, and every point would report them. Other errors may
-    depend on it; the points report those."""
-    try:
-        loaded = load_with_formulas(path, consts, formulas, text=text, run_checks=False)
-    except CompileError:
+    """E407 (no such property, none declared) and an int constant given doubles (E208),
+    once, before any point: neither depends on the point, and every point would report
+    them. Other errors may depend on it; the points report those."""
+    loaded = None
+    for value in (values[0], None):  # the file's own value if the first one fails
+        try:
+            loaded = load_with_formulas(
+                path, consts if value is None else consts | {variable: fmt(value)}, formulas,
+                text=text, run_checks=False)
+            break
+        except CompileError:
+            continue
+    if loaded is None:
         return
+    const = next((c for c in loaded.model.constants if c.name == variable), None)
+    doubles = [fmt(x) for x in values if isinstance(x, float)]
+    if const is not None and const.type is E.Type.INT and doubles:
+        raise loaded.remap_error(CompileError([Diagnostic(
+            "E208", Severity.ERROR, f"--const {variable}: {', '.join(doubles[:5])}"
+            f"{', ...' if len(doubles) > 5 else ''} "
+            f"{'is not an int' if len(doubles) == 1 else 'are not ints'}", const.span,
+            hint=f"{variable} is declared int: write its values as integers (1, not 1.0 "
+                 "or 1e0)")]))
     try:
         select(loaded.model, properties, loaded.adhoc)
     except CompileError as exc:
