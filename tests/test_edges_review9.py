@@ -211,3 +211,41 @@ def test_the_reward_queries_storm_answers_stay_allowed(tmp_path: Path, via: str)
     assert r.code == 0, r.out + r.err
     values = [p["value"] for p in json.loads(r.out)["properties"]]
     assert values == pytest.approx([1.75, 2.0, 2.0, 0.25])
+
+
+def _deep_label(depth: int) -> str:
+    """A label and a guard that each nest `depth` levels deep, half of them in a formula."""
+    half = depth // 2
+    return f"""machine deep;
+var x : [0..3] init 0;
+mode S = 0 initial;
+mode D = 1 final;
+formula f = {" + ".join(["x"] * half)};
+action Go in S when f + {" + ".join(["x"] * (depth - half - 1))} >= 0 {{
+    0.5: goto D; 0.5: x := min(x + 1, 3);
+}}
+label l = f + {" + ".join(["x"] * (depth - half - 1))} > 100;
+label done = mode == D;
+property p = P=? [ F "done" ];
+property q = P=? [ F "l" ];
+"""
+
+
+def test_expressions_storm_cannot_evaluate_are_e310_and_the_limit_builds(tmp_path: Path) -> None:
+    """Storm's ExprTk stops at a stack depth of 10,000: a label of 4,999 levels passed
+    `check` (E113 is at 5,000) and failed in verify with E403, through PRISM and JANI."""
+    from afsmc.check.storm_depth import STORM_DEPTH
+
+    path = tmp_path / "deep.afsm"
+    path.write_text(_deep_label(STORM_DEPTH))
+    assert run_cli("check", str(path)).code == 0
+    for via in ("prism", "jani"):  # the oracle: Storm builds and checks the limit itself
+        r = run_cli("verify", str(path), "--via", via, "--engine", "sparse", "--json")
+        assert r.code == 0, r.err[-800:]
+        values = {p["name"]: p["value"] for p in json.loads(r.out)["properties"]}
+        assert values == {"p": pytest.approx(1.0), "q": pytest.approx(0.5)}  # x = 1 first
+    path.write_text(_deep_label(STORM_DEPTH + 1))
+    r = run_cli("check", str(path))
+    assert r.code == 1 and "Traceback" not in r.err
+    assert r.err.count("error[E310]") == 2, r.err[-2000:]
+    assert f"label l nests {STORM_DEPTH + 1:,} levels deep once its formulas are inlined" in r.err

@@ -15,6 +15,7 @@ from afsmc.check import (
     modegraph,
     overflow,
     ranges,
+    storm_depth,
     undefined,
     unused,
     weights,
@@ -39,6 +40,7 @@ RULES: tuple[Rule, ...] = (
     unused.check_unused,
     check_sim_sources,
     mode_numbers.check_mode_numbers,
+    storm_depth.check_storm_depth,
     modegraph.check_unreachable, modegraph.check_cannot_end, modegraph.check_never_fires,
 )
 
@@ -54,7 +56,7 @@ def register(rule: Rule) -> None:
 # run: the others search states with 64-bit arithmetic and would report what the wrapped
 # values make of the model (a deadlock, an update out of range) that is not there.
 STRUCTURAL: tuple[Rule, ...] = (unused.check_unused, check_sim_sources,
-                                 mode_numbers.check_mode_numbers)
+                                 mode_numbers.check_mode_numbers, storm_depth.check_storm_depth)
 
 
 def run(model: ir.Model) -> list[Diagnostic]:
