@@ -7,11 +7,13 @@ a Python traceback.
 
 from __future__ import annotations
 
+import bisect
 import json
 import unicodedata
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, field
 from enum import StrEnum
+from functools import cached_property
 
 
 class Severity(StrEnum):
@@ -34,17 +36,29 @@ class Source:
     path: str
     text: str
 
+    @cached_property
+    def _starts(self) -> list[int]:
+        """Where each line starts. Lines end at '\n' only, as the lexer counts them:
+        str.splitlines also breaks at form feeds and U+2028, which showed the wrong line."""
+        starts, i = [0], self.text.find("\n")
+        while i >= 0:
+            starts.append(i + 1)
+            i = self.text.find("\n", i + 1)
+        return starts
+
     def line(self, lineno: int) -> str:
-        lines = self.text.splitlines()
-        if 1 <= lineno <= len(lines):
-            return lines[lineno - 1].removeprefix(BOM) if lineno == 1 else lines[lineno - 1]
-        return ""
+        starts = self._starts
+        if not 1 <= lineno <= len(starts):
+            return ""
+        end = starts[lineno] - 1 if lineno < len(starts) else len(self.text)
+        text = self.text[starts[lineno - 1]:end].removesuffix("\r")
+        return text.removeprefix(BOM) if lineno == 1 else text
 
     def position(self, offset: int) -> tuple[int, int]:
         """1-based (line, column) of a 0-based character offset."""
         offset = max(0, min(offset, len(self.text)))
-        line = self.text.count("\n", 0, offset) + 1
-        col = offset - (self.text.rfind("\n", 0, offset) + 1) + 1
+        line = bisect.bisect_right(self._starts, offset)
+        col = offset - self._starts[line - 1] + 1
         if line == 1 and offset > 0 and self.text.startswith(BOM):
             col -= 1
         return line, col

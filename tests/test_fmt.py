@@ -182,3 +182,17 @@ def test_parentheses_of_step_bounds_are_kept() -> None:
     out = format_text(text)
     for bound in ("F<=((3))", "F<=(a)", "F<=a", "F<=(a + 1)"):
         assert f"[ {bound} mode == A ]" in out
+
+
+def test_trailing_blanks_inside_a_block_comment_are_dropped_not_refused(tmp_path: Path) -> None:
+    """An editor's trailing spaces inside `/* ... */` made fmt refuse the file (E190, 'would
+    lose or reorder a comment'): the layout strips them, and the safety check did not."""
+    text = ("machine t;\n/* a \n   b\t\n */\nvar x : [0..1] init 0; // c  \nmode A initial;\n"
+            "mode B final;\naction Go in A {\n    goto B;\n}\n")
+    out = format_text(text)
+    assert "/* a\n   b\n */\n" in out and "// c\n" in out
+    assert format_text(out) == out
+    crlf = tmp_path / "crlf.afsm"
+    crlf.write_bytes(text.replace("\n", "\r\n").encode())
+    assert run_cli("fmt", str(crlf)).code == 0
+    assert crlf.read_bytes() == out.replace("\n", "\r\n").encode()

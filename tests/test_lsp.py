@@ -413,3 +413,29 @@ async def test_a_2000_term_expression_gets_diagnostics_not_a_crash(client: Langu
             f"action Stay in S weight ({chain}) {{ skip; }}\n")
     diags = await open_doc(client, "file:///tmp/long2000.afsm", text)
     assert [d.code for d in diags] == ["E301"], diags  # the two weights tie; no E999
+
+
+@MODULE
+async def test_positions_count_lines_at_newlines_only(client: LanguageClient) -> None:
+    """Review 13. An empty document crashed the handler (pygls's position of an offset),
+    so the previous diagnostics stayed; a form feed or U+2028 in a comment moved every
+    diagnostic below it a line down; the end of a last line without a newline was put on a
+    line the document does not have."""
+    uri = "file:///tmp/positions.afsm"
+    broken = "machine t;\nvar x : [0..2] init 0\n"
+    assert [d.code for d in await open_doc(client, uri, broken)] == ["E102"]
+    empty = await change(client, uri, "")
+    assert [d.code for d in empty] == ["E213"], empty  # replaced, as `afsmc check` says
+    assert empty[0].range.start == T.Position(line=0, character=0)
+
+    text = ("machine t;\n// a\x0cb\u2028c\nvar x : [0..1] init 0;\nmode A initial;\n"
+            "mode B final;\naction Go in A when y == 0 {\n    goto B;\n}\n")
+    (undefined,) = [d for d in await change(client, uri, text) if d.code == "E203"]
+    assert undefined.range.start == position(text, text.index("y == 0"))
+    assert slice_of(text, undefined.range) == "y"
+
+    cut = "machine t;\nmode A initial;\naction Go in A {"  # no newline at the end
+    lines = cut.split("\n")
+    for d in await change(client, uri, cut):
+        for p in (d.range.start, d.range.end):
+            assert p.line < len(lines) and p.character <= len(lines[p.line]), d

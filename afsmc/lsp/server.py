@@ -16,13 +16,14 @@ message).
 from __future__ import annotations
 
 import asyncio
+import bisect
 import functools
 import logging
 import re
 import time
 import traceback
 from collections import Counter
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from typing import Any, TypeVar
 
@@ -30,7 +31,7 @@ from lsprotocol import types as T
 from pygls.exceptions import JsonRpcException
 from pygls.lsp.server import LanguageServer
 from pygls.uris import to_fs_path
-from pygls.workspace import TextDocument
+from pygls.workspace import ServerTextPosition, TextDocument
 
 from afsmc import __version__
 from afsmc.compiler import load
@@ -124,8 +125,39 @@ def guarded(fn: F) -> F:
 # ---- positions -------------------------------------------------------------------
 
 
-def _snapshot(ls: AfsmServer, uri: str, text: str) -> TextDocument:
-    return TextDocument(uri, text, position_codec=ls.workspace.position_codec)
+class _Doc(TextDocument):
+    """A document whose lines end at '\n' only, as afsmc's spans count them and as LSP
+    does: pygls splits at form feeds and U+2028 too (diagnostics landed lines too low), failed
+    on an empty document, walked every line for each position, and put the end of a last
+    line without a newline on a line that does not exist."""
+
+    @functools.cached_property
+    def _starts(self) -> list[int]:
+        return [0, *(i + 1 for i, ch in enumerate(self.source) if ch == "\n")]
+
+    @property
+    def lines(self) -> Sequence[str]:
+        s, starts = self.source, self._starts
+        return tuple(s[a:b] for a, b in zip(starts, [*starts[1:], len(s)], strict=True))
+
+    def server_position_at_offset(self, offset: int) -> ServerTextPosition:
+        offset = min(max(offset, 0), len(self.source))
+        line = bisect.bisect_right(self._starts, offset) - 1
+        return ServerTextPosition(line, offset - self._starts[line])
+
+    def offset_at_server_position(self, server_position: ServerTextPosition) -> int:
+        line = min(max(server_position.line, 0), len(self._starts) - 1)
+        end = self._starts[line + 1] - 1 if line + 1 < len(self._starts) else len(self.source)
+        return min(self._starts[line] + max(server_position.character, 0), end)
+
+
+def _snapshot(ls: AfsmServer, uri: str, text: str) -> _Doc:
+    return _Doc(uri, text, position_codec=ls.workspace.position_codec)
+
+
+def _current(ls: AfsmServer, uri: str) -> _Doc:
+    """The editor's current text, with afsmc's positions."""
+    return _snapshot(ls, uri, ls.workspace.get_text_document(uri).source)
 
 
 def _range(doc: TextDocument, start: int, end: int) -> T.Range:
@@ -233,9 +265,7 @@ def _lookup(ls: AfsmServer, uri: str, pos: T.Position) -> tuple[I.Index, I.Occur
     st = ls.docs.get(uri)
     if st is None or st.index is None:
         return None
-    doc = ls.workspace.get_text_document(uri)
-    offset = _snapshot(ls, uri, st.index.text).offset_at_position(pos) \
-        if st.index.text != doc.source else doc.offset_at_position(pos)
+    offset = _snapshot(ls, uri, st.index.text).offset_at_position(pos)
     occ = st.index.at(offset)
     return (st.index, occ) if occ is not None else None
 
@@ -363,7 +393,7 @@ def completions(idx: I.Index | None, before: str) -> list[T.CompletionItem]:
 @guarded
 def completion(ls: AfsmServer, params: T.CompletionParams) -> T.CompletionList:
     uri = params.text_document.uri
-    doc = ls.workspace.get_text_document(uri)
+    doc = _current(ls, uri)
     offset = doc.offset_at_position(params.position)
     line_start = doc.source.rfind("\n", 0, offset) + 1
     st = ls.docs.get(uri)
@@ -387,7 +417,7 @@ def completion(ls: AfsmServer, params: T.CompletionParams) -> T.CompletionList:
 @guarded
 def formatting(ls: AfsmServer, params: T.DocumentFormattingParams) -> list[T.TextEdit] | None:
     uri = params.text_document.uri
-    doc = ls.workspace.get_text_document(uri)
+    doc = _current(ls, uri)
     try:
         out = format_text(doc.source, to_fs_path(uri) or uri)
     except CompileError:

@@ -22,7 +22,7 @@ from __future__ import annotations
 import bisect
 import dataclasses
 from dataclasses import dataclass, field
-from functools import cache
+from functools import cache, cached_property
 from typing import Any
 
 import lark
@@ -74,13 +74,18 @@ def _internal(path: str, why: str) -> Diagnostic:
 def _verify(text: str, out: str, module: ast.Module, toks: list[lark.Token], path: str) -> None:
     try:
         again = parse(out, path)
-        comments_after = [str(t).rstrip() for t in tokens(out) if t.type == "COMMENT"]
+        comments_after = [_comment_key(t) for t in tokens(out) if t.type == "COMMENT"]
     except (CompileError, LarkError):
         raise CompileError([_internal(path, "produced text that does not parse")]) from None
     if _shape(again) != _shape(module):
         raise CompileError([_internal(path, "would change the meaning of this file")])
-    if comments_after != [str(t).rstrip() for t in toks if t.type == "COMMENT"]:
+    if comments_after != [_comment_key(t) for t in toks if t.type == "COMMENT"]:
         raise CompileError([_internal(path, "would lose or reorder a comment")])
+
+
+def _comment_key(t: lark.Token) -> str:
+    # The layout drops trailing blanks on every line, inside a `/* ... */` too.
+    return "\n".join(line.rstrip() for line in str(t).split("\n")).rstrip()
 
 
 def _shape(node: Any) -> Any:
@@ -482,7 +487,12 @@ class _Formatter:
         return offset - (self.text.rfind("\n", 0, offset) + 1)
 
     def _line(self, offset: int) -> int:
-        return self.text.count("\n", 0, offset)
+        # by bisection: counting the newlines before each comment was quadratic in the file
+        return bisect.bisect_right(self._newlines, offset - 1)
+
+    @cached_property
+    def _newlines(self) -> list[int]:
+        return [i for i, ch in enumerate(self.text) if ch == "\n"]
 
     def run(self) -> str:
         units = self.units()
