@@ -45,6 +45,21 @@ _EXAMPLES: dict[tuple[str, str], list[str]] = {
         "action A in S { 0.5: goto B; 0.5: skip }",
         "action A in S { skip }",
         "hazard H from * with probability 0.1 { goto B }",
+        # ... and after each way an update's expression can end
+        "action A in S { x := x }",
+        "action A in S { x := 1 - x }",
+        "action A in S { x += K }",
+        "action A in S { x += 1 }",
+        "action A in S { x := 1 }",
+        "action A in S { b := !b }",
+        "action A in S { b := x == 1 }",
+        "action A in S { x := min(x, 1) }",
+        "action A in S { x := (x) }",
+        "action A in S { x := b ? 1 : 0 }",
+        "action A in S { p := (1, 2) }",
+        "action A in S { x := p.x }",
+        "action A in S { 0.5: x += 2 }",
+        "action A in S { 0.5: x := 2, goto B; 0.5: x := y }",
     ],
     ("E103", "'=' is not a comparison; write '==' to compare"): [
         "label a = x = 1;",
@@ -324,6 +339,12 @@ def _report_syntax_error(exc: UnexpectedInput, source: Source, reporter: Reporte
         # `P=? [ (F "done") ]`: nothing is nested, the operator is in brackets
         matched = ("E115", "a temporal operator (F, G, X, U) cannot stand in brackets: it "
                    "applies to the whole path formula, 'P=? [ F \"done\" ]'")
+    if matched is not None and str(tok) == "}" and matched[0] in ("E102", "E103", "E116"):
+        # A '}' right after an expression: the parser state is shared by every context an
+        # expression ends in, so the brace that is open decides what is missing.
+        matched = _missing_before_brace(text, scan)
+    if matched is not None and matched[0] == "E103" and str(tok) != "=":
+        matched = None  # only a '=' is taken for a comparison
     if matched is not None and not (formula and matched[0] == "E102"):
         code, message = matched
         if code in ("E102", "E116"):
@@ -341,6 +362,22 @@ def _report_syntax_error(exc: UnexpectedInput, source: Source, reporter: Reporte
         return
     reporter.error("E101", f"unexpected {_found(tok, the_end)}", span,
                    hint=_expected_hint(accepts, the_end))
+
+
+_BODY_OWNER = re.compile(r"\b(action|hazard|rewards)\b")
+
+
+def _missing_before_brace(text: str, scan: _Scan) -> tuple[str, str] | None:
+    """E116 where the innermost open bracket is the '{' of a body (an action's or hazard's
+    outcomes, a reward structure's items); None (unexpected '}') anywhere else."""
+    if not scan.open or scan.open[-1][0] != "{":
+        return None
+    owners = list(_BODY_OWNER.finditer(text, 0, scan.open[-1][1]))
+    if not owners:
+        return None
+    if owners[-1].group(1) == "rewards":
+        return "E116", "missing ';' at the end of the reward item"
+    return "E116", "missing ';' at the end of the outcome"
 
 
 def _unterminated(text: str, pos: int, source: Source, reporter: Reporter) -> bool:
