@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import contextvars
 import re
 from collections.abc import Iterator
 from dataclasses import dataclass, field
@@ -127,8 +128,30 @@ def _parser() -> lark.Lark:
     text = resources.files("afsmc.syntax").joinpath("afsm.lark").read_text(encoding="utf-8")
     # cache=True: lark keeps the LALR tables in the temp directory, keyed by the grammar's
     # hash, which saves ~0.15 s at every start of afsmc (lark rebuilds if the file is bad).
+    keywords = re.findall(r'"([A-Za-z]+)"', text)
+    callbacks = {kw.upper(): _glued for kw in keywords}
     return lark.Lark(text, parser="lalr", propagate_positions=True, maybe_placeholders=False,
-                     cache=True, start=_STARTS)
+                     cache=True, start=_STARTS, lexer_callbacks=callbacks)
+
+
+# The text being lexed, for _glued.
+_LEXING: contextvars.ContextVar[str] = contextvars.ContextVar("afsmc_lexing", default="")
+
+
+class _Glued(Exception):
+    def __init__(self, token: Token) -> None:
+        super().__init__(str(token))
+        self.token = token
+
+
+def _glued(tok: Token) -> Token:
+    """A keyword run into a name (`modeA initial;`): where no name may stand, the
+    contextual lexer takes the keyword's letters and a name after them, so the file read
+    as `mode A`. A keyword is never followed by a letter, digit or '_'."""
+    text, end = _LEXING.get(), tok.end_pos or 0
+    if end < len(text) and (text[end].isalnum() or text[end] == "_"):
+        raise _Glued(tok)
+    return tok
 
 
 def grammar_text() -> str:
@@ -158,7 +181,22 @@ def _parse(text: str, path: str, start: str) -> Any:
     reporter = Reporter()
     try:
         # A leading byte-order mark lexes as a blank, which keeps every offset as in `text`.
-        tree = _parser().parse(" " + text[1:] if text.startswith(BOM) else text, start=start)
+        lexed = " " + text[1:] if text.startswith(BOM) else text
+        reset = _LEXING.set(lexed)
+        try:
+            tree = _parser().parse(lexed, start=start)
+        finally:
+            _LEXING.reset(reset)
+    except _Glued as exc:
+        tok = exc.token
+        end = tok.end_pos or 0
+        word = re.match(r"\w*", text[end:])
+        rest = word.group() if word else ""
+        reporter.error("E122", f"'{tok}{rest}' is not a keyword, and no name may stand here",
+                       Span.at_offset(source, tok.start_pos or 0, end + len(rest)),
+                       hint=f"if the keyword '{tok}' is meant, put a space after it: "
+                            f"'{tok} {rest}'; else check the spelling")
+        raise CompileError(reporter.diagnostics) from None
     except UnexpectedInput as exc:
         _report_syntax_error(exc, source, reporter, formula=start == "prop")
         raise CompileError(reporter.diagnostics) from None
@@ -328,6 +366,16 @@ def _report_syntax_error(exc: UnexpectedInput, source: Source, reporter: Reporte
 
     if scan.open and _unclosed(exc, source, reporter, scan, accepts, formula):
         return
+    bound = _BOUND_EXPRESSION.search(text, 0, pos)
+    if bound is not None and (bound.group(3) or str(tok) in "+-*/"):
+        # `F<=K-1 "l"`: the bound is one number or name; the operator started the target
+        op, value = re.sub(r"\s+", "", bound.group(1)), bound.group(2)
+        rest = re.sub(r"\s*([-+*/])\s*", r" \1 ", bound.group(3)).strip() \
+            if bound.group(3) else f"{tok} ..."
+        reporter.error("E121", "a step bound that is an expression is written in brackets",
+                       Span.at_offset(source, bound.start(1), max(pos, bound.end(2))),
+                       hint=f"write '{op}({value} {rest})'")
+        return
     matched = _match_example(exc)
     if matched is not None and matched[0] == "E115" and not _TEMPORAL_BEFORE.search(
             text, 0, pos):
@@ -364,6 +412,11 @@ def _report_syntax_error(exc: UnexpectedInput, source: Source, reporter: Reporte
                    hint=_expected_hint(accepts, the_end))
 
 
+# A step bound (`F<=`, `G<=`, `U<=`, `C<=`, `I=`) of one number or name right before the
+# failing token, and (group 2) an operator with its operand that the parser took as the
+# start of the target: `F<=K -1` parses `-1` as the target and fails at the label after it.
+_BOUND_EXPRESSION = re.compile(
+    r"(\b(?:[FGUC]\s*<=|I\s*=))\s*([\w.]+)\s*((?:[-+*/]\s*[\w.]+\s*)+)?$")
 _BODY_OWNER = re.compile(r"\b(action|hazard|rewards)\b")
 
 
