@@ -123,6 +123,18 @@ def write_atomic(path: str, content: str | bytes, *, protect: tuple[str, ...] = 
     (rewriting an input in place, as `sim-check --update` and `fmt` do)."""
     refuse_inputs([path], protect)
     real = os.path.realpath(path)
+    if os.path.exists(real) and not (os.path.isfile(real) or os.path.isdir(real)):
+        # A device or a pipe (`-o /dev/null`, `/dev/stdout`): a file renamed over it would
+        # replace the device node itself, for every program on the machine.
+        try:
+            with open(real, "wb") as fb:
+                fb.write(content if isinstance(content, bytes) else content.encode()
+                         if newline is None else content.replace("\n", newline).encode())
+        except OSError as exc:
+            raise CompileError([Diagnostic("E003", Severity.ERROR,
+                                           f"cannot write {path}: {exc.strerror or exc}",
+                                           None)]) from None
+        return
     directory = os.path.dirname(real) or "."
     tmp = os.path.join(directory, f".{os.path.basename(real)}.tmp{os.getpid()}")
     try:

@@ -271,3 +271,25 @@ def test_a_bug_in_afsmc_is_one_line_and_a_traceback_file(monkeypatch: pytest.Mon
         assert "Traceback" in text and "an impossible state" in text
     finally:
         saved.unlink()
+
+
+def test_an_output_that_is_a_device_or_pipe_is_written_into_not_replaced(tmp_path: Path) -> None:
+    """`sweep -o /dev/null` renamed its temporary file over /dev/null: the machine's
+    /dev/null became a regular file. A FIFO stands in for the device here."""
+    import os
+    import stat
+    import threading
+
+    fifo = tmp_path / "pipe"
+    os.mkfifo(fifo)
+    got: list[bytes] = []
+    reader = threading.Thread(target=lambda: got.append(fifo.read_bytes()), daemon=True)
+    reader.start()
+    r = run_cli("sweep", str(EXAMPLES / "patrol.afsm"), "--const", "CELLS=1:2", "-p", "finish",
+                "--jobs", "1", "-o", str(fifo))
+    reader.join(timeout=60)
+    assert r.code == 0, r.err
+    assert stat.S_ISFIFO(os.stat(fifo).st_mode)  # still the pipe, not a file put in its place
+    assert got and got[0].decode().startswith("CELLS,property,min,max")
+    r = run_cli("compile", str(EXAMPLES / "patrol.afsm"), "-o", str(fifo))
+    assert r.code == 2 and "not a directory or a regular file" in r.err

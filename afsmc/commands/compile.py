@@ -66,6 +66,11 @@ def outputs_for(path: str, output: str | None, suffixes: list[str]) -> dict[str,
 def run(args: argparse.Namespace) -> int:
     if args.output == "":
         usage_error("-o: an empty name (give a directory, a file name, or '-' for stdout)")
+    if args.output not in (None, "-") and os.path.exists(args.output) \
+            and not (os.path.isdir(args.output) or os.path.isfile(args.output)):
+        # `-o /dev/null` wrote /dev/null.prism and /dev/null.props
+        usage_error(f"-o {args.output}: not a directory or a regular file (the outputs are "
+                    "named after it); '-' prints them")
     try:
         checked = load(args.file, overrides(args))
         report(checked.diagnostics)
