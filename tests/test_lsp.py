@@ -439,3 +439,23 @@ async def test_positions_count_lines_at_newlines_only(client: LanguageClient) ->
     for d in await change(client, uri, cut):
         for p in (d.range.start, d.range.end):
             assert p.line < len(lines) and p.character <= len(lines[p.line]), d
+
+
+def test_exit_code_follows_shutdown() -> None:
+    """LSP: `exit` after `shutdown` is 0, without it 1. It was always 0."""
+    import json
+
+    def frame(obj: dict[str, Any]) -> bytes:
+        body = json.dumps(obj).encode()
+        return b"Content-Length: %d\r\n\r\n" % len(body) + body
+
+    for shutdown, code in ((False, 1), (True, 0)):
+        msgs = [frame({"jsonrpc": "2.0", "id": 1, "method": "initialize",
+                       "params": {"capabilities": {}}}),
+                frame({"jsonrpc": "2.0", "method": "initialized", "params": {}})]
+        if shutdown:
+            msgs.append(frame({"jsonrpc": "2.0", "id": 2, "method": "shutdown"}))
+        msgs.append(frame({"jsonrpc": "2.0", "method": "exit"}))
+        p = subprocess.run([sys.executable, "-m", "afsmc.cli", "lsp"], input=b"".join(msgs),
+                           capture_output=True, timeout=60)
+        assert p.returncode == code, (shutdown, p.stderr[-500:])

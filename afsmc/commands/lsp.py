@@ -14,5 +14,4 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 def run(args: argparse.Namespace) -> int:
     from afsmc.lsp.server import serve  # pygls is only imported when the server runs
 
-    serve()
-    return 0
+    return serve()

@@ -570,5 +570,16 @@ def rename(ls: AfsmServer, params: T.RenameParams) -> T.WorkspaceEdit | None:
     return T.WorkspaceEdit(changes={uri: edits})
 
 
-def serve() -> None:
+_shut_down = [False]
+
+
+@server.feature(T.SHUTDOWN)
+def _on_shutdown(ls: AfsmServer, params: Any) -> None:
+    _shut_down[0] = True
+
+
+def serve() -> int:
+    """Serve until `exit`: 0 after a `shutdown` request, 1 without one (as LSP asks; pygls's
+    own exit code is lost in its event loop)."""
     server.start_io()
+    return 0 if _shut_down[0] else 1
