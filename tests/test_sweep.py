@@ -12,6 +12,7 @@ from pathlib import Path
 
 import pytest
 
+from afsmc.diagnostics import CompileError
 from afsmc.verify import parse_values, sweep
 from tests.conftest import EXAMPLES, run_cli
 from tests.test_verify import DEADLINE, GEO, RECORD
@@ -415,3 +416,25 @@ def test_a_double_constant_takes_every_number(deadline: str) -> None:
     r = run_cli("sweep", deadline, "--const", "P_FAIL=0:0.5:0.25", "-p", "steps")
     assert r.code == 0, r.err
     assert [row["P_FAIL"] for row in rows(r.out)] == ["0.0", "0.25", "0.5"]
+
+
+def test_a_worker_that_dies_is_a_diagnostic_with_the_points_it_had(
+        deadline: str, monkeypatch: pytest.MonkeyPatch) -> None:
+    """A killed worker (the OOM killer) surfaced as BrokenProcessPool: 'internal error',
+    exit 3, and the finished points were lost."""
+    import importlib
+    from concurrent.futures.process import BrokenProcessPool
+
+    sweep_mod = importlib.import_module("afsmc.verify.sweep")
+    real_run = sweep_mod._run
+
+    def dies_after_the_first(tasks, jobs, dask, progress, total, results):  # type: ignore[no-untyped-def]
+        real_run(tasks[:1], 1, None, None, total, results)  # the first chunk finishes
+        raise BrokenProcessPool("a child process terminated abruptly")
+
+    monkeypatch.setattr(sweep_mod, "_run", dies_after_the_first)
+    with pytest.raises(CompileError) as info:
+        sweep(deadline, "P_FAIL", [0.1, 0.2, 0.3], properties=["steps"], jobs=3)
+    (died, kept) = info.value.diagnostics
+    assert died.code == "E414" and "1 of 3 points were evaluated" in died.message
+    assert kept.code == "N412" and "\n0.1,steps," in kept.message

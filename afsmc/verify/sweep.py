@@ -16,6 +16,7 @@ import re
 import time
 from collections.abc import Sequence
 from concurrent.futures import ProcessPoolExecutor, as_completed
+from concurrent.futures.process import BrokenProcessPool
 from dataclasses import dataclass, field
 from decimal import Decimal, InvalidOperation
 from typing import Any, Literal
@@ -475,6 +476,20 @@ def sweep(path: str, variable: str, values: Sequence[Number], *, kind: Kind = "c
         for d in _kept(path, name, kind, got):
             exc.add_note(d.message)
         raise
+    except Exception as exc:
+        # A worker was killed (the out-of-memory killer, a signal): not a bug of afsmc.
+        # Dask says KilledWorker (not imported here: distributed takes a second to load).
+        if not isinstance(exc, BrokenProcessPool) and not (
+                type(exc).__name__ == "KilledWorker"
+                and type(exc).__module__.startswith("distributed")):
+            raise
+        got = [pt for pts, diags in finished.values() if not diags for pt in pts]
+        raise CompileError([Diagnostic(
+            "E414", Severity.ERROR, f"a process of the sweep died before it finished: "
+            f"{len(got)} of {len(values)} points were evaluated", None,
+            hint="was it killed, or out of memory? --jobs 1 runs one point at a time; "
+                 "--max-states stops a model that is too large before it is built"),
+            *_kept(path, name, kind, got)]) from None
     points: list[SweepPoint] = []
     failed: list[Diagnostic] = []
     for task, (pts, diags) in zip(tasks, outcomes, strict=True):
