@@ -4,6 +4,7 @@ determinism, workers, Dask, traces and undecided runs."""
 from __future__ import annotations
 
 import json
+import os
 import math
 from pathlib import Path
 
@@ -277,3 +278,32 @@ def test_the_header_names_the_resolution_only_for_a_model_with_intervals(tmp_pat
     assert "plain.afsm: 10 runs, no interval constants, seed 0" in r.out, r.out
     r = run_cli("simulate", str(PATROL), "--runs", "10", "--resolve", "floor")
     assert "patrol.afsm: 10 runs, interval constants floor, seed 0" in r.out, r.out
+
+
+def test_a_worker_that_dies_is_a_diagnostic_not_an_internal_error() -> None:
+    """A killed worker process (the OOM killer) surfaced as BrokenProcessPool: exit 3."""
+    import signal
+    import subprocess
+    import sys
+    import time
+
+    proc = subprocess.Popen([sys.executable, "-m", "afsmc.cli", "simulate", str(UAV),
+                             "--runs", "5000000", "--jobs", "2"],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                            start_new_session=True)
+    try:
+        children: list[int] = []
+        deadline = time.monotonic() + 60
+        while not children and time.monotonic() < deadline and proc.poll() is None:
+            time.sleep(0.2)
+            with open(f"/proc/{proc.pid}/task/{proc.pid}/children") as f:
+                children = [int(c) for c in f.read().split()]
+        assert children, "no worker process started"
+        time.sleep(1.0)  # let it reach the pool's loop
+        os.kill(children[-1], signal.SIGKILL)
+        out, err = proc.communicate(timeout=120)
+    finally:
+        if proc.poll() is None:
+            os.killpg(proc.pid, signal.SIGKILL)
+    assert proc.returncode == 1, err[-1500:]
+    assert "error[E506]" in err and "a worker process died" in err and "internal error" not in err

@@ -22,6 +22,7 @@ from afsmc.compiler import load
 from afsmc.lifetime import die_with_parent
 from afsmc.model.lower import lower
 from afsmc.sim import stats
+from afsmc.sim.compile import SimError
 from afsmc.sim.engine import BatchResult, Program, build, simulate_batch
 
 Strategy = Literal["uniform", "floor", "ceil", "min", "max"]
@@ -63,6 +64,8 @@ class Outcome:
 
 
 _PROGRAMS: dict[Job, Program] = {}
+# A killed worker (the out-of-memory killer, a signal) is not a bug of afsmc.
+_DIED = "a worker process died before it finished (was it killed, or out of memory?)"
 
 
 def program(job: Job) -> Program:
@@ -110,10 +113,13 @@ def simulate(job: Job, runs: int, seed: int, *, confidence: float = 0.999, jobs:
             futures = [client.submit(run_batch, job, n, s, trace if i == 0 else 0, pure=False)
                        for i, (n, s) in enumerate(plan)]
             index = {f.key: i for i, f in enumerate(futures)}
-            from distributed import as_completed
+            from distributed import KilledWorker, as_completed
 
-            for fut in as_completed(futures):  # type: ignore[no-untyped-call]
-                finished(index[fut.key], fut.result())
+            try:
+                for fut in as_completed(futures):  # type: ignore[no-untyped-call]
+                    finished(index[fut.key], fut.result())
+            except KilledWorker:
+                raise SimError(_DIED) from None
         finally:
             if not isinstance(dask, Client):
                 client.close()  # type: ignore[no-untyped-call]
@@ -121,14 +127,18 @@ def simulate(job: Job, runs: int, seed: int, *, confidence: float = 0.999, jobs:
         import multiprocessing
         from concurrent.futures import ProcessPoolExecutor
         from concurrent.futures import as_completed as cf_completed
+        from concurrent.futures.process import BrokenProcessPool
 
         ctx = multiprocessing.get_context("fork" if sys.platform == "linux" else "spawn")
         with ProcessPoolExecutor(max_workers=jobs, mp_context=ctx, initializer=die_with_parent,
                                  initargs=(os.getpid(),)) as pool:
             futs = {pool.submit(run_batch, job, n, s, trace if i == 0 else 0): i
                     for i, (n, s) in enumerate(plan)}
-            for f in cf_completed(futs):
-                finished(futs[f], f.result())
+            try:
+                for f in cf_completed(futs):
+                    finished(futs[f], f.result())
+            except BrokenProcessPool:
+                raise SimError(_DIED) from None
     else:
         for i, (n, s) in enumerate(plan):
             finished(i, simulate_batch(prog, n, np.random.default_rng(s), job.max_steps,
