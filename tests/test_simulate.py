@@ -4,8 +4,8 @@ determinism, workers, Dask, traces and undecided runs."""
 from __future__ import annotations
 
 import json
-import os
 import math
+import os
 from pathlib import Path
 
 import pytest
@@ -301,7 +301,7 @@ def test_a_worker_that_dies_is_a_diagnostic_not_an_internal_error() -> None:
         assert children, "no worker process started"
         time.sleep(1.0)  # let it reach the pool's loop
         os.kill(children[-1], signal.SIGKILL)
-        out, err = proc.communicate(timeout=120)
+        _, err = proc.communicate(timeout=120)
     finally:
         if proc.poll() is None:
             os.killpg(proc.pid, signal.SIGKILL)
