@@ -117,9 +117,11 @@ def check_overflow(model: ir.Model, rep: Reporter) -> None:
             if below or n.type is not Type.INT or free[id(n)] or not isinstance(
                     n, (E.Unary, E.Binary, E.Call)):
                 continue
-            end: float | int | None = _beyond(*bounds(n, model, memo=memo))
-            if end is not None and abs(end) <= 2.0 ** 63 * (1 + 2.0 ** -30):
-                # Floats round 2^63 - 2 up to 2^63: near the edge, ask exact integers.
+            lo, hi = bounds(n, model, memo=memo)
+            end: float | int | None = _beyond(lo, hi)
+            if any(abs(abs(b) - 2.0 ** 63) <= 2.0 ** 33 for b in (lo, hi)):
+                # Floats round 2^63 - 2 up to 2^63 (and a sum of rounded parts may fall
+                # short of it): near the edge, ask exact integers where they can be had.
                 got = _exact(n, model, exact)
                 if got is not None:
                     end = got[1] if got[1] > INT64[1] else got[0] if got[0] < INT64[0] else None

@@ -367,7 +367,7 @@ def _report_syntax_error(exc: UnexpectedInput, source: Source, reporter: Reporte
     if scan.open and _unclosed(exc, source, reporter, scan, accepts, formula):
         return
     bound = _BOUND_EXPRESSION.search(text, 0, pos)
-    if bound is not None and (bound.group(3) or str(tok) in "+-*/"):
+    if bound is not None and (bound.group(3) or str(tok) in ("+", "-", "*", "/")):
         # `F<=K-1 "l"`: the bound is one number or name; the operator started the target
         op, value = re.sub(r"\s+", "", bound.group(1)), bound.group(2)
         rest = re.sub(r"\s*([-+*/])\s*", r" \1 ", bound.group(3)).strip() \
