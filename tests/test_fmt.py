@@ -196,3 +196,11 @@ def test_trailing_blanks_inside_a_block_comment_are_dropped_not_refused(tmp_path
     crlf.write_bytes(text.replace("\n", "\r\n").encode())
     assert run_cli("fmt", str(crlf)).code == 0
     assert crlf.read_bytes() == out.replace("\n", "\r\n").encode()
+
+
+def test_rmin_written_together_still_parses() -> None:
+    """fmt writes `Rmin=?` as PRISM does; the check for keywords run into names (E122) first
+    refused it (found by the grammar fuzzer)."""
+    text = " machine  a  ;  property  a  =  R  min  =?  [  C  ]  ; "
+    out = format_text(text)
+    assert "property a = Rmin=? [ C ];" in out and format_text(out) == out

@@ -149,7 +149,9 @@ def _glued(tok: Token) -> Token:
     contextual lexer takes the keyword's letters and a name after them, so the file read
     as `mode A`. A keyword is never followed by a letter, digit or '_'."""
     text, end = _LEXING.get(), tok.end_pos or 0
-    if end < len(text) and (text[end].isalnum() or text[end] == "_"):
+    if end < len(text) and (text[end].isalnum() or text[end] == "_") and not (
+            # `Rmin=?` and `Rmax=?`, as PRISM writes them (`Pmin` is a keyword of its own)
+            tok == "R" and re.match(r"m(?:in|ax)(?![\w])", text[end:end + 4])):
         raise _Glued(tok)
     return tok
 
