@@ -441,21 +441,40 @@ async def test_positions_count_lines_at_newlines_only(client: LanguageClient) ->
             assert p.line < len(lines) and p.character <= len(lines[p.line]), d
 
 
-def test_exit_code_follows_shutdown() -> None:
-    """LSP: `exit` after `shutdown` is 0, without it 1. It was always 0."""
+def _session(*messages: dict[str, Any]) -> tuple[int, list[dict[str, Any]]]:
+    """Run `afsmc lsp` on these messages (after initialize); its exit code and replies."""
     import json
 
     def frame(obj: dict[str, Any]) -> bytes:
         body = json.dumps(obj).encode()
         return b"Content-Length: %d\r\n\r\n" % len(body) + body
 
-    for shutdown, code in ((False, 1), (True, 0)):
-        msgs = [frame({"jsonrpc": "2.0", "id": 1, "method": "initialize",
-                       "params": {"capabilities": {}}}),
-                frame({"jsonrpc": "2.0", "method": "initialized", "params": {}})]
-        if shutdown:
-            msgs.append(frame({"jsonrpc": "2.0", "id": 2, "method": "shutdown"}))
-        msgs.append(frame({"jsonrpc": "2.0", "method": "exit"}))
-        p = subprocess.run([sys.executable, "-m", "afsmc.cli", "lsp"], input=b"".join(msgs),
-                           capture_output=True, timeout=60)
-        assert p.returncode == code, (shutdown, p.stderr[-500:])
+    start = [{"jsonrpc": "2.0", "id": 1, "method": "initialize", "params": {"capabilities": {}}},
+             {"jsonrpc": "2.0", "method": "initialized", "params": {}}]
+    p = subprocess.run([sys.executable, "-m", "afsmc.cli", "lsp"],
+                       input=b"".join(frame(m) for m in (*start, *messages)),
+                       capture_output=True, timeout=60)
+    replies = [json.loads(part[part.index(b"{"):])
+               for part in p.stdout.split(b"Content-Length")[1:]]
+    return p.returncode, replies
+
+
+def test_exit_code_follows_shutdown() -> None:
+    """LSP: `exit` after `shutdown` is 0, without it 1. It was always 0."""
+    shutdown = {"jsonrpc": "2.0", "id": 2, "method": "shutdown"}
+    exit_ = {"jsonrpc": "2.0", "method": "exit"}
+    assert _session(exit_)[0] == 1
+    assert _session(shutdown, exit_)[0] == 0
+
+
+def test_a_request_with_bad_params_gets_an_error_reply() -> None:
+    """pygls only logged it, so a client waiting for the reply hung."""
+    code, replies = _session(
+        {"jsonrpc": "2.0", "id": 7, "method": "textDocument/hover",
+         "params": {"textDocument": {"uri": "file:///x.afsm"},
+                    "position": {"line": -1, "character": 0}}},
+        {"jsonrpc": "2.0", "id": 8, "method": "textDocument/hover"},
+        {"jsonrpc": "2.0", "id": 2, "method": "shutdown"}, {"jsonrpc": "2.0", "method": "exit"})
+    errors = {r["id"]: r["error"]["code"] for r in replies if "error" in r}
+    assert errors == {7: -32602, 8: -32602} and code == 0
+    assert not [r for r in replies if r.get("method") == "window/showMessage"]  # no pop-up too

@@ -181,3 +181,36 @@ def test_hostile_references_never_import_or_run_anything(ref: str, tmp_path: Pat
         assert "E501" in r.err and f"unknown simulator output '{ref}'" in r.err
     assert any(n.startswith("afsmc.commands") for n in seen)  # the spies did watch
     assert not named & set(seen), sorted(named & set(seen))
+
+
+TWO_ON_A_LINE = """machine two;
+const int T_AP = [7, 9] from sim uav.approach.duration; const int B_AP = 5 from sim uav.approach.battery; // sim-check: old
+const int T_DE = [11, 12] from sim uav.descend_grab.duration; // down to grab
+var x : [0..40] init 0 clamp;
+mode M = 0 initial;
+action Go in M { x += T_AP + B_AP + T_DE; }
+"""
+
+
+def test_update_of_two_constants_on_one_line_keeps_the_next_line(tmp_path: Path) -> None:
+    """Both constants edited the same old comment; the overlapping edits cut into the next
+    declaration (T_DE was gone and the file no longer compiled)."""
+    path = tmp_path / "two.afsm"
+    path.write_text(TWO_ON_A_LINE)
+    r = run_cli("sim-check", str(path), "--runs", "500", "--update")
+    assert r.code == 0, r.err
+    lines = path.read_text().splitlines()
+    assert lines[2] == TWO_ON_A_LINE.splitlines()[2]  # untouched
+    assert lines[1].count("// sim-check:") == 1
+    assert "uav.approach.duration, 500 runs" in lines[1] and "uav.approach.battery, 500" in lines[1]
+    assert run_cli("check", str(path)).code == 0
+    assert run_cli("sim-check", str(path), "--runs", "500").code == 0  # nothing drifted now
+
+
+def test_update_that_cannot_write_is_e003_not_an_internal_error(tmp_path: Path) -> None:
+    # The temporary file beside it gets a name longer than the file system allows.
+    path = tmp_path / ("x" * 250 + ".afsm")  # 255 characters: the most a name may have
+    path.write_text(TWO_ON_A_LINE)
+    r = run_cli("sim-check", str(path), "--runs", "500", "--update")
+    assert r.code == 1 and "error[E003]: cannot write" in r.err and "internal error" not in r.err
+    assert path.read_text() == TWO_ON_A_LINE

@@ -77,7 +77,11 @@ def run(args: argparse.Namespace) -> int:
         changes = {e.name: (e.suggestion, f"{e.ref}, {e.runs} runs, seed {e.seed}, {date}")
                    for e in drifted}
         # Rewriting the input is the point here: no `protect`; keep its line endings and mode.
-        write_atomic(args.file, rewrite(text, args.file, changes), newline=None, keep_mode=True)
+        try:
+            write_atomic(args.file, rewrite(text, args.file, changes), newline=None,
+                         keep_mode=True)
+        except CompileError as exc:  # E003: the file cannot be written (it is left as it was)
+            return fail(exc, args.json, wrapped=True)
         updated = True
     diags = [] if updated else [Diagnostic(
         "E502", Severity.ERROR,

@@ -28,8 +28,9 @@ from dataclasses import dataclass, field
 from typing import Any, TypeVar
 
 from lsprotocol import types as T
-from pygls.exceptions import JsonRpcException
+from pygls.exceptions import JsonRpcException, JsonRpcInvalidParams
 from pygls.lsp.server import LanguageServer
+from pygls.protocol import LanguageServerProtocol
 from pygls.uris import to_fs_path
 from pygls.workspace import ServerTextPosition, TextDocument
 
@@ -92,9 +93,27 @@ def analyse_full(text: str, path: str) -> list[Diagnostic]:
         return exc.diagnostics
 
 
+class _Protocol(LanguageServerProtocol):
+    """pygls only logs a request whose params do not fit its method (a negative position,
+    no params at all), so a client waiting for the answer hung: answer it with the error."""
+
+    def structure_message(self, data: dict[str, Any]) -> Any:
+        try:
+            return super().structure_message(data)
+        except JsonRpcException as exc:
+            if isinstance(data, dict) and "id" in data and "method" in data:
+                self._send_response(data["id"], error=exc.to_response_error())
+            raise
+
+
 class AfsmServer(LanguageServer):
     def __init__(self) -> None:
-        super().__init__("afsmc", __version__)
+        super().__init__("afsmc", __version__, protocol_cls=_Protocol)
+
+    def report_server_error(self, error: Exception, source: Any) -> None:
+        if isinstance(error, JsonRpcInvalidParams):
+            return  # answered already (_Protocol): no pop-up in the editor as well
+        super().report_server_error(error, source)
         self.docs: dict[str, DocState] = {}
         self.check_lock = asyncio.Lock()
         self.last_check = 0.0  # seconds the last full check took

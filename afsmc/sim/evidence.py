@@ -128,6 +128,9 @@ def rewrite(text: str, path: str, changes: dict[str, tuple[str, str]]) -> str:
     `// sim-check: ...` comment at the end of the line on which the declaration ends."""
     spans = value_spans(text, path)
     edits: list[tuple[int, int, str]] = []
+    # One comment per line: declarations that share a line share it. Each used to edit the
+    # same old comment, and the overlapping edits cut into the next line.
+    lines: dict[int, tuple[int, list[str]]] = {}  # end of line -> (last decl end, notes)
     for name, (value, note) in changes.items():
         start, end = spans[name]
         edits.append((start, end, value))
@@ -137,12 +140,12 @@ def rewrite(text: str, path: str, changes: dict[str, tuple[str, str]]) -> str:
             i = text.find(stop, decl_end)
             if i != -1:
                 eol = min(eol, i)
-        tail = text[decl_end:eol]
-        m = _PROVENANCE.search(tail)
-        if m:
-            edits.append((decl_end + m.start(), eol, f" // sim-check: {note}"))
-        else:
-            edits.append((eol, eol, f" // sim-check: {note}"))
+        last, notes = lines.get(eol, (decl_end, []))
+        lines[eol] = (max(last, decl_end), [*notes, note])
+    for eol, (last, notes) in lines.items():
+        m = _PROVENANCE.search(text[last:eol])
+        comment = f" // sim-check: {'; '.join(notes)}"
+        edits.append((last + m.start(), eol, comment) if m else (eol, eol, comment))
     out = text
     for start, end, new in sorted(edits, reverse=True):
         out = out[:start] + new + out[end:]
