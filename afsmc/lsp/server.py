@@ -22,13 +22,14 @@ import logging
 import re
 import time
 import traceback
+import types
 from collections import Counter
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from typing import Any, TypeVar
 
 from lsprotocol import types as T
-from pygls.exceptions import JsonRpcException, JsonRpcInvalidParams
+from pygls.exceptions import JsonRpcException
 from pygls.lsp.server import LanguageServer
 from pygls.protocol import LanguageServerProtocol
 from pygls.uris import to_fs_path
@@ -101,19 +102,18 @@ class _Protocol(LanguageServerProtocol):
         try:
             return super().structure_message(data)
         except JsonRpcException as exc:
-            if isinstance(data, dict) and "id" in data and "method" in data:
-                self._send_response(data["id"], error=exc.to_response_error())
-            raise
+            if not (isinstance(data, dict) and "id" in data and "method" in data):
+                raise
+            self._send_response(data["id"], error=exc.to_response_error())
+            # Answered: handle_message passes over a message of another JSON-RPC version,
+            # where an exception would also pop up "Error in server" in the editor.
+            return types.SimpleNamespace(jsonrpc="answered")
 
 
 class AfsmServer(LanguageServer):
     def __init__(self) -> None:
         super().__init__("afsmc", __version__, protocol_cls=_Protocol)
 
-    def report_server_error(self, error: Exception, source: Any) -> None:
-        if isinstance(error, JsonRpcInvalidParams):
-            return  # answered already (_Protocol): no pop-up in the editor as well
-        super().report_server_error(error, source)
         self.docs: dict[str, DocState] = {}
         self.check_lock = asyncio.Lock()
         self.last_check = 0.0  # seconds the last full check took
