@@ -447,3 +447,16 @@ def test_bounded_cumulative_state_rewards_on_an_mdp_are_refused_on_hybrid(
                                  engine=stormpy.Engine.HYBRID)
     wrong = stormpy.filter_initial_states(res, model).get_min()
     assert wrong != pytest.approx(3.0)  # if Storm gets it right one day, drop the refusal
+
+
+def test_api_takes_python_numbers_and_names_a_missing_property() -> None:
+    """`run(consts={"CELLS": 5})` raised a raw TypeError, and `res.property("zzz")` a bare
+    StopIteration (review 13)."""
+    from afsmc.verify import run as api_run
+
+    patrol = str(EXAMPLES / "patrol.afsm")
+    as_text = api_run(patrol, consts={"CELLS": "3"}, properties=["finish"])
+    as_int = api_run(patrol, consts={"CELLS": 3}, properties=["finish"])
+    assert as_int.property("finish").max == as_text.property("finish").max is not None
+    with pytest.raises(KeyError, match="no property 'zzz'; there are 'finish'"):
+        as_int.property("zzz")

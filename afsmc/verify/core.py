@@ -141,7 +141,12 @@ class VerifyResult:
         return self.model.type
 
     def property(self, name: str) -> PropertyResult:
-        return next(p for p in self.properties if p.name == name)
+        """Raises KeyError naming the properties there are (a bare StopIteration did)."""
+        for p in self.properties:
+            if p.name == name:
+                return p
+        raise KeyError(f"no property {name!r}; there are "
+                       + ", ".join(repr(p.name) for p in self.properties))
 
     def to_json(self) -> dict[str, object]:
         u = self.uniform_model
@@ -911,7 +916,17 @@ def check(model: ir.Model, props: Sequence[ir.Property], *, via: Via = "prism",
 
 
 @deep
-def run(path: str, *, consts: Mapping[str, str] | None = None, properties: Sequence[str] = (),
+def _const_text(v: str | bool | int | float) -> str:
+    """A constant's value as --const takes it: the API also takes Python numbers."""
+    if isinstance(v, str):
+        return v
+    if isinstance(v, bool):
+        return "true" if v else "false"
+    return str(v) if isinstance(v, int) else repr(float(v))
+
+
+def run(path: str, *, consts: Mapping[str, str | bool | int | float] | None = None,
+        properties: Sequence[str] = (),
         formulas: Sequence[str] = (), via: Via = "prism", engine: Engine = "sparse",
         max_states: int | None = None, uniform: bool = True, isolate: bool | None = None,
         progress: Progress | None = None, text: str | None = None,
@@ -919,7 +934,8 @@ def run(path: str, *, consts: Mapping[str, str] | None = None, properties: Seque
         split: bool = False, memory_budget: int | None = None) -> VerifyResult:
     """Verify one .afsm file; see the package docstring. Raises CompileError."""
     t0 = time.perf_counter()
-    loaded = load_with_formulas(path, consts, formulas, text=text)
+    texts = None if consts is None else {k: _const_text(v) for k, v in consts.items()}
+    loaded = load_with_formulas(path, texts, formulas, text=text)
     model = loaded.model
     props = select(model, properties, loaded.adhoc)
     load_time = time.perf_counter() - t0

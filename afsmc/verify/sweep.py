@@ -109,7 +109,12 @@ class SweepPoint:
     seconds: float = 0.0  # wall time of the point (not written to the outputs)
 
     def property(self, name: str) -> PropertyResult:
-        return next(p for p in self.properties if p.name == name)
+        """Raises KeyError naming the properties there are (a bare StopIteration did)."""
+        for p in self.properties:
+            if p.name == name:
+                return p
+        raise KeyError(f"no property {name!r}; there are "
+                       + ", ".join(repr(p.name) for p in self.properties))
 
 
 @dataclass(frozen=True)
