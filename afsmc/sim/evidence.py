@@ -94,8 +94,9 @@ def judge(const: ir.Constant, runs: int, seed: int) -> Evidence:
     a_lo, b_lo = stats.quantile_interval(xs, q_lo, conf)
     a_hi, b_hi = stats.quantile_interval(xs, q_hi, conf)
     hull = (math.floor(float(np.quantile(xs, q_lo))), math.ceil(float(np.quantile(xs, q_hi))))
-    lo_ok = (math.floor(a_lo), math.floor(b_lo))
-    hi_ok = (math.ceil(a_hi), math.ceil(b_hi))
+    # (an unbounded end stays unbounded: too few runs to bound that quantile)
+    lo_ok = tuple(math.floor(v) if math.isfinite(v) else v for v in (a_lo, b_lo))
+    hi_ok = tuple(math.ceil(v) if math.isfinite(v) else v for v in (a_hi, b_hi))
     ok = lo_ok[0] <= lo <= lo_ok[1] and hi_ok[0] <= hi <= hi_ok[1]
     accept = (f"floor in [{lo_ok[0]}, {lo_ok[1]}], ceil in [{hi_ok[0]}, {hi_ok[1]}] "
               f"(hull of the central {_num(c * 100)}% at confidence {_num(conf)})")
