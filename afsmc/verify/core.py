@@ -915,7 +915,6 @@ def check(model: ir.Model, props: Sequence[ir.Property], *, via: Via = "prism",
     return Checks(stats[0], stats[1] if len(stats) > 1 else None, results)
 
 
-@deep
 def _const_text(v: str | bool | int | float) -> str:
     """A constant's value as --const takes it: the API also takes Python numbers."""
     if isinstance(v, str):
@@ -925,6 +924,7 @@ def _const_text(v: str | bool | int | float) -> str:
     return str(v) if isinstance(v, int) else repr(float(v))
 
 
+@deep
 def run(path: str, *, consts: Mapping[str, str | bool | int | float] | None = None,
         properties: Sequence[str] = (),
         formulas: Sequence[str] = (), via: Via = "prism", engine: Engine = "sparse",
