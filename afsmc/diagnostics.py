@@ -25,6 +25,17 @@ class Severity(StrEnum):
 BOM = "\ufeff"
 
 
+def line_starts(text: str) -> list[int]:
+    """Where each line of `text` starts. Lines end at '\n' only, as the lexer counts them
+    (and LSP): str.splitlines also breaks at form feeds and U+2028, which put excerpts and
+    editor positions on the wrong line."""
+    starts, i = [0], text.find("\n")
+    while i >= 0:
+        starts.append(i + 1)
+        i = text.find("\n", i + 1)
+    return starts
+
+
 @dataclass(frozen=True)
 class Source:
     """The text of one input file, kept so diagnostics can quote it.
@@ -38,13 +49,7 @@ class Source:
 
     @cached_property
     def _starts(self) -> list[int]:
-        """Where each line starts. Lines end at '\n' only, as the lexer counts them:
-        str.splitlines also breaks at form feeds and U+2028, which showed the wrong line."""
-        starts, i = [0], self.text.find("\n")
-        while i >= 0:
-            starts.append(i + 1)
-            i = self.text.find("\n", i + 1)
-        return starts
+        return line_starts(self.text)
 
     def line(self, lineno: int) -> str:
         starts = self._starts

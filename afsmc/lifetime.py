@@ -13,6 +13,15 @@ import signal
 PR_SET_PDEATHSIG = 1  # <linux/prctl.h>
 
 
+def worker_died(exc: BaseException) -> bool:
+    """A pool worker was killed (the out-of-memory killer, a signal): not a bug of afsmc.
+    Dask says KilledWorker; distributed is not imported for it (it takes a second)."""
+    from concurrent.futures.process import BrokenProcessPool
+
+    return isinstance(exc, BrokenProcessPool) or (
+        type(exc).__name__ == "KilledWorker" and type(exc).__module__.startswith("distributed"))
+
+
 def die_with_parent(parent: int) -> None:
     """Call first thing in a child: the kernel sends it SIGKILL when the process `parent`
     (its parent's pid, passed in) dies, however it dies. Linux only (prctl); elsewhere

@@ -37,7 +37,7 @@ from pygls.workspace import ServerTextPosition, TextDocument
 
 from afsmc import __version__
 from afsmc.compiler import load
-from afsmc.diagnostics import CompileError, Diagnostic, Severity
+from afsmc.diagnostics import CompileError, Diagnostic, Severity, line_starts
 from afsmc.lsp import index as I
 from afsmc.model import ir
 from afsmc.model.expr import FUNCTIONS
@@ -117,6 +117,7 @@ class AfsmServer(LanguageServer):
         self.docs: dict[str, DocState] = {}
         self.check_lock = asyncio.Lock()
         self.last_check = 0.0  # seconds the last full check took
+        self.shut_down = False  # a `shutdown` request came: `exit` is then 0
 
 
 server = AfsmServer()
@@ -152,7 +153,7 @@ class _Doc(TextDocument):
 
     @functools.cached_property
     def _starts(self) -> list[int]:
-        return [0, *(i + 1 for i, ch in enumerate(self.source) if ch == "\n")]
+        return line_starts(self.source)
 
     @property
     def lines(self) -> Sequence[str]:
@@ -589,16 +590,13 @@ def rename(ls: AfsmServer, params: T.RenameParams) -> T.WorkspaceEdit | None:
     return T.WorkspaceEdit(changes={uri: edits})
 
 
-_shut_down = [False]
-
-
 @server.feature(T.SHUTDOWN)
 def _on_shutdown(ls: AfsmServer, params: Any) -> None:
-    _shut_down[0] = True
+    ls.shut_down = True
 
 
 def serve() -> int:
     """Serve until `exit`: 0 after a `shutdown` request, 1 without one (as LSP asks; pygls's
     own exit code is lost in its event loop)."""
     server.start_io()
-    return 0 if _shut_down[0] else 1
+    return 0 if server.shut_down else 1

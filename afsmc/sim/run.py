@@ -19,7 +19,7 @@ from typing import Any, Literal
 import numpy as np
 
 from afsmc.compiler import load
-from afsmc.lifetime import die_with_parent
+from afsmc.lifetime import die_with_parent, worker_died
 from afsmc.model.lower import lower
 from afsmc.sim import stats
 from afsmc.sim.compile import SimError
@@ -64,7 +64,7 @@ class Outcome:
 
 
 _PROGRAMS: dict[Job, Program] = {}
-# A killed worker (the out-of-memory killer, a signal) is not a bug of afsmc.
+# (lifetime.worker_died)
 _DIED = "a worker process died before it finished (was it killed, or out of memory?)"
 
 
@@ -113,12 +113,14 @@ def simulate(job: Job, runs: int, seed: int, *, confidence: float = 0.999, jobs:
             futures = [client.submit(run_batch, job, n, s, trace if i == 0 else 0, pure=False)
                        for i, (n, s) in enumerate(plan)]
             index = {f.key: i for i, f in enumerate(futures)}
-            from distributed import KilledWorker, as_completed
+            from distributed import as_completed
 
             try:
                 for fut in as_completed(futures):  # type: ignore[no-untyped-call]
                     finished(index[fut.key], fut.result())
-            except KilledWorker:
+            except Exception as exc:
+                if not worker_died(exc):
+                    raise
                 raise SimError(_DIED) from None
         finally:
             if not isinstance(dask, Client):
@@ -127,7 +129,6 @@ def simulate(job: Job, runs: int, seed: int, *, confidence: float = 0.999, jobs:
         import multiprocessing
         from concurrent.futures import ProcessPoolExecutor
         from concurrent.futures import as_completed as cf_completed
-        from concurrent.futures.process import BrokenProcessPool
 
         ctx = multiprocessing.get_context("fork" if sys.platform == "linux" else "spawn")
         with ProcessPoolExecutor(max_workers=jobs, mp_context=ctx, initializer=die_with_parent,
@@ -137,7 +138,9 @@ def simulate(job: Job, runs: int, seed: int, *, confidence: float = 0.999, jobs:
             try:
                 for f in cf_completed(futs):
                     finished(futs[f], f.result())
-            except BrokenProcessPool:
+            except Exception as exc:
+                if not worker_died(exc):
+                    raise
                 raise SimError(_DIED) from None
     else:
         for i, (n, s) in enumerate(plan):

@@ -28,7 +28,7 @@ from typing import Any
 import lark
 from lark.exceptions import LarkError
 
-from afsmc.diagnostics import BOM, CompileError, Diagnostic, Severity, Span
+from afsmc.diagnostics import BOM, CompileError, Diagnostic, Severity, Span, line_starts
 from afsmc.syntax import ast
 from afsmc.syntax.parser import grammar_text, parse
 
@@ -488,11 +488,11 @@ class _Formatter:
 
     def _line(self, offset: int) -> int:
         # by bisection: counting the newlines before each comment was quadratic in the file
-        return bisect.bisect_right(self._newlines, offset - 1)
+        return bisect.bisect_right(self._starts, offset) - 1
 
     @cached_property
-    def _newlines(self) -> list[int]:
-        return [i for i, ch in enumerate(self.text) if ch == "\n"]
+    def _starts(self) -> list[int]:
+        return line_starts(self.text)
 
     def run(self) -> str:
         units = self.units()

@@ -111,6 +111,14 @@ class PropertyResult:
         return out
 
 
+def find_property(results: Sequence[PropertyResult], name: str) -> PropertyResult:
+    """Raises KeyError naming the properties there are (a bare StopIteration did)."""
+    for p in results:
+        if p.name == name:
+            return p
+    raise KeyError(f"no property {name!r}; there are " + ", ".join(repr(p.name) for p in results))
+
+
 @dataclass
 class Checks:
     """What :func:`check` returns: the models built and one result per property."""
@@ -141,12 +149,7 @@ class VerifyResult:
         return self.model.type
 
     def property(self, name: str) -> PropertyResult:
-        """Raises KeyError naming the properties there are (a bare StopIteration did)."""
-        for p in self.properties:
-            if p.name == name:
-                return p
-        raise KeyError(f"no property {name!r}; there are "
-                       + ", ".join(repr(p.name) for p in self.properties))
+        return find_property(self.properties, name)
 
     def to_json(self) -> dict[str, object]:
         u = self.uniform_model

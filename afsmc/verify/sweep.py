@@ -16,7 +16,6 @@ import re
 import time
 from collections.abc import Sequence
 from concurrent.futures import ProcessPoolExecutor, as_completed
-from concurrent.futures.process import BrokenProcessPool
 from dataclasses import dataclass, field
 from decimal import Decimal, InvalidOperation
 from typing import Any, Literal
@@ -24,13 +23,20 @@ from typing import Any, Literal
 from afsmc.backends.prism import emit as prism_emit
 from afsmc.compiler import read_source, write_atomic
 from afsmc.diagnostics import CompileError, Diagnostic, Severity
-from afsmc.lifetime import die_with_parent
+from afsmc.lifetime import die_with_parent, worker_died
 from afsmc.model import expr as E
 from afsmc.model import ir
 from afsmc.model.lower import lower
 from afsmc.model.reduce import Reductions
 from afsmc.stack import deep
-from afsmc.verify.core import PropertyResult, check, load_with_formulas, select, shown
+from afsmc.verify.core import (
+    PropertyResult,
+    check,
+    find_property,
+    load_with_formulas,
+    select,
+    shown,
+)
 from afsmc.verify.guard import Progress
 from afsmc.verify.storm import Engine, Via, finite
 
@@ -109,12 +115,7 @@ class SweepPoint:
     seconds: float = 0.0  # wall time of the point (not written to the outputs)
 
     def property(self, name: str) -> PropertyResult:
-        """Raises KeyError naming the properties there are (a bare StopIteration did)."""
-        for p in self.properties:
-            if p.name == name:
-                return p
-        raise KeyError(f"no property {name!r}; there are "
-                       + ", ".join(repr(p.name) for p in self.properties))
+        return find_property(self.properties, name)
 
 
 @dataclass(frozen=True)
@@ -289,8 +290,8 @@ def model_text(path: str, text: str, consts: dict[str, str]) -> str:
 def independent(path: str, text: str, consts: dict[str, str], variable: str,
                 values: Sequence[Number]) -> bool:
     """Whether the model (not its properties) is the same at every value. Every one is
-    compared (about 0.015 s each for the UAV, the parse cached): a model can be equal at both ends and differ
-    between them (a range `[0..K * (2 - K)]` over K = 0..2)."""
+    compared (about 0.015 s each for the UAV, the parse cached): a model can be equal at
+    both ends and differ between them (a range `[0..K * (2 - K)]` over K = 0..2)."""
     if len(values) < 2:
         return False
     try:
@@ -482,11 +483,7 @@ def sweep(path: str, variable: str, values: Sequence[Number], *, kind: Kind = "c
             exc.add_note(d.message)
         raise
     except Exception as exc:
-        # A worker was killed (the out-of-memory killer, a signal): not a bug of afsmc.
-        # Dask says KilledWorker (not imported here: distributed takes a second to load).
-        if not isinstance(exc, BrokenProcessPool) and not (
-                type(exc).__name__ == "KilledWorker"
-                and type(exc).__module__.startswith("distributed")):
+        if not worker_died(exc):
             raise
         got = [pt for pts, diags in finished.values() if not diags for pt in pts]
         raise CompileError([Diagnostic(
