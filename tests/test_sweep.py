@@ -438,3 +438,13 @@ def test_a_worker_that_dies_is_a_diagnostic_with_the_points_it_had(
     (died, kept) = info.value.diagnostics
     assert died.code == "E414" and "1 of 3 points were evaluated" in died.message
     assert kept.code == "N412" and "\n0.1,steps," in kept.message
+
+
+def test_api_takes_python_numbers_as_run_does(deadline: str) -> None:
+    """The twin of run(consts={"CELLS": 5}): sweep's fixed constants raised a TypeError."""
+    as_text = sweep(deadline, "D", [3, 4], consts={"P_FAIL": "0.3"}, properties=["by_deadline"],
+                    jobs=1)
+    as_number = sweep(deadline, "D", [3, 4], consts={"P_FAIL": 0.3}, properties=["by_deadline"],
+                      jobs=1)
+    assert as_number.curve("by_deadline", "max") == as_text.curve("by_deadline", "max")
+    assert None not in as_text.curve("by_deadline", "max")

@@ -918,7 +918,7 @@ def check(model: ir.Model, props: Sequence[ir.Property], *, via: Via = "prism",
     return Checks(stats[0], stats[1] if len(stats) > 1 else None, results)
 
 
-def _const_text(v: str | bool | int | float) -> str:
+def const_text(v: str | bool | int | float) -> str:
     """A constant's value as --const takes it: the API also takes Python numbers."""
     if isinstance(v, str):
         return v
@@ -937,7 +937,7 @@ def run(path: str, *, consts: Mapping[str, str | bool | int | float] | None = No
         split: bool = False, memory_budget: int | None = None) -> VerifyResult:
     """Verify one .afsm file; see the package docstring. Raises CompileError."""
     t0 = time.perf_counter()
-    texts = None if consts is None else {k: _const_text(v) for k, v in consts.items()}
+    texts = None if consts is None else {k: const_text(v) for k, v in consts.items()}
     loaded = load_with_formulas(path, texts, formulas, text=text)
     model = loaded.model
     props = select(model, properties, loaded.adhoc)

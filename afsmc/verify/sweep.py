@@ -14,7 +14,7 @@ import io
 import os
 import re
 import time
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from dataclasses import dataclass, field
 from decimal import Decimal, InvalidOperation
@@ -32,6 +32,7 @@ from afsmc.stack import deep
 from afsmc.verify.core import (
     PropertyResult,
     check,
+    const_text,
     find_property,
     load_with_formulas,
     select,
@@ -434,7 +435,8 @@ def _chunks(xs: Sequence[Number], n: int) -> list[tuple[Number, ...]]:
 
 @deep
 def sweep(path: str, variable: str, values: Sequence[Number], *, kind: Kind = "const",
-          consts: dict[str, str] | None = None, properties: Sequence[str] = (),
+          consts: Mapping[str, str | bool | int | float] | None = None,
+          properties: Sequence[str] = (),
           formulas: Sequence[str] = (), via: Via = "prism", engine: Engine = "sparse",
           max_states: int | None = None, jobs: int | None = None, dask: Any = None,
           uniform: bool = True, progress: Progress | None = None,
@@ -445,16 +447,16 @@ def sweep(path: str, variable: str, values: Sequence[Number], *, kind: Kind = "c
     if not values:
         raise CompileError([Diagnostic("E410", Severity.ERROR, "the sweep has no values", None)])
     source = read_source(path) if text is None else text
-    consts = dict(consts or {})
+    texts = {k: const_text(v) for k, v in (consts or {}).items()}  # as run() takes them
     if kind == "const":
-        consts.pop(variable, None)
-        _check_names(path, source, consts, variable, values, properties, formulas)
+        texts.pop(variable, None)
+        _check_names(path, source, texts, variable, values, properties, formulas)
     else:
-        _check_bounds(path, source, consts, properties, formulas, values)
+        _check_bounds(path, source, texts, properties, formulas, values)
     jobs = jobs or os.cpu_count() or 1
     # Dask workers are daemon processes, which cannot start the guard's child process.
     isolate: bool | None = False if dask is not None else None
-    base = dict(path=path, text=source, consts=tuple(sorted(consts.items())),
+    base = dict(path=path, text=source, consts=tuple(sorted(texts.items())),
                 properties=tuple(properties), formulas=tuple(formulas), variable=variable,
                 kind=kind, via=via, engine=engine, max_states=max_states, uniform=uniform,
                 isolate=isolate, reductions=reductions, bisimulation=bisimulation,
@@ -462,7 +464,7 @@ def sweep(path: str, variable: str, values: Sequence[Number], *, kind: Kind = "c
     if kind == "const" and progress is not None and len(values) > 100:
         # about 0.015 s per value for the UAV: 15 s before the first point at 1,000
         progress(f"sweep: comparing the model at the {len(values):,} values of {variable}")
-    if kind == "const" and independent(path, source, consts, variable, values):
+    if kind == "const" and independent(path, source, texts, variable, values):
         # Only the properties read the constant (a deadline): one build per chunk.
         chunks = _chunks(values, 1 if dask is None and jobs == 1 else jobs)
         tasks = [Task(xs=c, shared=True, sweep_xs=tuple(values), **base)  # type: ignore[arg-type]
