@@ -394,7 +394,20 @@ def test_results_json_overlay(tmp_path: Path) -> None:
                        "is the output of `afsmc sweep`"),
                       (json.dumps({**results, "modes": [{"mode": "Dock", "value": 0.5},
                                                         {"number": 1, "value": 0.25}]}),
-                       "mode Dock is listed twice")):
+                       "mode Dock is listed twice"),
+                      ('{"properties": [{"name": "p", "min": NaN}]}',
+                       "property p has min nan, not a finite number"),
+                      ('{"properties": [{"name": "p", "value": Infinity}]}',
+                       "property p has value inf, not a finite number"),
+                      (json.dumps({**results, "modes": [{"mode": "Dock"}]}),
+                       "mode Dock has no value"),
+                      (json.dumps({**results, "modes": [{"mode": "Dock", "number": 0,
+                                                         "value": 0.5}]}),
+                       "names mode Dock (number 1) and number 0 (Patrol)"),
+                      (json.dumps({**results, "constants": []}), '"constants" is not an object'),
+                      (json.dumps({"properties": [{"name": "p", "value": 1},
+                                                  {"name": "p", "value": 2}]}),
+                       "property p is listed twice")):
         rj.write_text(bad)
         r = run_cli("diagram", str(EXAMPLES / "patrol.afsm"), "--results", str(rj), "-o",
                     str(out))

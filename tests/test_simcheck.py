@@ -234,3 +234,32 @@ def test_too_few_runs_cannot_report_a_drift() -> None:
     for runs in ("2", "10"):
         r = run_cli("sim-check", str(EXAMPLES / "uav.afsm"), "--runs", runs)
         assert r.code == 0 and "E502" not in r.err, r.err[-800:]
+
+
+UNFIT = """machine unfit;
+const int B_AP = 5 from sim uav.approach.battery with tolerance = 0.01;
+const int T_DE = [1, 2] from sim uav.descend_grab.duration;
+var x : [0..40] init 0 clamp;
+mode M = 0 initial;
+action Go in M { x += B_AP + T_DE; }
+"""
+
+
+def test_update_writes_no_value_its_own_rule_rejects(tmp_path: Path) -> None:
+    """An int whose accepted range (mean interval +- a small tolerance) holds no integer:
+    --update wrote the rounded mean and said "updated", and the next sim-check rejected it
+    again (review 13). Now that constant is E507 and stays as written; the others update."""
+    path = tmp_path / "unfit.afsm"
+    path.write_text(UNFIT)
+    r = run_cli("sim-check", str(path), "--runs", "500", "--update")
+    assert r.code == 1 and "error[E507]: constant 'B_AP'" in r.err, r.err
+    assert "no int fits the rule: it accepts value in [" in r.err and "E502" not in r.err
+    assert "updated 1 constant(s)" in r.err and "T_DE = [11, 12]" in r.err
+    lines = path.read_text().splitlines()
+    assert lines[1] == UNFIT.splitlines()[1]  # B_AP untouched
+    assert lines[2].startswith("const int T_DE = [11, 12] from sim")
+    again = run_cli("sim-check", str(path), "--runs", "500", "--json")
+    data = json.loads(again.out)
+    assert again.code == 1 and [d["code"] for d in data["diagnostics"]] == ["E507"]
+    by_name = {c["name"]: c for c in data["constants"]}
+    assert by_name["B_AP"]["suggestion"] is None and by_name["T_DE"]["verdict"] == "consistent"

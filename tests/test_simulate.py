@@ -15,6 +15,7 @@ from afsmc.backends.prism import emit
 from afsmc.compiler import load
 from afsmc.model.lower import Resolution, lower
 from afsmc.sim.run import job_for, simulate
+from afsmc.simlib import registry
 from afsmc.verify import run
 
 try:  # tests/ may or may not be a package
@@ -258,6 +259,12 @@ def test_options_that_would_be_ignored_are_refused_or_honoured() -> None:
     assert run_cli("simulate", str(PATROL), "--dask", "tcp://127.0.0.1:1", "--jobs", "2").code == 2
     r = run_cli("sim-check", "--list", str(PATROL))
     assert r.code == 2 and "takes no FILE" in r.err
+    # --list --json printed the text listing
+    r = run_cli("sim-check", "--list", "--json")
+    listed = json.loads(r.out)["outputs"]
+    assert r.code == 0 and [o["ref"] for o in listed] == registry.available()
+    assert {o["kind"] for o in listed} <= {"duration", "battery", "probability"}
+    assert "uav.takeoff.duration" in [o["ref"] for o in listed]
     data = sim_json(PATROL, "--runs", "20", "--traces", "2")
     traces = data["traces"]
     assert isinstance(traces, list) and len(traces) == 2

@@ -448,3 +448,18 @@ def test_api_takes_python_numbers_as_run_does(deadline: str) -> None:
                       jobs=1)
     assert as_number.curve("by_deadline", "max") == as_text.curve("by_deadline", "max")
     assert None not in as_text.curve("by_deadline", "max")
+
+
+@pytest.mark.parametrize(("option", "value"), [("kind", "zzz"), ("via", "smv"),
+                                               ("engine", "fast")])
+def test_api_refuses_an_unknown_choice(deadline: str, option: str, value: str) -> None:
+    """sweep(kind="zzz") ran a bound sweep, and a misspelt engine or via ran as sparse/PRISM
+    (review 13); the same check guards run()."""
+    from afsmc.verify import run
+
+    with pytest.raises(ValueError, match=f"{option} must be one of .*; got '{value}'"):
+        sweep(deadline, "D", [3], properties=["by_deadline"], jobs=1,
+              **{option: value})  # type: ignore[arg-type]
+    if option != "kind":
+        with pytest.raises(ValueError, match=f"{option} must be one of .*; got '{value}'"):
+            run(deadline, **{option: value})  # type: ignore[arg-type]

@@ -106,6 +106,11 @@ def _check_numbers(path: str, entry: dict[str, Any], what: str,
         if isinstance(v, bool) or not isinstance(v, (int, float)):
             raise _error("E611", f"{path}: {what} has {key} {v!r}, not a number",
                          hint="pass the output of `afsmc verify --json`")
+        if not math.isfinite(v):
+            # Python's json reads NaN and Infinity; verify writes neither (null + "infinite")
+            raise _error("E611", f"{path}: {what} has {key} {v!r}, not a finite number",
+                         hint="`afsmc verify --json` writes an infinite value as null and "
+                         "names it in \"infinite\"")
         if probability and not 0 <= v <= 1:
             raise _error("E611", f"{path}: {what} has {key} {v!r}, not a probability",
                          hint="a mode's number is the probability of reaching it, in [0, 1]")
@@ -138,6 +143,9 @@ def read_results(path: str, model: ir.Model) -> Overlay:
         raise _error("E611", f"{path} holds the results of machine {machine}, not {model.name}",
                      hint=f"run `afsmc verify --json` on the file of machine {model.name}")
     given = data.get("constants")
+    if given is not None and not isinstance(given, dict):
+        raise _error("E611", f"{path}: \"constants\" is not an object of NAME: value",
+                     hint="pass the output of `afsmc verify --json`")
     if isinstance(given, dict):
         # The diagram shows no constants: numbers of another instance would pass unnoticed.
         here = {c.name: c.value for c in model.constants if c.is_param}
@@ -149,7 +157,12 @@ def read_results(path: str, model: ir.Model) -> Overlay:
             raise _error("E611", f"{path} holds results for {theirs}; the diagram is of {mine}",
                          hint="pass the --const values the results were computed with")
     notes: list[str] = []
+    seen: set[str] = set()
     for entry in data.get("properties", []):
+        if entry["name"] in seen:
+            raise _error("E611", f"{path}: property {entry['name']} is listed twice",
+                         hint="give each property one entry")
+        seen.add(entry["name"])
         _check_numbers(path, entry, f"property {entry['name']}")
         notes.append(f"{entry['name']}: {_value(entry)}")
     by_name = {m.name: m.number for m in model.modes}
@@ -161,12 +174,21 @@ def read_results(path: str, model: ir.Model) -> Overlay:
         if not isinstance(entry, dict):
             raise _error("E611", f"{path}: an entry of \"modes\" is not an object",
                          hint=MODES_HINT)
-        number = entry.get("number", by_name.get(str(entry.get("mode"))))
+        named = by_name.get(str(entry.get("mode"))) if "mode" in entry else None
+        number = entry.get("number", named)
         if isinstance(number, bool) or not isinstance(number, int) or \
-                number not in model.mode_names:
-            which = entry.get("mode", entry.get("number"))
+                number not in model.mode_names or ("mode" in entry and named is None):
+            which = entry["mode"] if "mode" in entry and named is None else \
+                entry.get("number", entry.get("mode"))
             raise _error("E611", f"{path}: machine {model.name} has no mode {which!r}",
                          hint="modes are named as in the .afsm file, or numbered")
+        if named is not None and number != named:
+            raise _error("E611", f"{path}: an entry of \"modes\" names mode "
+                         f"{entry['mode']} (number {named}) and number {number} "
+                         f"({model.mode_names[number]})", hint=MODES_HINT)
+        if all(entry.get(k) is None for k in ("min", "max", "value", "uniform")):
+            raise _error("E611", f"{path}: mode {model.mode_names[number]} has no value",
+                         hint=MODES_HINT)
         if number in modes:
             raise _error("E611", f"{path}: mode {model.mode_names[number]} is listed twice in "
                          "\"modes\"", hint="give each mode one entry")

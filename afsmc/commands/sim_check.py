@@ -36,6 +36,10 @@ def run(args: argparse.Namespace) -> int:
             print(f"afsmc sim-check: error: --list lists every simulator output; it takes no "
                   f"FILE (got {args.file})", file=sys.stderr)
             return 2
+        if args.json:
+            print_json({"outputs": [{"ref": ref, "kind": registry.kind(ref)}
+                                    for ref in registry.available()]})
+            return 0
         for ref in registry.available():
             print(f"{ref}  ({registry.kind(ref)})")
         return 0
@@ -70,6 +74,15 @@ def run(args: argparse.Namespace) -> int:
                 c.source.span)]), args.json, wrapped=True)
     by_name = {c.name: c for c in sourced}
     drifted = [e for e in results if not e.consistent]
+    # No value its own rule accepts (an int whose accepted range holds no integer):
+    # --update would write a value the next sim-check rejects again.
+    unfit = [Diagnostic(
+        "E507", Severity.ERROR,
+        f"constant '{e.name}' has drifted from simulation '{e.ref}' (mean {e.mean:.4g}), and "
+        f"no {by_name[e.name].type.value} fits the rule: it accepts {e.accept}",
+        by_name[e.name].span, hint="widen its `tolerance`, or declare the constant double")
+        for e in drifted if not e.fits]
+    drifted = [e for e in drifted if e.fits]
     updated = False
     if args.update and drifted:
         assert text is not None
@@ -83,12 +96,12 @@ def run(args: argparse.Namespace) -> int:
         except CompileError as exc:  # E003: the file cannot be written (it is left as it was)
             return fail(exc, args.json, wrapped=True)
         updated = True
-    diags = [] if updated else [Diagnostic(
+    diags = unfit + ([] if updated else [Diagnostic(
         "E502", Severity.ERROR,
         f"constant '{e.name}' = {e.declared} has drifted from simulation '{e.ref}' "
         f"(mean {e.mean:.4g}; the rule accepts {e.accept})", by_name[e.name].span,
         hint=f"the simulation suggests {e.suggestion}; `afsmc sim-check --update` rewrites it")
-        for e in drifted]
+        for e in drifted])
     if args.json:
         print_json({"file": args.file, "runs": args.runs, "seed": args.seed,
                     "updated": [e.name for e in drifted] if updated else [],
@@ -102,8 +115,7 @@ def run(args: argparse.Namespace) -> int:
     if updated:
         print(f"sim-check: updated {len(drifted)} constant(s) in {args.file}: "
               + ", ".join(f"{e.name} = {e.suggestion}" for e in drifted), file=sys.stderr)
-        return 0
-    if drifted:
+    if diags:
         if not args.json:
             report(diags)
         return 1

@@ -41,6 +41,7 @@ class Evidence:
     suggestion: str  # the value --update writes
     confidence: float
     coverage: float | None
+    fits: bool = True  # the rule accepts `suggestion` (an int rule's range may hold no integer)
 
     def to_json(self) -> dict[str, object]:
         return {
@@ -50,8 +51,8 @@ class Evidence:
             "cdf_lo": self.cdf_lo, "cdf_hi": self.cdf_hi,
             "hull": list(self.hull) if self.hull else None, "accept": self.accept,
             "verdict": "consistent" if self.consistent else "drifted",
-            "suggestion": self.suggestion, "confidence": self.confidence,
-            "coverage": self.coverage,
+            "suggestion": self.suggestion if self.fits else None,
+            "confidence": self.confidence, "coverage": self.coverage,
         }
 
 
@@ -82,10 +83,17 @@ def judge(const: ir.Constant, runs: int, seed: int) -> Evidence:
         tol = pol.tolerance if pol.tolerance is not None else (0.5 if is_int else 0.01 * abs(mean))
         v = float(const.value)
         ok = low - tol <= v <= high + tol
-        sugg = str(round(mean)) if is_int else stats.shortest_decimal(mean, low, high)
+        fits = True
+        if is_int:
+            # the accepted integer nearest the mean; a small tolerance may admit none
+            first, last = math.ceil(low - tol), math.floor(high + tol)
+            fits = first <= last
+            sugg = str(min(max(round(mean), first), last) if fits else round(mean))
+        else:
+            sugg = stats.shortest_decimal(mean, low, high)
         return Evidence(const.name, ref, kind, pol.shape, _num(v), runs, seed, mean, low, high,
                         None, None, None, f"value in [{_num(low - tol)}, {_num(high + tol)}] "
-                        f"(mean interval +- tolerance {_num(tol)})", ok, sugg, conf, None)
+                        f"(mean interval +- tolerance {_num(tol)})", ok, sugg, conf, None, fits)
     assert pol.shape == INTERVAL and const.interval is not None
     lo, hi = const.interval
     c = pol.coverage
@@ -97,13 +105,16 @@ def judge(const: ir.Constant, runs: int, seed: int) -> Evidence:
     # (an unbounded end stays unbounded: too few runs to bound that quantile)
     lo_ok = tuple(math.floor(v) if math.isfinite(v) else v for v in (a_lo, b_lo))
     hi_ok = tuple(math.ceil(v) if math.isfinite(v) else v for v in (a_hi, b_hi))
-    ok = lo_ok[0] <= lo <= lo_ok[1] and hi_ok[0] <= hi <= hi_ok[1]
+    def accepted(a: float, b: float) -> bool:
+        return lo_ok[0] <= a <= lo_ok[1] and hi_ok[0] <= b <= hi_ok[1]
+    ok = accepted(lo, hi)
     accept = (f"floor in [{lo_ok[0]}, {lo_ok[1]}], ceil in [{hi_ok[0]}, {hi_ok[1]}] "
               f"(hull of the central {_num(c * 100)}% at confidence {_num(conf)})")
     cdf_lo = float(np.searchsorted(xs, lo, side="right")) / n
     cdf_hi = float(np.searchsorted(xs, hi, side="right")) / n
     return Evidence(const.name, ref, kind, pol.shape, f"[{lo}, {hi}]", runs, seed, mean, low,
-                    high, cdf_lo, cdf_hi, hull, accept, ok, f"[{hull[0]}, {hull[1]}]", conf, c)
+                    high, cdf_lo, cdf_hi, hull, accept, ok, f"[{hull[0]}, {hull[1]}]", conf, c,
+                    accepted(*hull))
 
 
 # ---- rewriting the file ------------------------------------------------------------

@@ -11,6 +11,7 @@ import math
 import os
 import re
 import time
+import typing
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any
@@ -927,6 +928,14 @@ def const_text(v: str | bool | int | float) -> str:
     return str(v) if isinstance(v, int) else repr(float(v))
 
 
+def check_choice(option: str, value: object, allowed: object) -> None:
+    """The API's Literal options, checked: a misspelt engine or via ran as sparse/PRISM."""
+    names = typing.get_args(allowed)
+    if value not in names:
+        raise ValueError(f"{option} must be one of " + ", ".join(map(repr, names))
+                         + f"; got {value!r}")
+
+
 @deep
 def run(path: str, *, consts: Mapping[str, str | bool | int | float] | None = None,
         properties: Sequence[str] = (),
@@ -935,7 +944,10 @@ def run(path: str, *, consts: Mapping[str, str | bool | int | float] | None = No
         progress: Progress | None = None, text: str | None = None,
         reductions: Reductions | None = None, bisimulation: bool = False,
         split: bool = False, memory_budget: int | None = None) -> VerifyResult:
-    """Verify one .afsm file; see the package docstring. Raises CompileError."""
+    """Verify one .afsm file; see the package docstring. Raises CompileError, or
+    ValueError for an unknown `via` or `engine`."""
+    check_choice("via", via, Via)
+    check_choice("engine", engine, Engine)
     t0 = time.perf_counter()
     texts = None if consts is None else {k: const_text(v) for k, v in consts.items()}
     loaded = load_with_formulas(path, texts, formulas, text=text)

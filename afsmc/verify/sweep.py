@@ -32,6 +32,7 @@ from afsmc.stack import deep
 from afsmc.verify.core import (
     PropertyResult,
     check,
+    check_choice,
     const_text,
     find_property,
     load_with_formulas,
@@ -442,7 +443,11 @@ def sweep(path: str, variable: str, values: Sequence[Number], *, kind: Kind = "c
           uniform: bool = True, progress: Progress | None = None,
           text: str | None = None, reductions: Reductions | None = None,
           bisimulation: bool = False, split: bool = False) -> SweepResult:
-    """Evaluate the properties at every value; see the package docstring. Raises CompileError."""
+    """Evaluate the properties at every value; see the package docstring. Raises CompileError,
+    or ValueError for an unknown `kind`, `via` or `engine`."""
+    check_choice("kind", kind, Kind)
+    check_choice("via", via, Via)
+    check_choice("engine", engine, Engine)
     t0 = time.perf_counter()
     if not values:
         raise CompileError([Diagnostic("E410", Severity.ERROR, "the sweep has no values", None)])
