@@ -170,18 +170,21 @@ def read_results(path: str, model: ir.Model) -> Overlay:
     listed = data.get("modes", []) or []
     if not isinstance(listed, list):
         raise _error("E611", f"{path}: \"modes\" is not a list", hint=MODES_HINT)
+
+    def no_mode(which: object) -> CompileError:
+        return _error("E611", f"{path}: machine {model.name} has no mode {which!r}",
+                      hint="modes are named as in the .afsm file, or numbered")
     for entry in listed:
         if not isinstance(entry, dict):
             raise _error("E611", f"{path}: an entry of \"modes\" is not an object",
                          hint=MODES_HINT)
-        named = by_name.get(str(entry.get("mode"))) if "mode" in entry else None
+        named = by_name.get(str(entry["mode"])) if "mode" in entry else None
+        if "mode" in entry and named is None:
+            raise no_mode(entry["mode"])
         number = entry.get("number", named)
         if isinstance(number, bool) or not isinstance(number, int) or \
-                number not in model.mode_names or ("mode" in entry and named is None):
-            which = entry["mode"] if "mode" in entry and named is None else \
-                entry.get("number", entry.get("mode"))
-            raise _error("E611", f"{path}: machine {model.name} has no mode {which!r}",
-                         hint="modes are named as in the .afsm file, or numbered")
+                number not in model.mode_names:
+            raise no_mode(number)
         if named is not None and number != named:
             raise _error("E611", f"{path}: an entry of \"modes\" names mode "
                          f"{entry['mode']} (number {named}) and number {number} "
