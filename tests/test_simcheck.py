@@ -248,11 +248,11 @@ action Go in M { x += B_AP + T_DE; }
 def test_update_writes_no_value_its_own_rule_rejects(tmp_path: Path) -> None:
     """An int whose accepted range (mean interval +- a small tolerance) holds no integer:
     --update wrote the rounded mean and said "updated", and the next sim-check rejected it
-    again (review 13). Now that constant is E507 and stays as written; the others update."""
+    again (review 13). Now that constant is E508 and stays as written; the others update."""
     path = tmp_path / "unfit.afsm"
     path.write_text(UNFIT)
     r = run_cli("sim-check", str(path), "--runs", "500", "--update")
-    assert r.code == 1 and "error[E507]: constant 'B_AP'" in r.err, r.err
+    assert r.code == 1 and "error[E508]: constant 'B_AP'" in r.err, r.err
     assert "no int fits the rule: it accepts value in [" in r.err and "E502" not in r.err
     assert "updated 1 constant(s)" in r.err and "T_DE = [11, 12]" in r.err
     lines = path.read_text().splitlines()
@@ -260,6 +260,6 @@ def test_update_writes_no_value_its_own_rule_rejects(tmp_path: Path) -> None:
     assert lines[2].startswith("const int T_DE = [11, 12] from sim")
     again = run_cli("sim-check", str(path), "--runs", "500", "--json")
     data = json.loads(again.out)
-    assert again.code == 1 and [d["code"] for d in data["diagnostics"]] == ["E507"]
+    assert again.code == 1 and [d["code"] for d in data["diagnostics"]] == ["E508"]
     by_name = {c["name"]: c for c in data["constants"]}
     assert by_name["B_AP"]["suggestion"] is None and by_name["T_DE"]["verdict"] == "consistent"

@@ -77,7 +77,7 @@ def run(args: argparse.Namespace) -> int:
     # No value its own rule accepts (an int whose accepted range holds no integer):
     # --update would write a value the next sim-check rejects again.
     unfit = [Diagnostic(
-        "E507", Severity.ERROR,
+        "E508", Severity.ERROR,
         f"constant '{e.name}' has drifted from simulation '{e.ref}' (mean {e.mean:.4g}), and "
         f"no {by_name[e.name].type.value} fits the rule: it accepts {e.accept}",
         by_name[e.name].span, hint="widen its `tolerance`, or declare the constant double")
