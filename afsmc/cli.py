@@ -18,10 +18,10 @@ import tempfile
 import threading
 import traceback
 from collections.abc import Sequence
-from typing import Any
+from typing import Any, TextIO
 
 from afsmc import __version__
-from afsmc.diagnostics import CompileError, Diagnostic, Severity
+from afsmc.diagnostics import CompileError, Diagnostic, Severity, render_all
 from afsmc.stack import run_deep
 
 # name -> one-line help; the module afsmc.commands.<name> implements it
@@ -132,8 +132,13 @@ def main(argv: Sequence[str] | None = None) -> int:
         parser.print_help(sys.stderr)
         return 2
     previous = _on_sigterm()
+    stdout = sys.stdout
+    sys.stdout = _GuardedStdout(stdout)
     try:
         code: int = run_deep(lambda: _run(args))
+        sys.stdout.flush()  # a full disk shows here, not as a traceback at the exit
+    except StdoutError as exc:
+        return _stdout_failed(exc, stdout)
     except KeyboardInterrupt as exc:
         terminated = _by_sigterm(exc)
         print("afsmc: terminated" if terminated else "afsmc: interrupted", file=sys.stderr)
@@ -152,9 +157,69 @@ def main(argv: Sequence[str] | None = None) -> int:
             raise
         return _internal_error(exc, getattr(args, "json", False))
     finally:
+        sys.stdout = stdout
         if previous is not None:
             signal.signal(signal.SIGTERM, previous)
     return code
+
+
+class StdoutError(Exception):
+    """Standard output failed (a full disk, a closed descriptor). Not an OSError, so that
+    no command's handler for its own OSErrors (E413, E507) takes it for one of those."""
+
+
+class _GuardedStdout:
+    """sys.stdout while a command runs: its write errors become StdoutError, which main
+    reports as E003 rather than as a bug in afsmc (a BrokenPipeError, `| head`, stays)."""
+
+    def __init__(self, stream: TextIO | None) -> None:
+        self._stream = stream  # None: the process started with descriptor 1 closed
+
+    def write(self, text: str) -> int:
+        if self._stream is None:  # print() would drop the results without a word
+            raise StdoutError("standard output is closed")
+        try:
+            return self._stream.write(text)
+        except BrokenPipeError:
+            raise
+        except OSError as exc:
+            raise StdoutError(exc.strerror or str(exc)) from exc
+
+    def flush(self) -> None:
+        if self._stream is None or self._stream.closed:  # (the LSP closes it at its exit)
+            return  # multiprocessing flushes before it starts a process
+        try:
+            self._stream.flush()
+        except BrokenPipeError:
+            raise
+        except OSError as exc:
+            raise StdoutError(exc.strerror or str(exc)) from exc
+
+    def __getattr__(self, name: str) -> Any:
+        if self._stream is None:
+            raise AttributeError(name)
+        return getattr(self._stream, name)
+
+
+def _stdout_failed(exc: StdoutError, stdout: TextIO | None) -> int:
+    """E003 on stderr (--json cannot reach a stdout that fails), exit 1. Descriptor 1 then
+    points at /dev/null, so that Python's last flush at the exit prints no traceback."""
+    from afsmc.commands.common import color_enabled
+
+    print(render_all([Diagnostic("E003", Severity.ERROR, f"cannot write to standard output: "
+                                 f"{exc}; the results are lost", None,
+                                 hint="write them to a file with -o where the command has "
+                                 "it, or free space where standard output goes")],
+                     color_enabled()), file=sys.stderr)
+    try:
+        fd = stdout.fileno() if stdout is not None else None
+    except (OSError, ValueError):  # not a file (a test's capture)
+        fd = None
+    if fd is not None:
+        null = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(null, fd)
+        os.close(null)
+    return 1
 
 
 def _internal_error(exc: Exception, as_json: bool) -> int:

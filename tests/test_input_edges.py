@@ -4,6 +4,7 @@ or non-finite constants, numbers beyond 64 bits, names PRISM or Storm reserve.""
 from __future__ import annotations
 
 import math
+import os
 import re
 from pathlib import Path
 
@@ -293,3 +294,33 @@ def test_an_output_that_is_a_device_or_pipe_is_written_into_not_replaced(tmp_pat
     assert got and got[0].decode().startswith("CELLS,property,min,max")
     r = run_cli("compile", str(EXAMPLES / "patrol.afsm"), "-o", str(fifo))
     assert r.code == 2 and "not a directory or a regular file" in r.err
+
+
+@pytest.mark.parametrize("command", [
+    ["simulate", "--runs", "50", "--json"], ["simulate", "--runs", "50"],
+    ["sweep", "--bound", "0:4", "-p", "finish_soon"], ["compile", "-o", "-"]])
+@pytest.mark.parametrize("stdout", ["full", "closed"])
+def test_results_that_cannot_reach_stdout_are_e003(command: list[str], stdout: str) -> None:
+    """A full disk behind stdout was a traceback (--json) or 'internal error' (exit 3); a
+    closed stdout was exit 3 (sweep) or exit 0 with the results silently lost (simulate).
+    Review 14, with /dev/full standing in for the full disk."""
+    import subprocess
+    import sys
+
+    from tests.conftest import EXAMPLES
+
+    argv = [sys.executable, "-m", "afsmc.cli", command[0], str(EXAMPLES / "patrol.afsm"),
+            *command[1:]]
+    if stdout == "full":
+        with open("/dev/full", "w") as full:
+            r = subprocess.run(argv, stdout=full, stderr=subprocess.PIPE, text=True,
+                               timeout=300)
+        why = "No space left on device"
+    else:
+        # the child starts with descriptor 1 closed
+        r = subprocess.run(argv, stderr=subprocess.PIPE, text=True, timeout=300,
+                           preexec_fn=lambda: os.close(1))
+        why = "standard output is closed"
+    assert r.returncode == 1, r.stderr
+    assert f"error[E003]: cannot write to standard output: {why}" in r.stderr, r.stderr
+    assert "Traceback" not in r.stderr and "internal error" not in r.stderr
