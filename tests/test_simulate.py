@@ -259,6 +259,15 @@ def test_options_that_would_be_ignored_are_refused_or_honoured() -> None:
     assert run_cli("simulate", str(PATROL), "--dask", "tcp://127.0.0.1:1", "--jobs", "2").code == 2
     r = run_cli("sim-check", "--list", str(PATROL))
     assert r.code == 2 and "takes no FILE" in r.err
+    # review 14: --runs 10^14 made 1.5e9 seeds before the first run (memory, then exit 3),
+    # a huge --batch-size an array per variable (MemoryError, exit 3); '' and '-' as the
+    # traces' file were ignored or written as a file named '-'
+    for argv, said in ((["--runs", str(10**14)], "1,525,878,907 batches, more than 100,000"),
+                       (["--batch-size", str(10**8)], "--batch-size 100,000,000 is more"),
+                       (["--traces", "1", "--traces-out", ""], "--traces-out '': give a file"),
+                       (["--traces", "1", "--traces-out", "-"], "--traces-out '-': give a")):
+        r = run_cli("simulate", str(PATROL), *argv)
+        assert r.code == 2 and said in r.err, (argv, r.err)
     # --list --json printed the text listing
     r = run_cli("sim-check", "--list", "--json")
     listed = json.loads(r.out)["outputs"]

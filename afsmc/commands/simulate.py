@@ -23,7 +23,16 @@ from afsmc.commands.common import (
 from afsmc.compiler import check_writable, read_source, write_atomic
 from afsmc.diagnostics import CompileError, Diagnostic, Severity
 from afsmc.sim.compile import SimError
-from afsmc.sim.run import BATCH, STRATEGIES, Outcome, job_for, program, simulate
+from afsmc.sim.run import (
+    BATCH,
+    MAX_BATCH_SIZE,
+    MAX_BATCHES,
+    STRATEGIES,
+    Outcome,
+    job_for,
+    program,
+    simulate,
+)
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
@@ -56,6 +65,22 @@ def run(args: argparse.Namespace) -> int:
     if args.runs < 1 or args.jobs < 1 or args.max_steps < 1 or args.batch_size < 1:
         print("afsmc simulate: error: --runs, --jobs, --max-steps and --batch-size must be "
               "positive", file=sys.stderr)
+        return 2
+    if args.batch_size > MAX_BATCH_SIZE:
+        print(f"afsmc simulate: error: --batch-size {args.batch_size:,} is more than "
+              f"{MAX_BATCH_SIZE:,} runs (a batch holds each variable of every run of it in "
+              "memory)", file=sys.stderr)
+        return 2
+    count = -(-args.runs // args.batch_size)
+    if count > MAX_BATCHES:
+        print(f"afsmc simulate: error: --runs {args.runs:,} in batches of {args.batch_size:,} "
+              f"is {count:,} batches, more than {MAX_BATCHES:,} (each has a seed, made "
+              f"before the runs); raise --batch-size (at most {MAX_BATCH_SIZE:,}) or lower "
+              "--runs", file=sys.stderr)
+        return 2
+    if args.traces_out is not None and args.traces_out in ("", "-"):
+        print(f"afsmc simulate: error: --traces-out {args.traces_out!r}: give a file name "
+              "(--traces K prints the sample runs)", file=sys.stderr)
         return 2
     if args.traces < 0 or (args.traces_out and not args.traces):
         print("afsmc simulate: error: --traces K needs K >= 0, and --traces-out needs "
