@@ -463,3 +463,20 @@ def test_api_refuses_an_unknown_choice(deadline: str, option: str, value: str) -
     if option != "kind":
         with pytest.raises(ValueError, match=f"{option} must be one of .*; got '{value}'"):
             run(deadline, **{option: value})  # type: ignore[arg-type]
+
+
+def test_an_error_at_every_point_is_reported_once() -> None:
+    """An error that does not depend on the swept value came once per point (review 14:
+    3 copies of E209 for FOO=1:3, 10 of E203 for CELLS=0:9); now once, saying where."""
+    patrol = str(EXAMPLES / "patrol.afsm")
+    r = run_cli("sweep", patrol, "--const", "FOO=1:3", "-p", "finish")
+    assert r.code == 1 and r.err.count("error[E209]") == 1, r.err
+    assert "at every value of FOO: --const FOO: no open constant named 'FOO'" in r.err
+    r = run_cli("sweep", patrol, "--const", "CELLS=2:4", "-f", 'P=? [ F "nolabel" ]')
+    assert r.code == 1 and r.err.count("error[E203]") == 1, r.err
+    assert 'at every value of CELLS: label "nolabel" is not declared' in r.err
+    # errors that differ from value to value stay one per value, each naming it
+    r = run_cli("sweep", patrol, "--const", "CELLS=-2:2", "-p", "finish")
+    assert r.code == 1 and "every value" not in r.err, r.err
+    assert "at CELLS=-2: range [0..-2] of 'cell' is empty" in r.err
+    assert "at CELLS=-1: range [0..-1] of 'cell' is empty" in r.err
