@@ -115,12 +115,12 @@ def check_writable(path: str, *, protect: tuple[str, ...] = ()) -> None:
 
 
 def write_atomic(path: str, content: str | bytes, *, protect: tuple[str, ...] = (),
-                 newline: str | None = "\n", keep_mode: bool = False) -> None:
+                 newline: str | None = "\n") -> None:
     """Write via a temporary file and rename, so a reader never sees half a file.
 
     Refuses to overwrite any of `protect` (the inputs). Text is written with `newline`
-    (None: as given); `keep_mode` keeps the permission bits of the file it replaces
-    (rewriting an input in place, as `sim-check --update` and `fmt` do)."""
+    (None: as given). A file it replaces keeps its permission bits: an output made private
+    (chmod 640) or an input rewritten in place (`fmt`, `sim-check --update`)."""
     refuse_inputs([path], protect)
     real = os.path.realpath(path)
     if os.path.exists(real) and not (os.path.isfile(real) or os.path.isdir(real)):
@@ -139,7 +139,7 @@ def write_atomic(path: str, content: str | bytes, *, protect: tuple[str, ...] = 
     tmp = os.path.join(directory, f".{os.path.basename(real)}.tmp{os.getpid()}")
     try:
         os.makedirs(directory, exist_ok=True)
-        mode = os.stat(real).st_mode & 0o7777 if keep_mode and os.path.exists(real) else None
+        mode = os.stat(real).st_mode & 0o7777 if os.path.exists(real) else None
         if isinstance(content, bytes):
             with open(tmp, "wb") as fb:
                 fb.write(content)

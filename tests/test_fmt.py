@@ -99,7 +99,8 @@ MESSY = ("machine m;\nvar x:[0..2] init 0;\nmode A=0 initial;\naction Go in A wh
 
 
 def test_in_place_keeps_the_permission_bits(tmp_path: Path) -> None:
-    """write_atomic's keep_mode: a private file stays private (was reset to 0644)."""
+    """write_atomic keeps the mode of what it replaces: a private file stays private (was
+    reset to 0644)."""
     path = tmp_path / "private.afsm"
     path.write_text(MESSY)
     for mode in (0o600, 0o755):

@@ -480,3 +480,15 @@ def test_an_error_at_every_point_is_reported_once() -> None:
     assert r.code == 1 and "every value" not in r.err, r.err
     assert "at CELLS=-2: range [0..-2] of 'cell' is empty" in r.err
     assert "at CELLS=-1: range [0..-1] of 'cell' is empty" in r.err
+
+
+def test_an_output_it_replaces_keeps_its_permissions(tmp_path: Path) -> None:
+    """-o over a file made private (chmod 640) left it 644 (review 14): the temporary file
+    renamed over it had the default mode. Every command writes through write_atomic."""
+    out = tmp_path / "perm.csv"
+    out.write_text("old\n")
+    out.chmod(0o640)
+    r = run_cli("sweep", str(EXAMPLES / "patrol.afsm"), "--bound", "0:2", "-p", "finish_soon",
+                "-o", str(out))
+    assert r.code == 0, r.err
+    assert out.read_text().startswith("bound,") and out.stat().st_mode & 0o7777 == 0o640

@@ -43,7 +43,7 @@ def run(args: argparse.Namespace) -> int:
         elif out != text:
             try:
                 # In place: keep the file's permission bits and its line endings.
-                write_atomic(path, out, newline=line_ending(raw), keep_mode=True)
+                write_atomic(path, out, newline=line_ending(raw))
             except CompileError as exc:
                 report(exc.diagnostics)
                 status = 1

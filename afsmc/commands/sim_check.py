@@ -91,8 +91,7 @@ def run(args: argparse.Namespace) -> int:
                    for e in drifted}
         # Rewriting the input is the point here: no `protect`; keep its line endings and mode.
         try:
-            write_atomic(args.file, rewrite(text, args.file, changes), newline=None,
-                         keep_mode=True)
+            write_atomic(args.file, rewrite(text, args.file, changes), newline=None)
         except CompileError as exc:  # E003: the file cannot be written (it is left as it was)
             return fail(exc, args.json, wrapped=True)
         updated = True
