@@ -196,6 +196,10 @@ def test_bound_sweep_rejects_a_bad_bound_once(tmp_path: Path, no_points: None) -
     r = run_cli("sweep", str(p), "--bound", "0:2:0.5", "-p", "soon", "--jobs", "2")
     assert r.code == 1
     assert r.err.count("error[E410]") == 1 and "--bound 0.5, 1.5: step bounds are integers" in r.err
+    # beyond 64 bits: every point ran, then failed in Storm's parser (E402, review 14)
+    r = run_cli("sweep", str(p), "--bound", f"{2**63}:{2**63 + 1}", "-p", "soon")
+    assert r.code == 1 and r.err.count("error[E410]") == 1, r.err
+    assert f"--bound {2**63}, {2**63 + 1}: step bounds are integers from 0 to 2^63 - 1" in r.err
 
 
 def test_outputs_are_checked_before_any_point(deadline: str, tmp_path: Path,
