@@ -78,7 +78,7 @@ def run(args: argparse.Namespace) -> int:
               f"before the runs); raise --batch-size (at most {MAX_BATCH_SIZE:,}) or lower "
               "--runs", file=sys.stderr)
         return 2
-    if args.traces_out is not None and args.traces_out in ("", "-"):
+    if args.traces_out in ("", "-"):
         print(f"afsmc simulate: error: --traces-out {args.traces_out!r}: give a file name "
               "(--traces K prints the sample runs)", file=sys.stderr)
         return 2
