@@ -323,3 +323,19 @@ def test_a_worker_that_dies_is_a_diagnostic_not_an_internal_error() -> None:
             os.killpg(proc.pid, signal.SIGKILL)
     assert proc.returncode == 1, err[-1500:]
     assert "error[E506]" in err and "a worker process died" in err and "internal error" not in err
+
+
+@pytest.mark.parametrize(("command", "code"), [
+    (["simulate", "--runs", "10"], "E507"), (["sweep", "--bound", "0:2", "-p", "finish_soon"],
+                                             "E413")])
+def test_an_unreachable_dask_scheduler_is_a_diagnostic(command: list[str], code: str) -> None:
+    """Nothing listens on port 1 of this machine: a diagnostic that asks whether a
+    scheduler runs there, not a traceback (simulate's had no hint; review 14)."""
+    import dask
+    import distributed  # noqa: F401  (its defaults first: leaving set() would drop them)
+
+    with dask.config.set({"distributed.comm.timeouts.connect": "1s"}):
+        r = run_cli(command[0], str(PATROL), *command[1:], "--dask", "tcp://127.0.0.1:1")
+    assert r.code == 1 and f"error[{code}]" in r.err, r.err
+    assert "is a Dask scheduler running at tcp://127.0.0.1:1?" in r.err
+    assert "Traceback" not in r.err

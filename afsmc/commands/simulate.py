@@ -132,7 +132,9 @@ def run(args: argparse.Namespace) -> int:
                     args.json, wrapped=True)
     except OSError as exc:  # e.g. the Dask scheduler is unreachable
         return fail(CompileError([Diagnostic("E507", Severity.ERROR,
-                                             f"simulation failed: {exc}", None)]),
+                                             f"simulation failed: {exc}", None,
+                                             hint=f"is a Dask scheduler running at {args.dask}?"
+                                             if args.dask else None)]),
                     args.json, wrapped=True)
     if args.json:
         print_json(_json(out, args))
