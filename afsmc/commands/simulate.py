@@ -29,6 +29,7 @@ from afsmc.sim.run import (
     MAX_BATCHES,
     STRATEGIES,
     Outcome,
+    batch_count,
     job_for,
     program,
     simulate,
@@ -71,7 +72,7 @@ def run(args: argparse.Namespace) -> int:
               f"{MAX_BATCH_SIZE:,} runs (a batch holds each variable of every run of it in "
               "memory)", file=sys.stderr)
         return 2
-    count = -(-args.runs // args.batch_size)
+    count = batch_count(args.runs, args.batch_size)
     if count > MAX_BATCHES:
         print(f"afsmc simulate: error: --runs {args.runs:,} in batches of {args.batch_size:,} "
               f"is {count:,} batches, more than {MAX_BATCHES:,} (each has a seed, made "

@@ -87,8 +87,12 @@ def run_batch(job: Job, runs: int, seed: np.random.SeedSequence, trace: int) -> 
     return simulate_batch(program(job), runs, np.random.default_rng(seed), job.max_steps, trace)
 
 
+def batch_count(runs: int, size: int) -> int:
+    return max(1, -(-runs // size))  # integers: math.ceil(runs / size) rounds above 2^53
+
+
 def batches(runs: int, seed: int, size: int = BATCH) -> list[tuple[int, np.random.SeedSequence]]:
-    count = max(1, math.ceil(runs / size))
+    count = batch_count(runs, size)
     seeds = np.random.SeedSequence(seed).spawn(count)
     return [(min(size, runs - i * size), seeds[i]) for i in range(count)]
 

@@ -29,6 +29,7 @@ from afsmc.model import expr as E
 from afsmc.model import ir
 from afsmc.model.lower import lower
 from afsmc.model.reduce import Reductions
+from afsmc.model.resolve import INT64
 from afsmc.stack import deep
 from afsmc.verify.core import (
     PropertyResult,
@@ -44,7 +45,6 @@ from afsmc.verify.guard import Progress
 from afsmc.verify.storm import Engine, Via, finite
 
 Kind = Literal["const", "bound"]
-INT64_MAX = 2**63 - 1
 Number = int | float
 MAX_POINTS = 10_000
 
@@ -536,13 +536,13 @@ def _check_bounds(path: str, text: str, consts: dict[str, str], properties: Sequ
     """A bound sweep's errors, once and before any point is computed (every chunk would
     otherwise find them, after the others' points were checked)."""
     # the values that are wrong whatever their spelling first; `1.0` only if that is all
-    bad = [fmt(x) for x in values if x < 0 or x != int(x) or x > INT64_MAX] \
+    bad = [fmt(x) for x in values if x < 0 or x != int(x) or x > INT64[1]] \
         or [fmt(x) for x in values if isinstance(x, float)]
     if bad:
         # (Storm reads a bound as a 64-bit integer: one beyond it failed every point, E402)
         raise CompileError([Diagnostic("E410", Severity.ERROR,
                                        f"--bound {', '.join(bad)}: step bounds are integers "
-                                       f"from 0 to 2^63 - 1 ({INT64_MAX:,})", None)])
+                                       f"from 0 to 2^63 - 1 ({INT64[1]:,})", None)])
     loaded = load_with_formulas(path, consts, formulas, text=text)
     diags = [d for p in select(loaded.model, properties, loaded.adhoc)
              if (d := _unbounded(p)) is not None]
