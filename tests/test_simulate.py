@@ -135,25 +135,72 @@ def test_undecided_runs_widen_the_interval() -> None:
 
 def test_a_reward_interval_needs_two_finished_runs() -> None:
     """One run, or no run that finishes, gives no sample variance: the interval of an
-    expected reward is unbounded (not the zero width of a variance taken as 0), and with
-    no finished run there is no estimate at all; the text says what to raise."""
+    expected reward is unbounded above (not the zero width of a variance taken as 0), and
+    with no finished run there is no estimate at all; the text says what to raise. These
+    rewards are never negative, so the interval starts at 0."""
     one = sim_json(PATROL, "--runs", "1")
     steps = next(p for p in one["properties"] if p["name"] == "duration")  # type: ignore[union-attr]
-    assert steps["low"] == "-inf" and steps["high"] == "inf" and steps["estimate"] > 0
+    assert steps["low"] == 0 and steps["high"] == "inf" and steps["estimate"] > 0
     none = sim_json(UAV, "--runs", "20", "--max-steps", "1")  # no UAV mission ends in 1 step
     drops = next(p for p in none["properties"] if p["name"] == "drops")  # type: ignore[union-attr]
     assert drops["undecided"] == 20 and drops["estimate"] is None
-    assert drops["low"] == "-inf" and drops["high"] == "inf"
+    assert drops["low"] == 0 and drops["high"] == "inf"
     two = sim_json(PATROL, "--runs", "2")
     steps = next(p for p in two["properties"] if p["name"] == "duration")  # type: ignore[union-attr]
     assert math.isfinite(steps["low"]) and math.isfinite(steps["high"])
     text = run_cli("simulate", str(PATROL), "--runs", "1")
     assert text.code == 0
     line = next(x for x in text.out.splitlines() if x.strip().startswith("duration"))
-    assert "[-inf, inf]" in line and "raise --runs" in line, line
+    assert "[0, inf]" in line and "raise --runs" in line, line
     text = run_cli("simulate", str(UAV), "--runs", "20", "--max-steps", "1")
     line = next(x for x in text.out.splitlines() if x.strip().startswith("drops"))
-    assert "n/a  [-inf, inf]" in line and "raise --max-steps" in line, line
+    assert "n/a  [0, inf]" in line and "raise --max-steps" in line, line
+
+
+SIGNED = """machine coin;
+var heads : bool init false;
+mode Toss = 0 initial;
+mode Pay = 1;
+mode Stop = 2 final;
+action Flip in Toss {
+    0.5: goto Pay, heads := true;
+    0.5: goto Pay;
+}
+action Cash in Pay {
+    goto Stop;
+}
+rewards gain {
+    [Cash] true : GAIN;
+}
+property gain = R{"gain"}=? [ F mode == Stop ];
+"""
+
+
+def coin_lows(tmp_path: Path, gain: str) -> list[tuple[float, float]]:
+    """(estimate, low) of the coin's mean reward over 3 runs, for 8 seeds."""
+    src = tmp_path / "coin.afsm"
+    src.write_text(SIGNED.replace("GAIN", gain))
+    out = []
+    for seed in range(8):
+        est = sim_json(src, "--runs", "3", "--seed", str(seed))["properties"][0]  # type: ignore[index]
+        out.append((est["estimate"], est["low"]))
+    return out
+
+
+def test_a_reward_interval_stops_at_0_for_rewards_that_cannot_be_negative(
+        tmp_path: Path) -> None:
+    """With few runs the normal interval of a mean reaches below 0. Interval bounds show
+    every item of this reward is >= 0 in every state, so the interval is cut at 0."""
+    lows = coin_lows(tmp_path, "heads ? 3 : 0")
+    assert all(low >= 0 for _, low in lows), lows
+    assert any(low == 0 and est > 0 for est, low in lows), lows  # the cut happened
+
+
+@pytest.mark.parametrize("gain", ["heads ? 3 : -1", "0 - 1"])
+def test_a_reward_interval_is_not_cut_when_a_reward_may_be_negative(
+        tmp_path: Path, gain: str) -> None:
+    lows = coin_lows(tmp_path, gain)
+    assert any(low < 0 for _, low in lows), lows
 
 
 def test_traces_in_mission_terms(tmp_path: Path) -> None:

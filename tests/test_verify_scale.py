@@ -161,7 +161,8 @@ def test_auto_with_hybrid_groups_the_queries_in_two_processes(tmp_path: object) 
 
 def test_auto_with_hybrid_refuses_total_rewards_before_checking(tmp_path: Path) -> None:
     # When "auto" picks hybrid, an unbounded R [ C ] has no answer there: the process says so
-    # (E404) as soon as it knows the engine, not after the queries checked before it.
+    # (E404) as soon as it knows the engine, before any query is checked; the other queries
+    # are then checked on the hybrid engine, and their values come with the error.
     from afsmc.diagnostics import CompileError
 
     path = tmp_path / "wide.afsm"
@@ -170,11 +171,16 @@ def test_auto_with_hybrid_refuses_total_rewards_before_checking(tmp_path: Path) 
     with pytest.raises(CompileError) as info:
         run(str(path), properties=["steps", "total"], engine="auto", memory_budget=1,
             progress=said.append)
-    [d] = info.value.diagnostics
+    # one error for total's min and max on the MDP, one on the uniform DTMC
+    d, on_dtmc, answered = info.value.diagnostics
     assert d.code == "E404" and "too many for the sparse engine" in d.message, d.message
+    assert d.message.replace("on the MDP", "on the uniform DTMC") == on_dtmc.message
     assert "cannot check this property" in d.message and d.span is not None
     assert d.hint is not None and "C<=k" in d.hint, d.hint
-    assert not any(s.startswith("checked") for s in said), said
+    first = next(i for i, s in enumerate(said) if "the other queries go on" in s)
+    assert not any(s.startswith("checked") for s in said[:first]), said
+    assert answered.code == "N412" and "steps_min = " in answered.message \
+        and "steps_max = " in answered.message and "total" not in answered.message, answered
     # one query per process: the processes after the one where "auto" picked hybrid refuse
     # it before they build, and the answers so far are kept
     said.clear()
@@ -462,8 +468,10 @@ def test_a_failed_run_reports_the_values_it_had(monkeypatch: pytest.MonkeyPatch)
     codes = [(d.code, d.severity) for d in info.value.diagnostics]
     assert codes == [("E406", Severity.ERROR), ("N412", Severity.NOTE)], codes
     note = info.value.diagnostics[1].message
-    assert note == f"answered before this:\n  success_min = {sparse.property('success').min!r} " \
-                   "on the MDP", note
+    # the check ran out of memory after the build: that process's other queries are not
+    # asked again (they would need as much), and the run ends with what it has
+    assert note == ("the other queries were answered:\n"
+                    f"  success_min = {sparse.property('success').min!r} on the MDP"), note
 
 
 def test_ctrl_c_prints_the_values_verify_had(monkeypatch: pytest.MonkeyPatch,
@@ -654,3 +662,43 @@ def test_sigterm_stops_a_small_model_with_a_huge_step_bound(tmp_path: Path) -> N
     assert proc.returncode == 143, err
     assert "afsmc: terminated" in err and "Traceback" not in err
     _group_ends(proc.pid)
+
+
+NEXT = """machine nx;
+var x : [0..3] init 0;
+mode A = 0 initial;
+mode B = 1 final;
+action Go in A when x < 3 { 0.3: x := x + 1; 0.7: goto B; }
+action Stop in A when x >= 3 { goto B; }
+rewards steps { true : 1; }
+property nxt   = P=? [ X x == 1 ];
+property reach = P=? [ F x == 2 ];
+property steps = R{"steps"}=? [ F mode == B ];
+"""
+
+
+def test_a_query_storm_cannot_check_does_not_cost_the_others(tmp_path: Path) -> None:
+    """Storm's hybrid engine cannot check X from JANI (a one-step bounded until); that is
+    its error, but the queries after it in the same process, and the other process's, are
+    still asked, and their values come with the error."""
+    from afsmc.diagnostics import CompileError, Severity
+
+    path = tmp_path / "nx.afsm"
+    path.write_text(NEXT, encoding="utf-8")
+    said: list[str] = []
+    with pytest.raises(CompileError) as info:
+        run(str(path), via="jani", engine="hybrid", progress=said.append)
+    codes = [(d.code, d.severity) for d in info.value.diagnostics]
+    assert codes == [("E404", Severity.ERROR), ("N412", Severity.NOTE)], codes
+    e404, note = info.value.diagnostics
+    assert "'nxt'" in e404.message and e404.span is not None and e404.span.line == 8
+    assert any("the other queries go on" in s for s in said), said
+    exact = run(str(path), via="jani", engine="sparse", isolate=False)
+    assert note.message == ("the other queries were answered:\n"
+                            f"  steps = {exact.property('steps').value!r} on the DTMC\n"
+                            f"  reach = {exact.property('reach').value!r} on the DTMC"), \
+        note.message
+    # the same through the CLI: exit 1, the error, then the values
+    r = run_cli("verify", str(path), "--via", "jani", "--engine", "hybrid")
+    assert r.code == 1 and "error[E404]" in r.err and "the other queries were answered" in r.err
+    assert "reach = " in r.err and "Traceback" not in r.err, r.err

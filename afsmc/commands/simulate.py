@@ -174,8 +174,7 @@ def _print(out: Outcome, args: argparse.Namespace, intervals: bool) -> None:
     width = max([len(e.name) for e in out.estimates] + [8])
     for e in out.estimates:
         why = [f"{e.undecided} undecided at --max-steps"] if e.undecided else []
-        if e.kind == "R" and e.low == -math.inf and e.high == math.inf:
-            # fewer than two runs with a value (see combine)
+        if e.no_spread:
             raise_ = [o for o, short in (("--runs", out.runs < 2),
                                          ("--max-steps", e.undecided > 0)) if short]
             why.append(f"no interval from fewer than 2 finished runs: raise "

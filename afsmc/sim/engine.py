@@ -17,6 +17,7 @@ import numpy.typing as npt
 
 from afsmc.model import expr as E
 from afsmc.model import ir
+from afsmc.model.bounds import bounds
 from afsmc.model.evaluate import scalar
 from afsmc.model.lower import Lowered
 from afsmc.sim.compile import Fn, Frame, Scope, SimError, compile_expr, fold, reads, static
@@ -55,6 +56,9 @@ class Monitor:
     target: Fn | None
     left: Fn | None = None
     reward: int = -1  # reward structure index
+    # R: every item of the structure is >= 0 in every state (interval bounds), so a run's
+    # total is too and the mean's interval may be cut at 0
+    nonneg: bool = False
 
 
 @dataclass
@@ -122,7 +126,9 @@ def build(low: Lowered) -> Program:
     numbers = [m.number for m in model.modes]
     state_rewards = [[(compile_expr(fold(it.guard, base)), compile_expr(fold(it.value, base)))
                       for it in r.items if it.action is None] for r in model.rewards]
-    monitors = [_monitor(p, base, model, reward_index) for p in model.properties]
+    nonneg = [all(bounds(it.value, model, generated=low.bounds)[0] >= 0 for it in r.items)
+              for r in model.rewards]
+    monitors = [_monitor(p, base, model, reward_index, nonneg) for p in model.properties]
     dtypes = {v.name: (np.bool_ if v.type is E.Type.BOOL else np.int64) for v in model.variables}
     return Program(model, [v.name for v in model.variables], [v.display for v in model.variables],
                    {v.name: v.init for v in model.variables}, dtypes, modes,
@@ -131,7 +137,8 @@ def build(low: Lowered) -> Program:
 
 
 
-def _monitor(p: ir.Property, sc: Scope, model: ir.Model, rindex: dict[str, int]) -> Monitor:
+def _monitor(p: ir.Property, sc: Scope, model: ir.Model, rindex: dict[str, int],
+             nonneg: list[bool]) -> Monitor:
     def bound(b: E.Expr | None) -> float:
         if b is None:
             return math.inf
@@ -144,7 +151,9 @@ def _monitor(p: ir.Property, sc: Scope, model: ir.Model, rindex: dict[str, int])
                        compile_expr(fold(path.target, sc)), left)
     target = compile_expr(fold(path.target, sc)) if path.target is not None else None
     rname = p.reward if p.reward is not None else (model.rewards[0].name if model.rewards else "")
-    return Monitor(p.name, "R", path.kind, bound(path.bound), target, None, rindex.get(rname, -1))
+    index = rindex.get(rname, -1)
+    return Monitor(p.name, "R", path.kind, bound(path.bound), target, None, index,
+                   index >= 0 and nonneg[index])
 
 
 @dataclass

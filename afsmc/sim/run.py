@@ -55,6 +55,7 @@ class Estimate:
     low: float
     high: float
     undecided: int
+    no_spread: bool = False  # R: fewer than two runs finished, so no interval from a variance
 
 
 @dataclass
@@ -179,15 +180,17 @@ def combine(prog: Program, results: list[BatchResult], confidence: float) -> lis
             out.append(Estimate(mo.name, "R", math.inf, math.inf, math.inf, und))
             continue
         mean = total / m if m else math.nan  # no run got a value: nothing to estimate
+        floor = 0.0 if mo.nonneg else -math.inf  # no reward below 0: neither is the mean
         if m < 2:
             # A sample variance needs two values: one run says nothing about the spread.
-            out.append(Estimate(mo.name, "R", mean, -math.inf, math.inf, und))
+            out.append(Estimate(mo.name, "R", mean, floor, math.inf, und, no_spread=True))
             continue
         var = max(sq / m - mean * mean, 0.0) * m / (m - 1)
         z = stats.normal_quantile(0.5 + confidence / 2)
         half = z * math.sqrt(var / m)
         # An undecided run's reward is only known to be at least its partial sum.
-        out.append(Estimate(mo.name, "R", mean, mean - half, math.inf if und else mean + half, und))
+        out.append(Estimate(mo.name, "R", mean, max(mean - half, floor),
+                            math.inf if und else mean + half, und))
     return out
 
 

@@ -407,6 +407,17 @@ def failure_diagnostic(f: StormFailure, model: ir.Model, low: Lowered,
 # ---- checking ----------------------------------------------------------------------
 
 
+def _one_query(res: JobResult) -> bool:
+    """Whether a process failed at one query rather than at the model: a check Storm could
+    not do, a property it could not read, or a check that ran out of memory or crashed
+    after the model was built. The model's other queries may still be answered."""
+    f = res.failure
+    assert f is not None
+    if f.stage in ("check", "property"):
+        return True
+    return f.stage in ("memory", "internal") and res.states > 0
+
+
 def _stats(res: JobResult, resolution: str) -> ModelStats:
     return ModelStats(res.kind, resolution, res.states, res.transitions, res.choices,
                       res.parse_time, res.build_time, res.check_time, res.engine,
@@ -507,6 +518,14 @@ def _unanswered(queries: list[tuple[ir.Property, str]], vals: dict[str, float],
             and not (n in comp and comp[n].name in vals and TERMINATES in vals)]
 
 
+def _not_failed(queries: list[tuple[ir.Property, str]], failed: set[str],
+                comp: dict[str, ir.Property]) -> list[tuple[ir.Property, str]]:
+    """The queries to ask still: not one that failed, nor a Pmax whose complementary Pmin
+    failed (Pmax itself needs more memory)."""
+    return [(p, n) for p, n in queries
+            if n not in failed and not (n in comp and comp[n].name in failed)]
+
+
 def _duals(props: Sequence[ir.Property]) -> dict[str, tuple[str, str]]:
     """The queries of the duals (`dual`) -> the query of the bounded-G property whose value
     each gives, as 1 - value, and the progress lines' wording of it (from the property
@@ -526,7 +545,8 @@ def _duals(props: Sequence[ir.Property]) -> dict[str, tuple[str, str]]:
 
 
 def _kept(done: Sequence[tuple[str, dict[str, float]]], comp: Mapping[str, ir.Property],
-          duals: Mapping[str, str] | None = None) -> list[Diagnostic]:
+          duals: Mapping[str, str] | None = None,
+          heading: str = "answered before this") -> list[Diagnostic]:
     """A note with the values answered before a failure: a long run keeps what it got."""
     gives = {p.name: name for name, p in comp.items()}  # complementary Pmin -> its Pmax
     lines = []
@@ -542,8 +562,7 @@ def _kept(done: Sequence[tuple[str, dict[str, float]]], comp: Mapping[str, ir.Pr
             lines.append(f"  {name} = {value!r} on the {what}")
     if not lines:
         return []
-    return [Diagnostic("N412", Severity.NOTE, "answered before this:\n" + "\n".join(lines),
-                       None)]
+    return [Diagnostic("N412", Severity.NOTE, f"{heading}:\n" + "\n".join(lines), None)]
 
 
 def _query_text(name: str, duals: Mapping[str, str]) -> str:
@@ -713,6 +732,9 @@ def check(model: ir.Model, props: Sequence[ir.Property], *, via: Via = "prism",
     stats: list[ModelStats] = []
     values: list[dict[str, float]] = []
     timings: list[dict[str, float]] = []  # each query's check time, as `values`
+    # Failures of one query (not of the model): the other queries go on, and these are
+    # raised at the end with every answer, so that one query does not cost an hour's others.
+    errors: list[Diagnostic] = []
 
     def kept(what: str, vals: dict[str, float]) -> list[Diagnostic]:
         """The note of what the finished models and this one have answered."""
@@ -749,6 +771,7 @@ def check(model: ir.Model, props: Sequence[ir.Property], *, via: Via = "prism",
         # the default: the expected rewards' minimum needs it to stay under 20 GB.
         rest_full_tables = False
         lost, lost_processes = 0.0, 0  # processes that failed after answering some queries
+        failed: set[str] = set()  # queries whose check failed (in `errors`)
         i = 0
         while True:
             if i == len(units) and TERMINATES in vals:
@@ -757,6 +780,8 @@ def check(model: ir.Model, props: Sequence[ir.Property], *, via: Via = "prism",
                 secs.pop(TERMINATES, None)  # a graph analysis, shared by every Pmax
                 direct = []
                 for name, rest in use.items():
+                    if rest.name in failed:
+                        continue  # its error is in `errors`; Pmax itself needs more memory
                     if rest.name in vals:
                         v, t = vals.pop(rest.name), secs.pop(rest.name, 0.0)
                         if ends:
@@ -777,7 +802,7 @@ def check(model: ir.Model, props: Sequence[ir.Property], *, via: Via = "prism",
                 try:
                     _refuse_symbolic(group, model, job_engine)
                 except CompileError as exc:
-                    raise CompileError([*exc.diagnostics, *kept(what, vals)]) from None
+                    raise CompileError([*errors, *exc.diagnostics, *kept(what, vals)]) from None
             limit = max_states if max_states is not None else (
                 default_max_states() if job_engine == "sparse" else None)
             # "auto" checks what the hybrid engine would check first, if it picks that: with
@@ -824,8 +849,8 @@ def check(model: ir.Model, props: Sequence[ir.Property], *, via: Via = "prism",
             except KeyboardInterrupt as exc:
                 # An hour's answers are not lost to a Ctrl-C: the CLI prints these notes.
                 got = exc.values if isinstance(exc, Interrupted) else {}
-                for d in kept(what, vals | got):
-                    exc.add_note(d.message)
+                for d in [*errors, *kept(what, vals | got)]:
+                    exc.add_note(d.message if d.code == "N412" else f"{d.code}: {d.message}")
                 raise
             failure = res.failure
             # What the process set out to check ("auto" adds and leaves some for hybrid).
@@ -862,8 +887,39 @@ def check(model: ir.Model, props: Sequence[ir.Property], *, via: Via = "prism",
                 i += 1
                 continue
             if res.failure is not None:
-                raise CompileError([failure_diagnostic(res.failure, model, low, group, job),
-                                    *kept(what, vals | res.values)])
+                bad = res.failure.prop
+                open_ = _unanswered(unit, vals, use)
+                # "auto" found hybrid and refused all these at once (Job.symbolic_refused)
+                refused = [n for _, n in open_ if n in job.symbolic_refused and n != bad] \
+                    if res.engine == "hybrid" and bad in job.symbolic_refused else []
+                ds = [failure_diagnostic(f, model, low, group, job) for f in
+                      [res.failure, *(dataclasses.replace(res.failure, prop=n) for n in refused)]]
+                ds = [dataclasses.replace(d, message=_readable(d.message, texts)) for d in ds]
+                if not _one_query(res):
+                    raise CompileError([*errors, *ds, *kept(what, vals | res.values)])
+                for d in ds:
+                    if d not in errors:  # a min and a max: one error
+                        errors.append(d)
+                vals |= res.values
+                secs |= res.seconds
+                lost, lost_processes = lost + res.elapsed, lost_processes + 1
+                # The unit's other unanswered queries go on in a fresh process. A failure
+                # that names no query (memory) is not asked again, nor is a Pmax whose
+                # complementary Pmin failed.
+                failed.update([bad, *refused] if bad is not None else [n for _, n in open_])
+                retry = _not_failed(open_, failed, use)
+                if progress is not None:
+                    progress(f"{ds[0].code}: {ds[0].message.rstrip('.')}; the other queries go on, and the "
+                             "error is reported at the end")
+                i += 1
+                if job_engine == "auto" and res.engine == "hybrid":
+                    job_engine = "hybrid"  # as after an answer (below)
+                    after = _not_failed([q for u in units[i:] for q in u], failed, use)
+                    units = units[:i] + [u for u in (_unanswered(u, vals, use) for u in
+                                                     plan(retry + after, True)) if u]
+                else:
+                    units = units[:i] + ([retry] if retry else []) + units[i:]
+                continue
             if complementary and res.dd_retried and not rest_full_tables:
                 rest_full_tables = True
                 if progress is not None:
@@ -887,11 +943,15 @@ def check(model: ir.Model, props: Sequence[ir.Property], *, via: Via = "prism",
                     progress(f"the {what} is checked with the hybrid engine: "
                              + ("one query per Storm process" if split else
                                 "the other queries follow in one more Storm process"))
-        assert merged is not None
-        stats.append(dataclasses.replace(merged, check_time=merged.check_time + lost,
-                                         processes=merged.processes + lost_processes))
+        if merged is not None:  # None only when every process failed (then `errors`)
+            stats.append(dataclasses.replace(merged, check_time=merged.check_time + lost,
+                                             processes=merged.processes + lost_processes))
         values.append(vals)
         timings.append(secs)
+    if errors:
+        raise CompileError([*errors, *_kept(list(zip([w for _, _, w in lows], values,
+                                                     strict=True)), comp, duals,
+                                            "the other queries were answered")])
     # a bounded G's query -> its dual's, whose value it is 1 minus (min and max swapped)
     asked_as = {query: its for its, query in duals.items()}
 
