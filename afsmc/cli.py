@@ -143,11 +143,14 @@ def main(argv: Sequence[str] | None = None) -> int:
         terminated = _by_sigterm(exc)
         print("afsmc: terminated" if terminated else "afsmc: interrupted", file=sys.stderr)
         notes = list(getattr(exc, "__notes__", []))  # e.g. the values verify had by then
+        errors: list[Diagnostic] = list(getattr(exc, "afsmc_errors", []))  # queries that failed
+        if errors:
+            print(render_all(errors), file=sys.stderr)
         for note in notes:
             print(f"afsmc: {note}", file=sys.stderr)
         if getattr(args, "json", False):
             # --json promises one JSON object on stdout, a Ctrl-C included
-            print(json.dumps({"interrupted": True, "diagnostics": [
+            print(json.dumps({"interrupted": True, "diagnostics": [d.to_json() for d in errors] + [
                 {"code": "N412", "severity": "note", "message": n} for n in notes]}, indent=2))
         return 128 + signal.SIGTERM if terminated else 130
     except BrokenPipeError:

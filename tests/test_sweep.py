@@ -496,3 +496,23 @@ def test_an_output_it_replaces_keeps_its_permissions(tmp_path: Path) -> None:
                 "-o", str(out))
     assert r.code == 0, r.err
     assert out.read_text().startswith("bound,") and out.stat().st_mode & 0o7777 == 0o640
+
+
+def test_a_failed_query_of_a_shared_model_is_named_as_the_user_wrote_it(tmp_path: Path) -> None:
+    """A sweep over a constant that only the properties read checks every point on one model,
+    as properties NAME__atI. An error there is the user's property at the points it covers,
+    once, not one per internal name, and no note of internal names follows."""
+    from afsmc.diagnostics import CompileError
+
+    path = tmp_path / "sw.afsm"
+    path.write_text("machine sw;\nparam int K = 3;\nvar x : [0..4] init 0 clamp;\n"
+                    "mode A = 0 initial;\nmode B = 1 final;\n"
+                    "action Go in A when x < 3 { 0.3: x += 1; 0.7: goto B; }\n"
+                    "action Stop in A when x >= 3 { goto B; }\n"
+                    "property nxt = P=? [ X x == 1 ];\n"
+                    "property reach = P=? [ F<=K x == 2 ];\n", encoding="utf-8")
+    with pytest.raises(CompileError) as info:
+        sweep(str(path), "K", [1, 2, 3], via="jani", engine="hybrid", jobs=1)
+    [d] = info.value.diagnostics
+    assert d.code == "E404" and d.message.startswith("at K=1..3: Storm failed to check 'nxt' "), d
+    assert "__at" not in d.message and d.span is not None and d.span.line == 8

@@ -702,3 +702,122 @@ def test_a_query_storm_cannot_check_does_not_cost_the_others(tmp_path: Path) -> 
     r = run_cli("verify", str(path), "--via", "jani", "--engine", "hybrid")
     assert r.code == 1 and "error[E404]" in r.err and "the other queries were answered" in r.err
     assert "reach = " in r.err and "Traceback" not in r.err, r.err
+
+
+def test_the_fresh_process_after_a_failed_query_asks_only_what_is_open(tmp_path: Path) -> None:
+    """`reach` is answered before `nxt` fails in the same process: the fresh process that
+    follows asks `again` only, not `reach` a second time."""
+    from afsmc.diagnostics import CompileError
+
+    path = tmp_path / "nx2.afsm"
+    path.write_text(NEXT.replace("property nxt", "property again = P=? [ F x == 3 ];\n"
+                                 "property nxt").replace("property steps", "// "),
+                    encoding="utf-8")
+    said: list[str] = []
+    with pytest.raises(CompileError) as info:
+        run(str(path), via="jani", engine="hybrid", isolate=True, progress=said.append)
+    checked = [s.split()[1] for s in said if s.startswith("checked ")]
+    assert sorted(checked) == ["again", "reach"], said
+    e404, note = info.value.diagnostics
+    assert e404.code == "E404" and "'nxt'" in e404.message
+    assert "reach = " in note.message and "again = " in note.message, note.message
+
+
+def test_auto_one_query_per_process_goes_on_past_what_hybrid_refuses(tmp_path: Path) -> None:
+    """With --split, "auto" learns in the first process that it checks with hybrid, which has
+    no R [ C ]: `total` is an error on each model (its min and max one), and every other
+    query of both models is still answered, with the sparse engine's values."""
+    from afsmc.diagnostics import CompileError
+
+    path = tmp_path / "wide.afsm"
+    path.write_text(WIDE + 'property total = R{"steps"}=? [ C ];\n', encoding="utf-8")
+    with pytest.raises(CompileError) as info:
+        run(str(path), properties=["total", "steps", "reach"], engine="auto", memory_budget=1,
+            split=True)
+    *errors, note = info.value.diagnostics
+    assert [(d.code, "'total'" in d.message) for d in errors] == [("E404", True)] * 2, errors
+    assert "on the MDP" in errors[0].message and "uniform DTMC" in errors[1].message
+    exact = run(str(path), properties=["steps", "reach"], engine="sparse", isolate=False)
+    got = dict(line.strip().split(" = ", 1) for line in note.message.splitlines()[1:])
+    assert set(got) == {"steps_min", "steps_max", "reach_min", "reach_max", "steps", "reach"}
+    for key, value in got.items():
+        v = float(value.split(" on the ")[0])
+        base = key.rsplit("_", 1)
+        truth = exact.property(base[0]) if base[-1] in ("min", "max") else exact.property(key)
+        ref = {"min": truth.min, "max": truth.max}.get(base[-1], truth.uniform)
+        assert ref is not None and abs(v - ref) < 1e-6, (key, v, ref)
+
+
+def test_a_memory_stop_names_the_query_and_the_others_go_on(
+        monkeypatch: pytest.MonkeyPatch) -> None:
+    """The guard names the query it stopped (its "check" phase); the run goes on with the
+    process's other queries in a fresh one, and the error says which query it was."""
+    from afsmc.diagnostics import CompileError
+    from afsmc.verify import core
+    from afsmc.verify.guard import _checking
+    from afsmc.verify.guard import run_job as real
+    from afsmc.verify.storm import JobResult, StormFailure
+
+    assert _checking("check success_min") == "success_min" and _checking("build") is None
+    calls: list[tuple[str, ...]] = []
+
+    def run_job(job: Job, bound: int, *, isolate: bool | None,
+                progress: Callable[[str], None] | None) -> JobResult:
+        calls.append(job.names)
+        res = real(job, bound, isolate=isolate, progress=progress)
+        if len(calls) == 1:  # stopped while checking the second query, as the guard would
+            first, second = job.names[:2]
+            res.values = {first: res.values[first]}
+            res.failure = StormFailure("memory", "stopped the MDP after 1 s: it used 9.9 GB, "
+                                       "85% of the memory that was available", prop=second)
+        return res
+
+    names = ["success", "drops"]
+    sparse = run(UAV, consts=SMALL["uav"], properties=names, engine="sparse", isolate=False,
+                 uniform=False)
+    monkeypatch.setattr(core, "run_job", run_job)
+    with pytest.raises(CompileError) as info:
+        run(UAV, consts=SMALL["uav"], properties=names, engine="sparse", uniform=False)
+    e406, note = info.value.diagnostics
+    assert e406.code == "E406" and e406.message.endswith("while checking success_max"), e406
+    assert calls == [("success_min", "success_max", "drops_min", "drops_max"),
+                     ("drops_min", "drops_max")], calls
+    assert note.message == (
+        "the other queries were answered:\n"
+        f"  success_min = {sparse.property('success').min!r} on the MDP\n"
+        f"  drops_min = {sparse.property('drops').min!r} on the MDP\n"
+        f"  drops_max = {sparse.property('drops').max!r} on the MDP"), note.message
+
+
+def test_sigterm_after_a_failed_query_reports_it_as_an_error_in_json(tmp_path: Path) -> None:
+    """`--json` after SIGTERM: the query that had failed is an error entry with its place
+    in the file, and the values answered since are the N412 note."""
+    import os
+    import signal
+    import sys
+
+    path = tmp_path / "nxl.afsm"
+    path.write_text(NEXT.replace("property steps", 'property slow = P=? [ F<=300000000 x == 3 ];'
+                                 "\n// "), encoding="utf-8")
+    proc = subprocess.Popen([sys.executable, "-m", "afsmc", "verify", str(path), "--via", "jani",
+                             "--engine", "hybrid", "--json", "--progress"],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                            start_new_session=True)
+    assert proc.stderr is not None
+    for line in proc.stderr:
+        if line.startswith("afsmc: checked reach"):
+            break
+    os.kill(proc.pid, signal.SIGTERM)
+    try:
+        out, err = proc.communicate(timeout=30)
+    except subprocess.TimeoutExpired:
+        os.killpg(proc.pid, signal.SIGKILL)
+        raise AssertionError("SIGTERM did not stop the check") from None
+    assert proc.returncode == 143, err
+    data = json.loads(out)
+    assert data["interrupted"] is True
+    e404, note = data["diagnostics"]
+    assert e404["code"] == "E404" and e404["severity"] == "error" and e404["line"] == 8, e404
+    assert note["code"] == "N412" and "reach = " in note["message"], note
+    assert "error[E404]" in err and "Traceback" not in err
+    _group_ends(proc.pid)

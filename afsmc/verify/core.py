@@ -6,13 +6,14 @@ See the package docstring (afsmc/verify/__init__.py) for the API.
 from __future__ import annotations
 
 import dataclasses
+import functools
 import importlib
 import math
 import os
 import re
 import time
 import typing
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -518,6 +519,48 @@ def _unanswered(queries: list[tuple[ir.Property, str]], vals: dict[str, float],
             and not (n in comp and comp[n].name in vals and TERMINATES in vals)]
 
 
+def _after_failure(res: JobResult, job: Job, unit: list[tuple[ir.Property, str]],
+                   vals: dict[str, float], use: dict[str, ir.Property], failed: set[str],
+                   owner: dict[str, str], texts: Mapping[str, str],
+                   diagnose: Callable[[StormFailure], Diagnostic],
+                   ) -> tuple[list[Diagnostic], list[tuple[ir.Property, str]]]:
+    """A process failed at one query (or at the model: the caller decides). Its errors,
+    and the queries of `unit` to ask again in a fresh process; adds to `failed` what is not
+    to be asked again: the query, and all of its property when Storm cannot check it
+    (min and max alike), or every open query when the failure names none."""
+    f = res.failure
+    assert f is not None
+    bad = f.prop
+    open_ = _unanswered(unit, vals, use)
+    # "auto" found hybrid and refused all these at once (Job.symbolic_refused)
+    refused = ([n for _, n in open_ if n in job.symbolic_refused and n != bad]
+               if res.engine == "hybrid" and bad in job.symbolic_refused else [])
+    ds = [diagnose(x) for x in [f, *(dataclasses.replace(f, prop=n) for n in refused)]]
+    ds = [dataclasses.replace(d, message=_readable(d.message, texts)) for d in ds]
+    if f.stage in ("memory", "internal"):
+        # the same words for every process stopped at this size: say which query it was
+        what = (f" while checking {_query_text(bad, texts)}" if bad is not None else
+                "; not answered: " + ", ".join(_query_text(n, texts) for _, n in open_))
+        ds[0] = dataclasses.replace(ds[0], message=ds[0].message + what)
+    if bad is None:
+        failed.update(n for _, n in open_)
+        return ds, []
+    failed.update([bad, *refused])
+    if bad == TERMINATES:
+        # each Pmax is then asked itself: the complementary Pmins would not be used
+        failed.update(n for _, n in open_ if n.startswith(REST))
+    elif f.stage in ("check", "property") and not bad.startswith(REST):
+        # what Storm cannot check of a property's min, it cannot of its max (the complement
+        # of a Pmax is another formula: it only fails itself)
+        failed.update(n for n, o in owner.items() if o == owner.get(bad, ""))
+    retry = _not_failed(open_, failed, use)
+    if len(retry) == len(open_):
+        # nothing answered and nothing left out: the same process would fail the same way
+        failed.update(n for _, n in open_)
+        return ds, []
+    return ds, retry
+
+
 def _not_failed(queries: list[tuple[ir.Property, str]], failed: set[str],
                 comp: dict[str, ir.Property]) -> list[tuple[ir.Property, str]]:
     """The queries to ask still: not one that failed, nor a Pmax whose complementary Pmin
@@ -745,6 +788,9 @@ def check(model: ir.Model, props: Sequence[ir.Property], *, via: Via = "prism",
         queries = [(p, n) for p in props for n, _ in property_variants(low, p)]
         by_name = {n: (p, n) for p, n in queries}
         use = comp if low.kind == "mdp" else {}
+        # query -> its property's name (a complementary Pmin: that of the Pmax it gives)
+        owner = {n: p.name for p, n in queries} | {
+            use[n].name: p.name for p, n in queries if n in use}
 
         def plan(qs: list[tuple[ir.Property, str]], hybrid: bool,
                  use: dict[str, ir.Property] = use) -> list[list[tuple[ir.Property, str]]]:
@@ -774,20 +820,22 @@ def check(model: ir.Model, props: Sequence[ir.Property], *, via: Via = "prism",
         failed: set[str] = set()  # queries whose check failed (in `errors`)
         i = 0
         while True:
-            if i == len(units) and TERMINATES in vals:
-                # Pmax = 1 - Pmin of the rest, if every path ends; else ask Pmax itself.
-                ends = vals.pop(TERMINATES) == 1.0
+            if i == len(units) and (TERMINATES in vals or TERMINATES in failed):
+                # Pmax = 1 - Pmin of the rest, if every path ends; else (or if that could
+                # not be checked) ask Pmax itself.
+                ends = vals.pop(TERMINATES, None) == 1.0
+                failed.discard(TERMINATES)
                 secs.pop(TERMINATES, None)  # a graph analysis, shared by every Pmax
                 direct = []
                 for name, rest in use.items():
-                    if rest.name in failed:
-                        continue  # its error is in `errors`; Pmax itself needs more memory
-                    if rest.name in vals:
-                        v, t = vals.pop(rest.name), secs.pop(rest.name, 0.0)
-                        if ends:
-                            vals[name], secs[name] = 1.0 - v, t
-                        else:
-                            direct.append(by_name[name])
+                    if name == TERMINATES or name in failed:
+                        continue
+                    v, t = vals.pop(rest.name, None), secs.pop(rest.name, 0.0)
+                    if ends and v is not None:
+                        vals[name], secs[name] = 1.0 - v, t
+                    elif not ends and name in by_name:
+                        direct.append(by_name[name])
+                    # else the Pmin failed: its error says so (Pmax needs more memory still)
                 if ends and progress is not None:
                     progress(f"every path of the {what} ends in a final mode: each Pmax [F target] "
                              "is 1 - Pmin [F (final & !target)], which needs less memory")
@@ -798,11 +846,20 @@ def check(model: ir.Model, props: Sequence[ir.Property], *, via: Via = "prism",
             unit = units[i]
             group = list(dict.fromkeys(p for p, _ in unit))
             if job_engine == "hybrid":
-                # "auto" picked hybrid in an earlier process (--split): refuse before building
-                try:
-                    _refuse_symbolic(group, model, job_engine)
-                except CompileError as exc:
-                    raise CompileError([*errors, *exc.diagnostics, *kept(what, vals)]) from None
+                # "auto" picked hybrid in an earlier process (--split): what the hybrid engine
+                # cannot check is refused before building, and the rest goes on
+                gaps = [n for p, n in unit if symbolic_gap(p, model, job_engine) is not None]
+                if gaps:
+                    try:
+                        _refuse_symbolic(group, model, job_engine)
+                    except CompileError as exc:
+                        errors.extend(d for d in exc.diagnostics if d not in errors)
+                    failed.update(gaps)
+                    units[i] = unit = _not_failed(unit, failed, use)
+                    if not unit:
+                        i += 1
+                        continue
+                    group = list(dict.fromkeys(p for p, _ in unit))
             limit = max_states if max_states is not None else (
                 default_max_states() if job_engine == "sparse" else None)
             # "auto" checks what the hybrid engine would check first, if it picks that: with
@@ -849,8 +906,9 @@ def check(model: ir.Model, props: Sequence[ir.Property], *, via: Via = "prism",
             except KeyboardInterrupt as exc:
                 # An hour's answers are not lost to a Ctrl-C: the CLI prints these notes.
                 got = exc.values if isinstance(exc, Interrupted) else {}
-                for d in [*errors, *kept(what, vals | got)]:
-                    exc.add_note(d.message if d.code == "N412" else f"{d.code}: {d.message}")
+                for d in kept(what, vals | got):
+                    exc.add_note(d.message)
+                setattr(exc, "afsmc_errors", list(errors))  # noqa: B010 -- the CLI shows them
                 raise
             failure = res.failure
             # What the process set out to check ("auto" adds and leaves some for hybrid).
@@ -887,38 +945,31 @@ def check(model: ir.Model, props: Sequence[ir.Property], *, via: Via = "prism",
                 i += 1
                 continue
             if res.failure is not None:
-                bad = res.failure.prop
-                open_ = _unanswered(unit, vals, use)
-                # "auto" found hybrid and refused all these at once (Job.symbolic_refused)
-                refused = [n for _, n in open_ if n in job.symbolic_refused and n != bad] \
-                    if res.engine == "hybrid" and bad in job.symbolic_refused else []
-                ds = [failure_diagnostic(f, model, low, group, job) for f in
-                      [res.failure, *(dataclasses.replace(res.failure, prop=n) for n in refused)]]
-                ds = [dataclasses.replace(d, message=_readable(d.message, texts)) for d in ds]
+                vals |= res.values
+                secs |= res.seconds
+                diagnose = functools.partial(failure_diagnostic, model=model, low=low,
+                                             props=group, job=job)
+                ds, retry = _after_failure(res, job, unit, vals, use, failed, owner, texts,
+                                           diagnose)
                 if not _one_query(res):
-                    raise CompileError([*errors, *ds, *kept(what, vals | res.values)])
+                    raise CompileError([*errors, *ds, *kept(what, vals)])
                 for d in ds:
                     if d not in errors:  # a min and a max: one error
                         errors.append(d)
-                vals |= res.values
-                secs |= res.seconds
                 lost, lost_processes = lost + res.elapsed, lost_processes + 1
-                # The unit's other unanswered queries go on in a fresh process. A failure
-                # that names no query (memory) is not asked again, nor is a Pmax whose
-                # complementary Pmin failed.
-                failed.update([bad, *refused] if bad is not None else [n for _, n in open_])
-                retry = _not_failed(open_, failed, use)
-                if progress is not None:
-                    progress(f"{ds[0].code}: {ds[0].message.rstrip('.')}; the other queries go on, and the "
-                             "error is reported at the end")
                 i += 1
+                later = [u for u in (_not_failed(u, failed, use) for u in units[i:]) if u]
                 if job_engine == "auto" and res.engine == "hybrid":
                     job_engine = "hybrid"  # as after an answer (below)
-                    after = _not_failed([q for u in units[i:] for q in u], failed, use)
-                    units = units[:i] + [u for u in (_unanswered(u, vals, use) for u in
-                                                     plan(retry + after, True)) if u]
+                    units = units[:i] + [u for u in (_unanswered(u, vals, use) for u in plan(
+                        retry + [q for u in later for q in u], True)) if u]
                 else:
-                    units = units[:i] + ([retry] if retry else []) + units[i:]
+                    units = units[:i] + ([retry] if retry else []) + later
+                if progress is not None:
+                    more = len(units) > i or what != lows[-1][2]
+                    progress(f"{ds[0].code}: {ds[0].message.rstrip('.')}; "
+                             + ("the other queries go on, and " if more else "")
+                             + "the error is reported at the end")
                 continue
             if complementary and res.dd_retried and not rest_full_tables:
                 rest_full_tables = True

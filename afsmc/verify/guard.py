@@ -302,7 +302,8 @@ def _run_isolated(job: Job, progress: Progress | None, every: float,
                                  elapsed=now - start,
                                  engine=engine, failure=StormFailure(
                     "memory", f"stopped the {job.what} after {now - start:.0f} s: it used "
-                    f"{rss / 2**30:.1f} GB, 85% of the memory that was available")), None
+                    f"{rss / 2**30:.1f} GB, 85% of the memory that was available",
+                    prop=_checking(phase))), None
             if now >= next_report:
                 next_report = now + report_interval(now - phase_start, every)
                 if phase == "build":
@@ -333,7 +334,12 @@ def _run_isolated(job: Job, progress: Progress | None, every: float,
                      engine=engine, failure=StormFailure(
         "memory" if code is not None and code < 0 else "internal",
         f"the Storm process {'checking' if phase.startswith('check') else 'building'} the "
-        f"{job.what} {why}{gb}")), code
+        f"{job.what} {why}{gb}", prop=_checking(phase))), code
+
+
+def _checking(phase: str) -> str | None:
+    """The query the child was checking when it was stopped or died (its "check" phase)."""
+    return phase[len("check "):] if phase.startswith("check ") else None
 
 
 def run_job(job: Job, bound: int, *, isolate: bool | None, progress: Progress | None) -> JobResult:

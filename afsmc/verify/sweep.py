@@ -180,7 +180,24 @@ def evaluate(task: Task) -> tuple[list[SweepPoint], list[Diagnostic]]:
     try:
         return _evaluate(task), []
     except CompileError as exc:
-        return [], exc.diagnostics
+        return [], _user_words(exc.diagnostics)
+
+
+def _user_words(diags: list[Diagnostic]) -> list[Diagnostic]:
+    """A task's errors in the user's words: its properties are checked as NAME__atI (one per
+    point); the sweep's own note replaces the check's note of the values it had, which
+    names them so."""
+    out: list[Diagnostic] = []
+    for d in diags:
+        if d.code == "N412":
+            continue
+        d = dataclasses.replace(d, message=_POINT_NAME.sub(r"\1", d.message))
+        if d not in out:  # the same failure at every point of a shared model: once
+            out.append(d)
+    return out
+
+
+_POINT_NAME = re.compile(r"\b(\w+?)__(?:at|keep)\d+\b")
 
 
 def _evaluate(task: Task) -> list[SweepPoint]:
@@ -507,8 +524,9 @@ def sweep(path: str, variable: str, values: Sequence[Number], *, kind: Kind = "c
     failed: dict[str, tuple[Diagnostic, list[str]]] = {}
     for task, (pts, diags) in zip(tasks, outcomes, strict=True):
         if diags:
-            where = f"{variable}={fmt(task.xs[0])}" if kind == "const" else \
-                f"bounds {fmt(task.xs[0])}..{fmt(task.xs[-1])}"
+            where = (f"bounds {fmt(task.xs[0])}..{fmt(task.xs[-1])}" if kind != "const" else
+                     f"{variable}={fmt(task.xs[0])}" if len(task.xs) == 1 else
+                     f"{variable}={fmt(task.xs[0])}..{fmt(task.xs[-1])}")  # a shared model
             for d in diags:
                 key = json.dumps(d.to_json(), sort_keys=True)
                 failed.setdefault(key, (d, []))[1].append(where)
