@@ -567,6 +567,15 @@ def _group_ends(pgid: int, seconds: float = 10.0) -> None:
     raise AssertionError(f"processes of the group outlived afsmc:\n{ps}")
 
 
+def _sigint_as_a_terminal_has_it() -> None:
+    """A command started in the background (`cmd &` in a script) ignores SIGINT, and Python
+    then raises no KeyboardInterrupt: the test sends Ctrl-C as a terminal would, so its
+    afsmc starts with SIGINT's default, whoever started the tests."""
+    import signal
+
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+
+
 def _verify_building(tmp_path: Path) -> subprocess.Popen[str]:
     """`afsmc verify` on an instance big enough for the guard's child, once it builds."""
     import sys
@@ -574,7 +583,8 @@ def _verify_building(tmp_path: Path) -> subprocess.Popen[str]:
     argv = [sys.executable, "-m", "afsmc", "verify", UAV, "--json", "--progress",
             "--const", "WIDTH=5,HEIGHT=5,OBJECTS=2,T_LIMIT=400"]
     proc = subprocess.Popen(argv, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-                            start_new_session=True, cwd=str(tmp_path))
+                            start_new_session=True, cwd=str(tmp_path),
+                            preexec_fn=_sigint_as_a_terminal_has_it)
     assert proc.stderr is not None
     for line in proc.stderr:  # the child has started once it reports its build
         if "building the MDP" in line:
@@ -631,12 +641,25 @@ def test_progress_lines_thin_out_as_a_phase_goes_on() -> None:
     assert report_interval(100, 45.0) == 45.0  # never more often than asked
 
 
+def _terminate(proc: subprocess.Popen[str]) -> tuple[str, str]:
+    """SIGTERM to afsmc alone, as `kill PID` does; its output, once it ended with 143."""
+    import os
+    import signal
+
+    os.kill(proc.pid, signal.SIGTERM)
+    try:
+        out, err = proc.communicate(timeout=30)
+    except subprocess.TimeoutExpired:
+        os.killpg(proc.pid, signal.SIGKILL)
+        raise AssertionError("SIGTERM did not stop the check") from None
+    assert proc.returncode == 143, err
+    return out, err
+
+
 def test_sigterm_stops_a_small_model_with_a_huge_step_bound(tmp_path: Path) -> None:
     """A 7-state model with F<=10^11 checks for hours. In afsmc's own process Storm's check
     would not see Ctrl-C or SIGTERM, so such a check runs in a child process: SIGTERM ends
     the command (exit 143) within seconds, and no Storm process is left."""
-    import os
-    import signal
     import sys
     import time
 
@@ -653,13 +676,7 @@ def test_sigterm_stops_a_small_model_with_a_huge_step_bound(tmp_path: Path) -> N
         if "built the" in line:
             break
     time.sleep(1.0)
-    os.kill(proc.pid, signal.SIGTERM)  # afsmc only, as `kill PID` does
-    try:
-        _, err = proc.communicate(timeout=30)
-    except subprocess.TimeoutExpired:
-        os.killpg(proc.pid, signal.SIGKILL)
-        raise AssertionError("SIGTERM did not stop the check") from None
-    assert proc.returncode == 143, err
+    _, err = _terminate(proc)
     assert "afsmc: terminated" in err and "Traceback" not in err
     _group_ends(proc.pid)
 
@@ -792,8 +809,6 @@ def test_a_memory_stop_names_the_query_and_the_others_go_on(
 def test_sigterm_after_a_failed_query_reports_it_as_an_error_in_json(tmp_path: Path) -> None:
     """`--json` after SIGTERM: the query that had failed is an error entry with its place
     in the file, and the values answered since are the N412 note."""
-    import os
-    import signal
     import sys
 
     path = tmp_path / "nxl.afsm"
@@ -807,13 +822,7 @@ def test_sigterm_after_a_failed_query_reports_it_as_an_error_in_json(tmp_path: P
     for line in proc.stderr:
         if line.startswith("afsmc: checked reach"):
             break
-    os.kill(proc.pid, signal.SIGTERM)
-    try:
-        out, err = proc.communicate(timeout=30)
-    except subprocess.TimeoutExpired:
-        os.killpg(proc.pid, signal.SIGKILL)
-        raise AssertionError("SIGTERM did not stop the check") from None
-    assert proc.returncode == 143, err
+    out, err = _terminate(proc)
     data = json.loads(out)
     assert data["interrupted"] is True
     e404, note = data["diagnostics"]
