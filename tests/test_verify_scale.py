@@ -179,8 +179,11 @@ def test_auto_with_hybrid_refuses_total_rewards_before_checking(tmp_path: Path) 
     assert d.hint is not None and "C<=k" in d.hint, d.hint
     first = next(i for i, s in enumerate(said) if "the other queries go on" in s)
     assert not any(s.startswith("checked") for s in said[:first]), said
-    assert answered.code == "N412" and "steps_min = " in answered.message \
-        and "steps_max = " in answered.message and "total" not in answered.message, answered
+    values, missing = answered.message.rsplit("\n", 1)
+    assert answered.code == "N412" and "steps_min = " in values \
+        and "steps_max = " in values and "total" not in values, answered
+    assert missing == ("not answered: total_min on the MDP, total_max on the MDP, "
+                       "total on the uniform DTMC"), missing
     # one query per process: the processes after the one where "auto" picked hybrid refuse
     # it before they build, and the answers so far are kept
     said.clear()
@@ -471,7 +474,9 @@ def test_a_failed_run_reports_the_values_it_had(monkeypatch: pytest.MonkeyPatch)
     # the check ran out of memory after the build: that process's other queries are not
     # asked again (they would need as much), and the run ends with what it has
     assert note == ("the other queries were answered:\n"
-                    f"  success_min = {sparse.property('success').min!r} on the MDP"), note
+                    f"  success_min = {sparse.property('success').min!r} on the MDP\n"
+                    "not answered: success_max on the MDP, drops_min on the MDP, "
+                    "drops_max on the MDP"), note
 
 
 def test_ctrl_c_prints_the_values_verify_had(monkeypatch: pytest.MonkeyPatch,
@@ -713,7 +718,8 @@ def test_a_query_storm_cannot_check_does_not_cost_the_others(tmp_path: Path) -> 
     exact = run(str(path), via="jani", engine="sparse", isolate=False)
     assert note.message == ("the other queries were answered:\n"
                             f"  steps = {exact.property('steps').value!r} on the DTMC\n"
-                            f"  reach = {exact.property('reach').value!r} on the DTMC"), \
+                            f"  reach = {exact.property('reach').value!r} on the DTMC\n"
+                            "not answered: nxt on the DTMC"), \
         note.message
     # the same through the CLI: exit 1, the error, then the values
     r = run_cli("verify", str(path), "--via", "jani", "--engine", "hybrid")
@@ -755,7 +761,10 @@ def test_auto_one_query_per_process_goes_on_past_what_hybrid_refuses(tmp_path: P
     assert [(d.code, "'total'" in d.message) for d in errors] == [("E404", True)] * 2, errors
     assert "on the MDP" in errors[0].message and "uniform DTMC" in errors[1].message
     exact = run(str(path), properties=["steps", "reach"], engine="sparse", isolate=False)
-    got = dict(line.strip().split(" = ", 1) for line in note.message.splitlines()[1:])
+    *lines, missing = note.message.splitlines()[1:]
+    assert missing == ("not answered: total_min on the MDP, total_max on the MDP, "
+                       "total on the uniform DTMC"), missing
+    got = dict(line.strip().split(" = ", 1) for line in lines)
     assert set(got) == {"steps_min", "steps_max", "reach_min", "reach_max", "steps", "reach"}
     for key, value in got.items():
         v = float(value.split(" on the ")[0])
@@ -803,7 +812,8 @@ def test_a_memory_stop_names_the_query_and_the_others_go_on(
         "the other queries were answered:\n"
         f"  success_min = {sparse.property('success').min!r} on the MDP\n"
         f"  drops_min = {sparse.property('drops').min!r} on the MDP\n"
-        f"  drops_max = {sparse.property('drops').max!r} on the MDP"), note.message
+        f"  drops_max = {sparse.property('drops').max!r} on the MDP\n"
+        "not answered: success_max on the MDP"), note.message
 
 
 def test_sigterm_after_a_failed_query_reports_it_as_an_error_in_json(tmp_path: Path) -> None:
@@ -830,3 +840,59 @@ def test_sigterm_after_a_failed_query_reports_it_as_an_error_in_json(tmp_path: P
     assert note["code"] == "N412" and "reach = " in note["message"], note
     assert "error[E404]" in err and "Traceback" not in err
     _group_ends(proc.pid)
+
+
+TRAP = """machine trap;
+const int D = [1, 2];
+var x : [0..3] init 0 clamp;
+mode A = 0 initial;
+mode B = 1 final;
+mode C = 2;
+action Stay in C { goto C; }
+hazard Trap from A with probability 0.05 { goto C; }
+action Go in A when x < 3 { 0.3: x += D; 0.7: goto B; }
+action Stop in A when x >= 3 { goto B; }
+property r1 = P=? [ F mode == B & x == 1 ];
+property r3 = P=? [ F mode == B & x == 3 ];
+"""
+
+
+def test_a_failed_complement_does_not_matter_where_not_every_path_ends(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """Mode C traps some paths outside the final modes, so each Pmax is asked itself, not as
+    1 - Pmin of its complement. A complement that failed (here, faked to run out of memory)
+    is then no error: every value is answered, equal to the sparse engine's, and no error
+    is raised."""
+    from afsmc.verify import core
+    from afsmc.verify.guard import run_job as real
+    from afsmc.verify.storm import JobResult, StormFailure
+
+    path = tmp_path / "trap.afsm"
+    path.write_text(TRAP, encoding="utf-8")
+    exact = run(str(path), engine="sparse", isolate=False, uniform=False)
+
+    def run_job(job: Job, bound: int, *, isolate: bool | None,
+                progress: Callable[[str], None] | None) -> JobResult:
+        res = real(job, bound, isolate=isolate, progress=progress)
+        if "__afsmc_rest_r1" in res.values:
+            order = list(res.values)
+            res.values = {k: res.values[k] for k in order[:order.index("__afsmc_rest_r1")]}
+            res.failure = StormFailure("memory", "stopped the MDP", prop="__afsmc_rest_r1")
+        return res
+
+    monkeypatch.setattr(core, "run_job", run_job)
+    said: list[str] = []
+    got = run(str(path), engine="hybrid", uniform=False, split=True, progress=said.append)
+    assert any("while checking r1_max as 1 - Pmin" in s for s in said), said
+    _close(_values(got), _values(exact), 1e-9)
+
+
+def test_a_sweep_names_its_points_properties_as_written() -> None:
+    from afsmc.diagnostics import Diagnostic, Severity
+    from afsmc.verify.sweep import _user_words
+
+    made = [Diagnostic("E406", Severity.ERROR, f"stopped while checking reach__at{i}_max as "
+                       "1 - Pmin", None) for i in range(3)]
+    made.append(Diagnostic("N412", Severity.NOTE, "answered before this:\n  reach__at0_min", None))
+    [d] = _user_words(made)
+    assert d.message == "stopped while checking reach_max as 1 - Pmin", d.message

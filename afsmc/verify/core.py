@@ -414,6 +414,9 @@ def _one_query(res: JobResult) -> bool:
     after the model was built. The model's other queries may still be answered."""
     f = res.failure
     assert f is not None
+    if f.prop == TERMINATES:
+        # a graph analysis every Pmax of the model depends on: as if the model failed
+        return False
     if f.stage in ("check", "property"):
         return True
     return f.stage in ("memory", "internal") and res.states > 0
@@ -530,14 +533,15 @@ def _after_failure(res: JobResult, job: Job, unit: list[tuple[ir.Property, str]]
     (min and max alike), or every open query when the failure names none."""
     f = res.failure
     assert f is not None
-    bad = f.prop
+    # the guard's phase may still name a query that had been answered when the process died
+    bad = f.prop if f.prop not in vals else None
     open_ = _unanswered(unit, vals, use)
     # "auto" found hybrid and refused all these at once (Job.symbolic_refused)
     refused = ([n for _, n in open_ if n in job.symbolic_refused and n != bad]
                if res.engine == "hybrid" and bad in job.symbolic_refused else [])
     ds = [diagnose(x) for x in [f, *(dataclasses.replace(f, prop=n) for n in refused)]]
     ds = [dataclasses.replace(d, message=_readable(d.message, texts)) for d in ds]
-    if f.stage in ("memory", "internal"):
+    if f.stage in ("memory", "internal") and (bad is not None or open_):
         # the same words for every process stopped at this size: say which query it was
         what = (f" while checking {_query_text(bad, texts)}" if bad is not None else
                 "; not answered: " + ", ".join(_query_text(n, texts) for _, n in open_))
@@ -546,10 +550,7 @@ def _after_failure(res: JobResult, job: Job, unit: list[tuple[ir.Property, str]]
         failed.update(n for _, n in open_)
         return ds, []
     failed.update([bad, *refused])
-    if bad == TERMINATES:
-        # each Pmax is then asked itself: the complementary Pmins would not be used
-        failed.update(n for _, n in open_ if n.startswith(REST))
-    elif f.stage in ("check", "property") and not bad.startswith(REST):
+    if f.stage in ("check", "property") and not bad.startswith(REST):
         # what Storm cannot check of a property's min, it cannot of its max (the complement
         # of a Pmax is another formula: it only fails itself)
         failed.update(n for n, o in owner.items() if o == owner.get(bad, ""))
@@ -818,6 +819,10 @@ def check(model: ir.Model, props: Sequence[ir.Property], *, via: Via = "prism",
         rest_full_tables = False
         lost, lost_processes = 0.0, 0  # processes that failed after answering some queries
         failed: set[str] = set()  # queries whose check failed (in `errors`)
+        # Pmax -> its complementary Pmin, while a Pmax may still be answered that way (not
+        # after termination is known: a Pmax asked then is asked itself)
+        pending = use
+        rest_errors: dict[str, Diagnostic] = {}  # a complementary Pmin's error
         i = 0
         while True:
             if i == len(units) and (TERMINATES in vals or TERMINATES in failed):
@@ -826,6 +831,9 @@ def check(model: ir.Model, props: Sequence[ir.Property], *, via: Via = "prism",
                 ends = vals.pop(TERMINATES, None) == 1.0
                 failed.discard(TERMINATES)
                 secs.pop(TERMINATES, None)  # a graph analysis, shared by every Pmax
+                pending = {}
+                if not ends:  # the complements are not used: nor are their errors
+                    errors[:] = [d for d in errors if d not in rest_errors.values()]
                 direct = []
                 for name, rest in use.items():
                     if name == TERMINATES or name in failed:
@@ -855,7 +863,7 @@ def check(model: ir.Model, props: Sequence[ir.Property], *, via: Via = "prism",
                     except CompileError as exc:
                         errors.extend(d for d in exc.diagnostics if d not in errors)
                     failed.update(gaps)
-                    units[i] = unit = _not_failed(unit, failed, use)
+                    units[i] = unit = _not_failed(unit, failed, pending)
                     if not unit:
                         i += 1
                         continue
@@ -949,8 +957,10 @@ def check(model: ir.Model, props: Sequence[ir.Property], *, via: Via = "prism",
                 secs |= res.seconds
                 diagnose = functools.partial(failure_diagnostic, model=model, low=low,
                                              props=group, job=job)
-                ds, retry = _after_failure(res, job, unit, vals, use, failed, owner, texts,
+                ds, retry = _after_failure(res, job, unit, vals, pending, failed, owner, texts,
                                            diagnose)
+                if res.failure.prop is not None and res.failure.prop.startswith(REST):
+                    rest_errors[res.failure.prop] = ds[0]
                 if not _one_query(res):
                     raise CompileError([*errors, *ds, *kept(what, vals)])
                 for d in ds:
@@ -958,7 +968,7 @@ def check(model: ir.Model, props: Sequence[ir.Property], *, via: Via = "prism",
                         errors.append(d)
                 lost, lost_processes = lost + res.elapsed, lost_processes + 1
                 i += 1
-                later = [u for u in (_not_failed(u, failed, use) for u in units[i:]) if u]
+                later = [u for u in (_not_failed(u, failed, pending) for u in units[i:]) if u]
                 if job_engine == "auto" and res.engine == "hybrid":
                     job_engine = "hybrid"  # as after an answer (below)
                     units = units[:i] + [u for u in (_unanswered(u, vals, use) for u in plan(
@@ -1000,9 +1010,17 @@ def check(model: ir.Model, props: Sequence[ir.Property], *, via: Via = "prism",
         values.append(vals)
         timings.append(secs)
     if errors:
-        raise CompileError([*errors, *_kept(list(zip([w for _, _, w in lows], values,
-                                                     strict=True)), comp, duals,
-                                            "the other queries were answered")])
+        notes = _kept(list(zip([w for _, _, w in lows], values, strict=True)), comp, duals,
+                      "the other queries were answered")
+        # every query without a value is named, whatever the reason it was not asked
+        missing = [f"{_query_text(n, duals)} on the {what}"
+                   for (_, low, what), vals in zip(lows, values, strict=True)
+                   for p in props for n, _ in property_variants(low, p) if n not in vals]
+        if missing:
+            text = "not answered: " + ", ".join(missing)
+            notes = ([dataclasses.replace(notes[0], message=f"{notes[0].message}\n{text}")]
+                     if notes else [Diagnostic("N412", Severity.NOTE, text, None)])
+        raise CompileError([*errors, *notes])
     # a bounded G's query -> its dual's, whose value it is 1 minus (min and max swapped)
     asked_as = {query: its for its, query in duals.items()}
 

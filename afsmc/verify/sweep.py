@@ -191,13 +191,13 @@ def _user_words(diags: list[Diagnostic]) -> list[Diagnostic]:
     for d in diags:
         if d.code == "N412":
             continue
-        d = dataclasses.replace(d, message=_POINT_NAME.sub(r"\1", d.message))
+        d = dataclasses.replace(d, message=_POINT_NAME.sub(r"\1\2", d.message))
         if d not in out:  # the same failure at every point of a shared model: once
             out.append(d)
     return out
 
 
-_POINT_NAME = re.compile(r"\b(\w+?)__(?:at|keep)\d+\b")
+_POINT_NAME = re.compile(r"\b(\w+?)__(?:at|keep)\d+(_min|_max)?\b")
 
 
 def _evaluate(task: Task) -> list[SweepPoint]:
@@ -503,8 +503,13 @@ def sweep(path: str, variable: str, values: Sequence[Number], *, kind: Kind = "c
     try:
         outcomes = _run(tasks, jobs, dask, progress, len(values), finished)
     except KeyboardInterrupt as exc:
-        # The points of the chunks that finished are not lost: the CLI prints this note.
+        # The points of the chunks that finished are not lost: the CLI prints this note,
+        # instead of check()'s, which names the points' properties internally (NAME__atI).
         got = [pt for pts, diags in finished.values() if not diags for pt in pts]
+        exc.__notes__ = []
+        errors = getattr(exc, "afsmc_errors", None)
+        if errors:
+            setattr(exc, "afsmc_errors", _user_words(errors))  # noqa: B010 -- for the CLI
         for d in _kept(path, name, kind, got):
             exc.add_note(d.message)
         raise
