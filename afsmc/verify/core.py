@@ -959,8 +959,9 @@ def check(model: ir.Model, props: Sequence[ir.Property], *, via: Via = "prism",
                                              props=group, job=job)
                 ds, retry = _after_failure(res, job, unit, vals, pending, failed, owner, texts,
                                            diagnose)
-                if res.failure.prop is not None and res.failure.prop.startswith(REST):
-                    rest_errors[res.failure.prop] = ds[0]
+                bad = res.failure.prop
+                if bad is not None and bad.startswith(REST) and bad not in res.values:
+                    rest_errors[bad] = ds[0]  # no error if the complement is not used
                 if not _one_query(res):
                     raise CompileError([*errors, *ds, *kept(what, vals)])
                 for d in ds:
@@ -1009,13 +1010,16 @@ def check(model: ir.Model, props: Sequence[ir.Property], *, via: Via = "prism",
                                              processes=merged.processes + lost_processes))
         values.append(vals)
         timings.append(secs)
+    # every query without a value is named, whatever the reason it was not asked
+    missing = [f"{_query_text(n, duals)} on the {what}"
+               for (_, low, what), vals in zip(lows, values, strict=True)
+               for p in props for n, _ in property_variants(low, p) if n not in vals]
+    if missing and not errors:  # a bug: say so rather than fail below
+        errors.append(Diagnostic("E406", Severity.ERROR, "internal error: no answer and no "
+                                 f"error for {', '.join(missing)}", None))
     if errors:
         notes = _kept(list(zip([w for _, _, w in lows], values, strict=True)), comp, duals,
                       "the other queries were answered")
-        # every query without a value is named, whatever the reason it was not asked
-        missing = [f"{_query_text(n, duals)} on the {what}"
-                   for (_, low, what), vals in zip(lows, values, strict=True)
-                   for p in props for n, _ in property_variants(low, p) if n not in vals]
         if missing:
             text = "not answered: " + ", ".join(missing)
             notes = ([dataclasses.replace(notes[0], message=f"{notes[0].message}\n{text}")]
