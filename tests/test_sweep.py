@@ -501,7 +501,7 @@ def test_an_output_it_replaces_keeps_its_permissions(tmp_path: Path) -> None:
 def test_a_failed_query_of_a_shared_model_is_named_as_the_user_wrote_it(tmp_path: Path) -> None:
     """A sweep over a constant that only the properties read checks every point on one model,
     as properties NAME__atI. An error there is the user's property at the points it covers,
-    once, not one per internal name, and no note of internal names follows."""
+    once, not one per internal name; the note of the values answered names each point."""
     from afsmc.diagnostics import CompileError
 
     path = tmp_path / "sw.afsm"
@@ -513,6 +513,12 @@ def test_a_failed_query_of_a_shared_model_is_named_as_the_user_wrote_it(tmp_path
                     "property reach = P=? [ F<=K x == 2 ];\n", encoding="utf-8")
     with pytest.raises(CompileError) as info:
         sweep(str(path), "K", [1, 2, 3], via="jani", engine="hybrid", jobs=1)
-    [d] = info.value.diagnostics
+    d, note = info.value.diagnostics
     assert d.code == "E404" and d.message.startswith("at K=1..3: Storm failed to check 'nxt' "), d
     assert "__at" not in d.message and d.span is not None and d.span.line == 8
+    lines = note.message.splitlines()
+    assert note.code == "N412" and "__at" not in note.message, note.message
+    assert [x.split(" = ")[0].strip() for x in lines[1:4]] == \
+        ["reach at K=1", "reach at K=2", "reach at K=3"], lines
+    assert lines[-1] == ("not answered: nxt at K=1 on the DTMC, nxt at K=2 on the DTMC, "
+                         "nxt at K=3 on the DTMC"), lines

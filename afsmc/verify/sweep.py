@@ -180,24 +180,32 @@ def evaluate(task: Task) -> tuple[list[SweepPoint], list[Diagnostic]]:
     try:
         return _evaluate(task), []
     except CompileError as exc:
-        return [], _user_words(exc.diagnostics)
+        return [], _user_words(exc.diagnostics, task)
 
 
-def _user_words(diags: list[Diagnostic]) -> list[Diagnostic]:
-    """A task's errors in the user's words: its properties are checked as NAME__atI (one per
-    point); the sweep's own note replaces the check's note of the values it had, which
-    names them so."""
+def _user_words(diags: list[Diagnostic], task: Task | None = None) -> list[Diagnostic]:
+    """A task's diagnostics in the user's words: its properties are checked as NAME__atI,
+    one per point (the I-th of `task.xs`). An error names the property (once, if it is the
+    same at every point); the note of the values answered names the point of each."""
+    def point(m: re.Match[str]) -> str:
+        i = int(m.group(2))
+        if task is None or i >= len(task.xs):
+            return m.group(1) + (m.group(3) or "")
+        x = fmt(task.xs[i])
+        where = f"{task.variable}={x}" if task.kind == "const" else f"bound {x}"
+        return f"{m.group(1)}{m.group(3) or ''} at {where}"
+
     out: list[Diagnostic] = []
     for d in diags:
-        if d.code == "N412":
-            continue
-        d = dataclasses.replace(d, message=_POINT_NAME.sub(r"\1\2", d.message))
+        message = (_POINT_NAME.sub(point, d.message) if d.code == "N412" else
+                   _POINT_NAME.sub(r"\1\3", d.message))
+        d = dataclasses.replace(d, message=message)
         if d not in out:  # the same failure at every point of a shared model: once
             out.append(d)
     return out
 
 
-_POINT_NAME = re.compile(r"\b(\w+?)__(?:at|keep)\d+(_min|_max)?\b")
+_POINT_NAME = re.compile(r"\b(\w+?)__(?:at|keep)(\d+)(_min|_max)?\b")
 
 
 def _evaluate(task: Task) -> list[SweepPoint]:
