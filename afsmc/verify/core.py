@@ -526,11 +526,12 @@ def _after_failure(res: JobResult, job: Job, unit: list[tuple[ir.Property, str]]
                    vals: dict[str, float], use: dict[str, ir.Property], failed: set[str],
                    owner: dict[str, str], texts: Mapping[str, str],
                    diagnose: Callable[[StormFailure], Diagnostic],
-                   ) -> tuple[list[Diagnostic], list[tuple[ir.Property, str]]]:
+                   ) -> tuple[list[Diagnostic], list[tuple[ir.Property, str]], str | None]:
     """A process failed at one query (or at the model: the caller decides). Its errors,
-    and the queries of `unit` to ask again in a fresh process; adds to `failed` what is not
-    to be asked again: the query, and all of its property when Storm cannot check it
-    (min and max alike), or every open query when the failure names none."""
+    the queries of `unit` to ask again in a fresh process, and the query it failed at (None
+    if it names none); adds to `failed` what is not to be asked again: the query, and all of
+    its property when Storm cannot check it (min and max alike), or every open query when
+    the failure names none."""
     f = res.failure
     assert f is not None
     # the guard's phase may still name a query that had been answered when the process died
@@ -548,7 +549,7 @@ def _after_failure(res: JobResult, job: Job, unit: list[tuple[ir.Property, str]]
         ds[0] = dataclasses.replace(ds[0], message=ds[0].message + what)
     if bad is None:
         failed.update(n for _, n in open_)
-        return ds, []
+        return ds, [], None
     failed.update([bad, *refused])
     if f.stage in ("check", "property") and not bad.startswith(REST):
         # what Storm cannot check of a property's min, it cannot of its max (the complement
@@ -558,8 +559,8 @@ def _after_failure(res: JobResult, job: Job, unit: list[tuple[ir.Property, str]]
     if len(retry) == len(open_):
         # nothing answered and nothing left out: the same process would fail the same way
         failed.update(n for _, n in open_)
-        return ds, []
-    return ds, retry
+        return ds, [], bad
+    return ds, retry, bad
 
 
 def _not_failed(queries: list[tuple[ir.Property, str]], failed: set[str],
@@ -776,6 +777,7 @@ def check(model: ir.Model, props: Sequence[ir.Property], *, via: Via = "prism",
     stats: list[ModelStats] = []
     values: list[dict[str, float]] = []
     timings: list[dict[str, float]] = []  # each query's check time, as `values`
+    model_queries: list[list[str]] = []  # each model's queries, as `values`
     # Failures of one query (not of the model): the other queries go on, and these are
     # raised at the end with every answer, so that one query does not cost an hour's others.
     errors: list[Diagnostic] = []
@@ -787,6 +789,7 @@ def check(model: ir.Model, props: Sequence[ir.Property], *, via: Via = "prism",
     for resolution, low, what in lows:
         # A query is one Storm check: a property, or an MDP property's min or its max.
         queries = [(p, n) for p in props for n, _ in property_variants(low, p)]
+        model_queries.append([n for _, n in queries])
         by_name = {n: (p, n) for p, n in queries}
         use = comp if low.kind == "mdp" else {}
         # query -> its property's name (a complementary Pmin: that of the Pmax it gives)
@@ -957,10 +960,9 @@ def check(model: ir.Model, props: Sequence[ir.Property], *, via: Via = "prism",
                 secs |= res.seconds
                 diagnose = functools.partial(failure_diagnostic, model=model, low=low,
                                              props=group, job=job)
-                ds, retry = _after_failure(res, job, unit, vals, pending, failed, owner, texts,
-                                           diagnose)
-                bad = res.failure.prop
-                if bad is not None and bad.startswith(REST) and bad not in res.values:
+                ds, retry, bad = _after_failure(res, job, unit, vals, pending, failed, owner,
+                                                texts, diagnose)
+                if bad is not None and bad.startswith(REST):
                     rest_errors[bad] = ds[0]  # no error if the complement is not used
                 if not _one_query(res):
                     raise CompileError([*errors, *ds, *kept(what, vals)])
@@ -1012,8 +1014,8 @@ def check(model: ir.Model, props: Sequence[ir.Property], *, via: Via = "prism",
         timings.append(secs)
     # every query without a value is named, whatever the reason it was not asked
     missing = [f"{_query_text(n, duals)} on the {what}"
-               for (_, low, what), vals in zip(lows, values, strict=True)
-               for p in props for n, _ in property_variants(low, p) if n not in vals]
+               for (_, _, what), names, vals in zip(lows, model_queries, values, strict=True)
+               for n in names if n not in vals]
     if missing and not errors:  # a bug: say so rather than fail below
         errors.append(Diagnostic("E406", Severity.ERROR, "internal error: no answer and no "
                                  f"error for {', '.join(missing)}", None))
