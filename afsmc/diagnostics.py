@@ -14,6 +14,7 @@ from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, field
 from enum import StrEnum
 from functools import cached_property
+from typing import Any
 
 
 class Severity(StrEnum):
@@ -197,11 +198,16 @@ class Reporter:
 
 
 class CompileError(Exception):
-    """Raised by a stage that cannot go on; carries every diagnostic collected so far."""
+    """Raised by a stage that cannot go on; carries every diagnostic collected so far.
 
-    def __init__(self, diagnostics: Sequence[Diagnostic]):
+    `partial`: what the stage had finished when it failed, for the caller to keep (verify's
+    answered queries, a sweep's points), so that one failed query does not lose an hour's
+    others; None if there is nothing to keep."""
+
+    def __init__(self, diagnostics: Sequence[Diagnostic], partial: Any = None):
         super().__init__("; ".join(d.message for d in diagnostics))
         self.diagnostics = list(diagnostics)
+        self.partial = partial
 
 
 def render(diag: Diagnostic, color: bool = False) -> str:

@@ -486,6 +486,49 @@ def test_an_error_at_every_point_is_reported_once() -> None:
     assert "at CELLS=-1: range [0..-1] of 'cell' is empty" in r.err
 
 
+SW = ("machine sw;\nparam int K = 3;\nvar x : [0..4] init 0 clamp;\n"
+      "mode A = 0 initial;\nmode B = 1 final;\n"
+      "action Go in A when x < K { 0.3: x += 1; 0.7: goto B; }\n"
+      "action Stop in A when x >= K { goto B; }\n"
+      "property nxt = P=? [ X x == 1 ];\n"
+      "property reach = P=? [ F x == 2 ];\n")
+
+
+def test_a_sweep_with_a_failed_query_still_writes_what_it_answered(tmp_path: Path) -> None:
+    """No data lost: one query that Storm cannot check (X from JANI on the hybrid engine)
+    fails at every point, yet -o, --json and stdout get every other value, the failed
+    query's cells empty (null in JSON); the errors follow and the exit code is 1. Here the
+    model reads K, so each point is a task of its own."""
+    path = tmp_path / "sw.afsm"
+    path.write_text(SW, encoding="utf-8")
+    exact = sweep(str(path), "K", [1, 2, 3], properties=["reach"], jobs=1)  # sparse, alone
+    assert exact.curve("reach", "value") == pytest.approx([0.0, 0.09, 0.09])
+    args = ["sweep", str(path), "--const", "K=1:3", "--via", "jani", "--engine", "hybrid",
+            "-j", "1"]
+    out = tmp_path / "sw.csv"
+    r = run_cli(*args, "-o", str(out))
+    assert r.code == 1 and r.err.count("error[E404]") == 1, r.err
+    assert "at every value of K: Storm failed to check 'nxt'" in r.err and "Traceback" not in r.err
+    assert "points were evaluated" not in r.err, r.err  # they are in the file instead
+    rows = list(csv.DictReader(io.StringIO(out.read_text())))
+    assert [(row["K"], row["property"]) for row in rows] == [
+        (k, n) for k in ("1", "2", "3") for n in ("nxt", "reach")]
+    assert [row["value"] for row in rows if row["property"] == "nxt"] == ["", "", ""]
+    assert [float(row["value"]) for row in rows if row["property"] == "reach"] == \
+        exact.curve("reach", "value")
+    # stdout (no -o): the same CSV there, the errors on stderr
+    r = run_cli(*args)
+    assert r.code == 1 and r.out == out.read_text() and "error[E404]" in r.err, r.err
+    # --json: the points and the diagnostics in one object
+    r = run_cli(*args, "--json")
+    assert r.code == 1, r.err
+    obj = json.loads(r.out)
+    assert [d["code"] for d in obj["diagnostics"]] == ["E404"], obj["diagnostics"]
+    values = {(pt["x"], p["name"]): p["value"] for pt in obj["points"] for p in pt["properties"]}
+    assert values == {(k, "nxt"): None for k in (1, 2, 3)} | {
+        (k, "reach"): v for k, v in zip((1, 2, 3), exact.curve("reach", "value"), strict=True)}
+
+
 def test_an_output_it_replaces_keeps_its_permissions(tmp_path: Path) -> None:
     """-o over a file made private (chmod 640) left it 644 (review 14): the temporary file
     renamed over it had the default mode. Every command writes through write_atomic."""
@@ -516,9 +559,15 @@ def test_a_failed_query_of_a_shared_model_is_named_as_the_user_wrote_it(tmp_path
     d, note = info.value.diagnostics
     assert d.code == "E404" and d.message.startswith("at K=1..3: Storm failed to check 'nxt' "), d
     assert "__at" not in d.message and d.span is not None and d.span.line == 8
+    # the values answered are kept in the points, each at its point (nxt's cells empty)
     lines = note.message.splitlines()
     assert note.code == "N412" and "__at" not in note.message, note.message
-    assert [x.split(" = ")[0].strip() for x in lines[1:4]] == \
-        ["reach at K=1", "reach at K=2", "reach at K=3"], lines
-    assert lines[-1] == ("not answered: nxt at K=1 on the DTMC, nxt at K=2 on the DTMC, "
-                         "nxt at K=3 on the DTMC"), lines
+    assert lines[0].startswith("3 points were evaluated before this, some in part"), lines
+    rows = [row.split(",")[:6] for row in lines[2:]]
+    assert [(k, name) for k, name, *_ in rows] == [
+        (str(k), n) for k in (1, 2, 3) for n in ("nxt", "reach")], rows
+    assert [value == "" for _, name, *_, value in rows] == [True, False] * 3, rows
+    exact = sweep(str(path), "K", [1, 2, 3], properties=["reach"], jobs=1)  # sparse, alone
+    part = info.value.partial
+    assert part.curve("reach", "value") == exact.curve("reach", "value"), part.points
+    assert part.curve("nxt", "value") == [None, None, None]

@@ -725,6 +725,15 @@ def test_a_query_storm_cannot_check_does_not_cost_the_others(tmp_path: Path) -> 
     r = run_cli("verify", str(path), "--via", "jani", "--engine", "hybrid")
     assert r.code == 1 and "error[E404]" in r.err and "the other queries were answered" in r.err
     assert "reach = " in r.err and "Traceback" not in r.err, r.err
+    # --json: the values answered as data, null where the query failed
+    r = run_cli("verify", str(path), "--via", "jani", "--engine", "hybrid", "--json")
+    assert r.code == 1, r.err
+    obj = json.loads(r.out)
+    assert [d["code"] for d in obj["diagnostics"]] == ["E404", "N412"], obj
+    assert {p["name"]: p["value"] for p in obj["properties"]} == {
+        "nxt": None, "reach": exact.property("reach").value,
+        "steps": exact.property("steps").value}, obj["properties"]
+    assert obj["model"]["states"] == exact.model.states, obj["model"]
 
 
 def test_the_fresh_process_after_a_failed_query_asks_only_what_is_open(tmp_path: Path) -> None:

@@ -112,9 +112,15 @@ def report(diags: Iterable[Diagnostic], as_json: bool = False) -> None:
 
 def fail(exc: CompileError, as_json: bool = False, wrapped: bool = False) -> int:
     """Print the diagnostics (as text, as a JSON list, or -- `wrapped`, for commands whose
-    --json output is an object -- as `{"diagnostics": [...]}`) and return exit code 1."""
+    --json output is an object -- as `{"diagnostics": [...]}`, followed by what the command
+    had finished, `exc.partial`, if it has a JSON form: verify's answered queries) and return
+    exit code 1."""
     if as_json and wrapped:
-        print(json.dumps({"diagnostics": [d.to_json() for d in exc.diagnostics]}, indent=2))
+        obj: dict[str, object] = {"diagnostics": [d.to_json() for d in exc.diagnostics]}
+        to_json = getattr(exc.partial, "to_json", None)
+        if callable(to_json):
+            obj |= to_json()
+        print(json.dumps(obj, indent=2))
         return 1
     report(exc.diagnostics, as_json)
     return 1

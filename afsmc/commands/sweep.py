@@ -11,6 +11,7 @@ import argparse
 import json
 import os
 import sys
+from collections.abc import Callable
 
 from afsmc import verify as lib
 from afsmc.commands.common import add_file, dask_address, fail, reductions, usage_error
@@ -22,7 +23,7 @@ from afsmc.commands.verify import (
 )
 from afsmc.compiler import check_writable, write_atomic
 from afsmc.diagnostics import CompileError, Diagnostic, Severity
-from afsmc.verify.sweep import Number, parse_values
+from afsmc.verify.sweep import Number, SweepResult, parse_values, without_kept_note
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
@@ -122,6 +123,18 @@ def run(args: argparse.Namespace) -> int:
     # The file's format follows its name; --json is what goes to stdout.
     file_json = (args.output or "").lower().endswith(".json")
     progress = progress_printer(args)
+
+    def write(res: SweepResult) -> None:
+        if args.output:
+            text = json.dumps(res.to_json(), indent=2) + "\n" if file_json else res.to_csv()
+            write_atomic(args.output, text, protect=(args.file,))
+            if progress:
+                progress(f"wrote {args.output}")
+        if args.plot:
+            res.plot(args.plot, protect=(args.file,))
+            if progress:
+                progress(f"wrote {args.plot}")
+
     try:
         # A sweep can take hours: an output it could not write is said before it starts.
         for out in (args.output, args.plot):
@@ -133,17 +146,11 @@ def run(args: argparse.Namespace) -> int:
                         jobs=args.jobs, dask=args.dask, uniform=args.uniform,
                         progress=progress, reductions=reductions(args),
                         bisimulation=args.bisim, split=args.split)
-        if args.output:
-            text = json.dumps(res.to_json(), indent=2) + "\n" if file_json else res.to_csv()
-            write_atomic(args.output, text, protect=(args.file,))
-            if progress:
-                progress(f"wrote {args.output}")
-        if args.plot:
-            res.plot(args.plot, protect=(args.file,))
-            if progress:
-                progress(f"wrote {args.plot}")
+        write(res)
     except CompileError as exc:
-        return fail(exc, args.json, wrapped=True)
+        if not isinstance(exc.partial, SweepResult) or not exc.partial.points:
+            return fail(exc, args.json, wrapped=True)
+        return _failed_in_part(exc, exc.partial, write, args, to_stdout)
     except OSError as exc:  # the Dask scheduler is unreachable, or no process could start
         # (writing the outputs fails as E003 in write_atomic)
         return fail(CompileError([Diagnostic("E413", Severity.ERROR, f"sweep failed: {exc}",
@@ -157,3 +164,22 @@ def run(args: argparse.Namespace) -> int:
     if progress:
         progress(f"{len(res.points)} points in {res.seconds:.1f} s")
     return 0
+
+
+def _failed_in_part(exc: CompileError, res: SweepResult, write: Callable[[SweepResult], None],
+                    args: argparse.Namespace, to_stdout: bool) -> int:
+    """Some points or queries failed: the others are written where the result would have
+    gone (a failed query's cells empty, its JSON values null), then the errors; exit 1."""
+    diags = without_kept_note(exc)
+    try:
+        write(res)
+    except CompileError as bad:  # the outputs could not be written: the note keeps the points
+        return fail(CompileError([*bad.diagnostics, *exc.diagnostics]), args.json,
+                    wrapped=True)
+    if args.json:
+        print(json.dumps(res.to_json() | {"diagnostics": [d.to_json() for d in diags]},
+                         indent=2))
+        return 1
+    if to_stdout or (not args.output and not args.plot):
+        sys.stdout.write(res.to_csv())
+    return fail(CompileError(diags))

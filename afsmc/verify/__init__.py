@@ -2,7 +2,10 @@
 
 Other tools (benchmarks, Monte Carlo cross-checks) call these functions directly. Every
 function raises :class:`afsmc.diagnostics.CompileError` carrying diagnostics (codes E4xx for
-Storm's side) instead of letting a Storm exception escape.
+Storm's side) instead of letting a Storm exception escape. When some queries fail and others
+were answered, the error's ``partial`` keeps the answers: a :class:`Partial` (``.model``,
+``.uniform_model``, ``.properties``, None where a query has no value) from ``run`` and
+``check``, a ``SweepResult`` of the points evaluated (whole or in part) from ``sweep``.
 
 ``run(path, *, consts=None, properties=(), formulas=(), via="prism", engine="sparse",
 max_states=None, uniform=True, isolate=None, progress=None, text=None) -> VerifyResult``
@@ -47,6 +50,7 @@ from afsmc.verify.core import (
     Checks,
     Loaded,
     ModelStats,
+    Partial,
     PropertyResult,
     VerifyResult,
     check,
@@ -61,6 +65,7 @@ __all__ = [
     "Checks",
     "Loaded",
     "ModelStats",
+    "Partial",
     "PropertyResult",
     "SweepPoint",
     "SweepResult",

@@ -131,6 +131,23 @@ class Checks:
 
 
 @dataclass
+class Partial:
+    """What :func:`check` had answered when it failed (`CompileError.partial`): a min, max,
+    uniform or value is None where its query failed or was not asked, and a model's stats
+    are None if none of its processes finished."""
+
+    model: ModelStats | None
+    uniform_model: ModelStats | None
+    properties: list[PropertyResult]
+
+    def to_json(self) -> dict[str, object]:
+        u = self.uniform_model
+        return {"model": self.model.to_json() if self.model is not None else None,
+                "uniform_model": u.to_json() if u is not None else None,
+                "properties": [p.to_json() for p in self.properties]}
+
+
+@dataclass
 class VerifyResult:
     path: str
     machine: str
@@ -208,7 +225,7 @@ class Loaded:
         return _remap(d, self.limit, self.where)
 
     def remap_error(self, exc: CompileError) -> CompileError:
-        return CompileError([self.remap(d) for d in exc.diagnostics])
+        return CompileError([self.remap(d) for d in exc.diagnostics], exc.partial)
 
 
 def load_with_formulas(path: str, overrides: Mapping[str, str] | None = None,
@@ -774,7 +791,7 @@ def check(model: ir.Model, props: Sequence[ir.Property], *, via: Via = "prism",
             lows.append(("uniform", lowered(model, "uniform", reductions), "uniform DTMC"))
     else:
         lows.append(("nondet", lowered(model, "nondet", reductions), "DTMC"))
-    stats: list[ModelStats] = []
+    stats: list[ModelStats | None] = []  # None: every process of that model failed
     values: list[dict[str, float]] = []
     timings: list[dict[str, float]] = []  # each query's check time, as `values`
     model_queries: list[list[str]] = []  # each model's queries, as `values`
@@ -786,6 +803,53 @@ def check(model: ir.Model, props: Sequence[ir.Property], *, via: Via = "prism",
         """The note of what the finished models and this one have answered."""
         done = [*zip([w for _, _, w in lows], values, strict=False), (what, vals)]
         return _kept(done, comp, duals)
+
+    # a bounded G's query -> its dual's, whose value it is 1 minus (min and max swapped)
+    asked_as = {query: its for its, query in duals.items()}
+
+    def results() -> list[PropertyResult]:
+        """One result per property from the models answered so far (None where not)."""
+        out = []
+        for p in original:
+            r = PropertyResult(p.name, shown(p), p.kind)
+            variants = ([(opt, 0, name) for name, opt in property_variants(lows[0][1], p)]
+                        + ([("uniform", 1, p.name)] if len(lows) > 1 else [])
+                        if lows[0][1].kind == "mdp" else [("value", 0, p.name)])
+            for key, which, name in variants:
+                if which >= len(values):
+                    continue
+                v = values[which].get(asked_as.get(name, name))
+                if v is None:
+                    continue
+                setattr(r, key, 1.0 - v if name in asked_as else v)
+                secs = timings[which].get(asked_as.get(name, name))
+                if secs is not None:
+                    r.seconds[key] = secs
+            out.append(r)
+        return out
+
+    def partial(more: dict[str, float] | None = None, secs: dict[str, float] | None = None,
+                built: ModelStats | None = None) -> Partial | None:
+        """What to keep of a failed run (None if nothing was answered). `more`, `secs` and
+        `built`: the values, times and stats of the model being checked, if it stops before
+        the end of its loop (its Pmax still as complements: converted as `_kept` does)."""
+        n = len(values)
+        if more is not None:
+            more = dict(more)
+            if more.get(TERMINATES) == 1.0:
+                more |= {name: 1.0 - more[rest.name] for name, rest in comp.items()
+                         if name != TERMINATES and rest.name in more}
+            values.append(more)
+            timings.append(secs or {})
+        try:
+            rs = results()
+        finally:
+            del values[n:], timings[n:]
+        if not any(getattr(r, k) is not None for r in rs for k in ("min", "max", "uniform",
+                                                                    "value")):
+            return None
+        models = [*stats, built, None, None]
+        return Partial(models[0], models[1], rs)
     for resolution, low, what in lows:
         # A query is one Storm check: a property, or an MDP property's min or its max.
         queries = [(p, n) for p in props for n, _ in property_variants(low, p)]
@@ -965,7 +1029,8 @@ def check(model: ir.Model, props: Sequence[ir.Property], *, via: Via = "prism",
                 if bad is not None and bad.startswith(REST):
                     rest_errors[bad] = ds[0]  # no error if the complement is not used
                 if not _one_query(res):
-                    raise CompileError([*errors, *ds, *kept(what, vals)])
+                    raise CompileError([*errors, *ds, *kept(what, vals)],
+                                       partial(vals, secs, merged))
                 for d in ds:
                     if d not in errors:  # a min and a max: one error
                         errors.append(d)
@@ -1007,9 +1072,10 @@ def check(model: ir.Model, props: Sequence[ir.Property], *, via: Via = "prism",
                     progress(f"the {what} is checked with the hybrid engine: "
                              + ("one query per Storm process" if split else
                                 "the other queries follow in one more Storm process"))
-        if merged is not None:  # None only when every process failed (then `errors`)
-            stats.append(dataclasses.replace(merged, check_time=merged.check_time + lost,
-                                             processes=merged.processes + lost_processes))
+        # merged is None only when every process failed (then `errors`)
+        stats.append(None if merged is None else dataclasses.replace(
+            merged, check_time=merged.check_time + lost,
+            processes=merged.processes + lost_processes))
         values.append(vals)
         timings.append(secs)
     # every query without a value is named, whatever the reason it was not asked
@@ -1026,32 +1092,10 @@ def check(model: ir.Model, props: Sequence[ir.Property], *, via: Via = "prism",
             text = "not answered: " + ", ".join(missing)
             notes = ([dataclasses.replace(notes[0], message=f"{notes[0].message}\n{text}")]
                      if notes else [Diagnostic("N412", Severity.NOTE, text, None)])
-        raise CompileError([*errors, *notes])
-    # a bounded G's query -> its dual's, whose value it is 1 minus (min and max swapped)
-    asked_as = {query: its for its, query in duals.items()}
-
-    def value(vals: dict[str, float], name: str) -> float:
-        return 1.0 - vals[asked_as[name]] if name in asked_as else vals[name]
-
-    def timed(r: PropertyResult, key: str, which: int, name: str) -> None:
-        setattr(r, key, value(values[which], name))
-        secs = timings[which].get(asked_as.get(name, name))
-        if secs is not None:
-            r.seconds[key] = secs
-
-    results = []
-    for p in original:
-        r = PropertyResult(p.name, shown(p), p.kind)
-        low = lows[0][1]
-        if low.kind == "mdp":
-            for name, opt in property_variants(low, p):
-                timed(r, opt, 0, name)
-            if len(values) > 1:
-                timed(r, "uniform", 1, p.name)
-        else:
-            timed(r, "value", 0, p.name)
-        results.append(r)
-    return Checks(stats[0], stats[1] if len(stats) > 1 else None, results)
+        raise CompileError([*errors, *notes], partial())
+    main, *uniform_model = stats  # the MDP or only DTMC, then the uniform DTMC if any
+    assert main is not None and None not in uniform_model  # else `errors` above
+    return Checks(main, uniform_model[0] if uniform_model else None, results())
 
 
 def const_text(v: str | bool | int | float) -> str:

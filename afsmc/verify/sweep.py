@@ -32,6 +32,8 @@ from afsmc.model.reduce import Reductions
 from afsmc.model.resolve import INT64
 from afsmc.stack import deep
 from afsmc.verify.core import (
+    Checks,
+    Partial,
     PropertyResult,
     check,
     check_choice,
@@ -111,9 +113,9 @@ def fmt(x: Number) -> str:
 @dataclass
 class SweepPoint:
     x: Number
-    properties: list[PropertyResult]
-    states: int
-    transitions: int
+    properties: list[PropertyResult]  # a value is None where its query failed (a partial result)
+    states: int | None  # None: the model's every process failed (a partial result)
+    transitions: int | None
     uniform_states: int | None = None
     uniform_transitions: int | None = None
     seconds: float = 0.0  # wall time of the point (not written to the outputs)
@@ -180,7 +182,9 @@ def evaluate(task: Task) -> tuple[list[SweepPoint], list[Diagnostic]]:
     try:
         return _evaluate(task), []
     except CompileError as exc:
-        return [], _user_words(exc.diagnostics, task)
+        # the points it answered in part (a query failed) are kept, their values None there
+        kept = exc.partial if isinstance(exc.partial, list) else []
+        return kept, _user_words(exc.diagnostics, task)
 
 
 def _user_words(diags: list[Diagnostic], task: Task | None = None) -> list[Diagnostic]:
@@ -227,11 +231,14 @@ def _evaluate(task: Task) -> list[SweepPoint]:
 
 def _points(model: ir.Model, props: list[ir.Property], task: Task, t0: float) -> list[SweepPoint]:
     if task.kind == "const":
-        c = _checks(model, props, task)
-        return [SweepPoint(task.xs[0], c.properties, c.model.states, c.model.transitions,
-                           c.uniform_model.states if c.uniform_model else None,
-                           c.uniform_model.transitions if c.uniform_model else None,
-                           time.perf_counter() - t0)]
+        try:
+            c = _checks(model, props, task)
+        except CompileError as exc:
+            if (got := _answered(exc)) is None:
+                raise
+            point = _point(task.xs[0], got[0].properties, got[0], time.perf_counter() - t0)
+            raise CompileError(got[1], [point]) from None
+        return [_point(task.xs[0], c.properties, c, time.perf_counter() - t0)]
     bounded = []
     for i, x in enumerate(task.xs):
         assert isinstance(x, int) and x >= 0  # sweep() checked
@@ -242,16 +249,30 @@ def _points(model: ir.Model, props: list[ir.Property], task: Task, t0: float) ->
 def _regroup(model: ir.Model, bounded: list[tuple[int, str, str, ir.Property]], task: Task,
              t0: float, preserve: Sequence[ir.Property] = ()) -> list[SweepPoint]:
     """Check every (point, property) on one model and split the results by point."""
-    c = _checks(model, [b for _, _, _, b in bounded], task, preserve)
+    errors: list[Diagnostic] = []
+    c: Checks | Partial
+    try:
+        c = _checks(model, [b for _, _, _, b in bounded], task, preserve)
+    except CompileError as exc:
+        if (got := _answered(exc)) is None:
+            raise
+        c, errors = got
     per_point: dict[int, list[PropertyResult]] = {}
     for (i, name, formula, _), r in zip(bounded, c.properties, strict=True):
         per_point.setdefault(i, []).append(
             dataclasses.replace(r, name=name, formula=formula or r.formula))
     secs = (time.perf_counter() - t0) / max(1, len(task.xs))
-    return [SweepPoint(x, per_point[i], c.model.states, c.model.transitions,
-                       c.uniform_model.states if c.uniform_model else None,
-                       c.uniform_model.transitions if c.uniform_model else None, secs)
-            for i, x in enumerate(task.xs)]
+    points = [_point(x, per_point[i], c, secs) for i, x in enumerate(task.xs)]
+    if errors:
+        raise CompileError(errors, points)
+    return points
+
+
+def _point(x: Number, properties: list[PropertyResult], c: Checks | Partial,
+           secs: float) -> SweepPoint:
+    m, u = c.model, c.uniform_model
+    return SweepPoint(x, properties, m.states if m else None, m.transitions if m else None,
+                      u.states if u else None, u.transitions if u else None, secs)
 
 
 def _inline_consts(p: ir.Property, model: ir.Model, name: str) -> ir.Property:
@@ -332,7 +353,7 @@ def independent(path: str, text: str, consts: dict[str, str], variable: str,
 
 
 def _checks(model: ir.Model, props: list[ir.Property], task: Task,
-            preserve: Sequence[ir.Property] = ()) -> Any:
+            preserve: Sequence[ir.Property] = ()) -> Checks:
     # A shared model serves every value of the constant. Saturation stays exact for all of
     # them: the properties arrive with the constant inlined per point (`_inline_consts`),
     # and the reductions preserve these and `preserve` (the sweep's other points), so a
@@ -342,6 +363,14 @@ def _checks(model: ir.Model, props: list[ir.Property], task: Task,
                  uniform=task.uniform, isolate=task.isolate, reductions=task.reductions,
                  bisimulation=task.bisimulation, split=task.split, preserve=preserve,
                  all_states=True)  # the same states whatever the chunks
+
+
+def _answered(exc: CompileError) -> tuple[Partial, list[Diagnostic]] | None:
+    """What check() answered before it failed, and its errors: the values are kept in the
+    points (None where a query failed), so its note of them (internal names) is not."""
+    if not isinstance(exc.partial, Partial):
+        return None
+    return exc.partial, [d for d in exc.diagnostics if d.code != "N412"]
 
 
 @dataclass
@@ -535,6 +564,7 @@ def sweep(path: str, variable: str, values: Sequence[Number], *, kind: Kind = "c
     # each diagnostic once, with the points it came from (an error that does not depend on
     # the value, say an undeclared label, came once per point: 37 copies for 0:900:25)
     failed: dict[str, tuple[Diagnostic, list[str]]] = {}
+    in_part = any(pts and diags for pts, diags in outcomes)
     for task, (pts, diags) in zip(tasks, outcomes, strict=True):
         if diags:
             where = (f"bounds {fmt(task.xs[0])}..{fmt(task.xs[-1])}" if kind != "const" else
@@ -543,8 +573,14 @@ def sweep(path: str, variable: str, values: Sequence[Number], *, kind: Kind = "c
             for d in diags:
                 key = json.dumps(d.to_json(), sort_keys=True)
                 failed.setdefault(key, (d, []))[1].append(where)
-        else:
-            points += pts
+        points += pts  # a failed task's too: what it answered (None where a query failed)
+    result = None
+    if points:
+        first = points[0]
+        typ = "mdp" if any(r.min is not None or r.max is not None
+                           for pt in points for r in pt.properties) else "dtmc"
+        result = SweepResult(path, name, kind, typ, points, [r.name for r in first.properties],
+                             time.perf_counter() - t0)
     if failed:
         def at(wheres: list[str]) -> str:
             if len(wheres) == len(tasks) > 1:
@@ -552,14 +588,23 @@ def sweep(path: str, variable: str, values: Sequence[Number], *, kind: Kind = "c
                     "at every bound"
             return "at " + (", ".join(wheres) if len(wheres) <= 5 else
                             f"{', '.join(wheres[:5])} and {len(wheres) - 5} more")
-        # every diagnostic names its points (a failed check's note of the values it had)
+        # Every diagnostic names its points. The points evaluated, whole or in part, are
+        # kept: in the error (the CLI writes them as it would have written the result) and
+        # in a note, for whoever reads only the message.
         raise CompileError([dataclasses.replace(d, message=f"{at(wheres)}: {d.message}")
-                            for d, wheres in failed.values()] + _kept(path, name, kind, points))
-    first = points[0]
-    typ = "mdp" if any(r.min is not None or r.max is not None for r in first.properties) \
-        else "dtmc"
-    return SweepResult(path, name, kind, typ, points, [r.name for r in first.properties],
-                       time.perf_counter() - t0)
+                            for d, wheres in failed.values()]
+                           + _kept(path, name, kind, points, in_part), result)
+    assert result is not None  # every task returned points, or failed
+    return result
+
+
+def without_kept_note(exc: CompileError) -> list[Diagnostic]:
+    """A failed sweep's diagnostics without its note of the points kept (the last), for a
+    caller that writes those points itself (`exc.partial`, a SweepResult)."""
+    if isinstance(exc.partial, SweepResult) and exc.partial.points and exc.diagnostics \
+            and exc.diagnostics[-1].code == "N412":
+        return exc.diagnostics[:-1]
+    return exc.diagnostics
 
 
 def _check_bounds(path: str, text: str, consts: dict[str, str], properties: Sequence[str],
@@ -613,7 +658,8 @@ def _check_names(path: str, text: str, consts: dict[str, str], variable: str,
         raise loaded.remap_error(exc) from None
 
 
-def _kept(path: str, variable: str, kind: Kind, points: list[SweepPoint]) -> list[Diagnostic]:
+def _kept(path: str, variable: str, kind: Kind, points: list[SweepPoint],
+          in_part: bool = False) -> list[Diagnostic]:
     """A note with the points evaluated before a failure or a Ctrl-C, as CSV."""
     if not points:
         return []
@@ -621,7 +667,9 @@ def _kept(path: str, variable: str, kind: Kind, points: list[SweepPoint]) -> lis
     part = SweepResult(path, variable, kind, "", points)
     return [Diagnostic("N412", Severity.NOTE, f"{len(points)} point{'s' if len(points) != 1 else ''} "
                        f"{'were' if len(points) != 1 else 'was'} evaluated before "
-                       "this:\n" + part.to_csv().rstrip("\n"), None)]
+                       "this" + (", some in part (the cells of the queries that failed are "
+                                 "empty)" if in_part else "") + ":\n"
+                       + part.to_csv().rstrip("\n"), None)]
 
 
 def _run(tasks: list[Task], jobs: int, dask: Any, progress: Progress | None, total: int,
