@@ -150,8 +150,13 @@ def main(argv: Sequence[str] | None = None) -> int:
             print(f"afsmc: {note}", file=sys.stderr)
         if getattr(args, "json", False):
             # --json promises one JSON object on stdout, a Ctrl-C included
-            print(json.dumps({"interrupted": True, "diagnostics": [d.to_json() for d in errors] + [
-                {"code": "N412", "severity": "note", "message": n} for n in notes]}, indent=2))
+            obj: dict[str, object] = {
+                "interrupted": True, "diagnostics": [d.to_json() for d in errors] + [
+                    {"code": "N412", "severity": "note", "message": n} for n in notes]}
+            partial = getattr(exc, "afsmc_partial", None)  # the answers so far, as data
+            if partial is not None:
+                obj |= partial.to_json()
+            print(json.dumps(obj, indent=2))
         return 128 + signal.SIGTERM if terminated else 130
     except BrokenPipeError:
         return 0

@@ -311,6 +311,14 @@ def test_ctrl_c_prints_the_points_a_sweep_had(deadline: str, monkeypatch: pytest
     assert code == 130 and "afsmc: interrupted" in err
     assert "1 point was evaluated before this:" in err, err
     assert "\n0,steps,2.0," in err, err
+    # --json: one object, with the point as data
+    calls.clear()
+    code = main(["sweep", deadline, "--const", "P_FAIL=0,0.25", "-p", "steps", "--jobs", "1",
+                 "--json"])
+    obj = json.loads(capsys.readouterr().out)
+    assert code == 130 and obj["interrupted"] is True, obj
+    assert [(pt["x"], [p["min"] for p in pt["properties"]]) for pt in obj["points"]] == \
+        [(0, [2.0])], obj["points"]
 
 
 @pytest.mark.parametrize("command", ["sweep", "simulate"])

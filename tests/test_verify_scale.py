@@ -510,6 +510,10 @@ def test_ctrl_c_with_json_still_prints_one_json_object(monkeypatch: pytest.Monke
     [note] = obj["diagnostics"]
     assert note["code"] == "N412"
     assert f"success_min = {sparse.property('success').min!r} on the MDP" in note["message"]
+    # and as data: the answer so far, null for the query it was stopped in
+    [prop] = obj["properties"]
+    assert (prop["name"], prop["min"], prop["max"]) == \
+        ("success", sparse.property("success").min, None), prop
 
 
 def test_kept_values_give_each_pmax_from_its_complement() -> None:
@@ -848,6 +852,9 @@ def test_sigterm_after_a_failed_query_reports_it_as_an_error_in_json(tmp_path: P
     assert e404["code"] == "E404" and e404["severity"] == "error" and e404["line"] == 8, e404
     assert note["code"] == "N412" and "reach = " in note["message"], note
     assert "error[E404]" in err and "Traceback" not in err
+    values = {p["name"]: p["value"] for p in data["properties"]}
+    exact = run(str(path), via="jani", engine="sparse", isolate=False, properties=["reach"])
+    assert values == {"nxt": None, "reach": exact.property("reach").value, "slow": None}, values
     _group_ends(proc.pid)
 
 

@@ -984,6 +984,8 @@ def check(model: ir.Model, props: Sequence[ir.Property], *, via: Via = "prism",
                 for d in kept(what, vals | got):
                     exc.add_note(d.message)
                 setattr(exc, "afsmc_errors", list(errors))  # noqa: B010 -- the CLI shows them
+                # and, for --json, the answers as data (a KeyboardInterrupt has no .partial)
+                setattr(exc, "afsmc_partial", partial(vals | got, secs, merged))  # noqa: B010
                 raise
             failure = res.failure
             # What the process set out to check ("auto" adds and leaves some for hybrid).

@@ -542,13 +542,17 @@ def sweep(path: str, variable: str, values: Sequence[Number], *, kind: Kind = "c
     except KeyboardInterrupt as exc:
         # The points of the chunks that finished are not lost: the CLI prints this note,
         # instead of check()'s, which names the points' properties internally (NAME__atI).
-        got = [pt for pts, diags in finished.values() if not diags for pt in pts]
+        got = [pt for i in sorted(finished) if not finished[i][1] for pt in finished[i][0]]
         exc.__notes__ = []
         errors = getattr(exc, "afsmc_errors", None)
         if errors:
             setattr(exc, "afsmc_errors", _user_words(errors))  # noqa: B010 -- for the CLI
         for d in _kept(path, name, kind, got):
             exc.add_note(d.message)
+        # for --json: the points as data (not check()'s, which has the internal names)
+        setattr(exc, "afsmc_partial", SweepResult(  # noqa: B010
+            path, name, kind, _type(got), got, [r.name for r in got[0].properties])
+            if got else None)
         raise
     except Exception as exc:
         if not worker_died(exc):
@@ -576,10 +580,8 @@ def sweep(path: str, variable: str, values: Sequence[Number], *, kind: Kind = "c
         points += pts  # a failed task's too: what it answered (None where a query failed)
     result = None
     if points:
-        first = points[0]
-        typ = "mdp" if any(r.min is not None or r.max is not None
-                           for pt in points for r in pt.properties) else "dtmc"
-        result = SweepResult(path, name, kind, typ, points, [r.name for r in first.properties],
+        result = SweepResult(path, name, kind, _type(points),
+                             points, [r.name for r in points[0].properties],
                              time.perf_counter() - t0)
     if failed:
         def at(wheres: list[str]) -> str:
@@ -596,6 +598,12 @@ def sweep(path: str, variable: str, values: Sequence[Number], *, kind: Kind = "c
                            + _kept(path, name, kind, points, in_part), result)
     assert result is not None  # every task returned points, or failed
     return result
+
+
+def _type(points: list[SweepPoint]) -> str:
+    """"mdp" if any point has a min or max (a failed query has neither), else "dtmc"."""
+    return "mdp" if any(r.min is not None or r.max is not None
+                        for pt in points for r in pt.properties) else "dtmc"
 
 
 def without_kept_note(exc: CompileError) -> list[Diagnostic]:
