@@ -450,6 +450,53 @@ def test_a_worker_that_dies_is_a_diagnostic_with_the_points_it_had(
     (died, kept) = info.value.diagnostics
     assert died.code == "E414" and "1 of 3 points were evaluated" in died.message
     assert kept.code == "N412" and "\n0.1,steps," in kept.message
+    assert info.value.partial.xs == [0.1], info.value.partial  # written by the CLI
+
+
+def _stop_after_first_task(monkeypatch: pytest.MonkeyPatch, stop: BaseException) -> None:
+    """The first task finishes, then the sweep stops with `stop` (a Ctrl-C, a dead worker)."""
+    import importlib
+
+    sweep_mod = importlib.import_module("afsmc.verify.sweep")
+    real_run = sweep_mod._run
+
+    def stops(tasks, jobs, dask, progress, total, results):  # type: ignore[no-untyped-def]
+        real_run(tasks[:1], 1, None, None, total, results)
+        raise stop
+
+    monkeypatch.setattr(sweep_mod, "_run", stops)
+
+
+@pytest.mark.parametrize("how", ["ctrl-c", "died"])
+def test_a_stopped_sweep_keeps_a_point_answered_in_part(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str],
+        how: str) -> None:
+    """The first point answered reach and failed nxt; then a Ctrl-C, or a worker died. That
+    point was dropped (review 17): neither its value nor its error was shown."""
+    from concurrent.futures.process import BrokenProcessPool
+
+    from afsmc.cli import main
+
+    path = tmp_path / "sw.afsm"
+    path.write_text(SW, encoding="utf-8")
+    exact = sweep(str(path), "K", [1], properties=["reach"], jobs=1)
+    _stop_after_first_task(monkeypatch, KeyboardInterrupt() if how == "ctrl-c" else
+                           BrokenProcessPool("a child process terminated abruptly"))
+    out = tmp_path / "out.json"
+    code = main(["sweep", str(path), "--const", "K=1:3", "--via", "jani", "--engine", "hybrid",
+                 "-j", "1", "--json", *(["-o", str(out)] if how == "died" else [])])
+    captured = capsys.readouterr()
+    obj = json.loads(captured.out)
+    assert code == (130 if how == "ctrl-c" else 1), captured.err
+    codes = [d["code"] for d in obj["diagnostics"]]
+    assert codes == (["E404", "N412"] if how == "ctrl-c" else ["E414", "E404"]), codes
+    assert obj["diagnostics"][codes.index("E404")]["message"].startswith("at K=1: "), obj
+    if how == "died":
+        assert "1 of 3 points were evaluated" in obj["diagnostics"][0]["message"]
+        assert json.loads(out.read_text())["points"] == obj["points"]
+    assert [(pt["x"], {p["name"]: p["value"] for p in pt["properties"]})
+            for pt in obj["points"]] == \
+        [(1, {"nxt": None, "reach": exact.curve("reach", "value")[0]})], obj["points"]
 
 
 def test_api_takes_python_numbers_as_run_does(deadline: str) -> None:

@@ -738,6 +738,17 @@ def test_a_query_storm_cannot_check_does_not_cost_the_others(tmp_path: Path) -> 
         "nxt": None, "reach": exact.property("reach").value,
         "steps": exact.property("steps").value}, obj["properties"]
     assert obj["model"]["states"] == exact.model.states, obj["model"]
+    # the same when the query that fails is the last one (review 17: its process was the
+    # only one of the model to build it, and the model's sizes were null)
+    nxt = "property nxt   = P=? [ X x == 1 ];\n"
+    last = tmp_path / "nx_last.afsm"
+    last.write_text(NEXT.replace(nxt, "") + nxt, encoding="utf-8")
+    r = run_cli("verify", str(last), "--via", "jani", "--engine", "hybrid", "--json",
+                "-p", "reach", "-p", "nxt")
+    obj = json.loads(r.out)
+    assert r.code == 1 and obj["model"] is not None, r.out
+    assert (obj["model"]["states"], obj["model"]["transitions"]) == \
+        (exact.model.states, exact.model.transitions), obj["model"]
 
 
 def test_the_fresh_process_after_a_failed_query_asks_only_what_is_open(tmp_path: Path) -> None:

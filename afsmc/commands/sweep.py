@@ -174,7 +174,7 @@ def _failed_in_part(exc: CompileError, res: SweepResult, write: Callable[[SweepR
     try:
         write(res)
     except CompileError as bad:  # the outputs could not be written: the note keeps the points
-        return fail(CompileError([*bad.diagnostics, *exc.diagnostics]), args.json,
+        return fail(CompileError([*bad.diagnostics, *exc.diagnostics], res), args.json,
                     wrapped=True)
     if args.json:
         print(json.dumps(res.to_json() | {"diagnostics": [d.to_json() for d in diags]},

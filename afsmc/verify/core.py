@@ -885,6 +885,16 @@ def check(model: ir.Model, props: Sequence[ir.Property], *, via: Via = "prism",
         # the default: the expected rewards' minimum needs it to stay under 20 GB.
         rest_full_tables = False
         lost, lost_processes = 0.0, 0  # processes that failed after answering some queries
+        # The model's sizes as a failed process reported them, should no process succeed
+        # (their times are all in `lost`, counted as checking).
+        built: ModelStats | None = None
+
+        def sizes(res: JobResult, known: ModelStats | None,
+                  resolution: str = resolution) -> ModelStats | None:
+            if known is not None or not res.states:
+                return known
+            return dataclasses.replace(_stats(res, resolution), parse_time=0.0,
+                                       build_time=0.0, check_time=0.0, processes=0)
         failed: set[str] = set()  # queries whose check failed (in `errors`)
         # Pmax -> its complementary Pmin, while a Pmax may still be answered that way (not
         # after termination is known: a Pmax asked then is asked itself)
@@ -985,7 +995,8 @@ def check(model: ir.Model, props: Sequence[ir.Property], *, via: Via = "prism",
                     exc.add_note(d.message)
                 setattr(exc, "afsmc_errors", list(errors))  # noqa: B010 -- the CLI shows them
                 # and, for --json, the answers as data (a KeyboardInterrupt has no .partial)
-                setattr(exc, "afsmc_partial", partial(vals | got, secs, merged))  # noqa: B010
+                setattr(exc, "afsmc_partial",  # noqa: B010
+                        partial(vals | got, secs, merged or built))
                 raise
             failure = res.failure
             # What the process set out to check ("auto" adds and leaves some for hybrid).
@@ -999,6 +1010,7 @@ def check(model: ir.Model, props: Sequence[ir.Property], *, via: Via = "prism",
                 secs |= res.seconds
                 # its time counts as checking: it answered some of the queries
                 lost, lost_processes = lost + res.elapsed, lost_processes + 1
+                built = sizes(res, built)
                 left = _unanswered(unit, vals, use)
                 # "auto" leaves here only after a hybrid check (sparse fills no tables, and
                 # a sparse process out of memory is not retried).
@@ -1024,6 +1036,7 @@ def check(model: ir.Model, props: Sequence[ir.Property], *, via: Via = "prism",
             if res.failure is not None:
                 vals |= res.values
                 secs |= res.seconds
+                built = sizes(res, built)
                 diagnose = functools.partial(failure_diagnostic, model=model, low=low,
                                              props=group, job=job)
                 ds, retry, bad = _after_failure(res, job, unit, vals, pending, failed, owner,
@@ -1032,7 +1045,7 @@ def check(model: ir.Model, props: Sequence[ir.Property], *, via: Via = "prism",
                     rest_errors[bad] = ds[0]  # no error if the complement is not used
                 if not _one_query(res):
                     raise CompileError([*errors, *ds, *kept(what, vals)],
-                                       partial(vals, secs, merged))
+                                       partial(vals, secs, merged or built))
                 for d in ds:
                     if d not in errors:  # a min and a max: one error
                         errors.append(d)
@@ -1074,7 +1087,9 @@ def check(model: ir.Model, props: Sequence[ir.Property], *, via: Via = "prism",
                     progress(f"the {what} is checked with the hybrid engine: "
                              + ("one query per Storm process" if split else
                                 "the other queries follow in one more Storm process"))
-        # merged is None only when every process failed (then `errors`)
+        # merged is None only when every process failed (then `errors`): the sizes a
+        # failed one reported, if any
+        merged = merged or built
         stats.append(None if merged is None else dataclasses.replace(
             merged, check_time=merged.check_time + lost,
             processes=merged.processes + lost_processes))

@@ -537,65 +537,68 @@ def sweep(path: str, variable: str, values: Sequence[Number], *, kind: Kind = "c
         tasks = [Task(xs=c, **base) for c in _chunks(values, parallel)]  # type: ignore[arg-type]
     name = variable if kind == "const" else "bound"
     finished: dict[int, tuple[list[SweepPoint], list[Diagnostic]]] = {}
-    try:
-        outcomes = _run(tasks, jobs, dask, progress, len(values), finished)
-    except KeyboardInterrupt as exc:
-        # The points of the chunks that finished are not lost: the CLI prints this note,
-        # instead of check()'s, which names the points' properties internally (NAME__atI).
-        got = [pt for i in sorted(finished) if not finished[i][1] for pt in finished[i][0]]
-        exc.__notes__ = []
-        errors = getattr(exc, "afsmc_errors", None)
-        if errors:
-            setattr(exc, "afsmc_errors", _user_words(errors))  # noqa: B010 -- for the CLI
-        for d in _kept(path, name, kind, got):
-            exc.add_note(d.message)
-        # for --json: the points as data (not check()'s, which has the internal names)
-        setattr(exc, "afsmc_partial", SweepResult(  # noqa: B010
-            path, name, kind, _type(got), got, [r.name for r in got[0].properties])
-            if got else None)
-        raise
-    except Exception as exc:
-        if not worker_died(exc):
-            raise
-        got = [pt for pts, diags in finished.values() if not diags for pt in pts]
-        raise CompileError([Diagnostic(
-            "E414", Severity.ERROR, f"a process of the sweep died before it finished: "
-            f"{len(got)} of {len(values)} points were evaluated", None,
-            hint="was it killed, or out of memory? --jobs 1 runs one point at a time; "
-                 "--max-states stops a model that is too large before it is built"),
-            *_kept(path, name, kind, got)]) from None
-    points: list[SweepPoint] = []
-    # each diagnostic once, with the points it came from (an error that does not depend on
-    # the value, say an undeclared label, came once per point: 37 copies for 0:900:25)
-    failed: dict[str, tuple[Diagnostic, list[str]]] = {}
-    in_part = any(pts and diags for pts, diags in outcomes)
-    for task, (pts, diags) in zip(tasks, outcomes, strict=True):
-        if diags:
+
+    def gathered() -> tuple[SweepResult | None, list[Diagnostic], list[Diagnostic]]:
+        """The tasks finished so far: a result of their points (in order; a failed task's
+        too, None where a query failed) and their errors, each with the points it covers
+        and once (an error that does not depend on the value, say an undeclared label,
+        came once per point: 37 copies for 0:900:25), and the note of the points as CSV."""
+        points: list[SweepPoint] = []
+        failed: dict[str, tuple[Diagnostic, list[str]]] = {}
+        for i in sorted(finished):
+            task, (pts, diags) = tasks[i], finished[i]
             where = (f"bounds {fmt(task.xs[0])}..{fmt(task.xs[-1])}" if kind != "const" else
                      f"{variable}={fmt(task.xs[0])}" if len(task.xs) == 1 else
                      f"{variable}={fmt(task.xs[0])}..{fmt(task.xs[-1])}")  # a shared model
             for d in diags:
                 key = json.dumps(d.to_json(), sort_keys=True)
                 failed.setdefault(key, (d, []))[1].append(where)
-        points += pts  # a failed task's too: what it answered (None where a query failed)
-    result = None
-    if points:
-        result = SweepResult(path, name, kind, _type(points),
-                             points, [r.name for r in points[0].properties],
-                             time.perf_counter() - t0)
-    if failed:
+            points += pts
+
         def at(wheres: list[str]) -> str:
             if len(wheres) == len(tasks) > 1:
                 return f"at every value of {variable}" if kind == "const" else \
                     "at every bound"
             return "at " + (", ".join(wheres) if len(wheres) <= 5 else
                             f"{', '.join(wheres[:5])} and {len(wheres) - 5} more")
-        # Every diagnostic names its points. The points evaluated, whole or in part, are
-        # kept: in the error (the CLI writes them as it would have written the result) and
-        # in a note, for whoever reads only the message.
-        raise CompileError([dataclasses.replace(d, message=f"{at(wheres)}: {d.message}")
-                            for d, wheres in failed.values()]
-                           + _kept(path, name, kind, points, in_part), result)
+        errors = [dataclasses.replace(d, message=f"{at(wheres)}: {d.message}")
+                  for d, wheres in failed.values()]
+        in_part = any(pts and diags for pts, diags in finished.values())
+        result = SweepResult(path, name, kind, _type(points), points,
+                             [r.name for r in points[0].properties],
+                             time.perf_counter() - t0) if points else None
+        return result, errors, _kept(path, name, kind, points, in_part)
+
+    try:
+        _run(tasks, jobs, dask, progress, len(values), finished)
+    except KeyboardInterrupt as exc:
+        # The points of the tasks that finished are not lost: the CLI prints the note and
+        # the errors, in place of check()'s (their properties have internal names, NAME__atI).
+        result, errors, notes = gathered()
+        exc.__notes__ = []
+        errors = [*_user_words(getattr(exc, "afsmc_errors", None) or []), *errors]
+        setattr(exc, "afsmc_errors", errors)  # noqa: B010 -- for the CLI
+        for d in notes:
+            exc.add_note(d.message)
+        setattr(exc, "afsmc_partial", result)  # noqa: B010 -- for --json, the points as data
+        raise
+    except Exception as exc:
+        if not worker_died(exc):
+            raise
+        result, errors, notes = gathered()
+        got = len(result.points) if result else 0
+        raise CompileError([Diagnostic(
+            "E414", Severity.ERROR, f"a process of the sweep died before it finished: "
+            f"{got} of {len(values)} points were evaluated", None,
+            hint="was it killed, or out of memory? --jobs 1 runs one point at a time; "
+                 "--max-states stops a model that is too large before it is built"),
+            *errors, *notes], result) from None
+    # Every error names its points. The points evaluated, whole or in part, are kept: in
+    # the error (the CLI writes them as it would have written the result) and in a note,
+    # for whoever reads only the message.
+    result, errors, notes = gathered()
+    if errors:
+        raise CompileError(errors + notes, result)
     assert result is not None  # every task returned points, or failed
     return result
 
@@ -681,9 +684,8 @@ def _kept(path: str, variable: str, kind: Kind, points: list[SweepPoint],
 
 
 def _run(tasks: list[Task], jobs: int, dask: Any, progress: Progress | None, total: int,
-         results: dict[int, tuple[list[SweepPoint], list[Diagnostic]]],
-         ) -> list[tuple[list[SweepPoint], list[Diagnostic]]]:
-    """Evaluate the tasks; `results` fills as they finish (a Ctrl-C keeps what it has)."""
+         results: dict[int, tuple[list[SweepPoint], list[Diagnostic]]]) -> None:
+    """Evaluate the tasks into `results`, as they finish (a Ctrl-C keeps what it has)."""
     start = time.monotonic()
     last = [0.0]
 
@@ -720,4 +722,3 @@ def _run(tasks: list[Task], jobs: int, dask: Any, progress: Progress | None, tot
             futs = {pool.submit(evaluate, t): i for i, t in enumerate(tasks)}
             for f in as_completed(futs):
                 done(futs[f], f.result())
-    return [results[i] for i in range(len(tasks))]
