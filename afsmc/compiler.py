@@ -6,6 +6,7 @@ collected, so a caller renders them once.
 
 from __future__ import annotations
 
+import contextlib
 import os
 import tempfile
 from collections.abc import Mapping
@@ -114,13 +115,28 @@ def check_writable(path: str, *, protect: tuple[str, ...] = ()) -> None:
         raise cannot(f"cannot create files in {directory} ({exc.strerror or exc})") from None
 
 
+def _umask() -> int:
+    """This process's umask, read without setting it (os.umask sets it, for every thread)."""
+    try:
+        with open("/proc/self/status", encoding="ascii") as f:
+            for line in f:
+                if line.startswith("Umask:"):
+                    return int(line.split()[1], 8)
+    except (OSError, ValueError):
+        pass
+    return 0o022
+
+
 def write_atomic(path: str, content: str | bytes, *, protect: tuple[str, ...] = (),
                  newline: str | None = "\n") -> None:
     """Write via a temporary file and rename, so a reader never sees half a file.
 
     Refuses to overwrite any of `protect` (the inputs). Text is written with `newline`
-    (None: as given). A file it replaces keeps its permission bits: an output made private
-    (chmod 640) or an input rewritten in place (`fmt`, `sim-check --update`)."""
+    (None: as given). A file it replaces keeps its permission bits and, where this process
+    may set them (root), its owner and group: an output made private (chmod 640) or an
+    input rewritten in place (`fmt`, `sim-check --update`; a `sudo afsmc fmt` must not
+    hand the user's file to root). The rename gives the path a new file, as `sed -i` does:
+    other hard links to the old one keep the old text."""
     refuse_inputs([path], protect)
     real = os.path.realpath(path)
     if os.path.exists(real) and not (os.path.isfile(real) or os.path.isdir(real)):
@@ -136,25 +152,35 @@ def write_atomic(path: str, content: str | bytes, *, protect: tuple[str, ...] = 
                                            None)]) from None
         return
     directory = os.path.dirname(real) or "."
-    tmp = os.path.join(directory, f".{os.path.basename(real)}.tmp{os.getpid()}")
+    tmp = ""
     try:
         os.makedirs(directory, exist_ok=True)
-        mode = os.stat(real).st_mode & 0o7777 if os.path.exists(real) else None
+        old = os.stat(real) if os.path.exists(real) else None
+        # A fresh name, created exclusively (mode 600): no other user's file or link in a
+        # shared directory is written through.
+        fd, tmp = tempfile.mkstemp(prefix=f".{os.path.basename(real)}.", suffix=".tmp",
+                                   dir=directory)
         if isinstance(content, bytes):
-            with open(tmp, "wb") as fb:
+            with open(fd, "wb") as fb:
                 fb.write(content)
                 fb.flush()
                 os.fsync(fb.fileno())
         else:
-            with open(tmp, "w", encoding="utf-8", newline="" if newline is None else newline) as f:
+            with open(fd, "w", encoding="utf-8", newline="" if newline is None else newline) as f:
                 f.write(content)
                 f.flush()
                 os.fsync(f.fileno())
-        if mode is not None:
-            os.chmod(tmp, mode)
+        if old is not None:
+            if (old.st_uid, old.st_gid) != (os.getuid(), os.getgid()):
+                # not root: the file becomes ours, as with any editor
+                with contextlib.suppress(PermissionError):
+                    os.chown(tmp, old.st_uid, old.st_gid)
+            os.chmod(tmp, old.st_mode & 0o7777)
+        else:  # a new file: the mode open() would give it (mkstemp's is 600)
+            os.chmod(tmp, 0o666 & ~_umask())
         os.replace(tmp, real)
     except OSError as exc:
-        if os.path.exists(tmp):
+        if tmp and os.path.exists(tmp):
             os.unlink(tmp)
         raise CompileError([Diagnostic("E003", Severity.ERROR,
                                        f"cannot write {path}: {exc.strerror or exc}", None)]) from None

@@ -8,6 +8,7 @@ source lines, and lines move) are stripped.
 from __future__ import annotations
 
 import io
+import os
 import re
 import sys
 from pathlib import Path
@@ -110,6 +111,39 @@ def test_in_place_keeps_the_permission_bits(tmp_path: Path) -> None:
         assert res.code == 0 and "reformatted" in res.err
         assert path.read_text() == format_text(MESSY)
         assert path.stat().st_mode & 0o7777 == mode
+
+
+@pytest.mark.skipif(os.geteuid() != 0, reason="only root can give a file to another user")
+def test_in_place_keeps_the_owner(tmp_path: Path) -> None:
+    """A `sudo afsmc fmt` in a user's checkout gave the file to root (review 18): with mode
+    640, its owner could then no longer read it."""
+    path = tmp_path / "theirs.afsm"
+    path.write_text(MESSY)
+    path.chmod(0o640)
+    os.chown(path, 65534, 65534)  # nobody
+    res = run_cli("fmt", str(path))
+    assert res.code == 0 and path.read_text() == format_text(MESSY), res.err
+    st = path.stat()
+    assert (st.st_uid, st.st_gid, st.st_mode & 0o7777) == (65534, 65534, 0o640)
+    assert [p.name for p in tmp_path.iterdir()] == ["theirs.afsm"]  # no temporary file left
+
+
+def test_a_new_output_gets_the_umask_mode(tmp_path: Path) -> None:
+    """The temporary file is created 600 (exclusively, under a fresh name); the output it
+    becomes has the mode a plain open() would give it."""
+    out = tmp_path / "out"
+    res = run_cli("compile", _messy(tmp_path), "-t", "prism", "-o", f"{out}/")
+    assert res.code == 0, res.err
+    mask = os.umask(0)
+    os.umask(mask)
+    assert {p.name: p.stat().st_mode & 0o777 for p in out.iterdir()} == {
+        "m.prism": 0o666 & ~mask, "m.props": 0o666 & ~mask}
+
+
+def _messy(tmp_path: Path) -> str:
+    path = tmp_path / "m.afsm"
+    path.write_text(MESSY)
+    return str(path)
 
 
 def test_in_place_keeps_crlf_line_endings(tmp_path: Path) -> None:
