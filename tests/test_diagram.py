@@ -407,7 +407,13 @@ def test_results_json_overlay(tmp_path: Path) -> None:
                       (json.dumps({**results, "constants": []}), '"constants" is not an object'),
                       (json.dumps({"properties": [{"name": "p", "value": 1},
                                                   {"name": "p", "value": 2}]}),
-                       "property p is listed twice")):
+                       "property p is listed twice"),
+                      # `afsmc simulate --json`: its estimates showed as n/a (review 18)
+                      (json.dumps({"runs": 100, "properties": [
+                          {"name": "finish", "estimate": 0.8, "low": 0.7, "high": 0.9}]}),
+                       "is the output of `afsmc simulate`"),
+                      (json.dumps({"properties": [{"name": "finish", "p": 0.8}]}),
+                       "no property has a min, max, uniform or value")):
         rj.write_text(bad)
         r = run_cli("diagram", str(EXAMPLES / "patrol.afsm"), "--results", str(rj), "-o",
                     str(out))

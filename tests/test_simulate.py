@@ -289,6 +289,10 @@ def test_json_shape() -> None:
     for p in data["properties"]:  # type: ignore[union-attr]
         assert set(p) >= {"name", "estimate", "low", "high"}
         assert isinstance(p["estimate"], float) and 0.0 <= p["low"] <= p["high"] <= 1.0
+    # which machine and instance, as verify --json names them (a saved result is traceable)
+    data = sim_json(PATROL, "--runs", "10", "--const", "CELLS=3")
+    assert (data["file"], data["machine"], data["constants"]) == \
+        (str(PATROL), "patrol", {"CELLS": 3, "ROUNDS": 3}), data
 
 
 
@@ -339,8 +343,22 @@ def test_the_header_names_the_resolution_only_for_a_model_with_intervals(tmp_pat
     r = run_cli("simulate", str(f), "--runs", "10", "--resolve", "floor")
     assert r.code == 0, r.err
     assert "plain.afsm: 10 runs, no interval constants, seed 0" in r.out, r.out
-    r = run_cli("simulate", str(PATROL), "--runs", "10", "--resolve", "floor")
-    assert "patrol.afsm: 10 runs, interval constants floor, seed 0" in r.out, r.out
+    for how, said in (("floor", "at their floor"), ("hi", "at their ceiling"),
+                      ("uniform", "uniform")):
+        r = run_cli("simulate", str(PATROL), "--runs", "10", "--resolve", how)
+        assert f"patrol.afsm: 10 runs, interval constants {said}, seed 0" in r.out, r.out
+
+
+def test_resolve_min_and_max_are_refused_with_the_reason() -> None:
+    """`--resolve min` meant always the floor, which on patrol.afsm gives the *larger*
+    probability of finishing (review 18): a user reading it as Pmin got Pmax's side.
+    lo/hi are the spellings of `compile --resolve`, and run the same as floor/ceil."""
+    for which in ("min", "max"):
+        r = run_cli("simulate", str(PATROL), "--runs", "10", "--resolve", which)
+        assert r.code == 2 and "cannot find the MDP's P" + which in r.err, r.err
+        assert "afsmc verify" in r.err and "Traceback" not in r.err
+    assert sim_json(PATROL, "--runs", "200", "--resolve", "lo")["properties"] == \
+        sim_json(PATROL, "--runs", "200", "--resolve", "floor")["properties"]
 
 
 def test_a_worker_that_dies_is_a_diagnostic_not_an_internal_error() -> None:

@@ -138,6 +138,15 @@ def read_results(path: str, model: ir.Model) -> Overlay:
         raise _error("E611", f"{path} is the output of `afsmc sweep`, a value per point: the "
                      "diagram takes one result per property",
                      hint="pass the output of `afsmc verify --json` at the constants drawn")
+    if "runs" in data or any("estimate" in e for e in data["properties"]):
+        # its numbers would show as n/a: they are estimates, not min/max/uniform/value
+        raise _error("E611", f"{path} is the output of `afsmc simulate`, estimates with "
+                     "confidence intervals: the diagram shows the values Storm computes",
+                     hint="pass the output of `afsmc verify --json`")
+    if data["properties"] and not any(k in e for e in data["properties"]
+                                      for k in ("min", "max", "uniform", "value")):
+        raise _error("E611", f"{path}: no property has a min, max, uniform or value",
+                     hint="pass the output of `afsmc verify --json`")
     machine = data.get("machine")
     if isinstance(machine, str) and machine != model.name:
         raise _error("E611", f"{path} holds the results of machine {machine}, not {model.name}",

@@ -42,9 +42,11 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--runs", type=int, default=100_000, metavar="N",
                    help="number of runs (default 100000)")
     add_seed(p)
-    p.add_argument("--resolve", choices=STRATEGIES, default="uniform",
-                   help="interval constants: uniform floor/ceil choice (default), always floor "
-                        "or ceil; min/max = floor/ceil (a fixed strategy, not the MDP optimum)")
+    p.add_argument("--resolve", type=_strategy, default="uniform",
+                   metavar="{" + ",".join(STRATEGIES) + "}",
+                   help="interval constants: uniform floor/ceil choice (default), or always "
+                        "the floor (floor, lo) or the ceiling (ceil, hi): one fixed strategy; "
+                        "`afsmc verify` gives the MDP's min and max")
     p.add_argument("--confidence", type=float, default=0.999, metavar="C",
                    help="confidence level of the intervals (default 0.999)")
     p.add_argument("--max-steps", type=int, default=100_000, metavar="K",
@@ -118,7 +120,8 @@ def run(args: argparse.Namespace) -> int:
                 last[0] = pct // 10
                 print(f"simulate: {done}/{total} runs ({pct}%)", file=sys.stderr)
 
-        intervals = program(job).model.is_nondeterministic
+        model = program(job).model
+        intervals = model.is_nondeterministic
         out = simulate(job, args.runs, args.seed, confidence=args.confidence, jobs=args.jobs,
                        dask=args.dask, trace=args.traces, batch_size=args.batch_size,
                        progress=progress)
@@ -138,7 +141,8 @@ def run(args: argparse.Namespace) -> int:
                                              if args.dask else None)]),
                     args.json, wrapped=True)
     if args.json:
-        print_json(_json(out, args))
+        print_json(_json(out, args, model.name,
+                         {c.name: c.value for c in model.constants if c.is_param}))
     else:
         _print(out, args, intervals)
     return 0
@@ -150,8 +154,24 @@ def _num(v: float) -> Any:
     return v if math.isfinite(v) else ("inf" if v > 0 else "-inf")
 
 
-def _json(out: Outcome, args: argparse.Namespace) -> dict[str, Any]:
+def _strategy(text: str) -> str:
+    if text in ("min", "max"):
+        raise argparse.ArgumentTypeError(
+            f"{text!r}: a simulation follows one fixed strategy and cannot find the MDP's "
+            f"P{text} over the interval choices; `afsmc verify` gives it. For every interval "
+            "at its floor or its ceiling, use lo or hi")
+    if text not in STRATEGIES:
+        raise argparse.ArgumentTypeError(
+            f"invalid choice: {text!r} (choose from {', '.join(STRATEGIES)})")
+    return text
+
+
+def _json(out: Outcome, args: argparse.Namespace, machine: str,
+          constants: dict[str, object]) -> dict[str, Any]:
     return {
+        "file": args.file,  # which machine and instance, as verify --json says them
+        "machine": machine,
+        "constants": constants,
         "runs": out.runs,
         "seed": args.seed,
         "resolve": args.resolve,
@@ -168,7 +188,9 @@ def _print(out: Outcome, args: argparse.Namespace, intervals: bool) -> None:
         print(_traces_text(out.traces))
     name = os.path.basename(args.file)
     # --resolve means nothing to a model without interval constants: do not suggest it did
-    resolved = f"interval constants {args.resolve}" if intervals else "no interval constants"
+    how = {"floor": "at their floor", "lo": "at their floor", "ceil": "at their ceiling",
+           "hi": "at their ceiling"}.get(args.resolve, args.resolve)
+    resolved = f"interval constants {how}" if intervals else "no interval constants"
     print(f"{name}: {out.runs} runs, {resolved}, seed {args.seed}, "
           f"{args.confidence:g} confidence")
     width = max([len(e.name) for e in out.estimates] + [8])
