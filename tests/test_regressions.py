@@ -140,6 +140,33 @@ def test_two_operands_in_a_row_outside_a_property_are_not_called_nested_temporal
     assert "E115" not in r.err and "E103" not in r.err
 
 
+@pytest.mark.parametrize(("formula", "column"), [
+    ("P=? [ F F mode == Dock ]", 11), ("P=? [ F F true ]", 11), ('P=? [ F F !"done" ]', 11),
+    ("P=? [ F F (cell == 1) ]", 9), ("P=? [ cell == 1 U F mode == Dock ]", 21),
+    ("P=? [ F<=3 G<=2 true ]", 17)])
+def test_a_nested_operator_before_a_keyword_or_bracket_is_e115(formula: str,
+                                                               column: int) -> None:
+    """The inner operator lexes as a name when no label follows it: the error was E116
+    ("missing ';' at the end of the outcome") or E233 ("unknown function 'F'"), review 18."""
+    from tests.conftest import EXAMPLES, run_cli
+
+    r = run_cli("verify", str(EXAMPLES / "patrol.afsm"), "--formula", formula)
+    assert r.code == 1 and f"--formula:1:{column}: error[E115]: temporal operators" in r.err, \
+        r.err
+
+
+def test_mode_equals_is_taken_for_a_comparison(tmp_path: Path) -> None:
+    """`when mode = A` (PRISM's spelling) gave a bare "unexpected '='", where `x = 1` got E103."""
+    from tests.conftest import run_cli
+
+    for line in ("action Go in A when mode = A { goto B; }", "label l = mode = B;"):
+        path = tmp_path / "m.afsm"
+        path.write_text("machine m;\nvar x : [0..2] init 0;\nmode A = 0 initial;\n"
+                        f"mode B = 1 final;\n{line}\n", encoding="utf-8")
+        r = run_cli("check", str(path))
+        assert r.code == 1 and "error[E103]: '=' is not a comparison" in r.err, r.err
+
+
 def test_verify_of_an_empty_file_names_the_file(tmp_path: Path) -> None:
     # E213 had no file:1:1 in verify (check had it), with or without --formula.
     from tests.conftest import run_cli

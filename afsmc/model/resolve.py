@@ -783,6 +783,13 @@ class _Resolver:
                                hint="w(...) names an action or a hazard with a condition (when)")
                 return self._placeholder(s)
             return E.WeightRef(target.text, s)
+        if f in ("F", "G", "X") and ctx.labels:
+            # `P=? [ F F (x == 1) ]`: the inner operator reads as a call
+            self.rep.error("E115", "temporal operators (F, G, X, U) do not nest: one applies "
+                           "to state formulas (labels, comparisons, and/or/not of them)",
+                           e.func.span, hint=f"the {f} here stands inside another temporal "
+                           "operator's formula; write one operator per property")
+            return self._placeholder(s)
         if f not in E.FUNCTIONS:
             self.rep.error("E233", f"unknown function '{f}'", e.func.span,
                            hint=did_you_mean(f, [*E.FUNCTIONS, "w"]) or

@@ -25,6 +25,9 @@ _TOKEN_NAMES = {
     "__ANON_0": "'..'", "$END": "end of file", "DOT": "'.'", "STAR": "'*'",
 }
 
+_E115 = ("E115", "temporal operators (F, G, X, U) do not nest: one applies to state formulas "
+                "(labels, comparisons, and/or/not of them)")
+
 # Common mistakes, each learnt from examples (lark's match_examples): the parser
 # state where an example fails identifies the mistake, whatever the names in it.
 _EXAMPLES: dict[tuple[str, str], list[str]] = {
@@ -67,9 +70,10 @@ _EXAMPLES: dict[tuple[str, str], list[str]] = {
         "formula f = x = 1;",
         "action A in S when x = 1 { skip; }",
         "action A in S weight x = 1 { skip; }",
+        "action A in S when mode = A { skip; }",  # PRISM's own spelling
+        "label a = mode = A;",
     ],
-    ("E115", "temporal operators (F, G, X, U) do not nest: one applies to state formulas "
-             "(labels, comparisons, and/or/not of them)"): [
+    _E115: [
         'property p = P=? [ F F "l" ];',
         'property p = P=? [ X X "l" ];',
         'property p = P=? [ G F "l" ];',
@@ -335,6 +339,9 @@ def _scan(text: str, upto: int) -> _Scan:
 # A temporal operator (F, G, X, possibly step-bounded) right before a position
 _TEMPORAL_BEFORE = re.compile(r"\b[FGX](?:\s*<=\s*[\w.]+)?\s*$")
 # ... in brackets at the start of a path formula: `[ (F` (`F (F` is a nested one)
+# ... right after another one, or after U (`F F mode == B`, `a U F true`): the inner
+# operator lexes as a name when no label follows it, and the parser fails on what follows
+_NESTED_TEMPORAL = re.compile(r"\b[FGXU](?:\s*<=\s*[\w.]+)?\s+[FGX](?:\s*<=\s*[\w.]+)?\s*$")
 _BRACKETED_TEMPORAL = re.compile(r"\[\s*(?:\(\s*)+[FGX](?:\s*<=\s*[\w.]+)?\s*$")
 
 
@@ -379,6 +386,8 @@ def _report_syntax_error(exc: UnexpectedInput, source: Source, reporter: Reporte
                        hint=f"write '{op}({value} {rest})'")
         return
     matched = _match_example(exc)
+    if scan.open and scan.open[-1][0] == "[" and _NESTED_TEMPORAL.search(text, 0, pos):
+        matched = _E115
     if matched is not None and matched[0] == "E115" and not _TEMPORAL_BEFORE.search(
             text, 0, pos):
         # The parser state is the one after any operand (`label a = x "l";`): only a
