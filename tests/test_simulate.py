@@ -59,7 +59,7 @@ SMALL = {"OBJ": "1", "WIDTH": "2"}  # a small instance keeps Storm's build quick
     (PATROL, {}, 20_000, "uniform", "uniform"),
     (MISSION, SMALL, 20_000, "uniform", "uniform"),
     (MISSION, SMALL, 10_000, "floor", "lo"),
-    (MISSION, SMALL, 10_000, "max", "hi"),
+    (MISSION, SMALL, 10_000, "hi", "hi"),
     (WEIGHTS, {}, 20_000, "uniform", "uniform"),
 ])
 def test_interval_contains_storm_value(path: Path, consts: dict[str, str], runs: int,
@@ -347,6 +347,26 @@ def test_the_header_names_the_resolution_only_for_a_model_with_intervals(tmp_pat
                       ("uniform", "uniform")):
         r = run_cli("simulate", str(PATROL), "--runs", "10", "--resolve", how)
         assert f"patrol.afsm: 10 runs, interval constants {said}, seed 0" in r.out, r.out
+
+
+def test_runs_that_cannot_end_say_why(tmp_path: Path) -> None:
+    """A loop whose final mode is unreachable: every run is undecided at --max-steps, and
+    "raise --max-steps" could never help (review 18). The check's warnings are shown, as
+    verify shows them, and the note names W602 instead."""
+    f = tmp_path / "loop.afsm"
+    f.write_text("machine loop;\nmode A = 0 initial;\nmode B = 1;\nmode Z = 2 final;\n"
+                 "action Go in A { goto B; }\naction Back in B { goto A; }\n"
+                 "property p = P=? [ F mode == Z ];\nrewards r { true : 1; }\n"
+                 'property c = R{"r"}=? [ F mode == Z ];\n')
+    r = run_cli("simulate", str(f), "--runs", "20", "--max-steps", "50")
+    assert r.code == 0, r.err
+    assert "warning[W602]" in r.err and "warning[W601]" in r.err, r.err
+    lines = {line.split()[0]: line for line in r.out.splitlines()[1:]}
+    assert "20 undecided at --max-steps; some modes cannot reach an end (W602)" in lines["p"]
+    assert "raise" not in r.out, r.out
+    data = sim_json(f, "--runs", "20", "--max-steps", "50")
+    assert {w["code"] for w in data["warnings"]} == {"W601", "W602"}, data["warnings"]
+    assert sim_json(PATROL, "--runs", "10")["warnings"] == []
 
 
 def test_resolve_min_and_max_are_refused_with_the_reason() -> None:

@@ -19,8 +19,9 @@ from afsmc.commands.common import (
     fail,
     overrides,
     print_json,
+    report,
 )
-from afsmc.compiler import check_writable, read_source, write_atomic
+from afsmc.compiler import check_writable, load, read_source, write_atomic
 from afsmc.diagnostics import CompileError, Diagnostic, Severity
 from afsmc.sim.compile import SimError
 from afsmc.sim.run import (
@@ -122,6 +123,12 @@ def run(args: argparse.Namespace) -> int:
 
         model = program(job).model
         intervals = model.is_nondeterministic
+        # the check's warnings, as verify shows them: W602 (a mode the mission cannot end
+        # from) is why runs stay undecided whatever --max-steps
+        warnings = [d for d in load(args.file, overrides(args), text=text).diagnostics
+                    if d.severity is Severity.WARNING]
+        if not args.json:
+            report(warnings)
         out = simulate(job, args.runs, args.seed, confidence=args.confidence, jobs=args.jobs,
                        dask=args.dask, trace=args.traces, batch_size=args.batch_size,
                        progress=progress)
@@ -142,9 +149,9 @@ def run(args: argparse.Namespace) -> int:
                     args.json, wrapped=True)
     if args.json:
         print_json(_json(out, args, model.name,
-                         {c.name: c.value for c in model.constants if c.is_param}))
+                         {c.name: c.value for c in model.constants if c.is_param}, warnings))
     else:
-        _print(out, args, intervals)
+        _print(out, args, intervals, endless=any(d.code == "W602" for d in warnings))
     return 0
 
 
@@ -167,7 +174,7 @@ def _strategy(text: str) -> str:
 
 
 def _json(out: Outcome, args: argparse.Namespace, machine: str,
-          constants: dict[str, object]) -> dict[str, Any]:
+          constants: dict[str, object], warnings: list[Diagnostic]) -> dict[str, Any]:
     return {
         "file": args.file,  # which machine and instance, as verify --json says them
         "machine": machine,
@@ -180,10 +187,11 @@ def _json(out: Outcome, args: argparse.Namespace, machine: str,
                         "high": _num(e.high), "undecided": e.undecided}
                        for e in out.estimates],
         **({"traces": out.traces} if args.traces else {}),  # as --traces-out writes them
+        "warnings": [d.to_json() for d in warnings],
     }
 
 
-def _print(out: Outcome, args: argparse.Namespace, intervals: bool) -> None:
+def _print(out: Outcome, args: argparse.Namespace, intervals: bool, endless: bool) -> None:
     if args.traces:
         print(_traces_text(out.traces))
     name = os.path.basename(args.file)
@@ -196,11 +204,16 @@ def _print(out: Outcome, args: argparse.Namespace, intervals: bool) -> None:
     width = max([len(e.name) for e in out.estimates] + [8])
     for e in out.estimates:
         why = [f"{e.undecided} undecided at --max-steps"] if e.undecided else []
+        if e.undecided and endless:
+            # more steps cannot help a run that is in a mode it cannot end from
+            why.append("some modes cannot reach an end (W602): `afsmc verify` gives the "
+                       "exact value")
         if e.no_spread:
             raise_ = [o for o, short in (("--runs", out.runs < 2),
-                                         ("--max-steps", e.undecided > 0)) if short]
-            why.append(f"no interval from fewer than 2 finished runs: raise "
-                       f"{' and '.join(raise_)}")
+                                         ("--max-steps", e.undecided > 0 and not endless))
+                      if short]
+            why.append("no interval from fewer than 2 finished runs" + (
+                f": raise {' and '.join(raise_)}" if raise_ else ""))
         value = "n/a" if math.isnan(e.estimate) else f"{e.estimate:.6g}"
         note = f"  ({'; '.join(why)})" if why else ""
         print(f"  {e.name.ljust(width)}  {value}  [{e.low:.6g}, {e.high:.6g}]{note}")
