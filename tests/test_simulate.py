@@ -369,6 +369,49 @@ def test_runs_that_cannot_end_say_why(tmp_path: Path) -> None:
     assert sim_json(PATROL, "--runs", "10")["warnings"] == []
 
 
+def test_merged_moments_equal_one_pass_over_all_values() -> None:
+    """Batches and chunks of runs are merged by their (count, sum, squared deviations):
+    the same as numpy over all values at once, even at a mean of 3e9."""
+    import numpy as np
+
+    from afsmc.sim.engine import merge_moments
+
+    rng = np.random.default_rng(1)
+    vals = 3e9 + rng.random(1000) * 1e-3
+    count, total, m2 = [0], [0.0], [0.0]
+    for chunk in np.split(vals, [1, 7, 300, 301, 999]):
+        merge_moments(count, total, m2, 0, chunk)
+    assert count[0] == 1000 and total[0] == pytest.approx(float(np.sum(vals)), rel=1e-15)
+    # (at 3e9 a double holds 7 digits of the 0.001s: agreement to 1e-3 where the sum of
+    # squares, at 9e18 +- 2048 per value, keeps none)
+    assert m2[0] == pytest.approx(float(np.sum((vals - vals.mean()) ** 2)), rel=1e-3)
+    again = [0], [0.0], [0.0]  # groups merged as batches are
+    merge_moments(*again, 0, (400, float(np.sum(vals[:400])),
+                              float(np.sum((vals[:400] - vals[:400].mean()) ** 2))))
+    merge_moments(*again, 0, vals[400:])
+    assert again[2][0] == pytest.approx(m2[0], rel=1e-3)
+
+
+def test_a_large_reward_keeps_a_narrow_interval(tmp_path: Path) -> None:
+    """3e9 plus a geometric number of 0.001s: sum(x^2)/m - mean^2 lost every digit of the
+    variance, and the 99.9% interval was +-2.6 wide for a standard error of 1e-5 (review 18).
+    It must hold Storm's value and be about as narrow as the spread says."""
+    f = tmp_path / "big.afsm"
+    f.write_text("machine big;\nmode S = 0 initial;\nmode A = 1;\nmode Z = 2 final;\n"
+                 "action Start in S { goto A; }\naction Go in A { 0.5: goto Z; 0.5: skip; }\n"
+                 "rewards r { [Start] true : 3000000000; [Go] true : 0.001; }\n"
+                 'property c = R{"r"}=? [ F mode == Z ];\n')
+    exact = run(str(f), isolate=False).property("c").value
+    assert exact == pytest.approx(3e9 + 0.002, abs=1e-6)
+    [c] = sim_json(f, "--runs", "10000")["properties"]  # type: ignore[misc]
+    assert c["low"] <= exact <= c["high"], (c, exact)
+    # the runs' standard deviation is 0.0014: a half-width of 3.3 * 0.0014 / 100
+    assert c["high"] - c["low"] < 2e-4, c
+    # and verify's table shows the digits that differ (it said 3e+09)
+    r = run_cli("verify", str(f))
+    assert r.code == 0 and " 3000000000.002\n" in r.out, r.out
+
+
 def test_resolve_min_and_max_are_refused_with_the_reason() -> None:
     """`--resolve min` meant always the floor, which on patrol.afsm gives the *larger*
     probability of finishing (review 18): a user reading it as Pmin got Pmax's side.

@@ -92,6 +92,8 @@ def num(v: float | None) -> str:
         return "-"
     if v != v or v in (float("inf"), float("-inf")):
         return str(v)
+    if abs(v) >= 1e5:  # an expected reward of 3000000000.002 read "3e+09"
+        return f"{v:.4f}".rstrip("0").rstrip(".")
     return f"{v:.6g}"
 
 

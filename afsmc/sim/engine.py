@@ -162,11 +162,36 @@ class BatchResult:
     true: list[int]  # per monitor: runs where the property holds (P)
     undecided: list[int]
     total: list[float]  # per monitor: sum of rewards (R) over decided runs
-    total_sq: list[float]
+    # R: sum of squared deviations from their mean (not the sum of squares: with rewards of
+    # 3e9 +- 0.001, sum(x^2)/m - mean^2 cancels to noise of about 1e3)
+    m2: list[float]
     infinite: list[int]  # R: runs with an infinite reward
     steps: int  # run-steps simulated
     max_steps_hit: int
     traces: list[list[dict[str, Any]]] = field(default_factory=list)
+
+
+def merge_moments(count: list[int], total: list[float], m2: list[float], k: int,
+                  vals: npt.NDArray[np.float64] | tuple[int, float, float]) -> None:
+    """Add values (or another group's (count, total, m2)) to group k's count, sum and sum
+    of squared deviations from the mean, exactly as one pass over all of them would (Chan
+    et al.'s pairwise update: stable, and independent of the mean's magnitude)."""
+    if isinstance(vals, tuple):
+        n_b, s_b, m2_b = vals
+    else:
+        n_b = len(vals)
+        s_b = float(np.sum(vals))
+        m2_b = float(np.sum((vals - s_b / n_b) ** 2)) if n_b else 0.0
+    if n_b == 0:
+        return
+    n_a = count[k]
+    if n_a:
+        delta = s_b / n_b - total[k] / n_a
+        m2[k] += m2_b + delta * delta * n_a * n_b / (n_a + n_b)
+    else:
+        m2[k] = m2_b
+    count[k] += n_b
+    total[k] += s_b
 
 
 def _as_bool(v: Any, n: int) -> npt.NDArray[np.bool_]:
@@ -194,7 +219,8 @@ def simulate_batch(prog: Program, runs: int, rng: np.random.Generator, max_steps
     n_true = [0] * nm
     n_und = [0] * nm
     tot = [0.0] * nm
-    tot_sq = [0.0] * nm
+    m2 = [0.0] * nm
+    n_fin = [0] * nm  # R: finite values so far, for merge_moments
     n_inf = [0] * nm
     absorbed = np.zeros(n, dtype=bool)
     traces: list[list[dict[str, Any]]] = [[] for _ in range(min(trace, n))]
@@ -307,9 +333,7 @@ def simulate_batch(prog: Program, runs: int, rng: np.random.Generator, max_steps
                 vals = acc[k][done][st != UNDECIDED]
                 inf = np.isinf(vals)
                 n_inf[k] += int(np.count_nonzero(inf))
-                fin = vals[~inf]
-                tot[k] += float(np.sum(fin))
-                tot_sq[k] += float(np.sum(fin * fin))
+                merge_moments(n_fin, tot, m2, k, vals[~inf])
         keep = ~done
         ids = ids[keep]
         status = status[:, keep]
@@ -448,9 +472,8 @@ def simulate_batch(prog: Program, runs: int, rng: np.random.Generator, max_steps
             vals = acc[k][~und]
             inf = np.isinf(vals)
             n_inf[k] += int(np.count_nonzero(inf))
-            tot[k] += float(np.sum(vals[~inf]))
-            tot_sq[k] += float(np.sum(vals[~inf] ** 2))
-    return BatchResult(runs, n_true, n_und, tot, tot_sq, n_inf, steps_done, hit, traces)
+            merge_moments(n_fin, tot, m2, k, vals[~inf])
+    return BatchResult(runs, n_true, n_und, tot, m2, n_inf, steps_done, hit, traces)
 
 
 def _gather(state: dict[str, npt.NDArray[Any]], idx: npt.NDArray[np.intp] | None,

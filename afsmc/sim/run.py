@@ -23,7 +23,7 @@ from afsmc.lifetime import die_with_parent, worker_died
 from afsmc.model.lower import lower
 from afsmc.sim import stats
 from afsmc.sim.compile import SimError
-from afsmc.sim.engine import BatchResult, Program, build, simulate_batch
+from afsmc.sim.engine import BatchResult, Program, build, merge_moments, simulate_batch
 
 Strategy = Literal["uniform", "floor", "ceil", "lo", "hi"]
 STRATEGIES: tuple[Strategy, ...] = ("uniform", "floor", "ceil", "lo", "hi")
@@ -176,8 +176,11 @@ def combine(prog: Program, results: list[BatchResult], confidence: float) -> lis
             continue
         inf = sum(r.infinite[k] for r in results)
         m = n - und - inf
-        total = sum(r.total[k] for r in results)
-        sq = sum(r.total_sq[k] for r in results)
+        count, sums, m2 = [0], [0.0], [0.0]
+        for r in results:  # the batches' moments, merged in batch order (deterministic)
+            merge_moments(count, sums, m2, 0,
+                          (r.runs - r.undecided[k] - r.infinite[k], r.total[k], r.m2[k]))
+        total = sums[0]
         if inf:
             out.append(Estimate(mo.name, "R", math.inf, math.inf, math.inf, und))
             continue
@@ -187,7 +190,7 @@ def combine(prog: Program, results: list[BatchResult], confidence: float) -> lis
             # A sample variance needs two values: one run says nothing about the spread.
             out.append(Estimate(mo.name, "R", mean, floor, math.inf, und, no_spread=True))
             continue
-        var = max(sq / m - mean * mean, 0.0) * m / (m - 1)
+        var = m2[0] / (m - 1)
         z = stats.normal_quantile(0.5 + confidence / 2)
         half = z * math.sqrt(var / m)
         # An undecided run's reward is only known to be at least its partial sum.
