@@ -74,6 +74,24 @@ def test_a_wrong_constant_fails_at_its_line(tmp_path: Path) -> None:
     assert r.err.count("E502") == 1  # only that constant
 
 
+def test_too_few_runs_are_not_called_consistent(tmp_path: Path) -> None:
+    """--runs 2 called [7, 9] "consistent" with a simulation whose samples were both below
+    7 (review 18): at that many runs the rule's quantiles are unbounded, so nothing can be
+    rejected. That is W503 and "too few runs", exit 0; --update changes nothing."""
+    path, _, wrong = _drifted(tmp_path)
+    r = run_cli("sim-check", str(path), "--runs", "2", "--update")
+    assert r.code == 0, r.err
+    assert re.search(r"^T_AP\s.*too few runs$", r.out, flags=re.M), r.out
+    assert "warning[W503]: constant 'T_AP': 2 runs of 'uav.approach.duration' are too few" \
+        in r.err and "raise --runs" in r.err, r.err
+    assert path.read_bytes() == wrong.encode()
+    data = json.loads(run_cli("sim-check", str(path), "--runs", "2", "--json").out)
+    verdicts = {c["name"]: c["verdict"] for c in data["constants"]}
+    assert verdicts["T_AP"] == "inconclusive", verdicts
+    # at the default, the same constant is judged
+    assert run_cli("sim-check", str(path)).code == 1
+
+
 def test_json_carries_the_drift_and_errors_are_one_object(tmp_path: Path) -> None:
     """--json: the drifted constant's E502 is in the object (it went nowhere before), and
     an error that stops sim-check is {"diagnostics": [...]}, as for verify and simulate."""

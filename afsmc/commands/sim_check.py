@@ -95,6 +95,12 @@ def run(args: argparse.Namespace) -> int:
         except CompileError as exc:  # E003: the file cannot be written (it is left as it was)
             return fail(exc, args.json, wrapped=True)
         updated = True
+    # Nothing to reject at this many runs: said, rather than called consistent.
+    few = [Diagnostic(
+        "W503", Severity.WARNING, f"constant '{e.name}': {e.runs} runs of '{e.ref}' are too "
+        f"few to judge it (the rule accepts {e.accept})", by_name[e.name].span,
+        hint="raise --runs: the quantiles of the rule need more samples to be bounded")
+        for e in results if e.inconclusive]
     diags = unfit + ([] if updated else [Diagnostic(
         "E502", Severity.ERROR,
         f"constant '{e.name}' = {e.declared} has drifted from simulation '{e.ref}' "
@@ -105,7 +111,7 @@ def run(args: argparse.Namespace) -> int:
         print_json({"file": args.file, "runs": args.runs, "seed": args.seed,
                     "updated": [e.name for e in drifted] if updated else [],
                     "constants": [e.to_json() for e in results],
-                    "diagnostics": [d.to_json() for d in diags]})
+                    "diagnostics": [d.to_json() for d in diags + few]})
     else:
         _table(results)
     if not sourced:
@@ -114,11 +120,9 @@ def run(args: argparse.Namespace) -> int:
     if updated:
         print(f"sim-check: updated {len(drifted)} constant(s) in {args.file}: "
               + ", ".join(f"{e.name} = {e.suggestion}" for e in drifted), file=sys.stderr)
-    if diags:
-        if not args.json:
-            report(diags)
-        return 1
-    return 0
+    if (diags or few) and not args.json:
+        report(diags + few)
+    return 1 if diags else 0
 
 
 def _today() -> str:
@@ -141,11 +145,14 @@ def _table(results: list[Evidence]) -> None:
         hull = f"[{e.hull[0]}, {e.hull[1]}]" if e.hull else "-"
         rows.append((e.name, e.ref, e.declared, f"{e.mean:.4g}",
                      f"[{e.mean_low:.4g}, {e.mean_high:.4g}]", cdf, hull,
-                     "consistent" if e.consistent else "DRIFTED"))
+                     {"inconclusive": "too few runs", "drifted": "DRIFTED"}.get(e.verdict,
+                                                                               e.verdict)))
     widths = [max(len(r[i]) for r in rows) for i in range(len(head))]
     for r in rows:
         print("  ".join(cell.ljust(w) for cell, w in zip(r, widths, strict=True)).rstrip())
     conf = {e.confidence for e in results}
-    print(f"\n{len(results)} constant(s), {sum(not e.consistent for e in results)} drifted; "
+    few = sum(e.inconclusive for e in results)
+    print(f"\n{len(results)} constant(s), {sum(not e.consistent for e in results)} drifted"
+          + (f", {few} with too few runs to judge" if few else "") + "; "
           f"{results[0].runs} runs, seed {results[0].seed}, confidence "
           + ", ".join(f"{c:g}" for c in sorted(conf)))

@@ -42,6 +42,14 @@ class Evidence:
     confidence: float
     coverage: float | None
     fits: bool = True  # the rule accepts `suggestion` (an int rule's range may hold no integer)
+    # Consistent, but with too few runs to bound what the rule accepts (a quantile's
+    # interval reaches infinity): nothing could have been rejected there, so not called so.
+    inconclusive: bool = False
+
+    @property
+    def verdict(self) -> str:
+        return "inconclusive" if self.inconclusive else \
+            "consistent" if self.consistent else "drifted"
 
     def to_json(self) -> dict[str, object]:
         return {
@@ -50,7 +58,7 @@ class Evidence:
             "mean": self.mean, "mean_low": self.mean_low, "mean_high": self.mean_high,
             "cdf_lo": self.cdf_lo, "cdf_hi": self.cdf_hi,
             "hull": list(self.hull) if self.hull else None, "accept": self.accept,
-            "verdict": "consistent" if self.consistent else "drifted",
+            "verdict": self.verdict,
             "suggestion": self.suggestion if self.fits else None,
             "confidence": self.confidence, "coverage": self.coverage,
         }
@@ -114,7 +122,8 @@ def judge(const: ir.Constant, runs: int, seed: int) -> Evidence:
     cdf_hi = float(np.searchsorted(xs, hi, side="right")) / n
     return Evidence(const.name, ref, kind, pol.shape, f"[{lo}, {hi}]", runs, seed, mean, low,
                     high, cdf_lo, cdf_hi, hull, accept, ok, f"[{hull[0]}, {hull[1]}]", conf, c,
-                    accepted(*hull))
+                    accepted(*hull),
+                    inconclusive=ok and not all(math.isfinite(v) for v in (*lo_ok, *hi_ok)))
 
 
 # ---- rewriting the file ------------------------------------------------------------
