@@ -62,8 +62,8 @@ class _Parser(argparse.ArgumentParser):
             except UnicodeDecodeError as exc:
                 self.error(f"the argument file {name!r} is not text ({exc.reason} at "
                            f"byte {exc.start})")
-            except OSError:
-                pass  # argparse says it
+            except OSError as exc:  # argparse would print the bare "[Errno 2] ..."
+                self.error(f"cannot read the argument file {name!r}: {exc.strerror or exc}")
         if not files:
             return super()._read_args_from_files(arg_strings)
         # Expanding one list at a time: the files of this list are the ones being read for
@@ -105,7 +105,11 @@ def build_parser() -> argparse.ArgumentParser:
                            fromfile_prefix_chars="@")
         mod.add_arguments(p)
         p.set_defaults(_run=mod.run)
+        commands[name] = p
     return parser
+
+
+commands: dict[str, argparse.ArgumentParser] = {}  # each command's parser, by name
 
 
 def _run(args: argparse.Namespace) -> int:
@@ -127,7 +131,11 @@ def _run(args: argparse.Namespace) -> int:
 
 def main(argv: Sequence[str] | None = None) -> int:
     parser = build_parser()
-    args = parser.parse_args(argv)
+    args, extra = parser.parse_known_args(argv)
+    if extra:
+        # argparse says it with the top-level usage; the command's own is the one that helps
+        where = commands.get(getattr(args, "command", None) or "", parser)
+        where.error(f"unrecognized arguments: {' '.join(extra)}")
     if not getattr(args, "command", None):
         parser.print_help(sys.stderr)
         return 2

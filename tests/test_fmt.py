@@ -146,6 +146,20 @@ def _messy(tmp_path: Path) -> str:
     return str(path)
 
 
+def test_diff_shows_the_change_and_writes_nothing(tmp_path: Path) -> None:
+    """`fmt --diff` (review 18: --check could not show what would change)."""
+    path = tmp_path / "messy.afsm"
+    path.write_text(MESSY)
+    r = run_cli("fmt", "--diff", str(path))
+    assert r.code == 0 and path.read_text() == MESSY, r.err
+    assert r.out.startswith(f"--- {path} (as it is)\n+++ {path} (formatted)\n"), r.out
+    assert "\n-var x:[0..2] init 0;\n" in r.out and "\n+var x : [0..2] init 0;\n" in r.out
+    assert run_cli("fmt", "--diff", "--check", str(path)).code == 1
+    path.write_text(format_text(MESSY))
+    r = run_cli("fmt", "--diff", "--check", str(path))
+    assert (r.code, r.out) == (0, ""), r.out
+
+
 def test_in_place_keeps_crlf_line_endings(tmp_path: Path) -> None:
     """A CRLF file is rewritten with CRLF (as `sim-check --update` keeps them); LF stays LF;
     line endings alone do not make a file unformatted."""

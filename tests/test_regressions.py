@@ -167,6 +167,37 @@ def test_mode_equals_is_taken_for_a_comparison(tmp_path: Path) -> None:
         assert r.code == 1 and "error[E103]: '=' is not a comparison" in r.err, r.err
 
 
+def test_check_takes_several_files_and_standard_input(tmp_path: Path) -> None:
+    """`check a.afsm b.afsm` was a usage error and `check -` E001, though `fmt` takes both
+    (review 18). One report for all of them; exit 1 if any has an error."""
+    import subprocess
+    import sys
+
+    from tests.conftest import CASES, EXAMPLES, run_cli
+
+    good = [str(EXAMPLES / "patrol.afsm"), str(EXAMPLES / "uav.afsm")]
+    assert run_cli("check", *good).code == 0
+    bad = CASES / "err_weight_tie" / "input.afsm"
+    r = run_cli("check", *good, str(bad), str(tmp_path / "none.afsm"))
+    assert r.code == 1 and "error[E301]" in r.err and "error[E001]" in r.err, r.err
+    r = subprocess.run([sys.executable, "-m", "afsmc", "check", "-"], input=bad.read_text(),
+                       capture_output=True, text=True, timeout=120)
+    assert r.returncode == 1 and "<stdin>:6:43: error[E301]" in r.stderr, r.stderr
+
+
+def test_a_usage_error_shows_the_command_s_usage() -> None:
+    """An unknown option of a command printed afsmc's top-level usage (review 18); a missing
+    argument file printed a bare '[Errno 2] ...'."""
+    from tests.conftest import EXAMPLES, run_cli
+
+    r = run_cli("fmt", "--nope", str(EXAMPLES / "patrol.afsm"))
+    assert r.code == 2 and "usage: afsmc fmt" in r.err and \
+        "afsmc fmt: error: unrecognized arguments: --nope" in r.err, r.err
+    r = run_cli("verify", str(EXAMPLES / "patrol.afsm"), "@no-such.args")
+    assert r.code == 2 and "cannot read the argument file 'no-such.args': No such file" in \
+        r.err and "Errno" not in r.err, r.err
+
+
 def test_verify_of_an_empty_file_names_the_file(tmp_path: Path) -> None:
     # E213 had no file:1:1 in verify (check had it), with or without --formula.
     from tests.conftest import run_cli

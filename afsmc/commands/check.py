@@ -1,27 +1,36 @@
-"""`afsmc check FILE`: report every problem of a file; exit 1 if any is an error."""
+"""`afsmc check FILE...`: report every problem of each file; exit 1 if any is an error.
+`-` reads standard input (as `fmt -` does)."""
 
 from __future__ import annotations
 
 import argparse
+import sys
 
-from afsmc.commands.common import add_consts, add_file, fail, overrides, report
+from afsmc.commands.common import add_consts, overrides, report
 from afsmc.compiler import load
-from afsmc.diagnostics import CompileError
+from afsmc.diagnostics import CompileError, Diagnostic, Severity
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
-    add_file(p)
+    p.add_argument("files", nargs="+", metavar="FILE",
+                   help="the .afsm files ('-': standard input)")
     add_consts(p)
     p.add_argument("--json", action="store_true", help="print diagnostics as JSON")
     p.add_argument("--werror", action="store_true", help="treat warnings as errors")
 
 
 def run(args: argparse.Namespace) -> int:
-    try:
-        checked = load(args.file, overrides(args))
-    except CompileError as exc:
-        return fail(exc, args.json)
-    report(checked.diagnostics, args.json)
-    if args.werror and checked.diagnostics:
+    # Every file's diagnostics, in the order of the files: one report (one JSON list).
+    diags: list[Diagnostic] = []
+    for path in args.files:
+        try:
+            if path == "-":
+                diags += load("<stdin>", overrides(args), text=sys.stdin.read()).diagnostics
+            else:
+                diags += load(path, overrides(args)).diagnostics
+        except CompileError as exc:
+            diags += exc.diagnostics
+    report(diags, args.json)
+    if any(d.severity is Severity.ERROR for d in diags) or (args.werror and diags):
         return 1
     return 0

@@ -1,4 +1,4 @@
-"""`afsmc fmt FILE... [--check]`: rewrite .afsm files in the canonical layout.
+"""`afsmc fmt FILE... [--check] [--diff]`: rewrite .afsm files in the canonical layout.
 
 Files are rewritten in place, atomically; `-` reads standard input and prints the result.
 A file that does not parse is left untouched and its syntax error is reported.
@@ -9,6 +9,7 @@ endings alone never make a file "not formatted".
 from __future__ import annotations
 
 import argparse
+import difflib
 import sys
 
 from afsmc.commands.common import report
@@ -21,6 +22,9 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("files", nargs="+", metavar="FILE", help="the .afsm files ('-': standard input)")
     p.add_argument("--check", action="store_true",
                    help="change nothing; list the files that are not formatted and exit 1 if any")
+    p.add_argument("--diff", action="store_true",
+                   help="change nothing; print what would change as a unified diff (with "
+                        "--check, also exit 1 if anything would)")
 
 
 def run(args: argparse.Namespace) -> int:
@@ -34,7 +38,14 @@ def run(args: argparse.Namespace) -> int:
             report(exc.diagnostics)
             status = 1
             continue
-        if args.check:
+        if args.diff:
+            name = "<stdin>" if path == "-" else path
+            sys.stdout.writelines(difflib.unified_diff(
+                text.splitlines(keepends=True), out.splitlines(keepends=True),
+                f"{name} (as it is)", f"{name} (formatted)"))
+            if args.check and out != text:
+                status = 1
+        elif args.check:
             if out != text:
                 print(path)
                 status = 1
