@@ -155,6 +155,33 @@ def test_prism_output_is_deterministic_and_golden(stem: str, update_golden: bool
     assert first.out == golden.read_text()
 
 
+def test_compile_to_stdout_marks_where_the_properties_begin(tmp_path: Path) -> None:
+    """`-o -` printed the model and its properties back to back (review 18): split at the
+    marked line, each part is what Storm reads from the two files."""
+    import stormpy
+
+    r = run_cli("compile", str(EXAMPLES / "patrol.afsm"), "-o", "-")
+    assert r.code == 0, r.err
+    model, props = r.out.split("\n// ---- patrol.props\n")
+    written = run_cli("compile", str(EXAMPLES / "patrol.afsm"), "-o", f"{tmp_path}/")
+    assert written.code == 0, written.err
+    assert model == (tmp_path / "patrol.prism").read_text()
+    assert props == (tmp_path / "patrol.props").read_text()
+    program = stormpy.parse_prism_program(str(tmp_path / "patrol.prism"))
+    assert len(stormpy.parse_properties(props, program)) == props.count(";")
+
+
+def test_compile_replaces_only_an_output_suffix(tmp_path: Path) -> None:
+    """`-o out/patrol.cells-4` wrote out/patrol.prism: '.cells-4' was taken for a suffix."""
+    src = str(EXAMPLES / "patrol.afsm")
+    for given, written in (("patrol.cells-4", "patrol.cells-4"), ("m.prism", "m"),
+                           ("n.props", "n"), ("plain", "plain")):
+        r = run_cli("compile", src, "-o", str(tmp_path / given))
+        assert r.code == 0, r.err
+        assert (tmp_path / f"{written}.prism").exists() and \
+            (tmp_path / f"{written}.props").exists(), (given, sorted(tmp_path.iterdir()))
+
+
 def test_compile_writes_files_and_never_overwrites_its_input(tmp_path: Path) -> None:
     src = tmp_path / "patrol.afsm"
     src.write_text((EXAMPLES / "patrol.afsm").read_text())
