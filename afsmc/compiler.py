@@ -13,7 +13,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 
 from afsmc import check
-from afsmc.diagnostics import CompileError, Diagnostic, Reporter, Severity
+from afsmc.diagnostics import CompileError, Diagnostic, Reporter, Severity, Source, Span
 from afsmc.model import ir
 from afsmc.model.lower import Lowered, Resolution, lower
 from afsmc.model.reduce import Reductions, reduce
@@ -32,10 +32,26 @@ def read_source(path: str, *, newline: str | None = None) -> str:
         raise CompileError([_io_error(path, "no such file")]) from None
     except IsADirectoryError:
         raise CompileError([_io_error(path, "is a directory, not an .afsm file")]) from None
-    except UnicodeDecodeError:
-        raise CompileError([_io_error(path, "is not UTF-8 text")]) from None
+    except UnicodeDecodeError as exc:
+        raise CompileError([_not_utf8(path, exc)]) from None
     except OSError as exc:
         raise CompileError([_io_error(path, exc.strerror or str(exc))]) from None
+
+
+def _not_utf8(path: str, exc: UnicodeDecodeError) -> Diagnostic:
+    """E001 at the first byte that is not UTF-8, with its line (an editor saved it as
+    Latin-1, say): the text before it decodes, the byte is shown as U+FFFD."""
+    try:
+        with open(path, "rb") as f:
+            raw = f.read()
+    except OSError:
+        return _io_error(path, "is not UTF-8 text")
+    source = Source(path, raw.decode("utf-8", errors="replace"))
+    at = len(raw[:exc.start].decode("utf-8", errors="replace"))
+    return Diagnostic("E001", Severity.ERROR, f"cannot read {path}: byte 0x{raw[exc.start]:02x} "
+                      "is not UTF-8 text", Span.at_offset(source, at),
+                      hint="save the file as UTF-8 (it may be Latin-1 or another 8-bit "
+                           "encoding)")
 
 
 def _io_error(path: str, why: str) -> Diagnostic:

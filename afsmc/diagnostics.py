@@ -250,7 +250,8 @@ def _excerpt(span: Span, paint: object) -> list[str]:
         return []
     gutter = str(span.line)
     start = min(span.column - 1, len(text))
-    end = span.end_column - 1 if span.end_line == span.line else start + 1
+    # a span over several lines: underlined to the end of its first line
+    end = span.end_column - 1 if span.end_line == span.line else len(text.rstrip())
     end = min(max(end, start + 1), max(len(text), start + 1))
     # The caret sits under the characters as a terminal draws them (columns, not characters).
     caret = " " * _cells(text[:start]) + "^" * max(1, _cells(text[start:end]))

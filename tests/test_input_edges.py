@@ -324,3 +324,15 @@ def test_results_that_cannot_reach_stdout_are_e003(command: list[str], stdout: s
     assert r.returncode == 1, r.stderr
     assert f"error[E003]: cannot write to standard output: {why}" in r.stderr, r.stderr
     assert "Traceback" not in r.stderr and "internal error" not in r.stderr
+
+
+def test_a_byte_that_is_not_utf8_is_shown_at_its_line(tmp_path: Path) -> None:
+    """A Latin-1 'é' gave E001 "is not UTF-8 text" with no line or column (review 18)."""
+    from tests.conftest import run_cli
+
+    path = tmp_path / "lat.afsm"
+    path.write_bytes(b"machine m;\n// caf\xe9\nmode A = 0 initial;\n")
+    r = run_cli("check", str(path))
+    assert r.code == 1 and f"{path}:2:7: error[E001]: cannot read {path}: byte 0xe9 is not " \
+        "UTF-8 text" in r.err, r.err
+    assert "save the file as UTF-8" in r.err and "Traceback" not in r.err
