@@ -133,8 +133,12 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser = build_parser()
     args, extra = parser.parse_known_args(argv)
     if extra:
-        # argparse says it with the top-level usage; the command's own is the one that helps
-        where = commands.get(getattr(args, "command", None) or "", parser)
+        # argparse says it with the top-level usage; the command's own is the one that
+        # helps, unless the argument came before the command's name
+        given = list(sys.argv[1:] if argv is None else argv)
+        command = getattr(args, "command", None) or ""
+        at = given.index(command) if command in given else 0
+        where = commands.get(command, parser) if extra[0] not in given[:at] else parser
         where.error(f"unrecognized arguments: {' '.join(extra)}")
     if not getattr(args, "command", None):
         parser.print_help(sys.stderr)

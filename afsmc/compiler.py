@@ -38,14 +38,23 @@ def read_source(path: str, *, newline: str | None = None) -> str:
         raise CompileError([_io_error(path, exc.strerror or str(exc))]) from None
 
 
-def _not_utf8(path: str, exc: UnicodeDecodeError) -> Diagnostic:
+def decode_source(raw: bytes, path: str) -> str:
+    """Bytes read elsewhere (standard input) as read_source reads a file: UTF-8, or E001."""
+    try:
+        return raw.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        raise CompileError([_not_utf8(path, exc, raw)]) from None
+
+
+def _not_utf8(path: str, exc: UnicodeDecodeError, raw: bytes | None = None) -> Diagnostic:
     """E001 at the first byte that is not UTF-8, with its line (an editor saved it as
     Latin-1, say): the text before it decodes, the byte is shown as U+FFFD."""
-    try:
-        with open(path, "rb") as f:
-            raw = f.read()
-    except OSError:
-        return _io_error(path, "is not UTF-8 text")
+    if raw is None:
+        try:
+            with open(path, "rb") as f:
+                raw = f.read()
+        except OSError:
+            return _io_error(path, "is not UTF-8 text")
     source = Source(path, raw.decode("utf-8", errors="replace"))
     at = len(raw[:exc.start].decode("utf-8", errors="replace"))
     return Diagnostic("E001", Severity.ERROR, f"cannot read {path}: byte 0x{raw[exc.start]:02x} "
@@ -188,15 +197,20 @@ def write_atomic(path: str, content: str | bytes, *, protect: tuple[str, ...] = 
                 os.fsync(f.fileno())
         if old is not None:
             if (old.st_uid, old.st_gid) != (os.getuid(), os.getgid()):
-                # not root: the file becomes ours, as with any editor
-                with contextlib.suppress(PermissionError):
+                try:
                     os.chown(tmp, old.st_uid, old.st_gid)
+                except PermissionError:  # not root: ours, with its group if we are in it
+                    with contextlib.suppress(PermissionError):
+                        os.chown(tmp, -1, old.st_gid)
             os.chmod(tmp, old.st_mode & 0o7777)
         else:  # a new file: the mode open() would give it (mkstemp's is 600)
             os.chmod(tmp, 0o666 & ~_umask())
         os.replace(tmp, real)
-    except OSError as exc:
+    except BaseException as exc:
+        # no temporary file left behind, whatever stopped the write (a Ctrl-C too)
         if tmp and os.path.exists(tmp):
             os.unlink(tmp)
+        if not isinstance(exc, OSError):
+            raise
         raise CompileError([Diagnostic("E003", Severity.ERROR,
                                        f"cannot write {path}: {exc.strerror or exc}", None)]) from None

@@ -140,6 +140,21 @@ def test_a_new_output_gets_the_umask_mode(tmp_path: Path) -> None:
         "m.prism": 0o666 & ~mask, "m.props": 0o666 & ~mask}
 
 
+def test_a_stopped_write_leaves_no_temporary_file(tmp_path: Path,
+                                                  monkeypatch: pytest.MonkeyPatch) -> None:
+    """A Ctrl-C during the write left `.NAME.XXXX.tmp` behind (review 19): only an OSError
+    removed it."""
+    from afsmc.compiler import write_atomic
+
+    def stop(fd: int) -> None:
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(os, "fsync", stop)
+    with pytest.raises(KeyboardInterrupt):
+        write_atomic(str(tmp_path / "out.prism"), "text\n")
+    assert list(tmp_path.iterdir()) == []
+
+
 def _messy(tmp_path: Path) -> str:
     path = tmp_path / "m.afsm"
     path.write_text(MESSY)
@@ -158,6 +173,19 @@ def test_diff_shows_the_change_and_writes_nothing(tmp_path: Path) -> None:
     path.write_text(format_text(MESSY))
     r = run_cli("fmt", "--diff", "--check", str(path))
     assert (r.code, r.out) == (0, ""), r.out
+    # a last line without its newline is marked, so that the patch applies (review 19)
+    path.write_text(MESSY.rstrip("\n"))
+    r = run_cli("fmt", "--diff", str(path))
+    assert "-action Stay in A when x==2 { skip; }\n\\ No newline at end of file\n" in r.out
+    patched = tmp_path / "patched.afsm"
+    patched.write_text(MESSY.rstrip("\n"))
+    import shutil
+    import subprocess
+    if shutil.which("patch"):
+        done = subprocess.run(["patch", "-s", str(patched)], input=r.out, text=True,
+                              capture_output=True, timeout=60)
+        assert done.returncode == 0, done.stderr + done.stdout
+        assert patched.read_text() == format_text(MESSY)
 
 
 def test_in_place_keeps_crlf_line_endings(tmp_path: Path) -> None:

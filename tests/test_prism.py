@@ -162,7 +162,7 @@ def test_compile_to_stdout_marks_where_the_properties_begin(tmp_path: Path) -> N
 
     r = run_cli("compile", str(EXAMPLES / "patrol.afsm"), "-o", "-")
     assert r.code == 0, r.err
-    model, props = r.out.split("\n// ---- patrol.props\n")
+    model, props = r.out.split("\n// ==== patrol.props\n")
     written = run_cli("compile", str(EXAMPLES / "patrol.afsm"), "-o", f"{tmp_path}/")
     assert written.code == 0, written.err
     assert model == (tmp_path / "patrol.prism").read_text()
@@ -180,6 +180,11 @@ def test_compile_replaces_only_an_output_suffix(tmp_path: Path) -> None:
         assert r.code == 0, r.err
         assert (tmp_path / f"{written}.prism").exists() and \
             (tmp_path / f"{written}.props").exists(), (given, sorted(tmp_path.iterdir()))
+    # a target of one file takes the name as given (review 19: x.json became x.json.jani)
+    for target, given, written in (("jani", "x.json", "x.json"), ("jani", "y", "y.jani"),
+                                   ("dot", "g.gv", "g.gv"), ("dot", "h.svg", "h.svg")):
+        r = run_cli("compile", src, "-t", target, "-o", str(tmp_path / given))
+        assert r.code == 0 and (tmp_path / written).exists(), (given, r.err)
 
 
 def test_compile_writes_files_and_never_overwrites_its_input(tmp_path: Path) -> None:

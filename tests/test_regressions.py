@@ -183,6 +183,12 @@ def test_check_takes_several_files_and_standard_input(tmp_path: Path) -> None:
     r = subprocess.run([sys.executable, "-m", "afsmc", "check", "-"], input=bad.read_text(),
                        capture_output=True, text=True, timeout=120)
     assert r.returncode == 1 and "<stdin>:6:43: error[E301]" in r.stderr, r.stderr
+    # standard input is read as strictly as a file (review 19), and only once
+    b = subprocess.run([sys.executable, "-m", "afsmc", "check", "-"],
+                       input=b"machine m;\nmode A\xe9 = 0 initial;\n", capture_output=True,
+                       timeout=120)
+    assert b.returncode == 1 and b"<stdin>:2:7: error[E001]" in b.stderr, b.stderr
+    assert run_cli("check", "-", "-").code == 2
 
 
 def test_a_usage_error_shows_the_command_s_usage() -> None:
@@ -193,6 +199,8 @@ def test_a_usage_error_shows_the_command_s_usage() -> None:
     r = run_cli("fmt", "--nope", str(EXAMPLES / "patrol.afsm"))
     assert r.code == 2 and "usage: afsmc fmt" in r.err and \
         "afsmc fmt: error: unrecognized arguments: --nope" in r.err, r.err
+    r = run_cli("--nope", "fmt", str(EXAMPLES / "patrol.afsm"))  # before the command: afsmc's
+    assert r.code == 2 and "afsmc: error: unrecognized arguments: --nope" in r.err, r.err
     r = run_cli("verify", str(EXAMPLES / "patrol.afsm"), "@no-such.args")
     assert r.code == 2 and "cannot read the argument file 'no-such.args': No such file" in \
         r.err and "Errno" not in r.err, r.err

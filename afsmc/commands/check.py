@@ -6,8 +6,8 @@ from __future__ import annotations
 import argparse
 import sys
 
-from afsmc.commands.common import add_consts, overrides, report
-from afsmc.compiler import load
+from afsmc.commands.common import add_consts, overrides, report, usage_error
+from afsmc.compiler import decode_source, load
 from afsmc.diagnostics import CompileError, Diagnostic, Severity
 
 
@@ -20,12 +20,15 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    if args.files.count("-") > 1:
+        usage_error("'-' (standard input) is given more than once")
     # Every file's diagnostics, in the order of the files: one report (one JSON list).
     diags: list[Diagnostic] = []
     for path in args.files:
         try:
-            if path == "-":
-                diags += load("<stdin>", overrides(args), text=sys.stdin.read()).diagnostics
+            if path == "-":  # strictly UTF-8, as a file is read
+                text = decode_source(sys.stdin.buffer.read(), "<stdin>")
+                diags += load("<stdin>", overrides(args), text=text).diagnostics
             else:
                 diags += load(path, overrides(args)).diagnostics
         except CompileError as exc:

@@ -47,9 +47,9 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("-t", "--target", default="prism", choices=sorted(available_targets()),
                    help="output language (default: prism)")
     p.add_argument("-o", "--output", metavar="DIR|FILE",
-                   help="output directory, or file name (a suffix such as .prism is replaced "
-                        "per output); default: the current directory; '-' prints to stdout "
-                        "(PRISM: the model, then '// ---- NAME.props' and the properties)")
+                   help="output directory, or file name (PRISM: a suffix such as .prism is "
+                        "replaced by each file's); default: the current directory; '-' prints to stdout "
+                        "(PRISM: the model, then '// ==== NAME.props' and the properties)")
     add_consts(p)
     add_resolve(p)
     add_reductions(p)
@@ -60,14 +60,16 @@ def outputs_for(path: str, output: str | None, suffixes: list[str]) -> dict[str,
     if output is None or os.path.isdir(output) or output.endswith(os.sep):
         directory = output or "."
         return {s: os.path.join(directory, stem + s) for s in suffixes}
-    # Only an output's own suffix is replaced: `-o out/patrol.cells-4` is not `out/patrol`.
     base, ext = os.path.splitext(output)
+    if len(suffixes) == 1 and ext:
+        return {suffixes[0]: output}  # one file (JANI, DOT): the name as given, x.json or g.gv
+    # Only an output's own suffix is replaced: `-o out/patrol.cells-4` is not `out/patrol`.
     if ext not in (*suffixes, *KNOWN_SUFFIXES):
         base = output
     return {s: base + s for s in suffixes}
 
 
-KNOWN_SUFFIXES = (".prism", ".props", ".pm", ".nm", ".jani", ".dot", ".gv")
+KNOWN_SUFFIXES = (".prism", ".props", ".pm", ".nm")  # PRISM's, replaced by its two files
 
 
 def run(args: argparse.Namespace) -> int:
@@ -87,7 +89,7 @@ def run(args: argparse.Namespace) -> int:
             stem = os.path.splitext(os.path.basename(args.file))[0]
             for i, (suffix, text) in enumerate(files.items()):
                 if i:  # where one file ends and the next begins (PRISM: model, properties)
-                    sys.stdout.write(f"\n// ---- {stem}{suffix}\n")
+                    sys.stdout.write(f"\n// ==== {stem}{suffix}\n")
                 sys.stdout.write(text)
             return 0
         paths = outputs_for(args.file, args.output, list(files))

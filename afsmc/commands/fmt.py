@@ -40,9 +40,13 @@ def run(args: argparse.Namespace) -> int:
             continue
         if args.diff:
             name = "<stdin>" if path == "-" else path
-            sys.stdout.writelines(difflib.unified_diff(
-                text.splitlines(keepends=True), out.splitlines(keepends=True),
-                f"{name} (as it is)", f"{name} (formatted)"))
+            for line in difflib.unified_diff(
+                    text.splitlines(keepends=True), out.splitlines(keepends=True),
+                    f"{name} (as it is)", f"{name} (formatted)"):
+                # a last line without its newline, marked as diff marks it (else it ran into
+                # the next line of the patch)
+                sys.stdout.write(line if line.endswith("\n") else
+                                 line + "\n\\ No newline at end of file\n")
             if args.check and out != text:
                 status = 1
         elif args.check:

@@ -17,6 +17,7 @@ from afsmc.commands.common import (
     add_seed,
     dask_address,
     fail,
+    num,
     overrides,
     print_json,
     report,
@@ -205,18 +206,17 @@ def _print(out: Outcome, args: argparse.Namespace, intervals: bool, endless: boo
     for e in out.estimates:
         why = [f"{e.undecided} undecided at --max-steps"] if e.undecided else []
         if e.undecided and endless:
-            # more steps cannot help a run that is in a mode it cannot end from
-            why.append("some modes cannot reach an end (W602): `afsmc verify` gives the "
-                       "exact value")
+            # more steps cannot help a run in a mode it cannot end from (but may help others)
+            why.append("some modes cannot reach an end (W602), where more steps do not "
+                       "help; `afsmc verify` gives the exact value")
         if e.no_spread:
             raise_ = [o for o, short in (("--runs", out.runs < 2),
-                                         ("--max-steps", e.undecided > 0 and not endless))
-                      if short]
-            why.append("no interval from fewer than 2 finished runs" + (
-                f": raise {' and '.join(raise_)}" if raise_ else ""))
-        value = "n/a" if math.isnan(e.estimate) else f"{e.estimate:.6g}"
+                                         ("--max-steps", e.undecided > 0)) if short]
+            why.append(f"no interval from fewer than 2 finished runs: raise "
+                       f"{' and '.join(raise_)}")
+        value = "n/a" if math.isnan(e.estimate) else num(e.estimate)
         note = f"  ({'; '.join(why)})" if why else ""
-        print(f"  {e.name.ljust(width)}  {value}  [{e.low:.6g}, {e.high:.6g}]{note}")
+        print(f"  {e.name.ljust(width)}  {value}  [{num(e.low)}, {num(e.high)}]{note}")
     if not out.estimates:
         print("  (no properties declared)")
     rate = out.runs / out.seconds * 60 if out.seconds > 0 else 0.0

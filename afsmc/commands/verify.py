@@ -13,6 +13,7 @@ from afsmc.commands.common import (
     add_file,
     add_reductions,
     fail,
+    num,
     overrides,
     reductions,
     report,
@@ -85,16 +86,6 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     add_storm_options(p)
     p.add_argument("--json", action="store_true",
                    help="print one JSON object: model, properties, timings")
-
-
-def num(v: float | None) -> str:
-    if v is None:
-        return "-"
-    if v != v or v in (float("inf"), float("-inf")):
-        return str(v)
-    if abs(v) >= 1e5:  # an expected reward of 3000000000.002 read "3e+09"
-        return f"{v:.4f}".rstrip("0").rstrip(".")
-    return f"{v:.6g}"
 
 
 def table(rows: list[list[str]], right: set[int]) -> list[str]:
