@@ -362,8 +362,8 @@ def test_runs_that_cannot_end_say_why(tmp_path: Path) -> None:
     assert r.code == 0, r.err
     assert "warning[W602]" in r.err and "warning[W601]" in r.err, r.err
     lines = {line.split()[0]: line for line in r.out.splitlines()[1:]}
-    assert "20 undecided at --max-steps; some modes cannot reach an end (W602), where more " \
-        "steps do not help" in lines["p"], lines
+    assert "20 undecided at --max-steps; some modes cannot reach an end (W602): a run there " \
+        "may stay undecided whatever --max-steps" in lines["p"], lines
     data = sim_json(f, "--runs", "20", "--max-steps", "50")
     assert {w["code"] for w in data["warnings"]} == {"W601", "W602"}, data["warnings"]
     assert sim_json(PATROL, "--runs", "10")["warnings"] == []

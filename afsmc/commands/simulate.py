@@ -206,9 +206,10 @@ def _print(out: Outcome, args: argparse.Namespace, intervals: bool, endless: boo
     for e in out.estimates:
         why = [f"{e.undecided} undecided at --max-steps"] if e.undecided else []
         if e.undecided and endless:
-            # more steps cannot help a run in a mode it cannot end from (but may help others)
-            why.append("some modes cannot reach an end (W602), where more steps do not "
-                       "help; `afsmc verify` gives the exact value")
+            # a run in a mode it cannot end from may never be decided (more steps may still
+            # help the others, and a target inside the loop)
+            why.append("some modes cannot reach an end (W602): a run there may stay "
+                       "undecided whatever --max-steps; `afsmc verify` gives the exact value")
         if e.no_spread:
             raise_ = [o for o, short in (("--runs", out.runs < 2),
                                          ("--max-steps", e.undecided > 0)) if short]
