@@ -22,11 +22,12 @@ from afsmc.commands.common import (
     print_json,
     report,
 )
-from afsmc.compiler import check_writable, load, read_source, write_atomic
+from afsmc.compiler import check_writable, read_source, write_atomic
 from afsmc.diagnostics import CompileError, Diagnostic, Severity
 from afsmc.sim.compile import SimError
 from afsmc.sim.run import (
     BATCH,
+    LOWERING,
     MAX_BATCH_SIZE,
     MAX_BATCHES,
     STRATEGIES,
@@ -126,8 +127,7 @@ def run(args: argparse.Namespace) -> int:
         intervals = model.is_nondeterministic
         # the check's warnings, as verify shows them: W602 (a mode the mission cannot end
         # from) is why runs stay undecided whatever --max-steps
-        warnings = [d for d in load(args.file, overrides(args), text=text).diagnostics
-                    if d.severity is Severity.WARNING]
+        warnings = [d for d in program(job).diagnostics if d.severity is Severity.WARNING]
         if not args.json:
             report(warnings)
         out = simulate(job, args.runs, args.seed, confidence=args.confidence, jobs=args.jobs,
@@ -197,8 +197,8 @@ def _print(out: Outcome, args: argparse.Namespace, intervals: bool, endless: boo
         print(_traces_text(out.traces))
     name = os.path.basename(args.file)
     # --resolve means nothing to a model without interval constants: do not suggest it did
-    how = {"floor": "at their floor", "lo": "at their floor", "ceil": "at their ceiling",
-           "hi": "at their ceiling"}.get(args.resolve, args.resolve)
+    how = {"lo": "at their floor", "hi": "at their ceiling"}.get(LOWERING[args.resolve],
+                                                                  args.resolve)
     resolved = f"interval constants {how}" if intervals else "no interval constants"
     print(f"{name}: {out.runs} runs, {resolved}, seed {args.seed}, "
           f"{args.confidence:g} confidence")

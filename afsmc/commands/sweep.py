@@ -176,10 +176,6 @@ def _failed_in_part(exc: CompileError, res: SweepResult, write: Callable[[SweepR
     except CompileError as bad:  # the outputs could not be written: the note keeps the points
         return fail(CompileError([*bad.diagnostics, *exc.diagnostics], res), args.json,
                     wrapped=True)
-    if args.json:
-        print(json.dumps(res.to_json() | {"diagnostics": [d.to_json() for d in diags]},
-                         indent=2))
-        return 1
-    if to_stdout or (not args.output and not args.plot):
+    if not args.json and (to_stdout or (not args.output and not args.plot)):
         sys.stdout.write(res.to_csv())
-    return fail(CompileError(diags))
+    return fail(CompileError(diags, res), args.json, wrapped=True)  # --json: points as data

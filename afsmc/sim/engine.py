@@ -15,6 +15,7 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
+from afsmc.diagnostics import Diagnostic
 from afsmc.model import expr as E
 from afsmc.model import ir
 from afsmc.model.bounds import bounds
@@ -74,6 +75,8 @@ class Program:
     monitors: list[Monitor]
     state_rewards: list[list[tuple[Fn, Fn]]]  # per structure: (guard, value)
     commands: list[Any]  # Lowered.commands
+    # the check's warnings and notes on the model (sim.run.program sets them), for the CLI
+    diagnostics: list[Diagnostic] = field(default_factory=list)
 
 
 def build(low: Lowered) -> Program:

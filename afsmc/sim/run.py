@@ -81,6 +81,7 @@ def program(job: Job) -> Program:
     if prog is None:
         checked = load(job.path, dict(job.overrides), text=job.text)
         prog = build(lower(checked.model, LOWERING[job.strategy]))  # type: ignore[arg-type]
+        prog.diagnostics = checked.diagnostics
         _PROGRAMS.clear()
         _PROGRAMS[job] = prog
     return prog
