@@ -498,3 +498,28 @@ def test_the_storm_child_allocates_in_huge_pages(monkeypatch: pytest.MonkeyPatch
     with child_environment():
         assert os.environ["GLIBC_TUNABLES"] == "glibc.malloc.arena_max=2:glibc.malloc.hugetlb=1"
     assert os.environ["GLIBC_TUNABLES"] == "glibc.malloc.arena_max=2"
+
+
+@pytest.mark.parametrize("via", ["prism", "jani"])
+def test_a_negative_expected_reward_is_the_same_on_every_engine(tmp_path: Path,
+                                                                via: str) -> None:
+    """The symbolic engines read the initial state's value, not the largest value over all
+    states counted with the 0 of states outside the filter: that turned -2 into 0. The
+    oracle is the sparse engine, and the hand count of the rewards along the one path."""
+    path = tmp_path / "neg.afsm"
+    path.write_text(
+        "machine neg;\nvar v : [0..3] init 0;\nmode A initial;\nmode B final;\n"
+        "action Go in A when v < 3 { v += 1; }\naction Stop in A when v == 3 { goto B; }\n"
+        "rewards r { true : v - 2; }\n"
+        "property total = R{\"r\"}=? [ F mode == B ];\n"
+        "property first = R{\"r\"}=? [ C<=2 ];\n"
+        "property reach = P=? [ F v == 2 ];\n")
+    sparse = run(str(path), engine="sparse", via=via, isolate=False)
+    # the states v = 0, 1, 2, 3 in A are left once each: -2 - 1 + 0 + 1
+    assert sparse.property("total").value == pytest.approx(-2.0, abs=1e-12)
+    assert sparse.property("first").value == pytest.approx(-3.0, abs=1e-12)
+    for engine in ("hybrid", "dd"):
+        res = run(str(path), engine=engine, via=via, isolate=False)
+        for name in ("total", "first", "reach"):
+            assert res.property(name).value == pytest.approx(
+                sparse.property(name).value, abs=1e-9), (engine, name)

@@ -295,8 +295,10 @@ def _execute(job: Job, notify: Notify) -> JobResult:
         try:
             if symbolic:
                 r = stormpy.model_checking(model, prop, only_initial_states=True, engine=engine)
-                # The value of the initial state, not the maximum over all states.
-                value = None if r is None else stormpy.filter_initial_states(r, model).get_max()
+                # The value of the (one) initial state: not the maximum over all states, and
+                # not the filtered result's get_max, which counts the 0 of every state outside
+                # the filter (a negative expected reward came out as 0).
+                value = None if r is None else stormpy.filter_initial_states(r, model).average()
             else:
                 r = stormpy.model_checking(model, prop)
                 value = r.get_value(model.initial_states[0])
