@@ -626,3 +626,35 @@ def test_a_failed_query_of_a_shared_model_is_named_as_the_user_wrote_it(tmp_path
     part = info.value.partial
     assert part.curve("reach", "value") == exact.curve("reach", "value"), part.points
     assert part.curve("nxt", "value") == [None, None, None]
+
+
+def test_a_bool_constant_is_swept_over_false_and_true(tmp_path: Path) -> None:
+    """`--const FLAG=false,true` sweeps a bool param; each point equals a verify run at that
+    value (the oracle), and the CSV, the JSON and verify's footer write the values as the
+    language does. --bound and mixed lists are refused as usage errors."""
+    p = tmp_path / "flag.afsm"
+    p.write_text("machine flag;\nparam bool FAST;\nvar c : [0..4] init 0;\nmode A initial;\n"
+                 "mode B final;\naction Go in A when c < 3 { 0.5 : c += (FAST ? 2 : 1); "
+                 "0.5 : c += 1; }\naction Stop in A when c >= 3 { goto B; }\n"
+                 "rewards steps { true : 1; }\n"
+                 "property n = R{\"steps\"}=? [ F mode == B ];\n")
+    out = tmp_path / "flag.csv"
+    r = run_cli("sweep", str(p), "--const", "FAST=true,false", "-p", "n", "-o", str(out),
+                "--jobs", "1")
+    assert r.code == 0, r.err
+    rows = list(csv.DictReader(out.open()))
+    assert [row["FAST"] for row in rows] == ["false", "true"]
+    for row in rows:
+        v = run_cli("verify", str(p), "--const", f"FAST={row['FAST']}", "-p", "n")
+        assert v.code == 0 and f"constants FAST={row['FAST']};" in v.out, v.out
+        one = json.loads(run_cli("verify", str(p), "--const", f"FAST={row['FAST']}", "-p", "n",
+                                 "--json").out)
+        assert float(row["value"]) == pytest.approx(one["properties"][0]["value"], abs=1e-12)
+    assert float(rows[0]["value"]) > float(rows[1]["value"])  # faster with FAST
+    js = json.loads(run_cli("sweep", str(p), "--const", "FAST=false,true", "-p", "n",
+                            "--json", "--jobs", "1").out)
+    assert [pt["x"] for pt in js["points"]] == [False, True]
+    bad = run_cli("sweep", str(p), "--const", "FAST=true,1", "-p", "n")
+    assert bad.code == 2 and "mixes true/false with numbers" in bad.err
+    assert run_cli("sweep", str(p), "-c", "FAST=true", "--bound", "false,true",
+                   "-p", "n").code == 2

@@ -15,6 +15,7 @@ from afsmc.commands.common import (
     add_consts,
     add_file,
     add_seed,
+    const_text,
     dask_address,
     fail,
     num,
@@ -233,7 +234,7 @@ def _traces_text(traces: list[list[dict[str, Any]]]) -> str:
         for st in tr:
             changed = {k: v for k, v in st["vars"].items() if prev.get(k) != v} if prev \
                 else st["vars"]
-            vals = " ".join(f"{k}={_val(v)}" for k, v in changed.items())
+            vals = " ".join(f"{k}={const_text(v)}" for k, v in changed.items())
             act = st.get("action")
             how = f"--{act}" + (f" [hazard {st['hazard']}]" if "hazard" in st else "") + "--> " \
                 if act else ""
@@ -242,5 +243,3 @@ def _traces_text(traces: list[list[dict[str, Any]]]) -> str:
     return "\n".join(lines)
 
 
-def _val(v: Any) -> str:
-    return ("true" if v else "false") if isinstance(v, bool) else str(v)

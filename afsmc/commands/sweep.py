@@ -100,6 +100,8 @@ def run(args: argparse.Namespace) -> int:
             values = parse_values(args.bound)
         except ValueError as exc:
             usage_error(f"--bound: {exc}")
+        if any(isinstance(x, bool) for x in values):
+            usage_error(f"--bound {args.bound}: a step bound is a whole number, not true/false")
         variable, kind = "bound", "bound"
     else:
         if len(swept) != 1:

@@ -12,6 +12,7 @@ from afsmc.commands.common import (
     add_consts,
     add_file,
     add_reductions,
+    const_text,
     fail,
     num,
     overrides,
@@ -133,7 +134,7 @@ def render(res: VerifyResult) -> str:
     for name, m in models:
         if m.engine_reason and res.engine == "auto":
             lines.append(f"{name}: engine {m.engine} ({m.engine_reason})")
-    consts = ", ".join(f"{k}={v}" for k, v in res.constants.items())
+    consts = ", ".join(f"{k}={const_text(v)}" for k, v in res.constants.items())
     lines.append("")
     lines.append(f"engine {res.engine}, via {res.via}"
                  + (f", constants {consts}" if consts else "")

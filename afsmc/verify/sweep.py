@@ -55,10 +55,18 @@ def parse_values(text: str) -> list[Number]:
     """`start:stop:step` (stop included when the steps reach it) or `a,b,c` (sorted; a
     value given twice is an error).
 
-    Integers stay integers; decimals are stepped exactly (0:1:0.1 has 11 points)."""
+    Integers stay integers; decimals are stepped exactly (0:1:0.1 has 11 points); `false,true`
+    sweeps a bool constant."""
     text = text.strip()
     if not text:
         raise ValueError("no values")
+    words = [part.strip() for part in text.split(",")]
+    if any(w in ("true", "false") for w in words):
+        if not all(w in ("true", "false") for w in words):
+            raise ValueError(f"mixes true/false with numbers: {text!r}")
+        if len(set(words)) < len(words):
+            raise ValueError(f"a value is given twice in {text!r}")
+        return sorted(w == "true" for w in words)
     if ":" in text:
         parts = text.split(":")
         if len(parts) not in (2, 3):
@@ -107,6 +115,8 @@ def _number(d: Decimal, whole: bool) -> Number:
 
 
 def fmt(x: Number) -> str:
+    if isinstance(x, bool):  # a bool constant, as the language writes it
+        return "true" if x else "false"
     return str(x) if isinstance(x, int) else repr(x)
 
 
@@ -470,6 +480,8 @@ class SweepResult:
                 ax.set_ylabel(what)
                 if what == "probability":
                     ax.set_ylim(-0.02, 1.02)
+                if any(isinstance(x, bool) for x in self.xs):
+                    ax.set_xticks(xs, [fmt(x) for x in self.xs])
                 ax.grid(True, alpha=0.3)
                 ax.legend(loc="best")
             buf = io.BytesIO()
