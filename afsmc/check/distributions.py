@@ -45,8 +45,9 @@ def _check(model: ir.Model, rep: Reporter, owner: str, when: dict[int, E.Expr],
     for mode, cond in when.items():
         wit = find(model, mode, E.conj(cond, defined(total, model), off))
         if wit is not None:
-            rep.error("E305", f"the outcome probabilities of {owner} do not sum to 1 in the "
-                      f"state {wit}", span, hint="make the last outcome '1 - ...' of the others")
+            rep.error("E305", f"the outcome probabilities of {owner} sum to "
+                      f"{value_at(model, total, wit, mode)}, not 1, in the state {wit}", span,
+                      hint="make the last outcome '1 - ...' of the others")
             return
 
 

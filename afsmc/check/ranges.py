@@ -6,6 +6,8 @@ floor/ceil choice of the interval constants it uses.
 
 from __future__ import annotations
 
+import math
+
 from afsmc.check.undefined import defined, interval_choices
 from afsmc.diagnostics import Reporter
 from afsmc.model import expr as E
@@ -25,9 +27,22 @@ def value_at(model: ir.Model, e: E.Expr, w: Witness, mode: int,
     env = Env(vars={by_display[n]: val for n, val in w.values}, mode=mode,
               consts=model.const_values | (consts or {}))
     try:
-        return number(evaluate(inline(e, model), env))
+        return short(evaluate(inline(e, model), env))
     except (EvalError, KeyError):
         return "?"
+
+
+def short(v: int | float | bool) -> str:
+    """A value for a message: -0.2, not -0.19999999999999996, but with the digits that keep
+    it on the same side of every integer (1.0000000000001 stays outside [0, 1])."""
+    if isinstance(v, int) or not math.isfinite(v):  # bool is an int
+        return number(v)
+    for digits in range(12, 18):
+        text = f"{v:.{digits}g}"
+        back = float(text)
+        if math.floor(back) == math.floor(v) and (back == int(back)) == (v == int(v)):
+            return number(back)
+    return number(v)
 
 
 def _check_updates(model: ir.Model, rep: Reporter, when: dict[int, E.Expr],
@@ -59,11 +74,15 @@ def _check_updates(model: ir.Model, rep: Reporter, when: dict[int, E.Expr],
                     if wit is None:
                         continue
                     chosen = "".join(f", {k} = {v}" for k, v in consts.items())
+                    value = value_at(model, u.value, wit, mode, consts)
+                    written = show(u.value)
+                    # `cell := 7`, not "7 = 7"
+                    what = f"{written} = {value}" if written != value else \
+                        f"{var.display} := {value}"
                     rep.error(
                         "E303",
                         f"this update can take {var.display} out of its range [{var.lo}..{var.hi}]: "
-                        f"{show(u.value)} = {value_at(model, u.value, wit, mode, consts)} in the "
-                        f"state {wit}{chosen}",
+                        f"{what} in the state {wit}{chosen}",
                         u.span,
                         hint=f"guard the action, bound the value with min/max, or declare "
                              f"'{var.display}' with 'clamp' to saturate at the range's ends")

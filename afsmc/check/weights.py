@@ -29,6 +29,14 @@ def _value_at(model: ir.Model, e: E.Expr, w: Witness, mode: int) -> str:
         return "?"
 
 
+def _same(a: str, b: str) -> bool:
+    """Equal values, however written (`0` and `0.0`)."""
+    try:
+        return a == b or float(a) == float(b)
+    except ValueError:
+        return False
+
+
 def check_weight_range(model: ir.Model, rep: Reporter) -> None:
     for a in model.actions:
         lo, hi = bounds(a.weight, model)
@@ -67,7 +75,7 @@ def check_weight_uniqueness(model: ir.Model, rep: Reporter) -> None:
             reported.add((a.name, b.name))
             va = _value_at(model, a.weight, wit, m.number)
             vb = _value_at(model, b.weight, wit, m.number)
-            both = f"both {va}" if va == vb else f"{va} and {vb} are equal within {TIE:g}"
+            both = f"both {va}" if _same(va, vb) else f"{va} and {vb} are equal within {TIE:g}"
             rep.error(
                 "E301",
                 f"weights of {a.name} and {b.name} tie ({both}) in the state {wit}",
