@@ -790,6 +790,11 @@ class _Resolver:
                            e.func.span, hint=f"the {f} here stands inside another temporal "
                            "operator's formula; write one operator per property")
             return self._placeholder(s)
+        if f == "not":  # `not (x == 1)` reads as a call
+            self.rep.error("E123", "'not' is not an operator in afsm: write '!'", e.func.span,
+                           hint="afsm's boolean operators are '&&' (and), '||' (or), "
+                                "'!' (not) and '=>' (implies)")
+            return self._placeholder(s)
         if f not in E.FUNCTIONS:
             self.rep.error("E233", f"unknown function '{f}'", e.func.span,
                            hint=did_you_mean(f, [*E.FUNCTIONS, "w"]) or

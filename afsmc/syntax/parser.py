@@ -28,6 +28,9 @@ _TOKEN_NAMES = {
 _E115 = ("E115", "temporal operators (F, G, X, U) do not nest: one applies to state formulas "
                 "(labels, comparisons, and/or/not of them)")
 
+_E120 = ("E120", "the guard comes before the weight: 'action NAME in MODES when GUARD "
+                "weight W { ... }'")
+
 # Common mistakes, each learnt from examples (lark's match_examples): the parser
 # state where an example fails identifies the mistake, whatever the names in it.
 _EXAMPLES: dict[tuple[str, str], list[str]] = {
@@ -96,8 +99,7 @@ _EXAMPLES: dict[tuple[str, str], list[str]] = {
         "action A in S { 0.5: goto B x := 1; }",
         "action A in S { goto B x := 1; }",
     ],
-    ("E120", "the guard comes before the weight: 'action NAME in MODES when GUARD "
-             "weight W { ... }'"): [
+    _E120: [
         "action A in S weight 1 when x > 1 { skip; }",
         "action A in * weight x when x > 1 { skip; }",
     ],
@@ -385,7 +387,19 @@ def _report_syntax_error(exc: UnexpectedInput, source: Source, reporter: Reporte
                        Span.at_offset(source, bound.start(1), max(pos, bound.end(2))),
                        hint=f"write '{op}({value} {rest})'")
         return
+    foreign = _foreign(text, pos, str(tok), tok.type)
+    if foreign is not None:
+        message, hint, word = foreign
+        reporter.error("E123", message,
+                       span if word is None else Span.at_offset(source, *word), hint=hint)
+        return
     matched = _match_example(exc)
+    if str(tok) == "when":
+        # Whatever expression the weight is (`weight (b > 3 ? 1 : 0) when ...`): the parser
+        # state after it is the one every expression ends in, which the examples cannot tell;
+        # a header that has its guard already has a second one here, not a swapped one.
+        matched = _E120 if _WEIGHT_BEFORE_GUARD.search(text, 0, pos) else \
+            None if matched == _E120 else matched
     if scan.open and scan.open[-1][0] == "[" and _NESTED_TEMPORAL.search(text, 0, pos):
         matched = _E115
     if matched is not None and matched[0] == "E115" and not _TEMPORAL_BEFORE.search(
@@ -421,6 +435,36 @@ def _report_syntax_error(exc: UnexpectedInput, source: Source, reporter: Reporte
         return
     reporter.error("E101", f"unexpected {_found(tok, the_end)}", span,
                    hint=_expected_hint(accepts, the_end))
+
+
+# An action's or hazard's header with its weight, right before a failing `when`
+_WEIGHT_BEFORE_GUARD = re.compile(
+    r"\b(?:action|hazard)\b(?:(?!\bwhen\b)[^{};])*\bweight\b[^{};]*$")
+_OPERATORS = "afsm's boolean operators are '&&' (and), '||' (or), '!' (not) and '=>' (implies)"
+_QUERY_BEFORE = re.compile(r"\b(?:P|Pmin|Pmax|R|Rmin|Rmax)\s*(?:\{[^{}]*\})?\s*$")
+
+
+def _foreign(text: str, pos: int, tok: str,
+             kind: str) -> tuple[str, str, tuple[int, int] | None] | None:
+    """(message, hint, the offending word's offsets if not the failing token) for a spelling
+    from another language (Python's `and`, `not`, `if ... then`; PRISM's `P>=0.5`
+    thresholds) where the parser fails on it or right after it; None otherwise."""
+    word = re.search(r"\b(\w+)\s*$", text[:pos])
+    before = word.group(1) if word else ""
+    at = (word.start(1), word.end(1)) if word else None
+    if kind == "NAME" and tok in ("and", "or"):
+        return (f"'{tok}' is not an operator in afsm: write '{'&&' if tok == 'and' else '||'}'",
+                _OPERATORS, None)
+    if before == "not" and kind != "LPAR":
+        return "'not' is not an operator in afsm: write '!'", _OPERATORS, at
+    if before == "if" or (kind == "NAME" and tok in ("then", "elif")):
+        return ("afsm has no 'if ... then ... else': write a conditional as 'COND ? A : B'",
+                "for example 'weight (b > 3 ? 1 : 0)'", at if before == "if" else None)
+    if tok in ("<", "<=", ">", ">=") and _QUERY_BEFORE.search(text, 0, pos):
+        return ("a property asks for a value, 'P=? [ ... ]', not a threshold",
+                "write 'P=? [ ... ]' (or Pmin=?, Pmax=?, R=?) and compare the value it gives; "
+                "afsm has no bounded P>=p or R<r queries", None)
+    return None
 
 
 # A step bound (`F<=`, `G<=`, `U<=`, `C<=`, `I=`) of one number or name right before the
