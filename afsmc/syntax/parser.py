@@ -28,6 +28,8 @@ _TOKEN_NAMES = {
 _E115 = ("E115", "temporal operators (F, G, X, U) do not nest: one applies to state formulas "
                 "(labels, comparisons, and/or/not of them)")
 
+_MISSING_SEMICOLON = (("E102", "missing ';' at the end of the declaration"),
+                      ("E116", "missing ';' at the end of the outcome"))
 _E120 = ("E120", "the guard comes before the weight: 'action NAME in MODES when GUARD "
                 "weight W { ... }'")
 
@@ -386,6 +388,14 @@ def _report_syntax_error(exc: UnexpectedInput, source: Source, reporter: Reporte
         reporter.error("E121", "a step bound that is an expression is written in brackets",
                        Span.at_offset(source, bound.start(1), max(pos, bound.end(2))),
                        hint=f"write '{op}({value} {rest})'")
+        return
+    line_start = text.rfind("\n", 0, pos) + 1
+    if (str(tok) in _DECL_KEYWORDS and not scan.open and not text[line_start:pos].strip()
+            and ("SEMICOLON" in accepts or _match_example(exc) in _MISSING_SEMICOLON)):
+        # A declaration starts its line where the one before has not ended: its ';' is
+        # missing, whatever the parser state says (`... clamp`, a label, a property).
+        reporter.error("E102", "missing ';' at the end of the declaration", after_last,
+                       hint=f"add ';' here; the next line starts with {str(tok)!r}")
         return
     foreign = _foreign(text, pos, str(tok), tok.type)
     if foreign is not None:
