@@ -111,6 +111,10 @@ class _Resolver:
         self.dropped_fields: set[tuple[str, str]] = set()
         # _placeholder's stand-ins by id (held here, so no other object takes their id)
         self.placeholders: dict[int, E.Expr] = {}
+        # Constants whose value stands in for one that was reported (E206, E228, ...), and
+        # whether the last _const_value read one: a range over them is not also "empty".
+        self.poisoned: set[str] = set()
+        self.tainted = False
         self.modes: dict[str, ir.Mode] = {}
         self.formulas: dict[str, ir.Formula] = {}
         self.formula_decls: dict[str, ast.FormulaDecl] = {}
@@ -261,14 +265,18 @@ class _Resolver:
         source = None
         is_param = isinstance(d, ast.ParamDecl)
         value: Any
+        errors = len(self.rep.diagnostics)
+        self.tainted = False
         if isinstance(d, ast.ConstDecl) and isinstance(d.value, ast.Interval):
             lo = self._const_value(d.value.lo, Type.INT)
+            lo_tainted = self.tainted
             hi = self._const_value(d.value.hi, Type.INT)
+            self.tainted = self.tainted or lo_tainted
             if t is not Type.INT:
                 self.rep.error("E204", f"interval constant '{name}' must be an int",
                                d.span, hint="timing and battery figures are whole numbers; "
                                "write 'const int' (the paper's floor and ceiling)")
-            elif isinstance(lo, int) and isinstance(hi, int) and lo > hi:
+            elif isinstance(lo, int) and isinstance(hi, int) and lo > hi and not self.tainted:
                 self.rep.error("E205", f"interval [{lo}, {hi}] of '{name}' is empty",
                                d.value.span, hint="write [low, high] with low <= high")
             interval = (int(lo), int(hi))
@@ -288,7 +296,9 @@ class _Resolver:
             source = ir.SimSource(d.source.ref.text,
                                   tuple((k.text, v) for k, v in d.source.policy), d.source.span,
                                   tuple(k.span for k, _ in d.source.policy))
-        if d.type == "prob" and not (0.0 <= float(value) <= 1.0):
+        if self.tainted or len(self.rep.diagnostics) > errors:
+            self.poisoned.add(name)
+        elif d.type == "prob" and not (0.0 <= float(value) <= 1.0):
             self.rep.error("E207", f"probability '{name}' = {value} is not in [0, 1]", d.span)
         self.consts[name] = ir.Constant(name, t, value, interval, is_param, source, d.span, d.type)
 
@@ -331,6 +341,8 @@ class _Resolver:
 
     def _const_value(self, e: ast.Expr, want: Type) -> Any:
         x = self._expr(e, CONST_CTX)
+        self.tainted = any(id(n) in self.placeholders or (
+            isinstance(n, E.ConstRef) and n.name in self.poisoned) for n in E.walk(x))
         if (want.numeric and not x.type.numeric) or (want is Type.BOOL and x.type is not Type.BOOL):
             self.rep.error("E210", f"expected {_a(want.value)} value, found {_a(x.type.value)}", e.span)
         if want is Type.INT and x.type is Type.DOUBLE:
@@ -480,10 +492,14 @@ class _Resolver:
             self.vars[flat] = ir.Variable(flat, display, Type.BOOL, 0, 1, value, False, span)
             return
         lo = self._const_value(t.lo, Type.INT)
+        tainted = self.tainted
         hi = self._const_value(t.hi, Type.INT)
+        tainted = tainted or self.tainted
         broken = False  # the range is reported: no E220 against a range never written
         if not (isinstance(lo, int) and isinstance(hi, int)):
             lo, hi, broken = 0, 0, True
+        elif tainted and lo > hi:  # a stand-in value of a reported constant: not also E219
+            hi, broken = lo, True
         if lo > hi:
             self.rep.error("E219", f"range [{lo}..{hi}] of '{display}' is empty", t.span)
             hi, broken = lo, True
