@@ -7,7 +7,6 @@ from __future__ import annotations
 import argparse
 import json
 import math
-import os
 import sys
 from typing import Any
 
@@ -196,7 +195,7 @@ def _json(out: Outcome, args: argparse.Namespace, machine: str,
 def _print(out: Outcome, args: argparse.Namespace, intervals: bool, endless: bool) -> None:
     if args.traces:
         print(_traces_text(out.traces))
-    name = os.path.basename(args.file)
+    name = args.file  # as given, as verify names it
     # --resolve means nothing to a model without interval constants: do not suggest it did
     how = {"lo": "at their floor", "hi": "at their ceiling"}.get(LOWERING[args.resolve],
                                                                   args.resolve)
