@@ -34,6 +34,7 @@ RULES: tuple[Rule, ...] = (
     int_pow.check_int_pow,
     weights.check_weight_range,
     weights.check_weight_uniqueness,
+    weights.check_weight_refs,
     weights.check_deadlock,
     distributions.check_distributions,
     ranges.check_update_ranges,
@@ -55,7 +56,7 @@ def register(rule: Rule) -> None:
 # Rules that read the model's structure only. After an integer overflow (E307) only these
 # run: the others search states with 64-bit arithmetic and would report what the wrapped
 # values make of the model (a deadlock, an update out of range) that is not there.
-STRUCTURAL: tuple[Rule, ...] = (unused.check_unused, check_sim_sources,
+STRUCTURAL: tuple[Rule, ...] = (unused.check_unused, check_sim_sources, weights.check_weight_refs,
                                  mode_numbers.check_mode_numbers, storm_depth.check_storm_depth)
 
 

@@ -105,3 +105,27 @@ def check_deadlock(model: ir.Model, rep: Reporter) -> None:
             rep.warning("W302", f"no action is enabled in the state {wit}: the machine stops "
                         f"there (actions of {m.name}: {names})", m.span,
                         hint="add an action for this case, or widen a guard")
+
+
+def check_weight_refs(model: ir.Model, rep: Reporter) -> None:
+    """W306: `w(B)` in the weight of an action that shares no mode with B is 0 in every
+    state where it is read (w(B) is B's weight where B is enabled, 0 elsewhere): likely the
+    wrong action or the wrong modes."""
+    by_name = {a.name: a for a in model.actions}
+    names = model.mode_names
+    for a in model.actions:
+        seen: set[str] = set()
+        for n in E.walk(a.weight):  # w() stands in weights only, not in formulas (E232)
+            if not isinstance(n, E.WeightRef) or n.action in seen:
+                continue
+            seen.add(n.action)
+            target = by_name.get(n.action)
+            if target is None or set(target.modes) & set(a.modes):
+                continue
+            rep.warning("W306", f"w({n.action}) in the weight of {a.name} is always 0: "
+                        f"{n.action} acts in none of {a.name}'s modes "
+                        f"({', '.join(names[m] for m in a.modes)})",
+                        n.span or a.weight_span or a.name_span,
+                        hint=f"w() reads an action of the same mode; check the name, or the "
+                             f"modes of {n.action}")
+
