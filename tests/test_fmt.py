@@ -281,3 +281,33 @@ def test_rmin_written_together_still_parses() -> None:
     text = " machine  a  ;  property  a  =  R  min  =?  [  C  ]  ; "
     out = format_text(text)
     assert "property a = Rmin=? [ C ];" in out and format_text(out) == out
+
+
+@pytest.mark.parametrize("eol", ["\r\n", "\r"])
+def test_diff_of_a_crlf_file_is_in_its_line_endings(tmp_path: Path, eol: str) -> None:
+    """`fmt --diff` writes the file's lines as they are and the formatted ones in the file's
+    ending, as `fmt` would write them: a CRLF file's patch applies to it (its lines were
+    compared and printed as LF, and patch refused them), and gives what `fmt` writes."""
+    path = tmp_path / "crlf.afsm"
+    raw = MESSY.replace("\n", eol)
+    path.write_bytes(raw.encode())
+    r = run_cli("fmt", "--diff", str(path))
+    assert r.code == 0
+    body = [line for line in re.findall(r"[^\r\n]*(?:\r\n|\r|\n)", r.out)
+            if line[:1] in " -+" and not line.startswith(("---", "+++"))]
+    assert body and all(line.endswith(eol) for line in body), body
+    # one hunk over the whole (short) file: its old side is the file, its new side fmt's
+    assert "".join(x[1:] for x in body if x[0] in " -") == raw
+    in_place = tmp_path / "in_place.afsm"
+    in_place.write_bytes(raw.encode())
+    assert run_cli("fmt", str(in_place)).code == 0
+    assert "".join(x[1:] for x in body if x[0] in " +").encode() == in_place.read_bytes()
+    import shutil
+    import subprocess
+    if eol == "\r\n" and shutil.which("patch"):
+        done = subprocess.run(["patch", "-s", str(path)], input=r.out.encode(),
+                              capture_output=True, timeout=60)
+        assert done.returncode == 0, done.stderr + done.stdout
+        assert path.read_bytes() == in_place.read_bytes()
+    # formatted already: no diff, whatever the endings
+    assert run_cli("fmt", "--diff", str(in_place)).out == ""

@@ -478,3 +478,82 @@ def test_a_request_with_bad_params_gets_an_error_reply() -> None:
     errors = {r["id"]: r["error"]["code"] for r in replies if "error" in r}
     assert errors == {7: -32602, 8: -32602} and code == 0
     assert not [r for r in replies if r.get("method") == "window/showMessage"]  # no pop-up too
+
+
+@MODULE
+async def test_navigation_after_a_syntax_error_follows_the_editor_s_text(
+        client: LanguageClient) -> None:
+    """Review 20. After an edit that does not parse, hover, definition, references and the
+    outline came from the last good parse at the editor's positions: a line inserted on top
+    made hover on `Dock` answer `Finished`. They now map through the lines both texts share
+    (and say nothing about lines changed since); hover shows values only for the text that
+    resolved (a constant's old value stood beside its new declaration)."""
+    text = (ROOT / "examples" / "patrol.afsm").read_text()
+    uri = (ROOT / "examples" / "shifted_patrol.afsm").as_uri()
+    doc = T.TextDocumentIdentifier(uri=uri)
+    await open_doc(client, uri, text)
+    edited = "var oops : ;\n" + text
+    assert [d.code[:2] for d in await change(client, uri, edited)] == ["E1"]  # type: ignore[index]
+    decl = edited.index("mode Dock") + len("mode ")
+    hover = await hover_at(client, doc, position(edited, decl + 1))
+    assert hover is not None and "Dock" in str(hover.contents), hover
+    assert "Finished" not in str(hover.contents)
+    assert hover.range is not None and slice_of(edited, hover.range) == "Dock"
+    use = code_only(edited).index("goto Dock") + len("goto ")
+    where = await client.text_document_definition_async(T.DefinitionParams(
+        text_document=doc, position=position(edited, use)))
+    assert isinstance(where, T.Location) and where.range.start == position(edited, decl)
+    refs = await client.text_document_references_async(T.ReferenceParams(
+        text_document=doc, position=position(edited, use),
+        context=T.ReferenceContext(include_declaration=True)))
+    assert refs and all(slice_of(edited, r.range) == "Dock" for r in refs)
+    assert {offset(edited, r.range.start) for r in refs} == {
+        m.start() for m in re.finditer(r"\bDock\b", code_only(edited))}
+    symbols = await client.text_document_document_symbol_async(
+        T.DocumentSymbolParams(text_document=doc))
+    dock = [s for s in symbols if s.name == "Dock"]  # type: ignore[union-attr]
+    assert dock and dock[0].selection_range.start == position(edited, decl)  # type: ignore[union-attr]
+    assert not any(s.name == "oops" for s in symbols)  # type: ignore[union-attr]
+    # the inserted line itself is not in the last good parse: nothing to say there
+    assert await hover_at(client, doc, T.Position(line=0, character=5)) is None
+
+    # a new value of CELLS with a name error elsewhere: hover gives no stale value
+    text6 = text.replace("param int CELLS  = 4;", "param int CELLS  = 6;")
+    broken = text6.replace("cell := at_end ? 0 : cell + 1", "cell := at_end ? 0 : cel + 1", 1)
+    assert broken != text6
+    assert "E203" in [d.code for d in await change(client, uri, broken)]
+    at = broken.index("param int CELLS") + len("param int ")
+    hover = await hover_at(client, doc, position(broken, at + 1))
+    assert hover is not None and "CELLS" in str(hover.contents)
+    assert "`4`" not in str(hover.contents), hover.contents
+    await change(client, uri, text6)
+    hover = await hover_at(client, doc, position(text6, at + 1))
+    assert hover is not None and "`6`" in str(hover.contents), hover.contents
+
+
+@MODULE
+async def test_formatting_and_positions_keep_the_document_s_line_endings(
+        client: LanguageClient) -> None:
+    """Review 20. Formatting turned a CRLF document into LF, even one already formatted,
+    unlike `afsmc fmt`; a file with bare CR line endings had every diagnostic on line 0 (LSP
+    counts '\\r' as a line end, as `afsmc check` does)."""
+    text = format_text((ROOT / "examples" / "patrol.afsm").read_text())
+    uri = "file:///tmp/crlf_patrol.afsm"
+    doc = T.TextDocumentIdentifier(uri=uri)
+    options = T.FormattingOptions(tab_size=4, insert_spaces=True)
+    await open_doc(client, uri, text.replace("\n", "\r\n"))
+    edits = await client.text_document_formatting_async(T.DocumentFormattingParams(
+        text_document=doc, options=options))
+    assert not edits and edits is not None
+    messy = text.replace("mode Dock     = 1;", "mode   Dock=1;")
+    assert messy != text
+    await change(client, uri, messy.replace("\n", "\r\n"))
+    edits = await client.text_document_formatting_async(T.DocumentFormattingParams(
+        text_document=doc, options=options))
+    assert edits and len(edits) == 1
+    assert edits[0].new_text == text.replace("\n", "\r\n")
+
+    cr = "machine m;\rvar x : [0..1] init 0;\rmode A initial;\rmode B final;\r" \
+         "action Go in A when x == 0 { goto C; }\r"
+    (bad,) = [d for d in await change(client, uri, cr) if d.code == "E215"]
+    assert bad.range.start == T.Position(line=4, character=cr.split("\r")[4].index("C;"))

@@ -10,12 +10,13 @@ from __future__ import annotations
 
 import argparse
 import difflib
+import re
 import sys
 
 from afsmc.commands.common import report
 from afsmc.compiler import read_source, write_atomic
 from afsmc.diagnostics import CompileError
-from afsmc.syntax.fmt import format_text
+from afsmc.syntax.fmt import format_text, line_ending
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
@@ -33,6 +34,7 @@ def run(args: argparse.Namespace) -> int:
         try:
             raw = sys.stdin.read() if path == "-" else read_source(path, newline="")
             text = raw.replace("\r\n", "\n").replace("\r", "\n")
+            eol = line_ending(raw)
             out = format_text(text, "<stdin>" if path == "-" else path)
         except CompileError as exc:
             report(exc.diagnostics)
@@ -40,12 +42,15 @@ def run(args: argparse.Namespace) -> int:
             continue
         if args.diff:
             name = "<stdin>" if path == "-" else path
-            for line in difflib.unified_diff(
-                    text.splitlines(keepends=True), out.splitlines(keepends=True),
-                    f"{name} (as it is)", f"{name} (formatted)"):
+            # In the file's own line endings, as fmt would write it: a CRLF file's patch
+            # applies to it.
+            patch = difflib.unified_diff(
+                _lines(raw), _lines(out.replace("\n", eol)),
+                f"{name} (as it is)", f"{name} (formatted)") if out != text else iter(())
+            for line in patch:
                 # a last line without its newline, marked as diff marks it (else it ran into
                 # the next line of the patch)
-                sys.stdout.write(line if line.endswith("\n") else
+                sys.stdout.write(line if line.endswith(("\n", "\r")) else
                                  line + "\n\\ No newline at end of file\n")
             if args.check and out != text:
                 status = 1
@@ -58,7 +63,7 @@ def run(args: argparse.Namespace) -> int:
         elif out != text:
             try:
                 # In place: keep the file's permission bits and its line endings.
-                write_atomic(path, out, newline=line_ending(raw))
+                write_atomic(path, out, newline=eol)
             except CompileError as exc:
                 report(exc.diagnostics)
                 status = 1
@@ -67,8 +72,8 @@ def run(args: argparse.Namespace) -> int:
     return status
 
 
-def line_ending(raw: str) -> str:
-    """The file's line ending: the one most of its lines end with (CRLF, CR or LF)."""
-    crlf = raw.count("\r\n")
-    counts = {"\r\n": crlf, "\r": raw.count("\r") - crlf, "\n": raw.count("\n") - crlf}
-    return max(("\n", "\r\n", "\r"), key=lambda e: counts[e])  # ties: LF first
+
+def _lines(text: str) -> list[str]:
+    """The lines of `text` with their endings ('\r\n', '\r' or '\n'; not str.splitlines's
+    form feeds and U+2028, which are not line ends in afsm)."""
+    return re.findall(r"[^\r\n]*(?:\r\n|\r|\n)|[^\r\n]+$", text)

@@ -7,8 +7,9 @@ mode graph: about a second and a half on uav.afsm, they enumerate states) run in
 thread once typing pauses (DEBOUNCE), exactly as `afsmc check` runs them, and replace the
 diagnostics when they finish if the text has not changed meanwhile.
 
-A file that does not parse keeps the navigation of its last good parse (completion in a
-file that has never parsed uses the text with its broken part left out, I.recover);
+A file that does not parse keeps the navigation of its last good parse, mapped to the
+editor's text through the lines both share (_Shift); completion in a file that has never
+parsed uses the text with its broken part left out (I.recover);
 nothing a client sends makes the server exit (every handler turns a failure into a log
 message).
 """
@@ -17,6 +18,7 @@ from __future__ import annotations
 
 import asyncio
 import bisect
+import difflib
 import functools
 import logging
 import re
@@ -37,14 +39,14 @@ from pygls.workspace import ServerTextPosition, TextDocument
 
 from afsmc import __version__
 from afsmc.compiler import load
-from afsmc.diagnostics import CompileError, Diagnostic, Severity, line_starts
+from afsmc.diagnostics import CompileError, Diagnostic, Severity
 from afsmc.lsp import index as I
 from afsmc.model import ir
 from afsmc.model.expr import FUNCTIONS
 from afsmc.model.names import AFSM_KEYWORDS
 from afsmc.model.resolve import resolve
 from afsmc.syntax import ast
-from afsmc.syntax.fmt import format_text
+from afsmc.syntax.fmt import format_text, line_ending
 from afsmc.syntax.parser import parse
 
 DEBOUNCE = 0.3  # seconds of quiet before the full checks run, when they are slow
@@ -58,7 +60,7 @@ class DocState:
     version: int | None = None
     text: str = ""
     index: I.Index | None = None  # from the last text that parsed
-    model: ir.Model | None = None  # from the last text that resolved
+    model: ir.Model | None = None  # when the current text resolved
     # completion before the first good parse: names from the text with its broken part
     # blanked (I.recover), for the (text, line) it was computed for
     recovered: tuple[str, int, I.Index] | None = None
@@ -145,15 +147,23 @@ def guarded(fn: F) -> F:
 # ---- positions -------------------------------------------------------------------
 
 
+_EOL = re.compile(r"\r\n|\r|\n")
+
+
 class _Doc(TextDocument):
-    """A document whose lines end at '\n' only, as afsmc's spans count them and as LSP
-    does: pygls splits at form feeds and U+2028 too (diagnostics landed lines too low), failed
-    on an empty document, walked every line for each position, and put the end of a last
-    line without a newline on a line that does not exist."""
+    """A document whose lines end at '\r\n', '\r' or '\n', as LSP counts them: pygls
+    splits at form feeds and U+2028 too (diagnostics landed lines too low), failed on an
+    empty document, walked every line for each position, and put the end of a last line
+    without a newline on a line that does not exist. (`afsmc check` reads '\r' as a line end
+    too.)"""
+
+    @functools.cached_property
+    def _eols(self) -> list[tuple[int, int]]:
+        return [(m.start(), m.end()) for m in _EOL.finditer(self.source)]
 
     @functools.cached_property
     def _starts(self) -> list[int]:
-        return line_starts(self.source)
+        return [0, *(end for _, end in self._eols)]
 
     @property
     def lines(self) -> Sequence[str]:
@@ -167,8 +177,54 @@ class _Doc(TextDocument):
 
     def offset_at_server_position(self, server_position: ServerTextPosition) -> int:
         line = min(max(server_position.line, 0), len(self._starts) - 1)
-        end = self._starts[line + 1] - 1 if line + 1 < len(self._starts) else len(self.source)
+        end = self._eols[line][0] if line < len(self._eols) else len(self.source)
         return min(self._starts[line] + max(server_position.character, 0), end)
+
+
+class _Shift:
+    """Offsets between the last text that parsed (`old`) and the editor's text (`new`), by
+    the runs of lines the two share: navigation from the last good parse answers about the
+    text the editor shows, and nothing about lines changed since (a position there maps to
+    None)."""
+
+    def __init__(self, old: str, new: str) -> None:
+        self.same = old == new
+        self.runs: list[tuple[int, int, int]] = []  # (old start, new start, length)
+        if self.same:
+            return
+        a, b = old.splitlines(keepends=True), new.splitlines(keepends=True)
+        oa, ob = [0], [0]
+        for line in a:
+            oa.append(oa[-1] + len(line))
+        for line in b:
+            ob.append(ob[-1] + len(line))
+        matcher = difflib.SequenceMatcher(None, a, b, autojunk=False)
+        for i, j, n in matcher.get_matching_blocks():
+            if n:
+                self.runs.append((oa[i], ob[j], oa[i + n] - oa[i]))
+
+    def _map(self, off: int, end: bool, src: int, dst: int) -> int | None:
+        if self.same:
+            return off
+        for run in self.runs:
+            start, length = run[src], run[2]
+            if start <= off < start + length or (end and start < off <= start + length):
+                return run[dst] + off - start
+        return None
+
+    def to_old(self, off: int) -> int | None:
+        return self._map(off, False, 1, 0)
+
+    def to_new(self, start: int, end: int) -> tuple[int, int] | None:
+        a, b = self._map(start, False, 0, 1), self._map(end, True, 0, 1)
+        if a is None or b is None or b - a != end - start:
+            return None  # the span runs into lines changed since
+        return a, b
+
+
+def _shift(ls: AfsmServer, uri: str, idx: I.Index) -> tuple[_Shift, _Doc]:
+    doc = _current(ls, uri)
+    return _Shift(idx.text, doc.source), doc
 
 
 def _snapshot(ls: AfsmServer, uri: str, text: str) -> _Doc:
@@ -227,8 +283,9 @@ def _changed(ls: AfsmServer, uri: str) -> None:
     if fast.module is not None:
         st.index = I.build(fast.module, st.text)
         st.recovered = None
-    if fast.model is not None:
-        st.model = fast.model
+    # The facts hover shows (values, ranges) hold for the text that resolved: another text
+    # keeps none rather than show a constant's old value beside its new declaration.
+    st.model = fast.model
     if st.task is not None:
         st.task.cancel()
         st.task = None
@@ -281,13 +338,22 @@ async def did_close(ls: AfsmServer, params: T.DidCloseTextDocumentParams) -> Non
 # ---- navigation ---------------------------------------------------------------------
 
 
-def _lookup(ls: AfsmServer, uri: str, pos: T.Position) -> tuple[I.Index, I.Occurrence] | None:
+def _lookup(ls: AfsmServer, uri: str, pos: T.Position
+            ) -> tuple[I.Index, I.Occurrence, _Shift, _Doc] | None:
+    """The name at the editor's position, found in the last good parse (through the lines
+    both texts share), with the mapping back to the editor's text."""
     st = ls.docs.get(uri)
     if st is None or st.index is None:
         return None
-    offset = _snapshot(ls, uri, st.index.text).offset_at_position(pos)
-    occ = st.index.at(offset)
-    return (st.index, occ) if occ is not None else None
+    shift, doc = _shift(ls, uri, st.index)
+    offset = shift.to_old(doc.offset_at_position(pos))
+    occ = st.index.at(offset) if offset is not None else None
+    return (st.index, occ, shift, doc) if occ is not None else None
+
+
+def _new_range(shift: _Shift, doc: _Doc, start: int, end: int) -> T.Range | None:
+    at = shift.to_new(start, end)
+    return None if at is None else _range(doc, *at)
 
 
 @server.feature(T.TEXT_DOCUMENT_HOVER)
@@ -296,14 +362,14 @@ def hover(ls: AfsmServer, params: T.HoverParams) -> T.Hover | None:
     found = _lookup(ls, params.text_document.uri, params.position)
     if found is None:
         return None
-    idx, occ = found
+    idx, occ, shift, doc = found
     d = idx.definition(occ)
     if d is None:
         return None
-    text = I.hover(d, idx.text, ls.docs[params.text_document.uri].model)
-    doc = _snapshot(ls, params.text_document.uri, idx.text)
+    st = ls.docs[params.text_document.uri]
+    text = I.hover(d, idx.text, st.model if shift.same else None)
     return T.Hover(contents=T.MarkupContent(kind=T.MarkupKind.Markdown, value=text),
-                   range=_range(doc, occ.start, occ.end))
+                   range=_new_range(shift, doc, occ.start, occ.end))
 
 
 @server.feature(T.TEXT_DOCUMENT_DEFINITION)
@@ -313,11 +379,12 @@ def definition(ls: AfsmServer, params: T.DefinitionParams) -> T.Location | None:
     found = _lookup(ls, uri, params.position)
     if found is None:
         return None
-    idx, occ = found
+    idx, occ, shift, doc = found
     d = idx.definition(occ)
     if d is None:
         return None
-    return T.Location(uri=uri, range=_range(_snapshot(ls, uri, idx.text), d.ident.start, d.ident.end))
+    rng = _new_range(shift, doc, d.ident.start, d.ident.end)
+    return None if rng is None else T.Location(uri=uri, range=rng)
 
 
 @server.feature(T.TEXT_DOCUMENT_REFERENCES)
@@ -327,10 +394,10 @@ def references(ls: AfsmServer, params: T.ReferenceParams) -> list[T.Location] | 
     found = _lookup(ls, uri, params.position)
     if found is None:
         return None
-    idx, occ = found
-    doc = _snapshot(ls, uri, idx.text)
-    return [T.Location(uri=uri, range=_range(doc, o.start, o.end))
-            for o in idx.references(occ.ns, occ.name, params.context.include_declaration)]
+    idx, occ, shift, doc = found
+    ranges = (_new_range(shift, doc, o.start, o.end)
+              for o in idx.references(occ.ns, occ.name, params.context.include_declaration))
+    return [T.Location(uri=uri, range=r) for r in ranges if r is not None]
 
 
 _SYMBOL_KINDS = {
@@ -350,26 +417,29 @@ def document_symbols(ls: AfsmServer, params: T.DocumentSymbolParams) -> list[T.D
     if st is None or st.index is None:
         return []
     idx = st.index
-    doc = _snapshot(ls, uri, idx.text)
+    shift, doc = _shift(ls, uri, idx)
     by_decl: dict[int, I.Definition] = {
         id(d.decl): d for d in idx.defs.values() if d.kind != "field"}
     out = []
     for decl in idx.module.decls:
         d = by_decl.get(id(decl))
-        if d is None:
-            continue
+        whole = _new_range(shift, doc, decl.span.start, decl.span.end)
+        name = _new_range(shift, doc, d.ident.start, d.ident.end) if d else None
+        if d is None or whole is None or name is None:
+            continue  # not declared, or edited since the last good parse
         children = [
-            T.DocumentSymbol(name=f.name.text, kind=T.SymbolKind.Field,
-                             range=_range(doc, f.span.start, f.span.end),
-                             selection_range=_range(doc, f.name.span.start, f.name.span.end))
+            T.DocumentSymbol(name=f.name.text, kind=T.SymbolKind.Field, range=r, selection_range=n)
             for f in (decl.type.fields if isinstance(decl, ast.VarDecl)
-                      and isinstance(decl.type, ast.TupleType) else ())]
+                      and isinstance(decl.type, ast.TupleType) else ())
+            for r, n in [(_new_range(shift, doc, f.span.start, f.span.end),
+                          _new_range(shift, doc, f.name.span.start, f.name.span.end))]
+            if r is not None and n is not None]
         detail = d.kind
         if isinstance(decl, (ast.ActionDecl, ast.HazardDecl)):
             detail = f"{d.kind} in {idx.text[decl.modes.span.start:decl.modes.span.end]}"
         out.append(T.DocumentSymbol(
-            name=d.name, kind=_SYMBOL_KINDS[d.kind], range=_range(doc, decl.span.start, decl.span.end),
-            selection_range=_range(doc, d.ident.start, d.ident.end), detail=detail, children=children or None))
+            name=d.name, kind=_SYMBOL_KINDS[d.kind], range=whole, selection_range=name,
+            detail=detail, children=children or None))
     return out
 
 
@@ -438,13 +508,17 @@ def completion(ls: AfsmServer, params: T.CompletionParams) -> T.CompletionList:
 def formatting(ls: AfsmServer, params: T.DocumentFormattingParams) -> list[T.TextEdit] | None:
     uri = params.text_document.uri
     doc = _current(ls, uri)
+    # As `afsmc fmt` does: line endings alone never make a text unformatted, and the
+    # formatted text keeps the document's own.
+    text = doc.source.replace("\r\n", "\n").replace("\r", "\n")
     try:
-        out = format_text(doc.source, to_fs_path(uri) or uri)
+        out = format_text(text, to_fs_path(uri) or uri)
     except CompileError:
         return None  # a syntax error: it is already shown as a diagnostic
-    if out == doc.source:
+    if out == text:
         return []
-    return [T.TextEdit(range=_range(doc, 0, len(doc.source)), new_text=out)]
+    return [T.TextEdit(range=_range(doc, 0, len(doc.source)),
+                       new_text=out.replace("\n", line_ending(doc.source)))]
 
 
 RENAMEABLE = {"mode", "constant", "variable", "action", "hazard", "formula", "label", "rewards",
@@ -460,7 +534,7 @@ def _rename_target(ls: AfsmServer, uri: str, pos: T.Position) -> tuple[I.Index, 
     found = _lookup(ls, uri, pos)
     if found is None:
         return None
-    idx, occ = found
+    idx, occ, _, _ = found
     d = idx.definition(occ)
     if d is None or d.kind not in RENAMEABLE:
         return None
@@ -514,7 +588,7 @@ def _why_not_renameable(ls: AfsmServer, uri: str, pos: T.Position) -> str | None
     found = _lookup(ls, uri, pos)
     if found is None:
         return None
-    idx, occ = found
+    idx, occ, _, _ = found
     d = idx.definition(occ)
     if d is None:
         return f"'{occ.name}' is not declared in this file"

@@ -594,3 +594,10 @@ def _render(lines: list[_Line]) -> str:
         else:
             out.append(ln.code.rstrip())
     return "\n".join(out) + "\n" if out else ""
+
+
+def line_ending(raw: str) -> str:
+    """A text's line ending: the one most of its lines end with (CRLF, CR or LF)."""
+    crlf = raw.count("\r\n")
+    counts = {"\r\n": crlf, "\r": raw.count("\r") - crlf, "\n": raw.count("\n") - crlf}
+    return max(("\n", "\r\n", "\r"), key=lambda e: counts[e])  # ties: LF first
