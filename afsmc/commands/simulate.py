@@ -203,7 +203,9 @@ def _print(out: Outcome, args: argparse.Namespace, intervals: bool, endless: boo
     print(f"{name}: {out.runs} runs, {resolved}, seed {args.seed}, "
           f"{args.confidence:g} confidence")
     width = max([len(e.name) for e in out.estimates] + [8])
-    for e in out.estimates:
+    values = ["n/a" if math.isnan(e.estimate) else num(e.estimate) for e in out.estimates]
+    vwidth = max([len(v) for v in values] + [1])  # the intervals start in one column
+    for e, value in zip(out.estimates, values, strict=True):
         why = [f"{e.undecided} undecided at --max-steps"] if e.undecided else []
         if e.undecided and endless:
             # a run in a mode it cannot end from may never be decided (more steps may still
@@ -215,9 +217,9 @@ def _print(out: Outcome, args: argparse.Namespace, intervals: bool, endless: boo
                                          ("--max-steps", e.undecided > 0)) if short]
             why.append(f"no interval from fewer than 2 finished runs: raise "
                        f"{' and '.join(raise_)}")
-        value = "n/a" if math.isnan(e.estimate) else num(e.estimate)
         note = f"  ({'; '.join(why)})" if why else ""
-        print(f"  {e.name.ljust(width)}  {value}  [{num(e.low)}, {num(e.high)}]{note}")
+        print(f"  {e.name.ljust(width)}  {value.ljust(vwidth)}  [{num(e.low)}, {num(e.high)}]"
+              f"{note}")
     if not out.estimates:
         print("  (no properties declared)")
     rate = out.runs / out.seconds * 60 if out.seconds > 0 else 0.0

@@ -164,7 +164,8 @@ def run(args: argparse.Namespace) -> int:
     elif to_stdout or (not args.output and not args.plot):
         sys.stdout.write(res.to_csv())
     if progress:
-        progress(f"{len(res.points)} points in {res.seconds:.1f} s")
+        n = len(res.points)
+        progress(f"{n} point{'' if n == 1 else 's'} in {res.seconds:.1f} s")
     return 0
 
 

@@ -476,7 +476,8 @@ def completions(idx: I.Index | None, before: str) -> list[T.CompletionItem]:
     return (_items(idx.names(I.VALUE))
             + [T.CompletionItem(f, kind=T.CompletionItemKind.Function, detail="function")
                for f in (*sorted(FUNCTIONS), "w")]
-            + [T.CompletionItem(k, kind=T.CompletionItemKind.Keyword) for k in I.KEYWORDS])
+            + [T.CompletionItem(k, kind=T.CompletionItemKind.Keyword) for k in I.KEYWORDS
+               if k not in FUNCTIONS])  # `min`, `max`: once, as the functions they are
 
 
 @server.feature(T.TEXT_DOCUMENT_COMPLETION, T.CompletionOptions(trigger_characters=['"', "(", "."]))
@@ -625,7 +626,8 @@ def refusal(idx: I.Index, d: I.Definition, new: str, path: str) -> str | None:
         return None
     other = idx.defs.get((d.ns, new))
     if other is not None:
-        return f"'{new}' is already declared (as {_article(other.kind)} {other.kind})"
+        kind = "reward structure" if other.kind == "rewards" else other.kind
+        return f"'{new}' is already declared (as {_article(kind)} {kind})"
     # Whatever else the checker would reject (E202: reserved in PRISM or Storm, names of
     # afsmc's own, ...): resolve the renamed text and look for errors it did not have.
     refs = sorted(idx.references(d.ns, d.name), key=lambda o: o.start)

@@ -445,6 +445,7 @@ class SweepResult:
         from matplotlib import rc_context
         from matplotlib.backends.backend_agg import FigureCanvasAgg
         from matplotlib.figure import Figure
+        from matplotlib.ticker import MaxNLocator
 
         ext = os.path.splitext(path)[1].lower()
         if ext not in (".png", ".svg"):
@@ -482,6 +483,8 @@ class SweepResult:
                     ax.set_ylim(-0.02, 1.02)
                 if any(isinstance(x, bool) for x in self.xs):
                     ax.set_xticks(xs, [fmt(x) for x in self.xs])
+                elif all(isinstance(x, int) for x in self.xs):  # no tick at ROUNDS = 1.5
+                    ax.xaxis.set_major_locator(MaxNLocator(integer=True))
                 ax.grid(True, alpha=0.3)
                 ax.legend(loc="best")
             buf = io.BytesIO()
