@@ -336,3 +336,14 @@ def test_a_byte_that_is_not_utf8_is_shown_at_its_line(tmp_path: Path) -> None:
     assert r.code == 1 and f"{path}:2:7: error[E001]: cannot read {path}: byte 0xe9 is not " \
         "UTF-8 text" in r.err, r.err
     assert "save the file as UTF-8" in r.err and "Traceback" not in r.err
+
+
+def test_compile_resolve_takes_floor_and_ceil_as_simulate_does() -> None:
+    """Review 20: `simulate --resolve floor` worked, `compile --resolve floor` was refused.
+    The aliases give the same model as lo/hi, and the header says which end."""
+    patrol = str(EXAMPLES / "patrol.afsm")
+    for alias, end in (("floor", "lo"), ("ceil", "hi")):
+        a = run_cli("compile", patrol, "--resolve", alias, "-o", "-")
+        b = run_cli("compile", patrol, "--resolve", end, "-o", "-")
+        assert a.code == b.code == 0 and a.out == b.out, a.err
+        assert ("by their floor" if alias == "floor" else "by their ceiling") in a.out

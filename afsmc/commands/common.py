@@ -52,10 +52,12 @@ def add_consts(p: argparse.ArgumentParser) -> None:
 def add_resolve(p: argparse.ArgumentParser, default: str | None = "nondet",
                 extra: str = "") -> None:
     """`default=None` lets a command tell whether --resolve was given."""
+    # floor/ceil: the paper's words, and simulate's aliases of lo/hi
     p.add_argument("--resolve", choices=RESOLUTIONS, default=default,
+                   type=lambda v: {"floor": "lo", "ceil": "hi"}.get(v, v),
                    help="interval constants [lo, hi]: nondeterministic choice (MDP, min/max "
-                        "bounds; default), uniform random choice (DTMC), or always lo / hi"
-                        + extra)
+                        "bounds; default), uniform random choice (DTMC), or always lo / hi "
+                        "(also written floor / ceil)" + extra)
 
 
 def add_reductions(p: argparse.ArgumentParser) -> None:
