@@ -123,11 +123,12 @@ def run(args: argparse.Namespace) -> int:
                 last[0] = pct // 10
                 print(f"simulate: {done}/{total} runs ({pct}%)", file=sys.stderr)
 
-        model = program(job).model
+        prog = program(job)
+        model = prog.model
         intervals = model.is_nondeterministic
         # the check's warnings, as verify shows them: W602 (a mode the mission cannot end
         # from) is why runs stay undecided whatever --max-steps
-        warnings = [d for d in program(job).diagnostics if d.severity is Severity.WARNING]
+        warnings = [d for d in prog.diagnostics if d.severity is Severity.WARNING]
         if not args.json:
             report(warnings)
         out = simulate(job, args.runs, args.seed, confidence=args.confidence, jobs=args.jobs,

@@ -25,7 +25,14 @@ from afsmc.model.names import (
     safe_identifier,
 )
 from afsmc.syntax import ast
-from afsmc.syntax.parser import MAX_DEPTH, flat_text, tokens
+from afsmc.syntax.parser import (
+    MAX_DEPTH,
+    NESTED_TEMPORAL,
+    NOT_OPERATOR,
+    OPERATORS,
+    flat_text,
+    tokens,
+)
 
 # How deeply a formula may nest once the formulas it uses are inlined (E246): the checks
 # and the JANI backend inline them, recursively (see afsmc.stack).
@@ -801,15 +808,12 @@ class _Resolver:
             return E.WeightRef(target.text, s)
         if f in ("F", "G", "X") and ctx.labels:
             # `P=? [ F F (x == 1) ]`: the inner operator reads as a call
-            self.rep.error("E115", "temporal operators (F, G, X, U) do not nest: one applies "
-                           "to state formulas (labels, comparisons, and/or/not of them)",
-                           e.func.span, hint=f"the {f} here stands inside another temporal "
-                           "operator's formula; write one operator per property")
+            self.rep.error("E115", NESTED_TEMPORAL, e.func.span,
+                           hint=f"the {f} here stands inside another temporal operator's "
+                                "formula; write one operator per property")
             return self._placeholder(s)
         if f == "not":  # `not (x == 1)` reads as a call
-            self.rep.error("E123", "'not' is not an operator in afsm: write '!'", e.func.span,
-                           hint="afsm's boolean operators are '&&' (and), '||' (or), "
-                                "'!' (not) and '=>' (implies)")
+            self.rep.error("E123", NOT_OPERATOR, e.func.span, hint=OPERATORS)
             return self._placeholder(s)
         if f not in E.FUNCTIONS:
             self.rep.error("E233", f"unknown function '{f}'", e.func.span,

@@ -25,8 +25,13 @@ _TOKEN_NAMES = {
     "__ANON_0": "'..'", "$END": "end of file", "DOT": "'.'", "STAR": "'*'",
 }
 
-_E115 = ("E115", "temporal operators (F, G, X, U) do not nest: one applies to state formulas "
-                "(labels, comparisons, and/or/not of them)")
+# Also said by the resolver, where `F F (x == 1)` and `not (x == 1)` parse as calls.
+NESTED_TEMPORAL = ("temporal operators (F, G, X, U) do not nest: one applies to state formulas "
+                   "(labels, comparisons, and/or/not of them)")
+NOT_OPERATOR = "'not' is not an operator in afsm: write '!'"
+OPERATORS = "afsm's boolean operators are '&&' (and), '||' (or), '!' (not) and '=>' (implies)"
+
+_E115 = ("E115", NESTED_TEMPORAL)
 
 _MISSING_SEMICOLON = (("E102", "missing ';' at the end of the declaration"),
                       ("E116", "missing ';' at the end of the outcome"))
@@ -389,9 +394,10 @@ def _report_syntax_error(exc: UnexpectedInput, source: Source, reporter: Reporte
                        Span.at_offset(source, bound.start(1), max(pos, bound.end(2))),
                        hint=f"write '{op}({value} {rest})'")
         return
+    matched = _match_example(exc)
     line_start = text.rfind("\n", 0, pos) + 1
     if (str(tok) in _DECL_KEYWORDS and not scan.open and not text[line_start:pos].strip()
-            and ("SEMICOLON" in accepts or _match_example(exc) in _MISSING_SEMICOLON)):
+            and ("SEMICOLON" in accepts or matched in _MISSING_SEMICOLON)):
         # A declaration starts its line where the one before has not ended: its ';' is
         # missing, whatever the parser state says (`... clamp`, a label, a property).
         reporter.error("E102", "missing ';' at the end of the declaration", after_last,
@@ -403,7 +409,6 @@ def _report_syntax_error(exc: UnexpectedInput, source: Source, reporter: Reporte
         reporter.error("E123", message,
                        span if word is None else Span.at_offset(source, *word), hint=hint)
         return
-    matched = _match_example(exc)
     if str(tok) == "when":
         # Whatever expression the weight is (`weight (b > 3 ? 1 : 0) when ...`): the parser
         # state after it is the one every expression ends in, which the examples cannot tell;
@@ -450,7 +455,6 @@ def _report_syntax_error(exc: UnexpectedInput, source: Source, reporter: Reporte
 # An action's or hazard's header with its weight, right before a failing `when`
 _WEIGHT_BEFORE_GUARD = re.compile(
     r"\b(?:action|hazard)\b(?:(?!\bwhen\b)[^{};])*\bweight\b[^{};]*$")
-_OPERATORS = "afsm's boolean operators are '&&' (and), '||' (or), '!' (not) and '=>' (implies)"
 _QUERY_BEFORE = re.compile(r"\b(?:P|Pmin|Pmax|R|Rmin|Rmax)\s*(?:\{[^{}]*\})?\s*$")
 
 
@@ -464,9 +468,9 @@ def _foreign(text: str, pos: int, tok: str,
     at = (word.start(1), word.end(1)) if word else None
     if kind == "NAME" and tok in ("and", "or"):
         return (f"'{tok}' is not an operator in afsm: write '{'&&' if tok == 'and' else '||'}'",
-                _OPERATORS, None)
+                OPERATORS, None)
     if before == "not" and kind != "LPAR":
-        return "'not' is not an operator in afsm: write '!'", _OPERATORS, at
+        return NOT_OPERATOR, OPERATORS, at
     if before == "if" or (kind == "NAME" and tok in ("then", "elif")):
         return ("afsm has no 'if ... then ... else': write a conditional as 'COND ? A : B'",
                 "for example 'weight (b > 3 ? 1 : 0)'", at if before == "if" else None)
