@@ -11,6 +11,7 @@ import argparse
 import importlib
 import json
 import os
+import re
 import shlex
 import signal
 import sys
@@ -44,6 +45,15 @@ class _Parser(argparse.ArgumentParser):
     scenario presets in examples/."""
 
     _reading: tuple[str, ...] = ()  # the argument files being expanded, outermost first
+
+    def __init__(self, *args: Any, **kwargs: Any) -> None:
+        super().__init__(*args, **kwargs)
+        # argparse takes `-5` for a value but `-5:10` or `-1,0` for an option ("--bound:
+        # expected one argument"); no option of afsmc starts with a digit. (A private
+        # attribute of argparse's, read by its _parse_optional since Python 3.2.)
+        if hasattr(self, "_negative_number_matcher"):
+            self._negative_number_matcher = re.compile(
+                r"^-(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?(?:[:,][-+.\d:,eE]*)?$")
 
     def _read_args_from_files(self, arg_strings: list[str]) -> list[str]:
         # argparse reports a missing file as a usage error, but lets a file that is not

@@ -66,6 +66,15 @@ def test_a_constant_without_a_name_is_a_usage_error() -> None:
         assert r.code == 2 and "expected NAME=VALUE" in r.err and "(no name)" in r.err, r.err
 
 
+def test_a_constant_without_a_value_is_a_usage_error() -> None:
+    # as `--const CELLS` is (no '='): both are the option's own syntax, not the model's
+    for command in ("check", "verify"):
+        for value in ("CELLS=", "CELLS= ", "CELLS=3,ROUNDS="):
+            r = run_cli(command, str(EXAMPLES / "patrol.afsm"), "--const", value)
+            assert r.code == 2 and "expected NAME=VALUE" in r.err and "(no value)" in r.err, \
+                r.err
+
+
 def test_sweep_a_range_replaces_a_preset_value_but_not_a_second_value() -> None:
     fixed, swept = split_consts(["OBJECTS=2", "DEADLINE=500", "DEADLINE=150:500:50"])
     assert fixed == {"OBJECTS": "2"} and swept == {"DEADLINE": [150, 200, 250, 300, 350, 400, 450, 500]}

@@ -21,9 +21,6 @@ import stormpy
 from afsmc.backends import jani, prism
 from afsmc.compiler import load
 from afsmc.compiler import lowered as compiler_lowered
-from afsmc.diagnostics import CompileError
-from afsmc.model import expr as E
-from afsmc.model import ir
 from afsmc.model.lower import RESOLUTIONS, Lowered
 from tests.conftest import CASES, EXAMPLES, ROOT, run_cli
 
@@ -266,18 +263,45 @@ def test_name_clashes_get_fresh_names(tmp_path: Path) -> None:
     assert_same_as_prism(low, tmp_path)
 
 
-def test_bounded_globally_is_a_diagnostic() -> None:
-    # Storm's JANI has no bounded G: `afsmc verify` asks its dual (afsmc.verify.core.dual),
-    # and `afsmc compile -t jani` says so rather than print it wrongly.
-    low = lowered("grid.afsm", "nondet", text=GRID)
-    safe = next(p for p in low.model.properties if p.name == "safe")
-    assert isinstance(safe.path, ir.Path)
-    bounded = replace(safe, name="safe3", path=replace(safe.path, bound=E.lit(3)))
-    model = replace(low.model, properties=(*low.model.properties, bounded))
-    with pytest.raises(CompileError) as info:
-        jani.emit(replace(low, model=model))
-    [diag] = info.value.diagnostics
-    assert diag.code == "E401" and "safe3" in diag.message and diag.span == safe.span
+def test_bounded_globally_is_written_as_its_dual(tmp_path: Path) -> None:
+    # Storm's JANI has no bounded G: the file holds P [F<=k !φ] (min and max swapped) under
+    # NAME_complement, and W401 says so. Oracle: the dual written by hand, checked by Storm
+    # from the PRISM file (whose reader has no bounded G either).
+    text = GRID + 'property safe3 = P=? [ G<=3 !"crashed" ];\n' \
+        'property hand = P=? [ F<=3 "crashed" ];\n' \
+        'property safe3_min_complement = Pmax=? [ G !"crashed" ];\n'  # takes the first name
+    low = lowered("grid.afsm", "nondet", text=text)
+    by_name = {p.name: p for p in low.model.properties}
+    props = tuple(by_name[n] for n in ("safe3", "hand", "safe3_min_complement"))
+    low = replace(low, model=replace(low.model, properties=props))
+    [note] = jani.notes(low)
+    assert note.code == "W401" and note.span == by_name["safe3"].span
+    assert "safe3_min = 1 - safe3_min_complement_, safe3_max = 1 - safe3_max_complement" \
+        in note.message, note.message
+    jm, jprops = storm_jani(low, tmp_path)
+    jnames = [p.get_name() for p in jprops]  # type: ignore[attr-defined]
+    assert jnames == jani.property_names(low) == [
+        "safe3_min_complement_", "safe3_max_complement", "hand_min", "hand_max",
+        "safe3_min_complement"]
+    jvalues = dict(zip(jnames, (value(jm, p) for p in jprops), strict=True))
+    pm, pprops = storm_prism(replace(low, model=replace(low.model, properties=props[1:2])),
+                             tmp_path)
+    hand = {p.get_name(): value(pm, p) for p in pprops}  # type: ignore[attr-defined]
+    assert 0 < hand["hand_min"] < hand["hand_max"] < 1, hand
+    assert jvalues["safe3_min_complement_"] == pytest.approx(hand["hand_max"], abs=1e-12)
+    assert jvalues["safe3_max_complement"] == pytest.approx(hand["hand_min"], abs=1e-12)
+    assert "1 - this value is safe3_min " in jani.dumps(jani.emit(low))
+
+
+def test_compile_writes_a_bounded_globally_with_w401(tmp_path: Path) -> None:
+    path = tmp_path / "grid.afsm"
+    path.write_text(GRID.replace("P=? [ G ", "P=? [ G<=3 "), encoding="utf-8")
+    r = run_cli("compile", str(path), "-t", "jani", "-o", str(tmp_path))
+    assert r.code == 0, r.err
+    assert "warning[W401]: property safe: " in r.err and "safe_max = 1 - safe_max_complement" \
+        in r.err, r.err
+    names = [p["name"] for p in json.loads((tmp_path / "grid.jani").read_text())["properties"]]
+    assert "safe_min_complement" in names and "safe_min" not in names
 
 
 def test_golden_patrol(update_golden: bool) -> None:

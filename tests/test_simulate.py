@@ -470,3 +470,39 @@ def test_an_unreachable_dask_scheduler_is_a_diagnostic(command: list[str], code:
     assert r.code == 1 and f"error[{code}]" in r.err, r.err
     assert "is a Dask scheduler running at tcp://127.0.0.1:1?" in r.err
     assert "Traceback" not in r.err
+
+
+@pytest.mark.parametrize("as_json", [True, False])
+def test_an_interrupted_simulation_keeps_the_runs_that_finished(tmp_path: Path,
+                                                                as_json: bool) -> None:
+    # SIGTERM (as `kill` or a batch system's timeout sends it) after the first batches: the
+    # estimate of those runs is printed, and for --json is the object's data.
+    import signal
+    import subprocess
+    import sys
+    import time
+
+    exact = storm_values(PATROL, "uniform", tmp=tmp_path)
+    argv = [sys.executable, "-m", "afsmc", "simulate", str(PATROL), "--runs", "100000000",
+            "--batch-size", "2000", *(["--json"] if as_json else [])]
+    proc = subprocess.Popen(argv, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    assert proc.stderr is not None
+    for line in proc.stderr:  # the first progress line follows the first batch
+        if line.startswith("simulate: ") and "runs (" in line:
+            break
+    time.sleep(0.5)
+    proc.send_signal(signal.SIGTERM)
+    out, err = proc.communicate(timeout=60)
+    assert proc.returncode == 143, err
+    assert "Traceback" not in err and "afsmc: terminated" in err
+    assert "runs that finished estimate" in err, err
+    if not as_json:
+        assert out == "", out
+        return
+    data = json.loads(out)
+    assert data["interrupted"] is True and data["diagnostics"][0]["code"] == "N412"
+    assert 2000 <= data["runs"] < 100_000_000 and data["runs"] % 2000 == 0
+    assert f"the {data['runs']:,} of 100,000,000 runs" in err
+    assert [p["name"] for p in data["properties"]] == list(exact)
+    for p in data["properties"]:
+        assert p["low"] <= exact[p["name"]] <= p["high"], (p, exact[p["name"]])

@@ -200,6 +200,11 @@ def test_bound_sweep_rejects_a_bad_bound_once(tmp_path: Path, no_points: None) -
     r = run_cli("sweep", str(p), "--bound", f"{2**63}:{2**63 + 1}", "-p", "soon")
     assert r.code == 1 and r.err.count("error[E410]") == 1, r.err
     assert f"--bound {2**63}, {2**63 + 1}: step bounds are integers from 0 to 2^63 - 1" in r.err
+    # a range that starts below 0 reaches afsmc's check: argparse took it for an option
+    for value in ("-2:1", "-1,0"):
+        r = run_cli("sweep", str(p), "--bound", value, "-p", "soon")
+        assert r.code == 1 and r.err.count("error[E410]") == 1, r.err
+        assert "--bound -" in r.err and "expected one argument" not in r.err, r.err
 
 
 def test_outputs_are_checked_before_any_point(deadline: str, tmp_path: Path,

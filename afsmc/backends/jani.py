@@ -24,10 +24,11 @@ from typing import Any
 
 from afsmc.backends.prism import describe, property_variants
 from afsmc.backends.storm_safe import signed_pow
-from afsmc.diagnostics import CompileError, Diagnostic, Severity, Span
+from afsmc.diagnostics import Diagnostic, Severity, Span
 from afsmc.model import expr as E
 from afsmc.model import ir
 from afsmc.model.lower import Command, Lowered
+from afsmc.model.semantics import bounded_globally, globally_dual
 
 Json = Any  # a JSON-ready value: dict, list, str, int, float, bool
 
@@ -244,12 +245,6 @@ def _edge(cmd: Command, low: Lowered, names: _Names, ex: _Exprs) -> Json:
 # ---- properties -------------------------------------------------------------------
 
 
-def _unsupported(prop: ir.Property, why: str, hint: str) -> CompileError:
-    return CompileError([Diagnostic("E401", Severity.ERROR,
-                                    f"property {prop.name} cannot be expressed in JANI: {why}",
-                                    prop.span, hint=hint)])
-
-
 def _path(prop: ir.Property, opt: str, names: _Names, ex: _Exprs) -> Json:
     path = prop.path
     # a DTMC has one value: Storm accepts Pmin/Emin there and they equal Pmax/Emax
@@ -262,11 +257,7 @@ def _path(prop: ir.Property, opt: str, names: _Names, ex: _Exprs) -> Json:
             inner = {"op": "U", "left": True, "right": target,
                      "step-bounds": {"lower": 1, "upper": 1}}
         elif path.kind == "G":
-            if path.bound is not None:
-                raise _unsupported(
-                    prop, "Storm does not support a step bound on G",
-                    "ask for P=? [ F<=k !(...) ] instead: P(G<=k a) = 1 - P(F<=k !a), "
-                    "with min and max swapped for an MDP")
+            assert path.bound is None  # _properties writes a bounded G as its dual
             inner = {"op": "G", "exp": target}
         elif path.kind == "U":
             assert path.left is not None
@@ -295,17 +286,50 @@ def _path(prop: ir.Property, opt: str, names: _Names, ex: _Exprs) -> Json:
     return out
 
 
+def dual_name(low: Lowered, name: str) -> str:
+    """The JANI name of the property that gives `name` (a step-bounded G) as 1 - its value:
+    NAME_complement, unless the file has a property of that name."""
+    taken = {n for p in low.model.properties for n, _ in property_variants(low, p)}
+    out = f"{name}_complement"
+    while out in taken:
+        out += "_"
+    return out
+
+
 def _properties(low: Lowered, names: _Names, ex: _Exprs) -> list[Json]:
     out = []
     for prop in low.model.properties:
         for name, opt in property_variants(low, prop):
+            asked, comment = prop, _where(prop.span)
+            if bounded_globally(prop):
+                # Storm's JANI has no step-bounded G: the file holds the dual, and says so
+                comment = f"1 - this value is {name} (P [ G<=k φ ] = 1 - P [ F<=k !φ ]" \
+                          f"{', min and max swapped' if opt else ''}); {comment}"
+                asked, name = globally_dual(prop, name), dual_name(low, name)
+                opt = {"min": "max", "max": "min"}.get(opt, "")
             out.append({
                 "name": name,
                 "expression": {"op": "filter", "fun": "values",
-                               "values": _path(prop, opt, names, ex),
+                               "values": _path(asked, opt, names, ex),
                                "states": {"op": "initial"}},
-                "comment": _where(prop.span),
+                "comment": comment,
             })
+    return out
+
+
+def notes(low: Lowered) -> list[Diagnostic]:
+    """W401 for each step-bounded G, which the file holds as its dual."""
+    out = []
+    for prop in low.model.properties:
+        if bounded_globally(prop):
+            pairs = [(n, dual_name(low, n)) for n, _ in property_variants(low, prop)]
+            said = ", ".join(f"{n} = 1 - {d}" for n, d in pairs)
+            out.append(Diagnostic(
+                "W401", Severity.WARNING,
+                f"property {prop.name}: Storm's JANI has no step-bounded G, so the file asks "
+                f"P [ F<=k !(...) ] instead: {said}"
+                + (" (min and max swapped)" if len(pairs) > 1 or prop.opt else ""),
+                prop.span, hint="`afsmc verify` reports the G values; `-t prism` keeps G<=k"))
     return out
 
 
@@ -347,8 +371,10 @@ def dumps(model: dict[str, Any]) -> str:
 
 
 def property_names(low: Lowered) -> list[str]:
-    """The JANI properties' names, in order: those of the PRISM backend's properties file."""
-    return [name for prop in low.model.properties for name, _ in property_variants(low, prop)]
+    """The JANI properties' names, in order: those of the PRISM backend's properties file,
+    but for the dual of each step-bounded G."""
+    return [dual_name(low, name) if bounded_globally(prop) else name
+            for prop in low.model.properties for name, _ in property_variants(low, prop)]
 
 
 def files(low: Lowered) -> dict[str, str]:

@@ -20,7 +20,7 @@ from afsmc.commands.common import (
     usage_error,
 )
 from afsmc.compiler import check_writable, load, lowered, write_atomic
-from afsmc.diagnostics import CompileError
+from afsmc.diagnostics import CompileError, Diagnostic
 from afsmc.model.lower import Lowered
 
 # -t NAME -> "module:function"; the function maps a Lowered model to {suffix: text}.
@@ -40,6 +40,12 @@ def available_targets() -> dict[str, Callable[[Lowered], dict[str, str]]]:
         except (ImportError, AttributeError):
             continue  # a backend that is not installed is not offered
     return out
+
+
+def target_notes(name: str, low: Lowered) -> list[Diagnostic]:
+    """A backend's warnings about what it wrote (its optional `notes(low)`): JANI's W401."""
+    notes = getattr(importlib.import_module(TARGETS[name].split(":")[0]), "notes", None)
+    return list(notes(low)) if notes else []
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
@@ -82,9 +88,13 @@ def run(args: argparse.Namespace) -> int:
                     "named after it); '-' prints them")
     try:
         checked = load(args.file, overrides(args))
-        report(checked.diagnostics)
-        files = available_targets()[args.target](
-            lowered(checked.model, args.resolve, reductions(args)))
+        try:
+            low = lowered(checked.model, args.resolve, reductions(args))
+        except CompileError:
+            report(checked.diagnostics)
+            raise
+        report([*checked.diagnostics, *target_notes(args.target, low)])
+        files = available_targets()[args.target](low)
         if args.output == "-":
             stem = os.path.splitext(os.path.basename(args.file))[0]
             for i, (suffix, text) in enumerate(files.items()):

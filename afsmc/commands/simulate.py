@@ -131,9 +131,21 @@ def run(args: argparse.Namespace) -> int:
         warnings = [d for d in prog.diagnostics if d.severity is Severity.WARNING]
         if not args.json:
             report(warnings)
-        out = simulate(job, args.runs, args.seed, confidence=args.confidence, jobs=args.jobs,
-                       dask=args.dask, trace=args.traces, batch_size=args.batch_size,
-                       progress=progress)
+        try:
+            out = simulate(job, args.runs, args.seed, confidence=args.confidence,
+                           jobs=args.jobs, dask=args.dask, trace=args.traces,
+                           batch_size=args.batch_size, progress=progress)
+        except KeyboardInterrupt as exc:
+            # The runs that finished are not lost to a Ctrl-C: the CLI prints the note and,
+            # for --json, the estimates as data.
+            part: Outcome | None = getattr(exc, "afsmc_outcome", None)
+            if part is not None:
+                exc.add_note(_so_far(part, args))
+                consts: dict[str, object] = {c.name: c.value for c in model.constants
+                                             if c.is_param}
+                setattr(exc, "afsmc_partial",  # noqa: B010
+                        _Partial(_json(part, args, model.name, consts, warnings)))
+            raise
         if args.traces_out:
             write_atomic(args.traces_out, json.dumps(out.traces, indent=1) + "\n",
                          protect=(args.file,))
@@ -155,6 +167,26 @@ def run(args: argparse.Namespace) -> int:
     else:
         _print(out, args, intervals, endless=any(d.code == "W602" for d in warnings))
     return 0
+
+
+class _Partial:
+    """What an interrupted run had, for the CLI's --json object."""
+
+    def __init__(self, obj: dict[str, Any]) -> None:
+        self.obj = obj
+
+    def to_json(self) -> dict[str, Any]:
+        return self.obj
+
+
+def _so_far(part: Outcome, args: argparse.Namespace) -> str:
+    lines = [f"the {part.runs:,} of {args.runs:,} runs that finished estimate "
+             f"({args.confidence:g} confidence, seed {args.seed}):"]
+    for e in part.estimates:
+        value = "n/a" if math.isnan(e.estimate) else num(e.estimate)
+        undecided = f", {e.undecided} undecided" if e.undecided else ""
+        lines.append(f"  {e.name} = {value} [{num(e.low)}, {num(e.high)}]{undecided}")
+    return "\n".join(lines)
 
 
 def _num(v: float) -> Any:

@@ -61,6 +61,8 @@ def parse_override(text: str) -> tuple[str, str]:
     name, value = text.split("=", 1)
     if not name.strip():
         raise ValueError(f"expected NAME=VALUE, got {text!r} (no name)")
+    if not value.strip():
+        raise ValueError(f"expected NAME=VALUE, got {text!r} (no value)")
     return name.strip(), value.strip()
 
 

@@ -6,6 +6,8 @@ checks, the lowering and the backends all build on them.
 
 from __future__ import annotations
 
+import dataclasses
+
 from afsmc.model import expr as E
 from afsmc.model import ir
 from afsmc.model.evaluate import EvalError, scalar
@@ -133,3 +135,17 @@ def fire_condition(model: ir.Model, action: ir.Action, mode: int, *,
             parts.append(E.disj(E.neg(en_b),
                                 E.Binary("<", b.weight, action.weight, Type.BOOL)))
     return E.conj(*parts)
+
+
+def bounded_globally(p: ir.Property) -> bool:
+    """`P [ G<=k φ ]`: Storm has no step-bounded G (neither its PRISM nor its JANI reader)."""
+    return isinstance(p.path, ir.Path) and p.path.kind == "G" and p.path.bound is not None
+
+
+def globally_dual(p: ir.Property, name: str) -> ir.Property:
+    """The property that gives `P [ G<=k φ ]` as 1 - its value, exactly: `P [ F<=k !φ ]`,
+    and for an MDP the minimum of one is 1 - the maximum of the other."""
+    assert isinstance(p.path, ir.Path) and p.path.bound is not None
+    return dataclasses.replace(p, name=name,
+                               opt="max" if p.opt == "min" else "min" if p.opt else "",
+                               path=ir.Path("F", E.neg(p.path.target), bound=p.path.bound))

@@ -117,50 +117,59 @@ def simulate(job: Job, runs: int, seed: int, *, confidence: float = 0.999, jobs:
         if progress:
             progress(done, runs)
 
-    if dask is not None:
-        from distributed import Client  # optional: only when --dask is used
+    def outcome() -> Outcome:
+        res = [r for r in results if r is not None]
+        return Outcome(sum(r.runs for r in res), combine(prog, res, confidence),
+                       sum(r.steps for r in res), time.monotonic() - started,
+                       res[0].traces if res else [], len(plan))
 
-        client = dask if isinstance(dask, Client) else Client(dask)  # type: ignore[no-untyped-call]
-        try:
-            futures = [client.submit(run_batch, job, n, s, trace if i == 0 else 0, pure=False)
-                       for i, (n, s) in enumerate(plan)]
-            index = {f.key: i for i, f in enumerate(futures)}
-            from distributed import as_completed
+    try:
+        if dask is not None:
+            from distributed import Client  # optional: only when --dask is used
 
+            client = dask if isinstance(dask, Client) else Client(dask)  # type: ignore[no-untyped-call]
             try:
-                for fut in as_completed(futures):  # type: ignore[no-untyped-call]
-                    finished(index[fut.key], fut.result())
-            except Exception as exc:
-                if not worker_died(exc):
-                    raise
-                raise SimError(_DIED) from None
-        finally:
-            if not isinstance(dask, Client):
-                client.close()  # type: ignore[no-untyped-call]
-    elif jobs > 1 and len(plan) > 1:
-        import multiprocessing
-        from concurrent.futures import ProcessPoolExecutor
-        from concurrent.futures import as_completed as cf_completed
+                futures = [client.submit(run_batch, job, n, s, trace if i == 0 else 0, pure=False)
+                           for i, (n, s) in enumerate(plan)]
+                index = {f.key: i for i, f in enumerate(futures)}
+                from distributed import as_completed
 
-        ctx = multiprocessing.get_context("fork" if sys.platform == "linux" else "spawn")
-        with ProcessPoolExecutor(max_workers=jobs, mp_context=ctx, initializer=die_with_parent,
-                                 initargs=(os.getpid(),)) as pool:
-            futs = {pool.submit(run_batch, job, n, s, trace if i == 0 else 0): i
-                    for i, (n, s) in enumerate(plan)}
-            try:
-                for f in cf_completed(futs):
-                    finished(futs[f], f.result())
-            except Exception as exc:
-                if not worker_died(exc):
-                    raise
-                raise SimError(_DIED) from None
-    else:
-        for i, (n, s) in enumerate(plan):
-            finished(i, simulate_batch(prog, n, np.random.default_rng(s), job.max_steps,
-                                       trace if i == 0 else 0))
-    res = [r for r in results if r is not None]
-    return Outcome(runs, combine(prog, res, confidence), sum(r.steps for r in res),
-                   time.monotonic() - started, res[0].traces if res else [], len(plan))
+                try:
+                    for fut in as_completed(futures):  # type: ignore[no-untyped-call]
+                        finished(index[fut.key], fut.result())
+                except Exception as exc:
+                    if not worker_died(exc):
+                        raise
+                    raise SimError(_DIED) from None
+            finally:
+                if not isinstance(dask, Client):
+                    client.close()  # type: ignore[no-untyped-call]
+        elif jobs > 1 and len(plan) > 1:
+            import multiprocessing
+            from concurrent.futures import ProcessPoolExecutor
+            from concurrent.futures import as_completed as cf_completed
+
+            ctx = multiprocessing.get_context("fork" if sys.platform == "linux" else "spawn")
+            with ProcessPoolExecutor(max_workers=jobs, mp_context=ctx, initializer=die_with_parent,
+                                     initargs=(os.getpid(),)) as pool:
+                futs = {pool.submit(run_batch, job, n, s, trace if i == 0 else 0): i
+                        for i, (n, s) in enumerate(plan)}
+                try:
+                    for f in cf_completed(futs):
+                        finished(futs[f], f.result())
+                except Exception as exc:
+                    if not worker_died(exc):
+                        raise
+                    raise SimError(_DIED) from None
+        else:
+            for i, (n, s) in enumerate(plan):
+                finished(i, simulate_batch(prog, n, np.random.default_rng(s), job.max_steps,
+                                           trace if i == 0 else 0))
+    except KeyboardInterrupt as exc:
+        if done:  # the batches that finished are an estimate of their own (the CLI shows it)
+            setattr(exc, "afsmc_outcome", outcome())  # noqa: B010
+        raise
+    return outcome()
 
 
 def combine(prog: Program, results: list[BatchResult], confidence: float) -> list[Estimate]:

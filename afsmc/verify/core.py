@@ -28,7 +28,7 @@ from afsmc.model.lower import Lowered
 from afsmc.model.names import did_you_mean
 from afsmc.model.pretty import show
 from afsmc.model.reduce import Reductions
-from afsmc.model.semantics import inline, static_value
+from afsmc.model.semantics import bounded_globally, globally_dual, inline, static_value
 from afsmc.stack import deep
 from afsmc.syntax.parser import parse, parse_property
 from afsmc.verify.guard import (
@@ -460,17 +460,8 @@ REST = "__afsmc_rest_"
 DUAL = "__afsmc_dual_"  # P[G<=k φ] asked as 1 - P[F<=k !φ]
 
 
-def _bounded_g(p: ir.Property) -> bool:
-    return isinstance(p.path, ir.Path) and p.path.kind == "G" and p.path.bound is not None
-
-
 def dual(p: ir.Property) -> ir.Property:
-    """Storm has no step-bounded G: P[G<=k φ] = 1 - P[F<=k !φ], exactly, and for an MDP
-    the minimum of one is 1 - the maximum of the other."""
-    assert isinstance(p.path, ir.Path)
-    return dataclasses.replace(p, name=DUAL + p.name,
-                               opt="max" if p.opt == "min" else "min" if p.opt else "",
-                               path=ir.Path("F", E.neg(p.path.target), bound=p.path.bound))
+    return globally_dual(p, DUAL + p.name)
 
 
 def _conjuncts(e: E.Expr) -> list[E.Expr]:
@@ -594,7 +585,7 @@ def _duals(props: Sequence[ir.Property]) -> dict[str, tuple[str, str]]:
     itself: its own name may end in `_min`)."""
     out = {}
     for p in props:
-        if _bounded_g(p):
+        if bounded_globally(p):
             # a DTMC, or an MDP property with Pmin/Pmax: the dual asks the other bound
             asked = {"min": "max", "max": "min"}.get(p.opt or "", "")
             out[DUAL + p.name] = (p.name, f"{p.name} as 1 - P{asked} [F<=k !φ]")
@@ -775,8 +766,8 @@ def check(model: ir.Model, props: Sequence[ir.Property], *, via: Via = "prism",
     if progress is not None:
         say = progress
         progress = lambda text: say(_readable(text, texts))  # noqa: E731
-    props = [dual(p) if _bounded_g(p) else p for p in props]
-    preserve = [dual(p) if _bounded_g(p) else p for p in preserve]
+    props = [dual(p) if bounded_globally(p) else p for p in props]
+    preserve = [dual(p) if bounded_globally(p) else p for p in preserve]
     bound = upper_bound(model)
     engine, reason = choose_engine(engine, bound)
     _refuse_symbolic(props, model, engine)
