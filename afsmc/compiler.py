@@ -79,10 +79,12 @@ class Checked:
 
 @deep
 def load(path: str, overrides: Mapping[str, str] | None = None, *, text: str | None = None,
-         run_checks: bool = True) -> Checked:
-    """Parse, resolve and check one file. Raises CompileError if anything is an error."""
+         run_checks: bool = True, open_params: bool = False) -> Checked:
+    """Parse, resolve and check one file. Raises CompileError if anything is an error.
+    (`open_params`: see resolve; only without the checks, which need every value.)"""
+    assert not (open_params and run_checks)
     module = parse(read_source(path) if text is None else text, path)
-    model = resolve(module, overrides)
+    model = resolve(module, overrides, open_params=open_params)
     warnings = list(model.cache.get("warnings", []))  # type: ignore[call-overload]
     if run_checks:
         rep = Reporter(warnings)

@@ -281,3 +281,26 @@ def test_update_writes_no_value_its_own_rule_rejects(tmp_path: Path) -> None:
     assert again.code == 1 and [d["code"] for d in data["diagnostics"]] == ["E508"]
     by_name = {c["name"]: c for c in data["constants"]}
     assert by_name["B_AP"]["suggestion"] is None and by_name["T_DE"]["verdict"] == "consistent"
+
+
+def test_a_param_no_simulated_constant_reads_needs_no_value(tmp_path: Path) -> None:
+    # sim-check judges the simulated constants: a param they do not read may stay open
+    # (the model's other checks need it, and are skipped, as stderr says) ...
+    text = UAV.read_text()
+    opened = text.replace("param int WIDTH    = 3;", "param int WIDTH;")
+    assert opened != text
+    path = tmp_path / "open.afsm"
+    path.write_text(opened)
+    r = run_cli("sim-check", str(path), "--json", "--runs", "2000")
+    got = json.loads(r.out)
+    assert "WIDTH has no value, and no simulated constant depends on it" in r.err, r.err
+    ref = run_cli("sim-check", str(UAV), "--json", "--runs", "2000")
+    assert r.code == ref.code and got["constants"] == json.loads(ref.out)["constants"]
+    # ... but one they read needs a value: E206, as before
+    needed = opened.replace("const int T_TAKEOFF  = [10, 11]",
+                            "const int T_TAKEOFF  = [WIDTH + 7, WIDTH + 8]")
+    assert needed != opened
+    path.write_text(needed)
+    r = run_cli("sim-check", str(path))
+    assert r.code == 1 and "error[E206]: open constant 'WIDTH' has no value" in r.err, r.err
+    assert "no simulated constant depends" not in r.err

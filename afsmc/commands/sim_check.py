@@ -57,7 +57,25 @@ def run(args: argparse.Namespace) -> int:
     try:
         checked = load(args.file, overrides(args), text=text)
     except CompileError as exc:
-        return fail(exc, args.json, wrapped=True)
+        errors = [d for d in exc.diagnostics if d.is_error]
+        if not errors or any(d.code != "E206" for d in errors):
+            return fail(exc, args.json, wrapped=True)
+        # Only params without a value: the simulated constants may not need them.
+        try:
+            checked = load(args.file, overrides(args), text=text, run_checks=False,
+                           open_params=True)
+        except CompileError:
+            return fail(exc, args.json, wrapped=True)
+        stand_ins = checked.model.cache.get("stand_ins", frozenset())
+        assert isinstance(stand_ins, frozenset)
+        if any(c.name in stand_ins for c in checked.model.constants if c.source is not None):
+            return fail(exc, args.json, wrapped=True)
+        open_ = sorted(c.name for c in checked.model.constants
+                       if c.is_param and c.name in stand_ins)
+        has, it = ("has", "it") if len(open_) == 1 else ("have", "them")
+        print(f"sim-check: {', '.join(open_)} {has} no value, and no simulated constant "
+              f"depends on {it}: the simulated constants are judged without the model's other "
+              "checks (`afsmc check --const ...` runs those)", file=sys.stderr)
     model = checked.model
     sourced = [c for c in model.constants if c.source is not None]
     results: list[Evidence] = []

@@ -97,13 +97,19 @@ def _shown(v: int) -> str:
     return f"{'-' if v < 0 else ''}{digits[0]}.{digits[1:3]}e{len(digits) - 1}"
 
 
-def resolve(module: ast.Module, overrides: Mapping[str, str] | None = None) -> ir.Model:
+def resolve(module: ast.Module, overrides: Mapping[str, str] | None = None, *,
+            open_params: bool = False) -> ir.Model:
+    """`open_params`: a param with no value is no error (E206) but a stand-in; the
+    constants whose values read one are `model.cache["stand_ins"]` (for sim-check, which
+    needs only the values of the simulated constants)."""
     r = _Resolver(module, dict(overrides or {}))
+    r.open_params = open_params
     model = r.run()
     if r.rep.has_errors:
         raise CompileError(r.rep.sorted())
     model.cache["warnings"] = [d for d in r.rep.sorted() if not d.is_error]
     model.cache["used_names"] = frozenset(r.used)
+    model.cache["stand_ins"] = frozenset(r.poisoned)
     return model
 
 
@@ -124,6 +130,7 @@ class _Resolver:
         # whether the last _const_value read one: a range over them is not also "empty".
         self.poisoned: set[str] = set()
         self.tainted = False
+        self.open_params = False  # resolve(open_params=True)
         self.modes: dict[str, ir.Mode] = {}
         self.formulas: dict[str, ir.Formula] = {}
         self.formula_decls: dict[str, ast.FormulaDecl] = {}
@@ -295,8 +302,11 @@ class _Resolver:
             if is_param and name in self.overrides:
                 value = self._parse_override(name, self.overrides[name], t, d.name.span)
             elif expr is None:
-                self.rep.error("E206", f"open constant '{name}' has no value",
-                               d.name.span, hint=f"pass --const {name}=VALUE, or give it a default")
+                if self.open_params:
+                    self.tainted = True  # a stand-in, as after E206
+                else:
+                    self.rep.error("E206", f"open constant '{name}' has no value", d.name.span,
+                                   hint=f"pass --const {name}=VALUE, or give it a default")
                 value = {Type.INT: 0, Type.DOUBLE: 0.0, Type.BOOL: False}[t]
             else:
                 assert not isinstance(expr, ast.Interval)
