@@ -68,8 +68,8 @@ def test_a_constant_without_a_name_is_a_usage_error() -> None:
 
 def test_a_constant_without_a_value_is_a_usage_error() -> None:
     # as `--const CELLS` is (no '='): both are the option's own syntax, not the model's
-    for command in ("check", "verify"):
-        for value in ("CELLS=", "CELLS= ", "CELLS=3,ROUNDS="):
+    for command in ("check", "verify", "sweep"):
+        for value in ("CELLS=", "CELLS= ", "ROUNDS=1:2,CELLS="):
             r = run_cli(command, str(EXAMPLES / "patrol.afsm"), "--const", value)
             assert r.code == 2 and "expected NAME=VALUE" in r.err and "(no value)" in r.err, \
                 r.err

@@ -302,6 +302,9 @@ def test_compile_writes_a_bounded_globally_with_w401(tmp_path: Path) -> None:
         in r.err, r.err
     names = [p["name"] for p in json.loads((tmp_path / "grid.jani").read_text())["properties"]]
     assert "safe_min_complement" in names and "safe_min" not in names
+    r = run_cli("compile", str(path), "-t", "jani", "--resolve", "uniform", "-o", "-")
+    assert r.code == 0 and "safe = 1 - safe_complement\n" in r.err, r.err  # a DTMC: no swap
+    assert '"name": "safe_complement"' in r.out
 
 
 def test_golden_patrol(update_golden: bool) -> None:

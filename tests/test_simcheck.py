@@ -296,11 +296,17 @@ def test_a_param_no_simulated_constant_reads_needs_no_value(tmp_path: Path) -> N
     assert "WIDTH has no value, and no simulated constant depends on it" in r.err, r.err
     ref = run_cli("sim-check", str(UAV), "--json", "--runs", "2000")
     assert r.code == ref.code and got["constants"] == json.loads(ref.out)["constants"]
-    # ... but one they read needs a value: E206, as before
+    # ... but one they read, through another constant too, needs a value: E206 for it
+    # alone. (100 / WIDTH divides by WIDTH's stand-in: no E211 after WIDTH's E206.)
+    opened = opened.replace("param int HEIGHT   = 3;", "param int HEIGHT;")
     needed = opened.replace("const int T_TAKEOFF  = [10, 11]",
-                            "const int T_TAKEOFF  = [WIDTH + 7, WIDTH + 8]")
+                            "const double HALF = 100 / WIDTH;\nconst int BASE = HEIGHT + 7;\n"
+                            "const int T_TAKEOFF  = [BASE, BASE + 1]")
     assert needed != opened
     path.write_text(needed)
     r = run_cli("sim-check", str(path))
-    assert r.code == 1 and "error[E206]: open constant 'WIDTH' has no value" in r.err, r.err
+    assert r.code == 1 and "error[E206]: open constant 'HEIGHT' has no value" in r.err, r.err
+    assert "'WIDTH'" not in r.err and "E211" not in r.err, r.err
     assert "no simulated constant depends" not in r.err
+    r = run_cli("check", str(path))
+    assert r.code == 1 and r.err.count("error[E206]") == 2 and "E211" not in r.err, r.err

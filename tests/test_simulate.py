@@ -472,11 +472,13 @@ def test_an_unreachable_dask_scheduler_is_a_diagnostic(command: list[str], code:
     assert "Traceback" not in r.err
 
 
-@pytest.mark.parametrize("as_json", [True, False])
+@pytest.mark.parametrize(("as_json", "jobs"), [(True, 1), (False, 1), (True, 2)])
 def test_an_interrupted_simulation_keeps_the_runs_that_finished(tmp_path: Path,
-                                                                as_json: bool) -> None:
+                                                                as_json: bool,
+                                                                jobs: int) -> None:
     # SIGTERM (as `kill` or a batch system's timeout sends it) after the first batches: the
-    # estimate of those runs is printed, and for --json is the object's data.
+    # estimate of those runs is printed, and for --json is the object's data. With worker
+    # processes too, which stop at once (the pool used to run every queued batch first).
     import signal
     import subprocess
     import sys
@@ -484,7 +486,7 @@ def test_an_interrupted_simulation_keeps_the_runs_that_finished(tmp_path: Path,
 
     exact = storm_values(PATROL, "uniform", tmp=tmp_path)
     argv = [sys.executable, "-m", "afsmc", "simulate", str(PATROL), "--runs", "100000000",
-            "--batch-size", "2000", *(["--json"] if as_json else [])]
+            "--batch-size", "2000", "--jobs", str(jobs), *(["--json"] if as_json else [])]
     proc = subprocess.Popen(argv, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     assert proc.stderr is not None
     for line in proc.stderr:  # the first progress line follows the first batch
@@ -492,7 +494,11 @@ def test_an_interrupted_simulation_keeps_the_runs_that_finished(tmp_path: Path,
             break
     time.sleep(0.5)
     proc.send_signal(signal.SIGTERM)
-    out, err = proc.communicate(timeout=60)
+    try:
+        out, err = proc.communicate(timeout=30)
+    except subprocess.TimeoutExpired:
+        proc.kill()
+        raise AssertionError("SIGTERM did not stop the simulation") from None
     assert proc.returncode == 143, err
     assert "Traceback" not in err and "afsmc: terminated" in err
     assert "runs that finished estimate" in err, err

@@ -322,13 +322,14 @@ def notes(low: Lowered) -> list[Diagnostic]:
     out = []
     for prop in low.model.properties:
         if bounded_globally(prop):
-            pairs = [(n, dual_name(low, n)) for n, _ in property_variants(low, prop)]
-            said = ", ".join(f"{n} = 1 - {d}" for n, d in pairs)
+            variants = property_variants(low, prop)
+            said = ", ".join(f"{n} = 1 - {dual_name(low, n)}" for n, _ in variants)
             out.append(Diagnostic(
                 "W401", Severity.WARNING,
                 f"property {prop.name}: Storm's JANI has no step-bounded G, so the file asks "
                 f"P [ F<=k !(...) ] instead: {said}"
-                + (" (min and max swapped)" if len(pairs) > 1 or prop.opt else ""),
+                # a DTMC's one value has no min and max to swap (_properties agrees)
+                + (" (min and max swapped)" if any(opt for _, opt in variants) else ""),
                 prop.span, hint="`afsmc verify` reports the G values; `-t prism` keeps G<=k"))
     return out
 

@@ -9,6 +9,7 @@ import datetime
 import os
 import sys
 import time
+from typing import cast
 
 from afsmc.commands.common import add_consts, add_seed, fail, overrides, print_json, report
 from afsmc.compiler import load, write_atomic
@@ -66,12 +67,14 @@ def run(args: argparse.Namespace) -> int:
                            open_params=True)
         except CompileError:
             return fail(exc, args.json, wrapped=True)
-        stand_ins = checked.model.cache.get("stand_ins", frozenset())
-        assert isinstance(stand_ins, frozenset)
-        if any(c.name in stand_ins for c in checked.model.constants if c.source is not None):
-            return fail(exc, args.json, wrapped=True)
-        open_ = sorted(c.name for c in checked.model.constants
-                       if c.is_param and c.name in stand_ins)
+        cache = checked.model.cache
+        missing = cast("dict[str, Diagnostic]", cache["open_params"])
+        reads = cast("dict[str, frozenset[str]]", cache["open_reads"])
+        needed = sorted({p for c in checked.model.constants if c.source is not None
+                         for p in reads.get(c.name, ())})
+        if needed:
+            return fail(CompileError([missing[p] for p in needed]), args.json, wrapped=True)
+        open_ = sorted(missing)
         has, it = ("has", "it") if len(open_) == 1 else ("have", "them")
         print(f"sim-check: {', '.join(open_)} {has} no value, and no simulated constant "
               f"depends on {it}: the simulated constants are judged without the model's other "

@@ -65,6 +65,8 @@ def split_consts(items: list[str]) -> tuple[dict[str, str], dict[str, list[Numbe
                 name, value = (s.strip() for s in part.split("=", 1))
                 if not name:
                     usage_error(f"--const {item}: expected NAME=VALUES")
+                if not value:  # as the other commands say it (parse_override)
+                    usage_error(f"--const: expected NAME=VALUES, got {part!r} (no value)")
                 given.append((name, [value]))
             elif not given:
                 usage_error(f"--const {item}: expected NAME=VALUES")

@@ -12,7 +12,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
 
-from afsmc.diagnostics import CompileError, Related, Reporter, Span
+from afsmc.diagnostics import CompileError, Diagnostic, Related, Reporter, Severity, Span
 from afsmc.model import expr as E
 from afsmc.model import ir
 from afsmc.model.evaluate import EvalError, RangeError, scalar
@@ -99,9 +99,10 @@ def _shown(v: int) -> str:
 
 def resolve(module: ast.Module, overrides: Mapping[str, str] | None = None, *,
             open_params: bool = False) -> ir.Model:
-    """`open_params`: a param with no value is no error (E206) but a stand-in; the
-    constants whose values read one are `model.cache["stand_ins"]` (for sim-check, which
-    needs only the values of the simulated constants)."""
+    """`open_params`: a param with no value is no error but a stand-in (for sim-check, which
+    needs only the values of the simulated constants): `model.cache["open_params"]` maps
+    each such param to the E206 it would have been, and `model.cache["open_reads"]` each
+    constant whose value reads them (through other constants too) to their names."""
     r = _Resolver(module, dict(overrides or {}))
     r.open_params = open_params
     model = r.run()
@@ -109,7 +110,8 @@ def resolve(module: ast.Module, overrides: Mapping[str, str] | None = None, *,
         raise CompileError(r.rep.sorted())
     model.cache["warnings"] = [d for d in r.rep.sorted() if not d.is_error]
     model.cache["used_names"] = frozenset(r.used)
-    model.cache["stand_ins"] = frozenset(r.poisoned)
+    model.cache["open_params"] = dict(r.open_errors)
+    model.cache["open_reads"] = dict(r.open_reads)
     return model
 
 
@@ -131,6 +133,9 @@ class _Resolver:
         self.poisoned: set[str] = set()
         self.tainted = False
         self.open_params = False  # resolve(open_params=True)
+        self.open_errors: dict[str, Diagnostic] = {}  # the E206 of each param it stood in for
+        self.open_reads: dict[str, frozenset[str]] = {}  # constant -> open params it reads
+        self.reading_open: set[str] = set()  # those of the declaration being resolved
         self.modes: dict[str, ir.Mode] = {}
         self.formulas: dict[str, ir.Formula] = {}
         self.formula_decls: dict[str, ast.FormulaDecl] = {}
@@ -283,6 +288,7 @@ class _Resolver:
         value: Any
         errors = len(self.rep.diagnostics)
         self.tainted = False
+        self.reading_open = set()
         if isinstance(d, ast.ConstDecl) and isinstance(d.value, ast.Interval):
             lo = self._const_value(d.value.lo, Type.INT)
             lo_tainted = self.tainted
@@ -302,11 +308,15 @@ class _Resolver:
             if is_param and name in self.overrides:
                 value = self._parse_override(name, self.overrides[name], t, d.name.span)
             elif expr is None:
+                missing = Diagnostic("E206", Severity.ERROR,
+                                     f"open constant '{name}' has no value", d.name.span,
+                                     hint=f"pass --const {name}=VALUE, or give it a default")
                 if self.open_params:
                     self.tainted = True  # a stand-in, as after E206
+                    self.open_errors[name] = missing
+                    self.reading_open.add(name)
                 else:
-                    self.rep.error("E206", f"open constant '{name}' has no value", d.name.span,
-                                   hint=f"pass --const {name}=VALUE, or give it a default")
+                    self.rep.extend([missing])
                 value = {Type.INT: 0, Type.DOUBLE: 0.0, Type.BOOL: False}[t]
             else:
                 assert not isinstance(expr, ast.Interval)
@@ -315,6 +325,8 @@ class _Resolver:
             source = ir.SimSource(d.source.ref.text,
                                   tuple((k.text, v) for k, v in d.source.policy), d.source.span,
                                   tuple(k.span for k, _ in d.source.policy))
+        if self.reading_open:
+            self.open_reads[name] = frozenset(self.reading_open)
         if self.tainted or len(self.rep.diagnostics) > errors:
             self.poisoned.add(name)
         elif d.type == "prob" and not (0.0 <= float(value) <= 1.0):
@@ -362,6 +374,8 @@ class _Resolver:
         x = self._expr(e, CONST_CTX)
         self.tainted = any(id(n) in self.placeholders or (
             isinstance(n, E.ConstRef) and n.name in self.poisoned) for n in E.walk(x))
+        self.reading_open |= {p for n in E.walk(x) if isinstance(n, E.ConstRef)
+                              for p in self.open_reads.get(n.name, ())}
         if (want.numeric and not x.type.numeric) or (want is Type.BOOL and x.type is not Type.BOOL):
             self.rep.error("E210", f"expected {_a(want.value)} value, found {_a(x.type.value)}", e.span)
         if want is Type.INT and x.type is Type.DOUBLE:
@@ -370,7 +384,8 @@ class _Resolver:
         try:
             v = scalar(x, self._const_env())
         except (EvalError, ZeroDivisionError, OverflowError) as exc:
-            self.rep.error("E211", f"cannot evaluate this constant: {exc}", e.span)
+            if not self.tainted:  # not 100 / N after N's own E206: a stand-in's consequence
+                self.rep.error("E211", f"cannot evaluate this constant: {exc}", e.span)
             return 0
         if want is Type.DOUBLE and isinstance(v, int) and not isinstance(v, bool):
             v = float(v)

@@ -150,8 +150,9 @@ def simulate(job: Job, runs: int, seed: int, *, confidence: float = 0.999, jobs:
             from concurrent.futures import as_completed as cf_completed
 
             ctx = multiprocessing.get_context("fork" if sys.platform == "linux" else "spawn")
-            with ProcessPoolExecutor(max_workers=jobs, mp_context=ctx, initializer=die_with_parent,
-                                     initargs=(os.getpid(),)) as pool:
+            pool = ProcessPoolExecutor(max_workers=jobs, mp_context=ctx,
+                                       initializer=die_with_parent, initargs=(os.getpid(),))
+            try:
                 futs = {pool.submit(run_batch, job, n, s, trace if i == 0 else 0): i
                         for i, (n, s) in enumerate(plan)}
                 try:
@@ -161,6 +162,14 @@ def simulate(job: Job, runs: int, seed: int, *, confidence: float = 0.999, jobs:
                     if not worker_died(exc):
                         raise
                     raise SimError(_DIED) from None
+            except BaseException:
+                # A Ctrl-C (or SIGTERM, to afsmc alone) stops the workers now: leaving the
+                # pool's `with` would run every batch still queued first.
+                for proc in list(getattr(pool, "_processes", {}).values()):
+                    proc.terminate()
+                pool.shutdown(wait=False, cancel_futures=True)
+                raise
+            pool.shutdown()
         else:
             for i, (n, s) in enumerate(plan):
                 finished(i, simulate_batch(prog, n, np.random.default_rng(s), job.max_steps,
