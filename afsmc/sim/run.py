@@ -125,51 +125,9 @@ def simulate(job: Job, runs: int, seed: int, *, confidence: float = 0.999, jobs:
 
     try:
         if dask is not None:
-            from distributed import Client  # optional: only when --dask is used
-
-            client = dask if isinstance(dask, Client) else Client(dask)  # type: ignore[no-untyped-call]
-            try:
-                futures = [client.submit(run_batch, job, n, s, trace if i == 0 else 0, pure=False)
-                           for i, (n, s) in enumerate(plan)]
-                index = {f.key: i for i, f in enumerate(futures)}
-                from distributed import as_completed
-
-                try:
-                    for fut in as_completed(futures):  # type: ignore[no-untyped-call]
-                        finished(index[fut.key], fut.result())
-                except Exception as exc:
-                    if not worker_died(exc):
-                        raise
-                    raise SimError(_DIED) from None
-            finally:
-                if not isinstance(dask, Client):
-                    client.close()  # type: ignore[no-untyped-call]
+            _on_dask(dask, job, plan, trace, finished)
         elif jobs > 1 and len(plan) > 1:
-            import multiprocessing
-            from concurrent.futures import ProcessPoolExecutor
-            from concurrent.futures import as_completed as cf_completed
-
-            ctx = multiprocessing.get_context("fork" if sys.platform == "linux" else "spawn")
-            pool = ProcessPoolExecutor(max_workers=jobs, mp_context=ctx,
-                                       initializer=die_with_parent, initargs=(os.getpid(),))
-            try:
-                futs = {pool.submit(run_batch, job, n, s, trace if i == 0 else 0): i
-                        for i, (n, s) in enumerate(plan)}
-                try:
-                    for f in cf_completed(futs):
-                        finished(futs[f], f.result())
-                except Exception as exc:
-                    if not worker_died(exc):
-                        raise
-                    raise SimError(_DIED) from None
-            except BaseException:
-                # A Ctrl-C (or SIGTERM, to afsmc alone) stops the workers now: leaving the
-                # pool's `with` would run every batch still queued first.
-                for proc in list(getattr(pool, "_processes", {}).values()):
-                    proc.terminate()
-                pool.shutdown(wait=False, cancel_futures=True)
-                raise
-            pool.shutdown()
+            _on_pool(jobs, job, plan, trace, finished)
         else:
             for i, (n, s) in enumerate(plan):
                 finished(i, simulate_batch(prog, n, np.random.default_rng(s), job.max_steps,
@@ -179,6 +137,59 @@ def simulate(job: Job, runs: int, seed: int, *, confidence: float = 0.999, jobs:
             setattr(exc, "afsmc_outcome", outcome())  # noqa: B010
         raise
     return outcome()
+
+
+Plan = list[tuple[int, np.random.SeedSequence]]
+Finished = Callable[[int, BatchResult], None]
+
+
+def _on_dask(dask: str | Any, job: Job, plan: Plan, trace: int, finished: Finished) -> None:
+    from distributed import Client  # optional: only when --dask is used
+
+    client = dask if isinstance(dask, Client) else Client(dask)  # type: ignore[no-untyped-call]
+    try:
+        futures = [client.submit(run_batch, job, n, s, trace if i == 0 else 0, pure=False)
+                   for i, (n, s) in enumerate(plan)]
+        index = {f.key: i for i, f in enumerate(futures)}
+        from distributed import as_completed
+
+        try:
+            for fut in as_completed(futures):  # type: ignore[no-untyped-call]
+                finished(index[fut.key], fut.result())
+        except Exception as exc:
+            if not worker_died(exc):
+                raise
+            raise SimError(_DIED) from None
+    finally:
+        if not isinstance(dask, Client):
+            client.close()  # type: ignore[no-untyped-call]
+
+
+def _on_pool(jobs: int, job: Job, plan: Plan, trace: int, finished: Finished) -> None:
+    import multiprocessing
+    from concurrent.futures import ProcessPoolExecutor, as_completed
+
+    ctx = multiprocessing.get_context("fork" if sys.platform == "linux" else "spawn")
+    pool = ProcessPoolExecutor(max_workers=jobs, mp_context=ctx, initializer=die_with_parent,
+                               initargs=(os.getpid(),))
+    try:
+        futs = {pool.submit(run_batch, job, n, s, trace if i == 0 else 0): i
+                for i, (n, s) in enumerate(plan)}
+        try:
+            for f in as_completed(futs):
+                finished(futs[f], f.result())
+        except Exception as exc:
+            if not worker_died(exc):
+                raise
+            raise SimError(_DIED) from None
+    except BaseException:
+        # A Ctrl-C (or SIGTERM, to afsmc alone) stops the workers now: leaving a pool's
+        # `with` would run every batch still queued first.
+        for proc in list(getattr(pool, "_processes", {}).values()):
+            proc.terminate()
+        pool.shutdown(wait=False, cancel_futures=True)
+        raise
+    pool.shutdown()
 
 
 def combine(prog: Program, results: list[BatchResult], confidence: float) -> list[Estimate]:
