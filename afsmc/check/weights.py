@@ -128,4 +128,3 @@ def check_weight_refs(model: ir.Model, rep: Reporter) -> None:
                         n.span or a.weight_span or a.name_span,
                         hint=f"w() reads an action of the same mode; check the name, or the "
                              f"modes of {n.action}")
-

@@ -132,11 +132,6 @@ def print_json(obj: object) -> None:
     print(json.dumps(obj, indent=2, sort_keys=False))
 
 
-def const_text(v: object) -> str:
-    """A constant's value as the language writes it (`true`, not Python's `True`)."""
-    return ("true" if v else "false") if isinstance(v, bool) else str(v)
-
-
 def num(v: float | None) -> str:
     """A value in a table: 6 significant digits, large ones in fixed point."""
     if v is None:

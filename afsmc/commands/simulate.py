@@ -14,7 +14,6 @@ from afsmc.commands.common import (
     add_consts,
     add_file,
     add_seed,
-    const_text,
     dask_address,
     fail,
     num,
@@ -37,6 +36,7 @@ from afsmc.sim.run import (
     program,
     simulate,
 )
+from afsmc.verify.core import const_text
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
@@ -275,5 +275,3 @@ def _traces_text(traces: list[list[dict[str, Any]]]) -> str:
             lines.append(f"  {st['step']:>4}  {how}{st['mode']}  {vals}".rstrip())
             prev = st["vars"]
     return "\n".join(lines)
-
-

@@ -12,7 +12,6 @@ from afsmc.commands.common import (
     add_consts,
     add_file,
     add_reductions,
-    const_text,
     fail,
     num,
     overrides,
@@ -22,6 +21,7 @@ from afsmc.commands.common import (
 )
 from afsmc.diagnostics import CompileError
 from afsmc.verify import VerifyResult
+from afsmc.verify.core import const_text
 from afsmc.verify.storm import ENGINES, VIAS
 
 

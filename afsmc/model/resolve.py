@@ -103,8 +103,7 @@ def resolve(module: ast.Module, overrides: Mapping[str, str] | None = None, *,
     needs only the values of the simulated constants): `model.cache["open_params"]` maps
     each such param to the E206 it would have been, and `model.cache["open_reads"]` each
     constant whose value reads them (through other constants too) to their names."""
-    r = _Resolver(module, dict(overrides or {}))
-    r.open_params = open_params
+    r = _Resolver(module, dict(overrides or {}), open_params)
     model = r.run()
     if r.rep.has_errors:
         raise CompileError(r.rep.sorted())
@@ -116,7 +115,7 @@ def resolve(module: ast.Module, overrides: Mapping[str, str] | None = None, *,
 
 
 class _Resolver:
-    def __init__(self, module: ast.Module, overrides: dict[str, str]):
+    def __init__(self, module: ast.Module, overrides: dict[str, str], open_params: bool = False):
         self.m = module
         self.src = module.span.source
         self.rep = Reporter()
@@ -132,7 +131,7 @@ class _Resolver:
         # whether the last _const_value read one: a range over them is not also "empty".
         self.poisoned: set[str] = set()
         self.tainted = False
-        self.open_params = False  # resolve(open_params=True)
+        self.open_params = open_params  # see resolve()
         self.open_errors: dict[str, Diagnostic] = {}  # the E206 of each param it stood in for
         self.open_reads: dict[str, frozenset[str]] = {}  # constant -> open params it reads
         self.reading_open: set[str] = set()  # those of the declaration being resolved
@@ -372,10 +371,11 @@ class _Resolver:
 
     def _const_value(self, e: ast.Expr, want: Type) -> Any:
         x = self._expr(e, CONST_CTX)
-        self.tainted = any(id(n) in self.placeholders or (
-            isinstance(n, E.ConstRef) and n.name in self.poisoned) for n in E.walk(x))
-        self.reading_open |= {p for n in E.walk(x) if isinstance(n, E.ConstRef)
-                              for p in self.open_reads.get(n.name, ())}
+        nodes = list(E.walk(x))
+        refs = [n.name for n in nodes if isinstance(n, E.ConstRef)]
+        self.tainted = any(id(n) in self.placeholders for n in nodes) or any(
+            r in self.poisoned for r in refs)
+        self.reading_open |= {p for r in refs for p in self.open_reads.get(r, ())}
         if (want.numeric and not x.type.numeric) or (want is Type.BOOL and x.type is not Type.BOOL):
             self.rep.error("E210", f"expected {_a(want.value)} value, found {_a(x.type.value)}", e.span)
         if want is Type.INT and x.type is Type.DOUBLE:

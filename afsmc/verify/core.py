@@ -1106,13 +1106,14 @@ def check(model: ir.Model, props: Sequence[ir.Property], *, via: Via = "prism",
     return Checks(main, uniform_model[0] if uniform_model else None, results())
 
 
-def const_text(v: str | bool | int | float) -> str:
-    """A constant's value as --const takes it: the API also takes Python numbers."""
+def const_text(v: object) -> str:
+    """A constant's value as --const takes it and the language writes it (`true`, not
+    Python's `True`): the API also takes Python numbers."""
     if isinstance(v, str):
         return v
     if isinstance(v, bool):
         return "true" if v else "false"
-    return str(v) if isinstance(v, int) else repr(float(v))
+    return str(v) if isinstance(v, int) else repr(float(typing.cast(float, v)))
 
 
 def check_choice(option: str, value: object, allowed: object) -> None:
