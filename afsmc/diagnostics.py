@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import bisect
 import json
+import re
 import unicodedata
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, field
@@ -35,6 +36,12 @@ def line_starts(text: str) -> list[int]:
         starts.append(i + 1)
         i = text.find("\n", i + 1)
     return starts
+
+
+def split_lines(text: str) -> list[str]:
+    """The lines of `text` with their endings ('\r\n', '\r' or '\n'): str.splitlines also
+    breaks at form feeds and U+2028, which are not line ends in afsm."""
+    return re.findall(r"[^\r\n]*(?:\r\n|\r|\n)|[^\r\n]+$", text)
 
 
 @dataclass(frozen=True)

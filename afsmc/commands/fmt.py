@@ -10,12 +10,11 @@ from __future__ import annotations
 
 import argparse
 import difflib
-import re
 import sys
 
 from afsmc.commands.common import report
 from afsmc.compiler import read_source, write_atomic
-from afsmc.diagnostics import CompileError
+from afsmc.diagnostics import CompileError, split_lines
 from afsmc.syntax.fmt import format_text, line_ending
 
 
@@ -45,7 +44,7 @@ def run(args: argparse.Namespace) -> int:
             # In the file's own line endings, as fmt would write it: a CRLF file's patch
             # applies to it.
             patch = difflib.unified_diff(
-                _lines(raw), _lines(out.replace("\n", eol)),
+                split_lines(raw), split_lines(out.replace("\n", eol)),
                 f"{name} (as it is)", f"{name} (formatted)") if out != text else iter(())
             for line in patch:
                 # a last line without its newline, marked as diff marks it (else it ran into
@@ -70,10 +69,3 @@ def run(args: argparse.Namespace) -> int:
                 continue
             print(f"reformatted {path}", file=sys.stderr)
     return status
-
-
-
-def _lines(text: str) -> list[str]:
-    """The lines of `text` with their endings ('\r\n', '\r' or '\n'; not str.splitlines's
-    form feeds and U+2028, which are not line ends in afsm)."""
-    return re.findall(r"[^\r\n]*(?:\r\n|\r|\n)|[^\r\n]+$", text)

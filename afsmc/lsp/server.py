@@ -39,7 +39,7 @@ from pygls.workspace import ServerTextPosition, TextDocument
 
 from afsmc import __version__
 from afsmc.compiler import load
-from afsmc.diagnostics import CompileError, Diagnostic, Severity
+from afsmc.diagnostics import CompileError, Diagnostic, Severity, split_lines
 from afsmc.lsp import index as I
 from afsmc.model import ir
 from afsmc.model.expr import FUNCTIONS
@@ -192,7 +192,7 @@ class _Shift:
         self.runs: list[tuple[int, int, int]] = []  # (old start, new start, length)
         if self.same:
             return
-        a, b = old.splitlines(keepends=True), new.splitlines(keepends=True)
+        a, b = split_lines(old), split_lines(new)
         oa, ob = [0], [0]
         for line in a:
             oa.append(oa[-1] + len(line))
