@@ -161,8 +161,9 @@ def test_auto_with_hybrid_groups_the_queries_in_two_processes(tmp_path: object) 
 
 def test_auto_with_hybrid_refuses_total_rewards_before_checking(tmp_path: Path) -> None:
     # When "auto" picks hybrid, an unbounded R [ C ] has no answer there: the process says so
-    # (E404) as soon as it knows the engine, before any query is checked; the other queries
-    # are then checked on the hybrid engine, and their values come with the error.
+    # as soon as it knows the engine, before any query is checked; the other queries are
+    # then checked on the model it has built (no second build), and their values come with
+    # the error (E404).
     from afsmc.diagnostics import CompileError
 
     path = tmp_path / "wide.afsm"
@@ -177,8 +178,13 @@ def test_auto_with_hybrid_refuses_total_rewards_before_checking(tmp_path: Path) 
     assert d.message.replace("on the MDP", "on the uniform DTMC") == on_dtmc.message
     assert "cannot check this property" in d.message and d.span is not None
     assert d.hint is not None and "C<=k" in d.hint, d.hint
-    first = next(i for i, s in enumerate(said) if "the other queries go on" in s)
+    first = next(i for i, s in enumerate(said) if s.startswith(
+        "the hybrid engine cannot check total_min, total_max: E404 follows"))
     assert not any(s.startswith("checked") for s in said[:first]), said
+    assert any(s.startswith("checked steps_max") for s in said[first:]), said
+    # one build of each model: the refused queries cost no process of their own
+    assert sum(s.startswith("built the MDP") for s in said) == 1, said
+    assert sum(s.startswith("built the uniform DTMC") for s in said) == 1, said
     values, missing = answered.message.rsplit("\n", 1)
     assert answered.code == "N412" and "steps_min = " in values \
         and "steps_max = " in values and "total" not in values, answered

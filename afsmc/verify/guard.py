@@ -270,6 +270,9 @@ def _run_isolated(job: Job, progress: Progress | None, every: float,
                     built = states
                     say(f"built the {job.what}: {states:,} states, {transitions:,} transitions "
                         f"in {secs:.1f} s")
+                elif event == "refused":
+                    say(f"the hybrid engine cannot check {', '.join(data)}: E404 follows "
+                        "once the other queries of this process are checked")
                 elif event == "value":
                     name, value, secs = data
                     answered[name], seconds[name] = value, secs

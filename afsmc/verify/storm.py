@@ -60,7 +60,8 @@ class Job:
     # depend on how many properties a process checks (a sweep's chunks, --jobs).
     all_states: bool = False
     # Queries Storm's hybrid engine gives no result, or a wrong one, for (core.symbolic_gap):
-    # if "auto" picks hybrid, the process fails on them at once, before checking any query.
+    # if "auto" picks hybrid, the process leaves them out, says so at once ("refused"),
+    # checks the others on the model it has built, and then fails at the first of them.
     symbolic_refused: tuple[str, ...] = ()
 
     @property
@@ -199,6 +200,7 @@ def _execute(job: Job, notify: Notify) -> JobResult:
     # engine is known)
     names = list(job.wanted)
     symbolic = engine_name != "sparse"
+    deferred: StormFailure | None = None  # the failure to report after the other checks
     try:
         if symbolic:
             # Labels and guards that mention constants fail in the symbolic builder otherwise.
@@ -238,15 +240,14 @@ def _execute(job: Job, notify: Notify) -> JobResult:
                         res.engine_reason += "; queries grouped by the tables they need"
                     refused = [n for n in names if n in job.symbolic_refused]
                     if refused:
-                        res.engine = engine_name
-                        res.states = int(model.nr_states)
-                        res.failure = StormFailure(
-                            "check", f"its {res.states:,} states are too many for the "
-                            f"sparse engine (about {need / 1e9:.1f} GB as sparse matrices), "
-                            "and the hybrid engine cannot check this property "
+                        # not a second build for the others: they are checked here
+                        deferred = StormFailure(
+                            "check", f"its {int(model.nr_states):,} states are too many for "
+                            f"the sparse engine (about {need / 1e9:.1f} GB as sparse "
+                            "matrices), and the hybrid engine cannot check this property "
                             "(docs/verification.md, \"Engines and routes\")",
                             prop=refused[0])
-                        return res
+                        names, props = _keep(names, props, tuple(refused))
         else:
             names, props = _keep(names, props, job.hybrid_extra)
             model = stormpy.build_model(program, _for_builder(props, job))
@@ -260,6 +261,8 @@ def _execute(job: Job, notify: Notify) -> JobResult:
     res.choices = int(getattr(model, "nr_choices", res.transitions) or 0) if not symbolic else 0
     res.kind = "mdp" if str(model.model_type).upper().endswith("MDP") else "dtmc"
     notify("built", (res.states, res.transitions, res.build_time))
+    if deferred is not None:
+        notify("refused", tuple(n for n in job.wanted if n in job.symbolic_refused))
     if symbolic and res.states == 0:
         # A model whose variables all keep their values: Storm's symbolic builder counts no
         # state, and its hybrid engine then crashes (segmentation fault) on some properties.
@@ -316,6 +319,7 @@ def _execute(job: Job, notify: Notify) -> JobResult:
         # A process that dies later (memory) has still answered this one: the watcher keeps it.
         notify("value", (name, float(value), res.seconds[name]))
     res.check_time = time.perf_counter() - t0
+    res.failure = deferred
     return res
 
 
