@@ -364,6 +364,10 @@ def _report_syntax_error(exc: UnexpectedInput, source: Source, reporter: Reporte
     if isinstance(exc, UnexpectedCharacters):
         pos = len(text) if exc.pos_in_stream is None else exc.pos_in_stream
         char = text[pos] if pos < len(text) else "?"
+        if char == "%":
+            reporter.error("E123", "'%' is not an operator in afsm: write 'mod(a, b)'",
+                           Span.at_offset(source, pos), hint=_mod_hint(text, pos, pos + 1))
+            return
         reporter.error("E101", f"unexpected character {char!r}", Span.at_offset(source, pos),
                        hint=_expected_hint(exc.allowed, the_end) if exc.allowed else None)
         return
@@ -403,7 +407,23 @@ def _report_syntax_error(exc: UnexpectedInput, source: Source, reporter: Reporte
         reporter.error("E102", "missing ';' at the end of the declaration", after_last,
                        hint=f"add ';' here; the next line starts with {str(tok)!r}")
         return
-    foreign = _foreign(text, pos, str(tok), tok.type)
+    header = _HAZARD_BOTH.search(text, 0, pos) if str(tok) in ("when", "with") else None
+    if header is not None and re.search(r"\b(?:when|with)\b", header.group(0)):
+        reporter.error("E124", "a hazard is either preemptive ('when GUARD') or probabilistic "
+                       "('with probability P'), not both", span,
+                       hint=_hazard_hint(text, header.start(), pos))
+        return
+    body = _in_body(text, scan)
+    amp = re.search(r"&\s*(?:[\w.]+\s*)?$", text[:pos]) if body else None
+    # (the contextual lexer may cut a ':=' it does not expect to ':')
+    assigns = str(tok) in (":=", "+=", "-=") or text.startswith(":=", pos)
+    if body and (str(tok) == "&" or (assigns and amp is not None)):
+        # PRISM's `x'=1 & y'=2`: after `goto B` the '&' fails, after `x := 1` the next ':='
+        at = span if str(tok) == "&" or amp is None else Span.at_offset(source, amp.start())
+        reporter.error("E107", "updates of one outcome are separated by ','", at,
+                       hint="write ',' instead of '&' (PRISM joins updates with '&')")
+        return
+    foreign = _foreign(text, pos, str(tok), tok.type, body)
     if foreign is not None:
         message, hint, word = foreign
         reporter.error("E123", message,
@@ -431,6 +451,10 @@ def _report_syntax_error(exc: UnexpectedInput, source: Source, reporter: Reporte
         # A '}' right after an expression: the parser state is shared by every context an
         # expression ends in, so the brace that is open decides what is missing.
         matched = _missing_before_brace(text, scan)
+    if matched is not None and matched[0] == "E116" and _missing_before_brace(text, scan) is None:
+        # the state after an expression, shared by labels, formulas and properties: a ';'
+        # is missing only where the text ends (a keyword on the next line: E102 above)
+        matched = _MISSING_SEMICOLON[0] if at_end else None
     if matched is not None and matched[0] == "E103" and str(tok) != "=":
         matched = None  # only a '=' is taken for a comparison
     if matched is not None and not (formula and matched[0] == "E102"):
@@ -458,27 +482,82 @@ _WEIGHT_BEFORE_GUARD = re.compile(
 _QUERY_BEFORE = re.compile(r"\b(?:P|Pmin|Pmax|R|Rmin|Rmax)\s*(?:\{[^{}]*\})?\s*$")
 
 
-def _foreign(text: str, pos: int, tok: str,
-             kind: str) -> tuple[str, str, tuple[int, int] | None] | None:
+def _foreign(text: str, pos: int, tok: str, kind: str,
+             body: bool = False) -> tuple[str, str, tuple[int, int] | None] | None:
     """(message, hint, the offending word's offsets if not the failing token) for a spelling
-    from another language (Python's `and`, `not`, `if ... then`; PRISM's `P>=0.5`
-    thresholds) where the parser fails on it or right after it; None otherwise."""
+    from another language (Python's `and`, `not`, `if ... then`, `x = 1`; an infix `mod`;
+    PRISM's `&` between updates and `P>=0.5` thresholds) where the parser fails on it or
+    right after it; None otherwise. `body`: the failing token is in an action's or hazard's
+    outcomes."""
     word = re.search(r"\b(\w+)\s*$", text[:pos])
     before = word.group(1) if word else ""
     at = (word.start(1), word.end(1)) if word else None
     if kind == "NAME" and tok in ("and", "or"):
         return (f"'{tok}' is not an operator in afsm: write '{'&&' if tok == 'and' else '||'}'",
                 OPERATORS, None)
+    if kind == "NAME" and tok == "mod":
+        return ("afsm has no infix 'mod': write 'mod(a, b)'",
+                _mod_hint(text, pos, pos + 3), None)
+    if body and tok == "=" and _UPDATE_TARGET.search(text, 0, pos):
+        name = _UPDATE_TARGET.search(text, 0, pos).group(1)  # type: ignore[union-attr]
+        return ("'=' does not assign in afsm: an update is written 'x := value'",
+                f"write '{name} := ...' (or '{name} += ...', '{name} -= ...')", None)
     if before == "not" and kind != "LPAR":
         return NOT_OPERATOR, OPERATORS, at
-    if before == "if" or (kind == "NAME" and tok in ("then", "elif")):
+    if before == "if" or (kind == "NAME" and tok in ("if", "then", "elif")):
         return ("afsm has no 'if ... then ... else': write a conditional as 'COND ? A : B'",
-                "for example 'weight (b > 3 ? 1 : 0)'", at if before == "if" else None)
+                (_conditional_update(text, pos) if body and tok == "if" else None)
+                or "for example 'weight (b > 3 ? 1 : 0)'", at if before == "if" else None)
     if tok in ("<", "<=", ">", ">=") and _QUERY_BEFORE.search(text, 0, pos):
         return ("a property asks for a value, 'P=? [ ... ]', not a threshold",
                 "write 'P=? [ ... ]' (or Pmin=?, Pmax=?, R=?) and compare the value it gives; "
                 "afsm has no bounded P>=p or R<r queries", None)
     return None
+
+
+# An update's target right before a failing '=': at the start of an outcome or after ','
+_UPDATE_TARGET = re.compile(r"(?:[{;,]|:(?!=))\s*([A-Za-z_][\w.]*)\s*$")
+# A hazard's header up to the failing token, with one trigger already
+_HAZARD_BOTH = re.compile(r"\bhazard\b(?:[^{};]|\{[^{}]*\})*$")
+
+
+def _hazard_hint(text: str, start: int, pos: int) -> str:
+    """For `hazard H from M when G with probability P {` (either order): 'with probability
+    (G ? P : 0)', with G and P as written where both are found."""
+    head = text[start:text.find("{", pos) if text.find("{", pos) >= 0 else len(text)]
+    g = re.search(r"\bwhen\s+(.+?)\s*(?=\bwith\b|$)", head, re.S)
+    p = re.search(r"\bwith\s+probability\s+(.+?)\s*(?=\bwhen\b|\bweight\b|$)", head, re.S)
+    cond, prob = (" ".join(m.group(1).split()) if m else "" for m in (g, p))
+    if not cond or not prob:
+        cond, prob = "GUARD", "P"
+    return f"for a probability that depends on the state, write 'with probability " \
+           f"({cond} ? {prob} : 0)'"
+
+
+def _conditional_update(text: str, pos: int) -> str | None:
+    """The hint for Python's `x := e if c` at `if` (pos): `x := (c ? e : x)`."""
+    upd = re.search(r"([A-Za-z_][\w.]*)\s*(:=|\+=|-=)\s*([^;{},:=]+?)\s*$", text[:pos])
+    cond = re.match(r"if\s+([^;{},]+?)\s*(?:[;},]|$)", text[pos:])
+    if upd is None or cond is None:
+        return None
+    x, op, e = upd.groups()
+    other = x if op == ":=" else "0"
+    return f"write '{x} {op} ({cond.group(1)} ? {e} : {other})'"
+
+
+def _mod_hint(text: str, start: int, end: int) -> str:
+    """'write mod(a, b)' with the operands around an infix `mod` or '%' where they are
+    single names or numbers."""
+    a = re.search(r"([\w.]+)\s*$", text[:start])
+    b = re.match(r"\s*([\w.]+)", text[end:])
+    if a and b:
+        return f"write 'mod({a.group(1)}, {b.group(1)})'"
+    return "mod(a, b) is the remainder of a divided by b"
+
+
+def _in_body(text: str, scan: _Scan) -> bool:
+    """Whether the innermost open bracket is the '{' of an action's or hazard's outcomes."""
+    return _missing_before_brace(text, scan) == ("E116", "missing ';' at the end of the outcome")
 
 
 # A step bound (`F<=`, `G<=`, `U<=`, `C<=`, `I=`) of one number or name right before the
