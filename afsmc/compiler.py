@@ -29,6 +29,11 @@ def read_source(path: str, *, newline: str | None = None) -> str:
         with open(path, encoding="utf-8", newline=newline) as f:
             return f.read()
     except FileNotFoundError:
+        if path == "-":  # the commands that read standard input handle '-' before this
+            raise CompileError([Diagnostic(
+                "E001", Severity.ERROR, "cannot read -: this command reads a file, not "
+                "standard input", None, hint="'afsmc check -' and 'afsmc fmt -' read standard "
+                "input; save the model to a file for the others")]) from None
         raise CompileError([_io_error(path, "no such file")]) from None
     except IsADirectoryError:
         raise CompileError([_io_error(path, "is a directory, not an .afsm file")]) from None
@@ -127,9 +132,7 @@ def check_writable(path: str, *, protect: tuple[str, ...] = ()) -> None:
     if os.path.isdir(real):
         raise cannot("it is a directory")
     # write_atomic creates missing directories: the nearest existing one must allow it.
-    directory = os.path.dirname(real) or "."
-    while not os.path.exists(directory):
-        directory = os.path.dirname(directory)
+    directory = _nearest_existing(real)
     if not os.path.isdir(directory):
         raise cannot(f"{directory} is not a directory")
     if not os.access(directory, os.W_OK | os.X_OK):
@@ -140,6 +143,14 @@ def check_writable(path: str, *, protect: tuple[str, ...] = ()) -> None:
         os.rmdir(probe)
     except OSError as exc:
         raise cannot(f"cannot create files in {directory} ({exc.strerror or exc})") from None
+
+
+def _nearest_existing(real: str) -> str:
+    """The nearest existing ancestor of the (resolved) path `real`."""
+    directory = os.path.dirname(real) or "."
+    while not os.path.exists(directory):
+        directory = os.path.dirname(directory)
+    return directory
 
 
 def _umask() -> int:
@@ -214,5 +225,9 @@ def write_atomic(path: str, content: str | bytes, *, protect: tuple[str, ...] = 
             os.unlink(tmp)
         if not isinstance(exc, OSError):
             raise
+        why = exc.strerror or str(exc)
+        if isinstance(exc, (FileExistsError, NotADirectoryError)) and \
+                not os.path.isdir(near := _nearest_existing(real)):
+            why = f"{near} is not a directory"  # not makedirs' "File exists"
         raise CompileError([Diagnostic("E003", Severity.ERROR,
-                                       f"cannot write {path}: {exc.strerror or exc}", None)]) from None
+                                       f"cannot write {path}: {why}", None)]) from None

@@ -190,8 +190,12 @@ def _why(mg: ModeGraph, a: ir.Action, modes: tuple[int, ...]) -> str:
         if any(b.kind == "preemptive" for n in modes for b in model.actions_in(n)):
             return "its guard never holds while no preemptive hazard does"
         return "its guard never holds"
+    # only the competitors enabled together with it somewhere: a rival with a disjoint
+    # guard is not what beats it
     rivals = sorted({b.name for n in modes for b in competitors(model, a, n)
-                     if mg.fires.get((b.name, n), False)})
+                     if mg.fires.get((b.name, n), False) and exists(model, n, E.Binary(
+                         "&&", enabled(model, a, n), enabled(model, b, n), E.Type.BOOL))}) or \
+        sorted({b.name for n in modes for b in competitors(model, a, n)})
     return "an enabled competitor always has a larger weight (" + ", ".join(rivals) + ")"
 
 

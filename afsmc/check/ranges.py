@@ -84,8 +84,12 @@ def _check_updates(model: ir.Model, rep: Reporter, when: dict[int, E.Expr],
                         f"this update can take {var.display} out of its range [{var.lo}..{var.hi}]: "
                         f"{what} in the state {wit}{chosen}",
                         u.span,
-                        hint=f"guard the action, bound the value with min/max, or declare "
-                             f"'{var.display}' with 'clamp' to saturate at the range's ends")
+                        hint="guard the action, bound the value with min/max, or declare "
+                             + (f"'{var.display}' with 'clamp' to saturate at the range's ends"
+                                if "." not in var.display else
+                                # clamp is the whole tuple's: every field saturates then
+                                f"the tuple '{var.display.split('.')[0]}' with 'clamp' to "
+                                "saturate its fields at their ranges' ends"))
                     done = True
                     break
                 if done:

@@ -34,6 +34,11 @@ def run(args: argparse.Namespace) -> int:
         except CompileError as exc:
             diags += exc.diagnostics
     report(diags, args.json)
-    if any(d.severity is Severity.ERROR for d in diags) or (args.werror and diags):
+    if any(d.severity is Severity.ERROR for d in diags):
+        return 1
+    warnings = sum(d.severity is Severity.WARNING for d in diags)
+    if args.werror and warnings:
+        if not args.json:  # the summary above counts them as warnings: say why exit 1
+            print(f"afsmc: --werror: {warnings} warning(s) treated as errors", file=sys.stderr)
         return 1
     return 0

@@ -86,6 +86,11 @@ def run(args: argparse.Namespace) -> int:
         # `-o /dev/null` wrote /dev/null.prism and /dev/null.props
         usage_error(f"-o {args.output}: not a directory or a regular file (the outputs are "
                     "named after it); '-' prints them")
+    if args.target == "dot" and args.output not in (None, "-") and \
+            os.path.splitext(args.output)[1].lower() in (".svg", ".png", ".pdf"):
+        # DOT text in x.svg is no picture; `diagram` runs Graphviz for one
+        usage_error(f"-o {args.output}: 'compile -t dot' writes Graphviz's DOT text, not a "
+                    f"picture; 'afsmc diagram {args.file} -o {args.output}' draws it")
     try:
         checked = load(args.file, overrides(args))
         try:

@@ -711,6 +711,10 @@ class _Resolver:
             return E.Binary(op, a, b, t, s)
         a = self._expr(e.left, ctx)
         b = self._expr(e.right, ctx)
+        if id(a) in self.placeholders or id(b) in self.placeholders:
+            # an operand that has had its error (undeclared, no such field): no type error
+            # that follows from its stand-in's type (`mode == Alpa` is not mode against int)
+            return E.Binary(op, a, b, Type.BOOL, s)
         if op in ("==", "!="):
             if a.type.numeric != b.type.numeric or (not a.type.numeric and a.type is not b.type):
                 self.rep.error("E226", f"cannot compare {_a(a.type.value)} with {_a(b.type.value)}", s,
@@ -725,6 +729,8 @@ class _Resolver:
     def _unify(self, a: E.Expr, b: E.Expr, e: Any, what: str) -> Type:
         if a.type is b.type:
             return a.type
+        if id(a) in self.placeholders or id(b) in self.placeholders:
+            return b.type if id(a) in self.placeholders else a.type
         if a.type.numeric and b.type.numeric:
             return Type.DOUBLE
         self.rep.error("E226", f"{what} have different types ({a.type.value}, {b.type.value})",

@@ -655,8 +655,8 @@ def _check_bounds(path: str, text: str, consts: dict[str, str], properties: Sequ
 def _check_names(path: str, text: str, consts: dict[str, str], variable: str,
                  values: Sequence[Number], properties: Sequence[str],
                  formulas: Sequence[str]) -> None:
-    """E407 (no such property, none declared) and an int constant given doubles (E208),
-    once, before any point: neither depends on the point, and every point would report
+    """E407 (no such property, none declared), an int constant given doubles and a bool
+    given numbers or a number bools (E208), once, before any point: neither depends on the point, and every point would report
     them. Other errors may depend on it; the points report those."""
     loaded = None
     for value in (values[0], None):  # the file's own value if the first one fails
@@ -678,6 +678,18 @@ def _check_names(path: str, text: str, consts: dict[str, str], variable: str,
             f"{'is not an int' if len(doubles) == 1 else 'are not ints'}", const.span,
             hint=f"{variable} is declared int: write its values as integers (1, not 1.0 "
                  "or 1e0)")]))
+    if const is not None and (const.type is E.Type.BOOL) != all(
+            isinstance(x, bool) for x in values):
+        # a bool swept as 0:1 (or a number as false,true): every point would say so
+        wrong = [fmt(x) for x in values if isinstance(x, bool) != (const.type is E.Type.BOOL)]
+        kind = const.type.value
+        raise loaded.remap_error(CompileError([Diagnostic(
+            "E208", Severity.ERROR, f"--const {variable}: {', '.join(wrong[:5])}"
+            f"{', ...' if len(wrong) > 5 else ''} {'is not' if len(wrong) == 1 else 'are not'} "
+            f"{'a bool' if len(wrong) == 1 else 'bools'}" if kind == "bool" else
+            f"--const {variable}: true and false are not numbers", const.span,
+            hint=f"{variable} is declared bool: sweep it as 'false,true'" if kind == "bool"
+            else f"{variable} is declared {kind}: sweep it over numbers, e.g. '0:10'")]))
     try:
         select(loaded.model, properties, loaded.adhoc)
     except CompileError as exc:
