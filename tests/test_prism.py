@@ -182,9 +182,12 @@ def test_compile_replaces_only_an_output_suffix(tmp_path: Path) -> None:
             (tmp_path / f"{written}.props").exists(), (given, sorted(tmp_path.iterdir()))
     # a target of one file takes the name as given (review 19: x.json became x.json.jani)
     for target, given, written in (("jani", "x.json", "x.json"), ("jani", "y", "y.jani"),
-                                   ("dot", "g.gv", "g.gv"), ("dot", "h.svg", "h.svg")):
+                                   ("dot", "g.gv", "g.gv"), ("dot", "h.dot", "h.dot")):
         r = run_cli("compile", src, "-t", target, "-o", str(tmp_path / given))
         assert r.code == 0 and (tmp_path / written).exists(), (given, r.err)
+    # but DOT text under a picture's name is a mistake (review 22): `diagram` draws one
+    r = run_cli("compile", src, "-t", "dot", "-o", str(tmp_path / "h.svg"))
+    assert r.code == 2 and not (tmp_path / "h.svg").exists(), r.err
 
 
 def test_compile_writes_files_and_never_overwrites_its_input(tmp_path: Path) -> None:
