@@ -190,12 +190,13 @@ def _why(mg: ModeGraph, a: ir.Action, modes: tuple[int, ...]) -> str:
         if any(b.kind == "preemptive" for n in modes for b in model.actions_in(n)):
             return "its guard never holds while no preemptive hazard does"
         return "its guard never holds"
+    beaters = [(b, n) for n in modes for b in competitors(model, a, n)]
     # only the competitors enabled together with it somewhere: a rival with a disjoint
     # guard is not what beats it
-    rivals = sorted({b.name for n in modes for b in competitors(model, a, n)
-                     if mg.fires.get((b.name, n), False) and exists(model, n, E.Binary(
-                         "&&", enabled(model, a, n), enabled(model, b, n), E.Type.BOOL))}) or \
-        sorted({b.name for n in modes for b in competitors(model, a, n)})
+    rivals = sorted({b.name for b, n in beaters if mg.fires.get((b.name, n), False)
+                     and exists(model, n, E.Binary("&&", enabled(model, a, n),
+                                                   enabled(model, b, n), E.Type.BOOL))}) \
+        or sorted({b.name for b, _ in beaters})
     return "an enabled competitor always has a larger weight (" + ", ".join(rivals) + ")"
 
 

@@ -413,7 +413,8 @@ def _report_syntax_error(exc: UnexpectedInput, source: Source, reporter: Reporte
                        "('with probability P'), not both", span,
                        hint=_hazard_hint(text, header.start(), pos))
         return
-    body = _in_body(text, scan)
+    owner = _body_owner(text, scan)
+    body = owner in ("action", "hazard")  # in outcomes, where updates are
     amp = re.search(r"&\s*(?:[\w.]+\s*)?$", text[:pos]) if body else None
     # (the contextual lexer may cut a ':=' it does not expect to ':')
     assigns = str(tok) in (":=", "+=", "-=") or text.startswith(":=", pos)
@@ -451,7 +452,7 @@ def _report_syntax_error(exc: UnexpectedInput, source: Source, reporter: Reporte
         # A '}' right after an expression: the parser state is shared by every context an
         # expression ends in, so the brace that is open decides what is missing.
         matched = _missing_before_brace(text, scan)
-    if matched is not None and matched[0] == "E116" and _missing_before_brace(text, scan) is None:
+    if matched is not None and matched[0] == "E116" and owner is None:
         # the state after an expression, shared by labels, formulas and properties: a ';'
         # is missing only where the text ends (a keyword on the next line: E102 above)
         matched = _MISSING_SEMICOLON[0] if at_end else None
@@ -498,8 +499,8 @@ def _foreign(text: str, pos: int, tok: str, kind: str,
     if kind == "NAME" and tok == "mod":
         return ("afsm has no infix 'mod': write 'mod(a, b)'",
                 _mod_hint(text, pos, pos + 3), None)
-    if body and tok == "=" and _UPDATE_TARGET.search(text, 0, pos):
-        name = _UPDATE_TARGET.search(text, 0, pos).group(1)  # type: ignore[union-attr]
+    if body and tok == "=" and (target := _UPDATE_TARGET.search(text, 0, pos)):
+        name = target.group(1)
         return ("'=' does not assign in afsm: an update is written 'x := value'",
                 f"write '{name} := ...' (or '{name} += ...', '{name} -= ...')", None)
     if before == "not" and kind != "LPAR":
@@ -524,7 +525,8 @@ _HAZARD_BOTH = re.compile(r"\bhazard\b(?:[^{};]|\{[^{}]*\})*$")
 def _hazard_hint(text: str, start: int, pos: int) -> str:
     """For `hazard H from M when G with probability P {` (either order): 'with probability
     (G ? P : 0)', with G and P as written where both are found."""
-    head = text[start:text.find("{", pos) if text.find("{", pos) >= 0 else len(text)]
+    brace = text.find("{", pos)
+    head = text[start:brace if brace >= 0 else len(text)]
     g = re.search(r"\bwhen\s+(.+?)\s*(?=\bwith\b|$)", head, re.S)
     p = re.search(r"\bwith\s+probability\s+(.+?)\s*(?=\bwhen\b|\bweight\b|$)", head, re.S)
     cond, prob = (" ".join(m.group(1).split()) if m else "" for m in (g, p))
@@ -555,11 +557,6 @@ def _mod_hint(text: str, start: int, end: int) -> str:
     return "mod(a, b) is the remainder of a divided by b"
 
 
-def _in_body(text: str, scan: _Scan) -> bool:
-    """Whether the innermost open bracket is the '{' of an action's or hazard's outcomes."""
-    return _missing_before_brace(text, scan) == ("E116", "missing ';' at the end of the outcome")
-
-
 # A step bound (`F<=`, `G<=`, `U<=`, `C<=`, `I=`) of one number or name right before the
 # failing token, and (group 2) an operator with its operand that the parser took as the
 # start of the target: `F<=K -1` parses `-1` as the target and fails at the label after it.
@@ -568,15 +565,22 @@ _BOUND_EXPRESSION = re.compile(
 _BODY_OWNER = re.compile(r"\b(action|hazard|rewards)\b")
 
 
-def _missing_before_brace(text: str, scan: _Scan) -> tuple[str, str] | None:
-    """E116 where the innermost open bracket is the '{' of a body (an action's or hazard's
-    outcomes, a reward structure's items); None (unexpected '}') anywhere else."""
+def _body_owner(text: str, scan: _Scan) -> str | None:
+    """'action', 'hazard' or 'rewards' where the innermost open bracket is the '{' of such a
+    body (outcomes, reward items); None anywhere else."""
     if not scan.open or scan.open[-1][0] != "{":
         return None
     owners = list(_BODY_OWNER.finditer(text, 0, scan.open[-1][1]))
-    if not owners:
+    return owners[-1].group(1) if owners else None
+
+
+def _missing_before_brace(text: str, scan: _Scan) -> tuple[str, str] | None:
+    """E116 where the innermost open bracket is the '{' of a body (an action's or hazard's
+    outcomes, a reward structure's items); None (unexpected '}') anywhere else."""
+    owner = _body_owner(text, scan)
+    if owner is None:
         return None
-    if owners[-1].group(1) == "rewards":
+    if owner == "rewards":
         return "E116", "missing ';' at the end of the reward item"
     return "E116", "missing ';' at the end of the outcome"
 

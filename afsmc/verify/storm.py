@@ -201,6 +201,7 @@ def _execute(job: Job, notify: Notify) -> JobResult:
     names = list(job.wanted)
     symbolic = engine_name != "sparse"
     deferred: StormFailure | None = None  # the failure to report after the other checks
+    refused: list[str] = []  # ... of these queries, which the hybrid engine cannot check
     try:
         if symbolic:
             # Labels and guards that mention constants fail in the symbolic builder otherwise.
@@ -262,7 +263,7 @@ def _execute(job: Job, notify: Notify) -> JobResult:
     res.kind = "mdp" if str(model.model_type).upper().endswith("MDP") else "dtmc"
     notify("built", (res.states, res.transitions, res.build_time))
     if deferred is not None:
-        notify("refused", tuple(n for n in job.wanted if n in job.symbolic_refused))
+        notify("refused", tuple(refused))
     if symbolic and res.states == 0:
         # A model whose variables all keep their values: Storm's symbolic builder counts no
         # state, and its hybrid engine then crashes (segmentation fault) on some properties.

@@ -655,9 +655,10 @@ def _check_bounds(path: str, text: str, consts: dict[str, str], properties: Sequ
 def _check_names(path: str, text: str, consts: dict[str, str], variable: str,
                  values: Sequence[Number], properties: Sequence[str],
                  formulas: Sequence[str]) -> None:
-    """E407 (no such property, none declared), an int constant given doubles and a bool
-    given numbers or a number bools (E208), once, before any point: neither depends on the point, and every point would report
-    them. Other errors may depend on it; the points report those."""
+    """E407 (no such property, none declared), an int constant given doubles, and a bool
+    given numbers or a number given bools (E208), once, before any point: none of them
+    depends on the point, and every point would report them. Other errors may depend on
+    it; the points report those."""
     loaded = None
     for value in (values[0], None):  # the file's own value if the first one fails
         try:
@@ -681,15 +682,16 @@ def _check_names(path: str, text: str, consts: dict[str, str], variable: str,
     if const is not None and (const.type is E.Type.BOOL) != all(
             isinstance(x, bool) for x in values):
         # a bool swept as 0:1 (or a number as false,true): every point would say so
-        wrong = [fmt(x) for x in values if isinstance(x, bool) != (const.type is E.Type.BOOL)]
-        kind = const.type.value
+        if const.type is E.Type.BOOL:
+            wrong = [fmt(x) for x in values if not isinstance(x, bool)]
+            listed = ", ".join(wrong[:5]) + (", ..." if len(wrong) > 5 else "")
+            message = f"{listed} {'is not a bool' if len(wrong) == 1 else 'are not bools'}"
+            hint = f"{variable} is declared bool: sweep it as 'false,true'"
+        else:
+            message = "true and false are not numbers"
+            hint = f"{variable} is declared {const.type.value}: sweep it over numbers, e.g. '0:10'"
         raise loaded.remap_error(CompileError([Diagnostic(
-            "E208", Severity.ERROR, f"--const {variable}: {', '.join(wrong[:5])}"
-            f"{', ...' if len(wrong) > 5 else ''} {'is not' if len(wrong) == 1 else 'are not'} "
-            f"{'a bool' if len(wrong) == 1 else 'bools'}" if kind == "bool" else
-            f"--const {variable}: true and false are not numbers", const.span,
-            hint=f"{variable} is declared bool: sweep it as 'false,true'" if kind == "bool"
-            else f"{variable} is declared {kind}: sweep it over numbers, e.g. '0:10'")]))
+            "E208", Severity.ERROR, f"--const {variable}: {message}", const.span, hint=hint)]))
     try:
         select(loaded.model, properties, loaded.adhoc)
     except CompileError as exc:
