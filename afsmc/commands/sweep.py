@@ -149,7 +149,7 @@ def run(args: argparse.Namespace) -> int:
                         via=args.via, engine=args.engine, max_states=args.max_states,
                         jobs=args.jobs, dask=args.dask, uniform=args.uniform,
                         progress=progress, reductions=reductions(args),
-                        bisimulation=args.bisim, split=args.split)
+                        bisimulation=args.bisim, split=args.split, solver=args.solver)
         write(res)
     except CompileError as exc:
         if not isinstance(exc.partial, SweepResult) or not exc.partial.points:

@@ -22,7 +22,7 @@ from afsmc.commands.common import (
 from afsmc.diagnostics import CompileError
 from afsmc.verify import VerifyResult
 from afsmc.verify.core import const_text
-from afsmc.verify.storm import ENGINES, VIAS
+from afsmc.verify.storm import ENGINES, SOLVERS, VIAS
 
 
 def positive(text: str) -> int:
@@ -52,6 +52,12 @@ def add_storm_options(p: argparse.ArgumentParser) -> None:
                         "the states symbolically first when they may be many), sparse "
                         "(explicit matrices), dd (decision diagrams throughout) or hybrid "
                         "(symbolic model, explicit vectors)")
+    p.add_argument("--solver", choices=SOLVERS, default="auto",
+                   help="how Storm solves an MDP's min/max equations on the sparse and "
+                        "hybrid engines: auto (default: value iteration on hybrid, "
+                        "topological on sparse), "
+                        "topological (Storm's default: strongly connected components first) "
+                        "or value-iteration (stops at a relative change of 1e-10)")
     p.add_argument("--bisim", action="store_true",
                    help="minimise the sparse model by strong bisimulation before checking "
                         "(exact; faster checks, more memory while building)")
@@ -121,7 +127,7 @@ def render(res: VerifyResult) -> str:
         models.append(("uniform DTMC", u))
     bisim = any(m.quotient_states is not None for _, m in models)
     mrows = [["model", "states", "transitions", "choices"] + (["quotient"] if bisim else [])
-             + ["build", "check", "engine"]]
+             + ["build", "check", "engine", "solver"]]
     for name, m in models:
         mrows.append([name, f"{m.states:,}", f"{m.transitions:,}",
                       f"{m.choices:,}" if m.choices else "-"]
@@ -129,8 +135,9 @@ def render(res: VerifyResult) -> str:
                         if bisim else [])
                      + [f"{m.build_time + m.bisimulation_time:.3f} s"
                         + (f" ({m.processes} builds)" if m.processes > 1 else ""),
-                        f"{m.check_time:.3f} s", m.engine])
-    lines += table(mrows, set(range(1, len(mrows[0]) - 1)))
+                        f"{m.check_time:.3f} s", m.engine,
+                        m.solver.replace("-", " ") or "-"])
+    lines += table(mrows, set(range(1, len(mrows[0]) - 2)))
     for name, m in models:
         if m.engine_reason and res.engine == "auto":
             lines.append(f"{name}: engine {m.engine} ({m.engine_reason})")
@@ -156,7 +163,7 @@ def run(args: argparse.Namespace) -> int:
                   formulas=args.formula, via=args.via, engine=args.engine,
                   max_states=args.max_states, uniform=args.uniform,
                   progress=progress_printer(args), reductions=reductions(args),
-                  bisimulation=args.bisim, split=args.split)
+                  bisimulation=args.bisim, split=args.split, solver=args.solver)
     except CompileError as exc:
         return fail(exc, args.json, wrapped=True)
     if args.json:

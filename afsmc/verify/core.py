@@ -45,6 +45,7 @@ from afsmc.verify.storm import (
     Engine,
     Job,
     JobResult,
+    Solver,
     StormFailure,
     Via,
     finite,
@@ -69,12 +70,15 @@ class ModelStats:
     quotient_transitions: int | None = None
     bisimulation_time: float = 0.0
     processes: int = 1  # Storm runs that built this model (--split: one per query)
+    solver: str = ""  # "topological" | "value-iteration" (storm.solver_for)
 
     def to_json(self) -> dict[str, object]:
         out: dict[str, object] = {
             "states": self.states, "transitions": self.transitions, "choices": self.choices,
             "type": self.type, "resolution": self.resolution, "engine": self.engine,
             "processes": self.processes}
+        if self.solver:  # an MDP's
+            out["solver"] = self.solver
         if self.engine_reason:
             out["engine_reason"] = self.engine_reason
         if self.quotient_states is not None:
@@ -443,7 +447,7 @@ def _stats(res: JobResult, resolution: str) -> ModelStats:
     return ModelStats(res.kind, resolution, res.states, res.transitions, res.choices,
                       res.parse_time, res.build_time, res.check_time, res.engine,
                       res.engine_reason, res.quotient_states, res.quotient_transitions,
-                      res.bisimulation_time)
+                      res.bisimulation_time, solver=res.solver)
 
 
 # ---- Pmax as 1 - Pmin ------------------------------------------------------------------
@@ -739,13 +743,15 @@ def check(model: ir.Model, props: Sequence[ir.Property], *, via: Via = "prism",
           isolate: bool | None = None, progress: Progress | None = None,
           reductions: Reductions | None = None, bisimulation: bool = False,
           split: bool = False, memory_budget: int | None = None,
-          preserve: Sequence[ir.Property] = (), all_states: bool = False) -> Checks:
+          preserve: Sequence[ir.Property] = (), all_states: bool = False,
+          solver: Solver = "auto") -> Checks:
     """Check `props` (uniquely named) on a loaded model; raises CompileError on failure.
 
     `preserve`: further properties that the reductions keep exact but that are not checked
     (a sweep's other points, so that every chunk of it builds the same model).
     `all_states`: Storm builds every reachable state even for one property (Job.all_states),
     so that the state counts do not depend on how the properties are split over processes.
+    `solver`: how Storm solves the min/max equation systems (storm.Solver).
     `max_states`: None is the default limit, which the sparse engine only has: there the
     state count predicts the memory. The symbolic engines' memory is held by the guard
     instead (85% of the free memory), and "auto" picks hybrid only for a model whose
@@ -947,8 +953,7 @@ def check(model: ir.Model, props: Sequence[ir.Property], *, via: Via = "prism",
                            memory_budget, only=tuple(mine),
                            hybrid_skip=tuple(n for n in mine if n not in first),
                            hybrid_extra=extra)
-            if all_states:
-                job = dataclasses.replace(job, all_states=True)
+            job = dataclasses.replace(job, solver=solver, all_states=all_states)
             if job_engine == "auto":
                 job = dataclasses.replace(job, symbolic_refused=tuple(
                     n for p, n in unit if symbolic_gap(p, model, "auto") is not None))
@@ -1131,11 +1136,13 @@ def run(path: str, *, consts: Mapping[str, str | bool | int | float] | None = No
         max_states: int | None = None, uniform: bool = True, isolate: bool | None = None,
         progress: Progress | None = None, text: str | None = None,
         reductions: Reductions | None = None, bisimulation: bool = False,
-        split: bool = False, memory_budget: int | None = None) -> VerifyResult:
+        split: bool = False, memory_budget: int | None = None,
+        solver: Solver = "auto") -> VerifyResult:
     """Verify one .afsm file; see the package docstring. Raises CompileError, or
-    ValueError for an unknown `via` or `engine`."""
+    ValueError for an unknown `via`, `engine` or `solver`."""
     check_choice("via", via, Via)
     check_choice("engine", engine, Engine)
+    check_choice("solver", solver, Solver)
     t0 = time.perf_counter()
     texts = None if consts is None else {k: const_text(v) for k, v in consts.items()}
     loaded = load_with_formulas(path, texts, formulas, text=text)
@@ -1151,7 +1158,8 @@ def run(path: str, *, consts: Mapping[str, str | bool | int | float] | None = No
     try:
         checks = check(model, props, via=via, engine=engine, max_states=max_states,
                        uniform=uniform, isolate=isolate, progress=progress, reductions=reductions,
-                       bisimulation=bisimulation, split=split, memory_budget=memory_budget)
+                       bisimulation=bisimulation, split=split, memory_budget=memory_budget,
+                       solver=solver)
     except CompileError as exc:
         raise loaded.remap_error(exc) from None
     consts_used: dict[str, object] = {c.name: c.value for c in model.constants if c.is_param}

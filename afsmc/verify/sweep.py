@@ -44,7 +44,7 @@ from afsmc.verify.core import (
     shown,
 )
 from afsmc.verify.guard import Progress
-from afsmc.verify.storm import Engine, Via, finite
+from afsmc.verify.storm import Engine, Solver, Via, finite
 
 Kind = Literal["const", "bound"]
 Number = int | float
@@ -158,6 +158,7 @@ class Task:
     reductions: Reductions | None = None
     bisimulation: bool = False
     split: bool = False  # one Storm process per query
+    solver: Solver = "auto"
 
 
 def _unbounded(p: ir.Property) -> Diagnostic | None:
@@ -372,7 +373,8 @@ def _checks(model: ir.Model, props: list[ir.Property], task: Task,
     return check(model, props, via=task.via, engine=task.engine, max_states=task.max_states,
                  uniform=task.uniform, isolate=task.isolate, reductions=task.reductions,
                  bisimulation=task.bisimulation, split=task.split, preserve=preserve,
-                 all_states=True)  # the same states whatever the chunks
+                 all_states=True,  # the same states whatever the chunks
+                 solver=task.solver)
 
 
 def _answered(exc: CompileError) -> tuple[Partial, list[Diagnostic]] | None:
@@ -513,12 +515,14 @@ def sweep(path: str, variable: str, values: Sequence[Number], *, kind: Kind = "c
           max_states: int | None = None, jobs: int | None = None, dask: Any = None,
           uniform: bool = True, progress: Progress | None = None,
           text: str | None = None, reductions: Reductions | None = None,
-          bisimulation: bool = False, split: bool = False) -> SweepResult:
+          bisimulation: bool = False, split: bool = False,
+          solver: Solver = "auto") -> SweepResult:
     """Evaluate the properties at every value; see the package docstring. Raises CompileError,
-    or ValueError for an unknown `kind`, `via` or `engine`."""
+    or ValueError for an unknown `kind`, `via`, `engine` or `solver`."""
     check_choice("kind", kind, Kind)
     check_choice("via", via, Via)
     check_choice("engine", engine, Engine)
+    check_choice("solver", solver, Solver)
     t0 = time.perf_counter()
     if not values:
         raise CompileError([Diagnostic("E410", Severity.ERROR, "the sweep has no values", None)])
@@ -536,7 +540,7 @@ def sweep(path: str, variable: str, values: Sequence[Number], *, kind: Kind = "c
                 properties=tuple(properties), formulas=tuple(formulas), variable=variable,
                 kind=kind, via=via, engine=engine, max_states=max_states, uniform=uniform,
                 isolate=isolate, reductions=reductions, bisimulation=bisimulation,
-                split=split)
+                split=split, solver=solver)
     if kind == "const" and progress is not None and len(values) > 100:
         # about 0.015 s per value for the UAV: 15 s before the first point at 1,000
         progress(f"sweep: comparing the model at the {len(values):,} values of {variable}")
