@@ -85,10 +85,15 @@ def table(rows: list[dict[str, str]]) -> str:
     return "\n".join(out)
 
 
+def _sum(a: float | None, b: float | None) -> float | None:
+    return a + b if a is not None and b is not None else None
+
+
 def ratios(latest: dict[tuple[str, str], dict[str, str]], instances: list[str]) -> str:
     out = ["| instance | states: reduced / unreduced | total time: reduced / unreduced | "
-           "bisim quotient / reduced states | check time: bisim / plain | hybrid / sparse total time |",
-           "|---|---|---|---|---|---|"]
+           "bisim quotient / reduced states | check time: bisim / plain | hybrid / sparse total time | "
+           "hybrid check time: value iteration / topological |",
+           "|---|---|---|---|---|---|---|"]
     for inst in instances:
         def get(config: str, key: str, inst: str = inst) -> float | None:
             r = latest.get((inst, config))
@@ -105,7 +110,11 @@ def ratios(latest: dict[tuple[str, str], dict[str, str]], instances: list[str]) 
                  ratio(get("sparse-bisim", "quotient_states"), get("sparse", "states"), 3),
                  ratio(max(get("sparse-bisim", "check_s") or 0, 0.01) if get("sparse-bisim", "check_s") is not None else None,
                        max(get("sparse", "check_s") or 0, 0.01)),
-                 ratio(get("hybrid", "total_s"), get("sparse", "total_s"), 1)]
+                 ratio(get("hybrid", "total_s"), get("sparse", "total_s"), 1),
+                 # the checks of the MDP and of the uniform DTMC
+                 ratio(_sum(get("hybrid", "check_s"), get("hybrid", "uniform_check_s")),
+                       _sum(get("hybrid-topological", "check_s"),
+                            get("hybrid-topological", "uniform_check_s")))]
         if any(cells[1:]):
             out.append("| " + " | ".join(cells) + " |")
     return "\n".join(out)

@@ -1,7 +1,7 @@
-"""`--solver`: how Storm solves an MDP's min/max equations. Value iteration (the hybrid
-engine's default) and Storm's topological solver must give the same values, on acyclic
-missions (the UAV) and on cyclic ones (the patrol robot's dock loop, a machine that may
-spin forever), on both engines."""
+"""`--solver`: how Storm solves the equations (an MDP's min/max, a DTMC's linear ones).
+Value iteration (the hybrid engine's default) and Storm's topological solver must give the
+same values, on acyclic missions (the UAV) and on cyclic ones (the patrol robot's dock loop,
+a machine that may spin forever), on both engines, for the MDP and the uniform DTMC."""
 
 from __future__ import annotations
 
@@ -23,8 +23,9 @@ def test_value_iteration_gives_the_topological_solver_s_values_on_the_uav(engine
     vi = run(UAV, consts=SMALL["uav"], engine=engine, isolate=False, solver="value-iteration")
     topo = run(UAV, consts=SMALL["uav"], engine=engine, isolate=False, solver="topological")
     assert vi.model.solver == "value-iteration" and topo.model.solver == "topological"
-    # the uniform DTMC has linear equations: no min/max solver to name
-    assert vi.uniform_model is not None and vi.uniform_model.solver == ""
+    # the uniform DTMC's linear equations too
+    assert vi.uniform_model is not None and vi.uniform_model.solver == "value-iteration"
+    assert topo.uniform_model is not None and topo.uniform_model.solver == "topological"
     # 1e-10 relative: on an acyclic mission the iteration reaches the fixed point
     _close(_values(vi), _values(topo), 1e-9)
     assert vi.model.states == topo.model.states

@@ -53,8 +53,9 @@ def add_storm_options(p: argparse.ArgumentParser) -> None:
                         "(explicit matrices), dd (decision diagrams throughout) or hybrid "
                         "(symbolic model, explicit vectors)")
     p.add_argument("--solver", choices=SOLVERS, default="auto",
-                   help="how Storm solves an MDP's min/max equations on the sparse and "
-                        "hybrid engines: auto (default: value iteration on hybrid, "
+                   help="how Storm solves the equations (an MDP's min/max, a DTMC's "
+                        "linear) on the sparse and hybrid engines: auto (default: value "
+                        "iteration on hybrid, "
                         "topological on sparse), "
                         "topological (Storm's default: strongly connected components first) "
                         "or value-iteration (stops at a relative change of 1e-10)")

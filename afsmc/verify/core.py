@@ -77,7 +77,7 @@ class ModelStats:
             "states": self.states, "transitions": self.transitions, "choices": self.choices,
             "type": self.type, "resolution": self.resolution, "engine": self.engine,
             "processes": self.processes}
-        if self.solver:  # an MDP's
+        if self.solver:  # not for the dd engine
             out["solver"] = self.solver
         if self.engine_reason:
             out["engine_reason"] = self.engine_reason
@@ -751,7 +751,7 @@ def check(model: ir.Model, props: Sequence[ir.Property], *, via: Via = "prism",
     (a sweep's other points, so that every chunk of it builds the same model).
     `all_states`: Storm builds every reachable state even for one property (Job.all_states),
     so that the state counts do not depend on how the properties are split over processes.
-    `solver`: how Storm solves the min/max equation systems (storm.Solver).
+    `solver`: how Storm solves the equation systems (storm.Solver).
     `max_states`: None is the default limit, which the sparse engine only has: there the
     state count predicts the memory. The symbolic engines' memory is held by the guard
     instead (85% of the free memory), and "auto" picks hybrid only for a model whose
