@@ -5,7 +5,6 @@ from __future__ import annotations
 import builtins
 import math
 import re
-import time
 from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
@@ -248,12 +247,11 @@ def test_outputs_of_a_simulator_are_paired() -> None:
 
 
 @pytest.mark.parametrize("sim", uav.SIMULATORS, ids=lambda s: s.name)
-def test_100k_runs_are_fast(sim: Simulator) -> None:
-    t0 = time.perf_counter()
+def test_100k_runs_in_one_call(sim: Simulator) -> None:
+    # How fast is measured in benchmarks/simlib_speed.py, not here: a timed assertion
+    # fails on a slow machine for no fault of the code.
     out = sim.run(100_000, np.random.default_rng(1))
-    elapsed = time.perf_counter() - t0
-    assert all(np.shape(v) == (100_000,) for v in out.values())
-    assert elapsed < 2.0, f"{sim.name}: {elapsed:.2f} s"
+    assert out and all(np.shape(v) == (100_000,) for v in out.values())
 
 
 # --- physics --------------------------------------------------------------

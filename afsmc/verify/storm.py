@@ -26,16 +26,16 @@ Via = Literal["prism", "jani"]
 VIAS: tuple[Via, ...] = ("prism", "jani")
 # How Storm solves the equation systems (an MDP's min/max ones, a DTMC's linear ones) on the
 # sparse and hybrid engines. "auto": value iteration on the hybrid engine, Storm's default
-# (topological) on sparse. Storm's topological solver
-# splits the model into strongly connected components first; a mission whose clock only
-# grows is acyclic but for its final modes, so every component is one state, and on
-# scenario 1 (77.5 M states) that decomposition and the state-by-state solution took 137 s
-# of a 394 s query that value iteration answered in 276 s (docs/benchmarks.md).
+# (topological) on sparse. The topological solver splits the model into strongly connected
+# components first; a mission whose clock only grows is acyclic but for its final modes, so
+# every component is one state, and on scenario 1 (77.5 M states) that decomposition and
+# the state-by-state solution took 137 s of a 394 s query that value iteration answered in
+# 276 s (docs/benchmarks.md).
 Solver = Literal["auto", "topological", "value-iteration"]
 SOLVERS: tuple[Solver, ...] = ("auto", "topological", "value-iteration")
 # Value iteration stops when no value changes by more than this, relative to itself. Storm's
 # default, 1e-6, moved values in the ninth digit; at 1e-10 they equal the topological
-# solver's to about 1e-15 on the UAV, at no measurable extra cost: an acyclic model reaches
+# solver's to about 1e-14 on the UAV, at no measurable extra cost: an acyclic model reaches
 # its fixed point after as many iterations as its longest path has steps.
 VI_PRECISION = "1/10000000000"
 
