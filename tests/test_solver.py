@@ -40,13 +40,7 @@ def test_value_iteration_on_cyclic_machines(engine: str, tmp_path: Path) -> None
         topo = run(path, engine=engine, isolate=False, solver="topological")
         # Inside a cycle the topological solver iterates too, to Storm's default relative
         # precision of 1e-6 (the patrol's expected duration, about 19, differs by 4e-8)
-        a, b = _values(vi), _values(topo)
-        assert a.keys() == b.keys()
-        for name in a:
-            for x, y in zip(a[name], b[name], strict=True):
-                assert (x is None) == (y is None), name
-                if x is not None and y is not None:
-                    assert x == pytest.approx(y, rel=1e-6, abs=1e-9), name
+        _close(_values(vi), _values(topo), 1e-9, rel=1e-6)
         # and not a trivial agreement: the machines have choices that matter
         assert any(p.min is not None and p.max is not None and p.max - p.min > 1e-3
                    for p in topo.properties), path

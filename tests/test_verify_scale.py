@@ -30,13 +30,14 @@ def _values(res: object) -> dict[str, tuple[float | None, ...]]:
 
 
 def _close(a: dict[str, tuple[float | None, ...]], b: dict[str, tuple[float | None, ...]],
-           tol: float) -> None:
+           tol: float, rel: float | None = None) -> None:
+    """Equal to `tol` (absolute), or also to `rel` (relative) if given."""
     assert a.keys() == b.keys()
     for name in a:
         for x, y in zip(a[name], b[name], strict=True):
             assert (x is None) == (y is None), name
             if x is not None and y is not None:
-                assert x == pytest.approx(y, abs=tol), name
+                assert x == pytest.approx(y, rel=rel, abs=tol), name
 
 
 @pytest.mark.parametrize("path,consts", [(str(EXAMPLES / "patrol.afsm"), {}), (UAV, SMALL["uav"])])

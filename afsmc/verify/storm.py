@@ -272,13 +272,13 @@ def _execute(job: Job, notify: Notify) -> JobResult:
         res.failure = StormFailure("build", _message(exc))
         return res
     res.engine = engine_name
-    check_env = _check_environment(stormpy, job, engine_name)
+    res.solver = solver_for(job.solver, engine_name)
+    check_env = _value_iteration(stormpy, job) if res.solver == "value-iteration" else None
     notify("engine", engine_name)  # a process that dies later still says which engine ran
     res.build_time = time.perf_counter() - t0
     res.states, res.transitions = int(model.nr_states), int(model.nr_transitions)
     res.choices = int(getattr(model, "nr_choices", res.transitions) or 0) if not symbolic else 0
     res.kind = "mdp" if str(model.model_type).upper().endswith("MDP") else "dtmc"
-    res.solver = solver_for(job.solver, engine_name)
     notify("built", (res.states, res.transitions, res.build_time))
     if deferred is not None:
         notify("refused", tuple(refused))
@@ -353,10 +353,9 @@ def solver_for(solver: Solver, engine: str) -> str:
     return solver
 
 
-def _check_environment(stormpy: Any, job: Job, engine: str) -> Any:
-    """Storm's environment for the checks: None is Storm's default (topological)."""
-    if solver_for(job.solver, engine) != "value-iteration":
-        return None
+def _value_iteration(stormpy: Any, job: Job) -> Any:
+    """Storm's environment for checks by value iteration (Storm's default, None, is the
+    topological solver)."""
     from stormpy import developer
 
     env = stormpy.Environment()
