@@ -55,16 +55,34 @@ def test_dead_reset_shrinks_the_uav_state_space(tmp_path: Path) -> None:
 
 
 def test_live_variables_of_the_uav() -> None:
-    """ret is dead while searching (it is always rewritten before it is read), and
-    observable variables are live everywhere."""
+    """ret is dead while searching (it is always rewritten before it is read); what the
+    labels read is live wherever it may still be read, and nowhere else: the labels about
+    the mission's outcome hold only in Done, so EmergencyLand keeps no variable."""
     model = load(str(EXAMPLES / "uav.afsm"), SMALL["uav"]).model
     live = live_variables(lower(model))
     search = model.mode("Search").number
     assert "ret_x" not in live[search] and "ret_y" not in live[search]
     assert "ret_x" in live[model.mode("GoToSearch").number]
-    for var in observable(model):
-        assert all(var in live[m.number] for m in model.modes)
     assert {"obj", "t", "exhausted", "aborted"} <= observable(model)
+    for var in observable(model):
+        assert all(var in live[m.number] for m in model.modes if not m.final)
+    done, emergency = model.mode("Done").number, model.mode("EmergencyLand").number
+    assert {"obj", "t", "exhausted", "aborted"} <= observable(model, done) <= live[done]
+    assert observable(model, emergency) == set() == live[emergency]
+
+
+def test_a_final_mode_no_label_looks_into_is_one_state(tmp_path: Path) -> None:
+    """Every emergency landing of the reduced UAV is the same state; unreduced, there is
+    one per (objects left, time, ...) it happened at. The probabilities are equal (the
+    exactness test above)."""
+    model = load(str(EXAMPLES / "uav.afsm"), SMALL["uav"]).model
+    plain, _ = storm_prism(lower(model, "lo"), tmp_path, "p")
+    reduced, _ = storm_prism(reduce(lower(model, "lo")), tmp_path, "r")
+
+    def landings(m: object) -> int:
+        return int(m.labeling.get_states("emergency").get_number_of_set_bits())  # type: ignore[attr-defined]
+
+    assert landings(plain) > 100 and landings(reduced) == 1
 
 
 def test_reorder_puts_wide_counters_last_and_interleaves_tuples() -> None:

@@ -3,8 +3,8 @@
 * ``dead_reset`` -- a live-variable analysis over modes: a variable that will not be
   read again before it is written (in the mode a transition enters) is reset to its
   initial value by that transition. States that differed only in a dead variable merge;
-  no property can tell, because variables read by labels, rewards or properties are
-  live everywhere. (Measured on UAV-like models: about half the states, see
+  no property can tell, because a variable that a label, reward or property reads in a
+  mode is live there (and, by the analysis, wherever it may be read later). (Measured on UAV-like models: about half the states, see
   docs/benchmarks.md.)
 * ``saturate`` -- a counter that only grows (the mission time) and is only ever compared
   with constants is saturated just above the largest constant it is compared with: all
@@ -62,18 +62,82 @@ def reduce(low: Lowered, options: Reductions = Reductions()) -> Lowered:
 # ---- live variables ------------------------------------------------------------------
 
 
-def observable(model: ir.Model) -> set[str]:
-    """Variables that labels, rewards or properties read: never reset."""
+def observable(model: ir.Model, mode: int | None = None) -> set[str]:
+    """Variables that labels, rewards or properties read: never reset. With `mode`, those
+    they read in a state of that mode: `mode == Done && obj == 0` reads nothing elsewhere,
+    so a final EmergencyLand keeps no mission variables and is one state, not one per
+    (obj, t, ...) it was entered with."""
     exprs: list[E.Expr] = [lb.value for lb in model.labels]
     for r in model.rewards:
-        exprs += [x for it in r.items for x in (it.guard, it.value)]
+        # an action's reward is read in the states its action leaves
+        exprs += [x for it in r.items for x in (it.guard, it.value)
+                  if mode is None or it.action is None or mode in model.action(it.action).modes]
     for p in model.properties:
         exprs += [x for x in (getattr(p.path, "target", None), getattr(p.path, "left", None),
                               getattr(p.path, "bound", None)) if x is not None]
     out: set[str] = set()
     for e in exprs:
-        out |= E.vars_read(inline(e, model))
+        out |= E.vars_read(inline(e, model) if mode is None else at_mode(e, mode, model))
     return out
+
+
+def at_mode(e: E.Expr, mode: int, model: ir.Model) -> E.Expr:
+    """`e` (formulas and labels inlined) in a state of `mode`, folded as far as that goes."""
+    m = model.mode_by_number(mode)
+
+    def fn(n: E.Expr) -> E.Expr | None:
+        return E.ModeVal(m.name, m.number) if isinstance(n, E.CurrentMode) else None
+
+    return fold(E.transform(inline(e, model), fn))
+
+
+_CMP = {"==": lambda a, b: a == b, "!=": lambda a, b: a != b, "<": lambda a, b: a < b,
+        "<=": lambda a, b: a <= b, ">": lambda a, b: a > b, ">=": lambda a, b: a >= b}
+
+
+def _known(e: E.Expr) -> int | float | bool | None:
+    if isinstance(e, E.Lit):
+        return e.value
+    if isinstance(e, E.ModeVal):
+        return e.number
+    return None
+
+
+def _is(e: E.Expr, value: bool) -> bool:
+    return isinstance(e, E.Lit) and e.type is E.Type.BOOL and e.value is value
+
+
+def fold(e: E.Expr) -> E.Expr:
+    """Fold what is known: comparisons of numbers and modes, connectives with a constant
+    side, if-then-else on a constant condition."""
+    def fn(n: E.Expr) -> E.Expr | None:
+        if isinstance(n, E.Binary):
+            a, b = _known(n.left), _known(n.right)
+            if n.op in _CMP and a is not None and b is not None:
+                return E.lit(bool(_CMP[n.op](a, b)))
+            if n.op == "&&" and (_is(n.left, False) or _is(n.right, False)):
+                return E.FALSE
+            if n.op == "||" and (_is(n.left, True) or _is(n.right, True)):
+                return E.TRUE
+            if n.op in ("&&", "||"):
+                unit = n.op == "&&"
+                if _is(n.left, unit):
+                    return n.right
+                if _is(n.right, unit):
+                    return n.left
+            if n.op == "=>":
+                if _is(n.left, False) or _is(n.right, True):
+                    return E.TRUE
+                if _is(n.left, True):
+                    return n.right
+            return None
+        if isinstance(n, E.Unary) and n.op == "!" and isinstance(n.operand, E.Lit):
+            return E.lit(not n.operand.value)
+        if isinstance(n, E.Ite) and isinstance(n.cond, E.Lit):
+            return n.then if n.cond.value else n.other
+        return None
+
+    return E.transform(e, fn)
 
 
 def _reads(cmd: Command, model: ir.Model) -> set[str]:
@@ -98,9 +162,8 @@ def live_variables(low: Lowered) -> dict[int, set[str]]:
     """For every mode, the variables that may be read before being written from there."""
     model = low.model
     everything = {v.name for v in model.variables}
-    keep = observable(model)
     modes = [m.number for m in model.modes]
-    reads = {m: set(keep) for m in modes}
+    reads = {m: observable(model, m) for m in modes}
     for cmd in low.commands:
         r = _reads(cmd, model)
         for m in cmd.modes:
