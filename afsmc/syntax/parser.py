@@ -473,8 +473,22 @@ def _report_syntax_error(exc: UnexpectedInput, source: Source, reporter: Reporte
             return
         reporter.error(code, message, span, hint=f"found {_found(tok, the_end)}")
         return
+    before = _OPERAND_BEFORE.search(text, 0, pos)
+    if "PLUS" in accepts and tok.type in _OPERANDS and before is not None:
+        # `x 2`: an operator could follow the first operand. lark's list of what it expects
+        # there starts with '(' (a call), which is no help.
+        end = " or end the declaration with ';'" if "SEMICOLON" in accepts else ""
+        reporter.error("E101", f"missing operator between {before.group(1)!r} and "
+                       f"{str(tok)!r}", span,
+                       hint=f"join them with an operator ('+', '==', '&&', ...){end}")
+        return
     reporter.error("E101", f"unexpected {_found(tok, the_end)}", span,
                    hint=_expected_hint(accepts, the_end))
+
+
+# Operands (a name, a number, a quoted label), and one that ends right before a position.
+_OPERANDS = ("NAME", "NUMBER", "ESCAPED_STRING")
+_OPERAND_BEFORE = re.compile(r'([A-Za-z_][\w.]*|\d[\w.]*|"[^"]*"|\))\s*\Z')
 
 
 # An action's or hazard's header with its weight, right before a failing `when`
