@@ -136,7 +136,7 @@ def test_two_operands_in_a_row_outside_a_property_are_not_called_nested_temporal
     path.write_text('machine m;\nmode A = 0 initial;\nvar x : [0..1];\nlabel a = x "l";\n',
                     encoding="utf-8")
     r = run_cli("check", str(path))
-    assert r.code == 1 and "error[E101]: unexpected" in r.err, r.err
+    assert r.code == 1 and "error[E101]: missing operator between 'x' and '\"l\"'" in r.err, r.err
     assert "E115" not in r.err and "E103" not in r.err
 
 
