@@ -4,8 +4,8 @@
   read again before it is written (in the mode a transition enters) is reset to its
   initial value by that transition. States that differed only in a dead variable merge;
   no property can tell, because a variable that a label, reward or property reads in a
-  mode is live there (and, by the analysis, wherever it may be read later). (Measured on UAV-like models: about half the states, see
-  docs/benchmarks.md.)
+  mode is live there (and, by the analysis, wherever it may be read later). (Measured on
+  UAV-like models: about half the states, see docs/benchmarks.md.)
 * ``saturate`` -- a counter that only grows (the mission time) and is only ever compared
   with constants is saturated just above the largest constant it is compared with: all
   larger values satisfy the same comparisons and stay larger, so they are one state
