@@ -14,10 +14,10 @@ from dataclasses import dataclass
 
 from afsmc import check
 from afsmc.diagnostics import CompileError, Diagnostic, Reporter, Severity, Source, Span
+from afsmc.lower.lowering import Lowered, Resolution, lower
+from afsmc.lower.reduce import Reductions, reduce
 from afsmc.model import ir
-from afsmc.model.lower import Lowered, Resolution, lower
-from afsmc.model.reduce import Reductions, reduce
-from afsmc.model.resolve import resolve
+from afsmc.resolve.resolver import resolve
 from afsmc.stack import deep
 from afsmc.syntax import ast
 from afsmc.syntax.parser import parse

@@ -31,7 +31,7 @@ sys.path.insert(0, ROOT)
 
 from afsmc.backends.prism import emit  # noqa: E402
 from afsmc.compiler import load, lowered  # noqa: E402
-from afsmc.model.reduce import Reductions  # noqa: E402
+from afsmc.lower.reduce import Reductions  # noqa: E402
 
 UAV = os.path.join(ROOT, "examples", "uav.afsm")
 AFSMC = [sys.executable, "-m", "afsmc.cli"]

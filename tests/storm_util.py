@@ -8,7 +8,7 @@ from typing import Any
 import stormpy
 
 from afsmc.backends.prism import emit
-from afsmc.model.lower import Lowered
+from afsmc.lower.lowering import Lowered
 
 
 def storm_prism(low: Lowered, tmp: Path, name: str = "model") -> tuple[Any, dict[str, float]]:

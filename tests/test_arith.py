@@ -14,9 +14,9 @@ import z3
 
 from afsmc.backends import jani
 from afsmc.compiler import load
+from afsmc.lower.lowering import lower
 from afsmc.model import expr as E
 from afsmc.model.evaluate import Env, evaluate
-from afsmc.model.lower import lower
 from afsmc.model.search import _z3
 from afsmc.sim.compile import compile_expr
 from tests.conftest import run_cli

@@ -15,7 +15,7 @@ from afsmc.cli import build_parser
 from afsmc.commands.common import overrides
 from afsmc.commands.sweep import split_consts
 from afsmc.compiler import load
-from afsmc.model.lower import lower
+from afsmc.lower.lowering import lower
 from afsmc.model.names import RESERVED, STORM_KEYWORDS
 from afsmc.model.pretty import number
 from afsmc.syntax.fmt import format_text

@@ -21,7 +21,7 @@ import stormpy
 from afsmc.backends import jani, prism
 from afsmc.compiler import load
 from afsmc.compiler import lowered as compiler_lowered
-from afsmc.model.lower import RESOLUTIONS, Lowered
+from afsmc.lower.lowering import RESOLUTIONS, Lowered
 from tests.conftest import CASES, EXAMPLES, ROOT, run_cli
 
 # `--const`-style overrides that keep an example's instance small enough for a test.

@@ -12,8 +12,8 @@ import pytest
 
 ROOT = Path(__file__).resolve().parent.parent
 PACKAGE = ROOT / "afsmc"
-EARLY = ("syntax", "model")
-LATER = ("afsmc.check", "afsmc.backends", "afsmc.verify", "afsmc.sim", "afsmc.simlib",
+EARLY = ("syntax", "model", "resolve")
+LATER = ("afsmc.check", "afsmc.lower", "afsmc.backends", "afsmc.verify", "afsmc.sim", "afsmc.simlib",
          "afsmc.commands", "afsmc.cli", "afsmc.lsp", "afsmc.compiler")
 
 
@@ -52,7 +52,7 @@ EARLY_FILES = sorted(p for layer in EARLY for p in (PACKAGE / layer).rglob("*.py
 
 def test_the_early_layers_have_modules() -> None:
     assert {p.parent.name for p in EARLY_FILES} >= set(EARLY)
-    assert any(p.name == "lower.py" for p in EARLY_FILES)
+    assert any(p.name == "resolver.py" for p in EARLY_FILES)
 
 
 @pytest.mark.parametrize("path", EARLY_FILES, ids=lambda p: str(p.relative_to(PACKAGE)))
@@ -63,7 +63,7 @@ def test_early_layers_import_no_later_stage(path: Path) -> None:
 
 # The checks may use the simulator registry (afsmc.simlib: which simulators exist, for
 # `from sim` constants), but no stage that consumes their verdict.
-AFTER_CHECK = ("afsmc.backends", "afsmc.verify", "afsmc.sim", "afsmc.commands", "afsmc.cli",
+AFTER_CHECK = ("afsmc.lower", "afsmc.backends", "afsmc.verify", "afsmc.sim", "afsmc.commands", "afsmc.cli",
                "afsmc.lsp", "afsmc.compiler")
 CHECK_FILES = sorted((PACKAGE / "check").rglob("*.py"))
 
@@ -71,6 +71,17 @@ CHECK_FILES = sorted((PACKAGE / "check").rglob("*.py"))
 @pytest.mark.parametrize("path", CHECK_FILES, ids=lambda p: str(p.relative_to(PACKAGE)))
 def test_checks_import_no_later_stage(path: Path) -> None:
     bad = sorted(m for m in imported(path) if any(_is_within(m, p) for p in AFTER_CHECK))
+    assert not bad, f"{_module_name(path)} imports a later stage: {', '.join(bad)}"
+
+
+AFTER_LOWER = ("afsmc.backends", "afsmc.verify", "afsmc.sim", "afsmc.commands", "afsmc.cli",
+               "afsmc.lsp", "afsmc.compiler")
+LOWER_FILES = sorted((PACKAGE / "lower").rglob("*.py"))
+
+
+@pytest.mark.parametrize("path", LOWER_FILES, ids=lambda p: str(p.relative_to(PACKAGE)))
+def test_lowering_imports_no_later_stage(path: Path) -> None:
+    bad = sorted(m for m in imported(path) if any(_is_within(m, p) for p in AFTER_LOWER))
     assert not bad, f"{_module_name(path)} imports a later stage: {', '.join(bad)}"
 
 

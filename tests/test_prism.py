@@ -13,7 +13,7 @@ import stormpy
 
 from afsmc.backends.prism import emit
 from afsmc.compiler import load
-from afsmc.model.lower import RESOLUTIONS, lower
+from afsmc.lower.lowering import RESOLUTIONS, lower
 from tests.conftest import CASES, EXAMPLES, ROOT, run_cli
 from tests.storm_util import storm_prism
 

@@ -8,8 +8,8 @@ from pathlib import Path
 import pytest
 
 from afsmc.compiler import load
-from afsmc.model.lower import lower
-from afsmc.model.reduce import Reductions, live_variables, observable, reduce
+from afsmc.lower.lowering import lower
+from afsmc.lower.reduce import Reductions, live_variables, observable, reduce
 from tests.conftest import EXAMPLES
 from tests.storm_util import storm_prism
 from tests.test_prism import CLIMB, GEOMETRIC, SMALL

@@ -7,8 +7,8 @@ from pathlib import Path
 import pytest
 
 from afsmc.compiler import load
-from afsmc.model.lower import lower
-from afsmc.model.reduce import Reductions, reduce
+from afsmc.lower.lowering import lower
+from afsmc.lower.reduce import Reductions, reduce
 from tests.storm_util import storm_prism
 
 

@@ -13,7 +13,7 @@ import stormpy
 
 from afsmc.backends.prism import emit
 from afsmc.compiler import load
-from afsmc.model.lower import Resolution, lower
+from afsmc.lower.lowering import Resolution, lower
 from afsmc.sim.run import job_for, simulate
 from afsmc.simlib import registry
 from afsmc.verify import run

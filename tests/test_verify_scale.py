@@ -14,8 +14,8 @@ import pytest
 
 from afsmc.backends.prism import PrismOutput, emit, property_variants
 from afsmc.compiler import load, lowered
+from afsmc.lower.reduce import Reductions
 from afsmc.model import ir
-from afsmc.model.reduce import Reductions
 from afsmc.verify import run
 from afsmc.verify.guard import IN_PROCESS_STATES
 from afsmc.verify.storm import Job, execute

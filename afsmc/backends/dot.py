@@ -27,9 +27,9 @@ import graphviz
 
 from afsmc import __version__
 from afsmc.check.modegraph import ModeGraph, analyse, compact
+from afsmc.lower.lowering import Lowered
 from afsmc.model import expr as E
 from afsmc.model import ir
-from afsmc.model.lower import Lowered
 from afsmc.model.pretty import with_names
 from afsmc.model.semantics import static_value
 

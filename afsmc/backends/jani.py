@@ -25,9 +25,9 @@ from typing import Any
 from afsmc.backends.prism import describe, property_variants
 from afsmc.backends.storm_safe import signed_pow
 from afsmc.diagnostics import Diagnostic, Severity, Span
+from afsmc.lower.lowering import Command, Lowered
 from afsmc.model import expr as E
 from afsmc.model import ir
-from afsmc.model.lower import Command, Lowered
 from afsmc.model.semantics import bounded_globally, globally_dual
 
 Json = Any  # a JSON-ready value: dict, list, str, int, float, bool

@@ -12,9 +12,9 @@ from typing import ClassVar
 
 from afsmc import __version__
 from afsmc.backends.storm_safe import signed_pow
+from afsmc.lower.lowering import Command, Lowered
 from afsmc.model import expr as E
 from afsmc.model import ir
-from afsmc.model.lower import Command, Lowered
 from afsmc.model.pretty import Printer, number
 
 

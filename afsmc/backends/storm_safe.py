@@ -11,9 +11,9 @@ sparse engine for a base it does not fold (a variable) and for doubles.
 
 from __future__ import annotations
 
+from afsmc.lower.lowering import Lowered
 from afsmc.model import expr as E
 from afsmc.model.bounds import bounds
-from afsmc.model.lower import Lowered
 
 INT = E.Type.INT
 

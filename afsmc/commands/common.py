@@ -9,9 +9,9 @@ from collections.abc import Iterable
 
 from afsmc.diagnostics import CompileError, Diagnostic, render_all
 from afsmc.diagnostics import to_json as diags_to_json
-from afsmc.model.lower import RESOLUTIONS
-from afsmc.model.reduce import Reductions
-from afsmc.model.resolve import parse_override
+from afsmc.lower.lowering import RESOLUTIONS
+from afsmc.lower.reduce import Reductions
+from afsmc.resolve.resolver import parse_override
 
 
 def add_file(p: argparse.ArgumentParser) -> None:

@@ -21,7 +21,7 @@ from afsmc.commands.common import (
 )
 from afsmc.compiler import check_writable, load, lowered, write_atomic
 from afsmc.diagnostics import CompileError, Diagnostic
-from afsmc.model.lower import Lowered
+from afsmc.lower.lowering import Lowered
 
 # -t NAME -> "module:function"; the function maps a Lowered model to {suffix: text}.
 TARGETS: dict[str, str] = {

@@ -33,8 +33,8 @@ from afsmc.commands.common import (
 from afsmc.commands.verify import positive
 from afsmc.compiler import load, lowered, write_atomic
 from afsmc.diagnostics import CompileError, Diagnostic, Severity
+from afsmc.lower.lowering import Resolution
 from afsmc.model import ir
-from afsmc.model.lower import Resolution
 from afsmc.verify.guard import Progress, default_max_states, run_job, upper_bound
 from afsmc.verify.storm import Job
 

@@ -44,7 +44,7 @@ from afsmc.lsp import index as I
 from afsmc.model import ir
 from afsmc.model.expr import FUNCTIONS
 from afsmc.model.names import AFSM_KEYWORDS
-from afsmc.model.resolve import resolve
+from afsmc.resolve.resolver import resolve
 from afsmc.syntax import ast
 from afsmc.syntax.fmt import format_text, line_ending
 from afsmc.syntax.parser import parse

@@ -16,11 +16,11 @@ import numpy as np
 import numpy.typing as npt
 
 from afsmc.diagnostics import Diagnostic
+from afsmc.lower.lowering import Lowered
 from afsmc.model import expr as E
 from afsmc.model import ir
 from afsmc.model.bounds import bounds
 from afsmc.model.evaluate import scalar
-from afsmc.model.lower import Lowered
 from afsmc.sim.compile import Fn, Frame, Scope, SimError, compile_expr, fold, reads, static
 
 UNDECIDED, TRUE, FALSE = 0, 1, 2

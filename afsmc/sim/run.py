@@ -20,7 +20,7 @@ import numpy as np
 
 from afsmc.compiler import load
 from afsmc.lifetime import die_with_parent, worker_died
-from afsmc.model.lower import lower
+from afsmc.lower.lowering import lower
 from afsmc.sim import stats
 from afsmc.sim.compile import SimError
 from afsmc.sim.engine import BatchResult, Program, build, merge_moments, simulate_batch

@@ -21,13 +21,13 @@ from afsmc.backends.prism import emit as prism_emit
 from afsmc.backends.prism import formula_text, property_variants
 from afsmc.compiler import load, lowered
 from afsmc.diagnostics import CompileError, Diagnostic, Related, Severity, Source, Span
+from afsmc.lower.lowering import Lowered
+from afsmc.lower.reduce import Reductions
 from afsmc.model import expr as E
 from afsmc.model import ir
 from afsmc.model.evaluate import Env, EvalError, evaluate
-from afsmc.model.lower import Lowered
 from afsmc.model.names import did_you_mean
 from afsmc.model.pretty import show
-from afsmc.model.reduce import Reductions
 from afsmc.model.semantics import bounded_globally, globally_dual, inline, static_value
 from afsmc.stack import deep
 from afsmc.syntax.parser import parse, parse_property

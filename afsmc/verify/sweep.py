@@ -25,11 +25,11 @@ from afsmc.backends.prism import emit as prism_emit
 from afsmc.compiler import read_source, write_atomic
 from afsmc.diagnostics import CompileError, Diagnostic, Severity
 from afsmc.lifetime import die_with_parent, worker_died
+from afsmc.lower.lowering import lower
+from afsmc.lower.reduce import Reductions
 from afsmc.model import expr as E
 from afsmc.model import ir
-from afsmc.model.lower import lower
-from afsmc.model.reduce import Reductions
-from afsmc.model.resolve import INT64
+from afsmc.resolve.resolver import INT64
 from afsmc.stack import deep
 from afsmc.verify.core import (
     Checks,

@@ -22,10 +22,10 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, replace
 
+from afsmc.lower.lowering import Branch, Command, Lowered
 from afsmc.model import expr as E
 from afsmc.model import ir
 from afsmc.model.bounds import bounds, static
-from afsmc.model.lower import Branch, Command, Lowered
 from afsmc.model.semantics import inline
 
 

@@ -64,7 +64,7 @@ class Lowered:
     resolution: Resolution
     weights: dict[str, E.Expr]  # action -> effective weight w(s, a) (0 where not enabled)
     bounds: dict[str, tuple[str, int]] = field(default_factory=dict)  # generated const -> (interval const, value)
-    reductions: tuple[str, ...] = ()  # exact reductions applied (afsmc.model.reduce)
+    reductions: tuple[str, ...] = ()  # exact reductions applied (afsmc.lower.reduce)
 
     @property
     def kind(self) -> Literal["dtmc", "mdp"]:
