@@ -17,7 +17,7 @@ import time
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 sys.path.insert(0, ROOT)
 
-from afsmc.compiler import read_source  # noqa: E402
+from afsmc.files import read_source  # noqa: E402
 from afsmc.sim.run import job_for, simulate  # noqa: E402
 
 DEFAULT = [os.path.join(ROOT, "examples", "uav.afsm"), os.path.join(ROOT, "examples", "patrol.afsm"),

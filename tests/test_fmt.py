@@ -144,7 +144,7 @@ def test_a_stopped_write_leaves_no_temporary_file(tmp_path: Path,
                                                   monkeypatch: pytest.MonkeyPatch) -> None:
     """A Ctrl-C during the write left `.NAME.XXXX.tmp` behind (review 19): only an OSError
     removed it."""
-    from afsmc.compiler import write_atomic
+    from afsmc.files import write_atomic
 
     def stop(fd: int) -> None:
         raise KeyboardInterrupt

@@ -7,8 +7,9 @@ import argparse
 import sys
 
 from afsmc.commands.common import add_consts, overrides, report, usage_error
-from afsmc.compiler import decode_source, load
+from afsmc.compiler import load
 from afsmc.diagnostics import CompileError, Diagnostic, Severity
+from afsmc.files import decode_source
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:

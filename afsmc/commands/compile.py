@@ -19,8 +19,9 @@ from afsmc.commands.common import (
     report,
     usage_error,
 )
-from afsmc.compiler import check_writable, load, lowered, write_atomic
+from afsmc.compiler import load, lowered
 from afsmc.diagnostics import CompileError, Diagnostic
+from afsmc.files import check_writable, write_atomic
 from afsmc.lower.lowering import Lowered
 
 # -t NAME -> "module:function"; the function maps a Lowered model to {suffix: text}.

@@ -31,8 +31,9 @@ from afsmc.commands.common import (
     usage_error,
 )
 from afsmc.commands.verify import positive
-from afsmc.compiler import load, lowered, write_atomic
+from afsmc.compiler import load, lowered
 from afsmc.diagnostics import CompileError, Diagnostic, Severity
+from afsmc.files import write_atomic
 from afsmc.lower.lowering import Resolution
 from afsmc.model import ir
 from afsmc.verify.guard import Progress, default_max_states, run_job, upper_bound

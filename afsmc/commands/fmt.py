@@ -13,8 +13,8 @@ import difflib
 import sys
 
 from afsmc.commands.common import report
-from afsmc.compiler import read_source, write_atomic
 from afsmc.diagnostics import CompileError, split_lines
+from afsmc.files import read_source, write_atomic
 from afsmc.syntax.fmt import format_text, line_ending
 
 

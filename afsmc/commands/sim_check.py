@@ -12,8 +12,9 @@ import time
 from typing import cast
 
 from afsmc.commands.common import add_consts, add_seed, fail, overrides, print_json, report
-from afsmc.compiler import load, write_atomic
+from afsmc.compiler import load
 from afsmc.diagnostics import CompileError, Diagnostic, Severity
+from afsmc.files import write_atomic
 from afsmc.sim.evidence import Evidence, judge, rewrite
 from afsmc.simlib import registry
 

@@ -21,8 +21,8 @@ from afsmc.commands.common import (
     print_json,
     report,
 )
-from afsmc.compiler import check_writable, read_source, write_atomic
 from afsmc.diagnostics import CompileError, Diagnostic, Severity
+from afsmc.files import check_writable, read_source, write_atomic
 from afsmc.sim.compile import SimError
 from afsmc.sim.run import (
     BATCH,

@@ -21,8 +21,8 @@ from afsmc.commands.verify import (
     progress_printer,
     refuse_bisim_on_symbolic,
 )
-from afsmc.compiler import check_writable, write_atomic
 from afsmc.diagnostics import CompileError, Diagnostic, Severity
+from afsmc.files import check_writable, write_atomic
 from afsmc.verify.sweep import Number, SweepResult, parse_values, without_kept_note
 
 

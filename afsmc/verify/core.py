@@ -236,7 +236,7 @@ def load_with_formulas(path: str, overrides: Mapping[str, str] | None = None,
                        formulas: Sequence[str] = (), *, text: str | None = None,
                        run_checks: bool = True) -> Loaded:
     """Load `path` with each formula appended as `property adhocN = <formula>;`."""
-    from afsmc.compiler import read_source
+    from afsmc.files import read_source
 
     base = read_source(path) if text is None else text
     full = base if base.endswith("\n") else base + "\n"

@@ -22,8 +22,8 @@ from decimal import Decimal, InvalidOperation
 from typing import Any, Literal
 
 from afsmc.backends.prism import emit as prism_emit
-from afsmc.compiler import read_source, write_atomic
 from afsmc.diagnostics import CompileError, Diagnostic, Severity
+from afsmc.files import read_source, write_atomic
 from afsmc.lifetime import die_with_parent, worker_died
 from afsmc.lower.lowering import lower
 from afsmc.lower.reduce import Reductions
