@@ -23,6 +23,7 @@ from typing import Any, TextIO
 
 from afsmc import __version__
 from afsmc.diagnostics import CompileError, Diagnostic, Severity, render_all
+from afsmc.interrupt import JsonResult, Stopped
 from afsmc.stack import run_deep
 
 # name -> one-line help; the module afsmc.commands.<name> implements it
@@ -164,8 +165,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     except KeyboardInterrupt as exc:
         terminated = _by_sigterm(exc)
         print("afsmc: terminated" if terminated else "afsmc: interrupted", file=sys.stderr)
-        notes = list(getattr(exc, "__notes__", []))  # e.g. the values verify had by then
-        errors: list[Diagnostic] = list(getattr(exc, "afsmc_errors", []))  # queries that failed
+        stopped = exc if isinstance(exc, Stopped) else None  # what was finished by then
+        notes = stopped.notes if stopped else []
+        errors: list[Diagnostic] = stopped.errors if stopped else []
         if errors:
             print(render_all(errors), file=sys.stderr)
         for note in notes:
@@ -175,8 +177,8 @@ def main(argv: Sequence[str] | None = None) -> int:
             obj: dict[str, object] = {
                 "interrupted": True, "diagnostics": [d.to_json() for d in errors] + [
                     {"code": "N412", "severity": "note", "message": n} for n in notes]}
-            partial = getattr(exc, "afsmc_partial", None)  # the answers so far, as data
-            if partial is not None:
+            partial = stopped.partial if stopped else None  # the answers so far, as data
+            if isinstance(partial, JsonResult):
                 obj |= partial.to_json()
             print(json.dumps(obj, indent=2))
         return 128 + signal.SIGTERM if terminated else 130

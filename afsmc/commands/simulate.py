@@ -23,6 +23,7 @@ from afsmc.commands.common import (
 )
 from afsmc.diagnostics import CompileError, Diagnostic, Severity
 from afsmc.files import check_writable, read_source, write_atomic
+from afsmc.interrupt import Stopped
 from afsmc.sim.compile import SimError
 from afsmc.sim.run import (
     BATCH,
@@ -135,17 +136,17 @@ def run(args: argparse.Namespace) -> int:
             out = simulate(job, args.runs, args.seed, confidence=args.confidence,
                            jobs=args.jobs, dask=args.dask, trace=args.traces,
                            batch_size=args.batch_size, progress=progress)
-        except KeyboardInterrupt as exc:
+        except Stopped as exc:
             # The runs that finished are not lost to a Ctrl-C: the CLI prints the note and,
             # for --json, the estimates as data.
-            part: Outcome | None = getattr(exc, "afsmc_outcome", None)
-            if part is not None:
-                exc.add_note(_so_far(part, args))
-                consts: dict[str, object] = {c.name: c.value for c in model.constants
-                                             if c.is_param}
-                setattr(exc, "afsmc_partial",  # noqa: B010
-                        _Partial(_json(part, args, model.name, consts, warnings)))
-            raise
+            part = exc.partial
+            if not isinstance(part, Outcome):
+                raise
+            consts: dict[str, object] = {c.name: c.value for c in model.constants
+                                         if c.is_param}
+            raise Stopped(notes=[_so_far(part, args)],
+                          partial=_Partial(_json(part, args, model.name, consts,
+                                                 warnings))) from exc
         if args.traces_out:
             write_atomic(args.traces_out, json.dumps(out.traces, indent=1) + "\n",
                          protect=(args.file,))

@@ -19,6 +19,7 @@ from typing import Any, Literal
 import numpy as np
 
 from afsmc.compiler import load
+from afsmc.interrupt import Stopped
 from afsmc.lifetime import die_with_parent, worker_died
 from afsmc.lower.lowering import lower
 from afsmc.sim import stats
@@ -134,7 +135,7 @@ def simulate(job: Job, runs: int, seed: int, *, confidence: float = 0.999, jobs:
                                            trace if i == 0 else 0))
     except KeyboardInterrupt as exc:
         if done:  # the batches that finished are an estimate of their own (the CLI shows it)
-            setattr(exc, "afsmc_outcome", outcome())  # noqa: B010
+            raise Stopped(partial=outcome()) from exc
         raise
     return outcome()
 

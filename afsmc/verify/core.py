@@ -21,6 +21,7 @@ from afsmc.backends.prism import emit as prism_emit
 from afsmc.backends.prism import formula_text, property_variants
 from afsmc.compiler import load, lowered
 from afsmc.diagnostics import CompileError, Diagnostic, Related, Severity, Source, Span
+from afsmc.interrupt import Stopped
 from afsmc.lower.lowering import Lowered
 from afsmc.lower.reduce import Reductions
 from afsmc.model import expr as E
@@ -985,15 +986,11 @@ def check(model: ir.Model, props: Sequence[ir.Property], *, via: Via = "prism",
             try:
                 res = run_job(job, bound, isolate=fresh, progress=progress)
             except KeyboardInterrupt as exc:
-                # An hour's answers are not lost to a Ctrl-C: the CLI prints these notes.
+                # An hour's answers are not lost to a Ctrl-C: the CLI prints the errors and
+                # notes and, for --json, the answers as data.
                 got = exc.values if isinstance(exc, Interrupted) else {}
-                for d in kept(what, vals | got):
-                    exc.add_note(d.message)
-                setattr(exc, "afsmc_errors", list(errors))  # noqa: B010 -- the CLI shows them
-                # and, for --json, the answers as data (a KeyboardInterrupt has no .partial)
-                setattr(exc, "afsmc_partial",  # noqa: B010
-                        partial(vals | got, secs, merged or built))
-                raise
+                raise Stopped(errors, [d.message for d in kept(what, vals | got)],
+                              partial(vals | got, secs, merged or built)) from exc
             failure = res.failure
             # What the process set out to check ("auto" adds and leaves some for hybrid).
             asked = len(job.hybrid_queries if res.engine == "hybrid" else job.names)

@@ -24,6 +24,7 @@ from typing import Any, Literal
 from afsmc.backends.prism import emit as prism_emit
 from afsmc.diagnostics import CompileError, Diagnostic, Severity
 from afsmc.files import read_source, write_atomic
+from afsmc.interrupt import Stopped
 from afsmc.lifetime import die_with_parent, worker_died
 from afsmc.lower.lowering import lower
 from afsmc.lower.reduce import Reductions
@@ -592,15 +593,12 @@ def sweep(path: str, variable: str, values: Sequence[Number], *, kind: Kind = "c
         _run(tasks, jobs, dask, progress, len(values), finished)
     except KeyboardInterrupt as exc:
         # The points of the tasks that finished are not lost: the CLI prints the note and
-        # the errors, in place of check()'s (their properties have internal names, NAME__atI).
+        # the errors, in place of check()'s (their properties have internal names, NAME__atI),
+        # and for --json the points as data.
         result, errors, notes = gathered()
-        exc.__notes__ = []
-        errors = [*_user_words(getattr(exc, "afsmc_errors", None) or []), *errors]
-        setattr(exc, "afsmc_errors", errors)  # noqa: B010 -- for the CLI
-        for d in notes:
-            exc.add_note(d.message)
-        setattr(exc, "afsmc_partial", result)  # noqa: B010 -- for --json, the points as data
-        raise
+        inner = exc.errors if isinstance(exc, Stopped) else []
+        raise Stopped([*_user_words(inner), *errors], [d.message for d in notes],
+                      result) from exc
     except Exception as exc:
         if not worker_died(exc):
             raise
