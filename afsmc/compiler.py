@@ -15,7 +15,7 @@ from afsmc.files import read_source
 from afsmc.lower.lowering import Lowered, Resolution, lower
 from afsmc.lower.reduce import Reductions, reduce
 from afsmc.model import ir
-from afsmc.resolve.resolver import resolve
+from afsmc.resolve import resolve
 from afsmc.stack import deep
 from afsmc.syntax import ast
 from afsmc.syntax.parser import parse
@@ -29,6 +29,12 @@ def parse_file(path: str) -> ast.Module:
 class Checked:
     model: ir.Model
     diagnostics: list[Diagnostic]  # warnings and notes; errors raise instead
+    # From afsmc.resolve.Resolved: the names the source uses where the IR keeps no
+    # reference (for check.run), and, with `open_params`, the params without a value (the
+    # E206 each would have been) and the constants that read them.
+    used_names: frozenset[str]
+    open_params: Mapping[str, Diagnostic]
+    open_reads: Mapping[str, frozenset[str]]
 
 
 @deep
@@ -38,15 +44,16 @@ def load(path: str, overrides: Mapping[str, str] | None = None, *, text: str | N
     (`open_params`: see resolve; only without the checks, which need every value.)"""
     assert not (open_params and run_checks)
     module = parse(read_source(path) if text is None else text, path)
-    model = resolve(module, overrides, open_params=open_params)
-    warnings = list(model.cache.get("warnings", []))  # type: ignore[call-overload]
+    resolved = resolve(module, overrides, open_params=open_params)
+    warnings = list(resolved.warnings)
     if run_checks:
         rep = Reporter(warnings)
-        rep.extend(check.run(model))
+        rep.extend(check.run(resolved.model, used_names=resolved.used_names))
         if rep.has_errors:
             raise CompileError(rep.sorted())
         warnings = rep.sorted()
-    return Checked(model, warnings)
+    return Checked(resolved.model, warnings, resolved.used_names, resolved.open_params,
+                   resolved.open_reads)
 
 
 def lowered(model: ir.Model, resolution: Resolution = "nondet",

@@ -72,8 +72,9 @@ def test_the_smt_solver_decides_ties_as_enumeration_does(
     path = str(ROOT / "tests" / "cases" / case / "input.afsm")
 
     def run() -> list[tuple[str, str]]:
-        model = load(path, run_checks=False).model
-        return [(d.code, d.message) for d in check.run(model)]
+        loaded = load(path, run_checks=False)
+        return [(d.code, d.message)
+                for d in check.run(loaded.model, used_names=loaded.used_names)]
 
     enumerated = run()
     monkeypatch.setattr(search, "ENUMERATION_LIMIT", 0)

@@ -31,8 +31,8 @@ property q = R{"r"}=? [ F mode == B ];
 
 
 def _codes(path: str) -> list[tuple[str, str]]:
-    model = load(path, run_checks=False).model
-    return [(d.code, d.message) for d in check.run(model)]
+    loaded = load(path, run_checks=False)
+    return [(d.code, d.message) for d in check.run(loaded.model, used_names=loaded.used_names)]
 
 
 @pytest.mark.parametrize("case", ["err_div_guard", "err_div_update", "err_div_constant",

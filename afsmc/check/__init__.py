@@ -60,14 +60,19 @@ STRUCTURAL: tuple[Rule, ...] = (unused.check_unused, check_sim_sources, weights.
                                  mode_numbers.check_mode_numbers, storm_depth.check_storm_depth)
 
 
-def run(model: ir.Model) -> list[Diagnostic]:
+def run(model: ir.Model, *, used_names: frozenset[str] = frozenset()) -> list[Diagnostic]:
+    """Every rule's diagnostics, sorted. `used_names`: the names the source refers to
+    where the IR keeps no reference (`afsmc.resolve.Resolved.used_names`), for W303/W304."""
     rep = Reporter()
     for rule in RULES:
         if rule is not overflow.check_overflow and rule not in STRUCTURAL and any(
                 d.code == "E307" for d in rep.diagnostics):
             continue
         try:
-            rule(model, rep)
+            if rule is unused.check_unused:
+                unused.check_unused(model, rep, used_names)
+            else:
+                rule(model, rep)
         except (Undecided, EvalError, OverflowError) as exc:
             # OverflowError: a value beyond numpy's int64 (E307 says where).
             # An unproven property is said, never passed over in silence.

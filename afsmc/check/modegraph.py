@@ -21,8 +21,8 @@ never reaches), so every conclusion below is sound for a warning:
   unsatisfiable there, a preemptive hazard always disables it, or a competitor always
   beats it.
 
-The analysis is cached on the model (`model.cache["modegraph"]`), so `afsmc check` and
-the diagram share one computation.
+The analysis is kept with the model (`model.memo.modegraph`), so `afsmc check` and the
+diagram share one computation.
 """
 
 from __future__ import annotations
@@ -101,9 +101,9 @@ def _outcome_edges(model: ir.Model, source: int, via: str, kind: EdgeKind,
 
 
 def analyse(model: ir.Model) -> ModeGraph:
-    cached = model.cache.get("modegraph")
-    if isinstance(cached, ModeGraph):
-        return cached
+    known = model.memo.modegraph
+    if isinstance(known, ModeGraph):
+        return known
     finals = {m.number for m in model.modes if m.final}
     fires: dict[tuple[str, int], bool] = {}
     edges: list[Edge] = []
@@ -138,7 +138,7 @@ def analyse(model: ir.Model) -> ModeGraph:
     cannot_end = tuple(m.number for m in model.modes
                        if m.number in reachable and m.number not in can_end)
     result = ModeGraph(model, tuple(edges), fires, reachable, terminal, cannot_end)
-    model.cache["modegraph"] = result
+    model.memo.modegraph = result
     return result
 
 

@@ -19,9 +19,9 @@ from afsmc.model import expr as E
 from afsmc.model import ir
 from afsmc.model.bounds import bounds
 from afsmc.model.expr import Type
+from afsmc.model.limits import INT64
 from afsmc.model.pretty import with_names
 from afsmc.model.semantics import inline
-from afsmc.resolve.resolver import INT64
 
 _STATE_FREE = (E.Lit, E.ConstRef, E.Unary, E.Binary, E.Ite, E.Call)
 

@@ -29,15 +29,14 @@ def _exprs(model: ir.Model) -> list[E.Expr]:
     return out
 
 
-def check_unused(model: ir.Model, rep: Reporter) -> None:
-    read: set[str] = set()
+def check_unused(model: ir.Model, rep: Reporter, used_names: frozenset[str] = frozenset()) -> None:
+    """W303/W304. `used_names`: what the source refers to where the IR keeps no reference
+    (a constant's value, a variable's range), `Resolved.used_names`."""
+    read: set[str] = set(used_names)
     for e in _exprs(model):
         for n in E.walk(e):
             if isinstance(n, (E.VarRef, E.ConstRef, E.FormulaRef)):
                 read.add(n.name)
-    used = model.cache.get("used_names", frozenset())
-    assert isinstance(used, frozenset)
-    read |= used
     for v in model.variables:
         if v.name not in read:
             rep.warning("W303", f"variable {v.display} is never read", v.span,

@@ -11,7 +11,7 @@ from afsmc.diagnostics import CompileError, Diagnostic, render_all
 from afsmc.diagnostics import to_json as diags_to_json
 from afsmc.lower.lowering import RESOLUTIONS
 from afsmc.lower.reduce import Reductions
-from afsmc.resolve.resolver import parse_override
+from afsmc.resolve import parse_override
 
 
 def add_file(p: argparse.ArgumentParser) -> None:

@@ -9,12 +9,12 @@ import datetime
 import os
 import sys
 import time
-from typing import cast
 
 from afsmc.commands.common import add_consts, add_seed, fail, overrides, print_json, report
-from afsmc.compiler import load
+from afsmc.compiler import Checked, load
 from afsmc.diagnostics import CompileError, Diagnostic, Severity
 from afsmc.files import write_atomic
+from afsmc.model import ir
 from afsmc.sim.evidence import Evidence, judge, rewrite
 from afsmc.simlib import registry
 
@@ -34,17 +34,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     if args.list:
-        if args.file is not None:
-            print(f"afsmc sim-check: error: --list lists every simulator output; it takes no "
-                  f"FILE (got {args.file})", file=sys.stderr)
-            return 2
-        if args.json:
-            print_json({"outputs": [{"ref": ref, "kind": registry.kind(ref)}
-                                    for ref in registry.available()]})
-            return 0
-        for ref in registry.available():
-            print(f"{ref}  ({registry.kind(ref)})")
-        return 0
+        return _list(args)
     if args.file is None:
         print("afsmc sim-check: error: FILE is required (or --list)", file=sys.stderr)
         return 2
@@ -56,44 +46,13 @@ def run(args: argparse.Namespace) -> int:
             text = f.read()  # newline="": --update must keep every other byte
     except (OSError, UnicodeDecodeError):
         text = None
-    try:
-        checked = load(args.file, overrides(args), text=text)
-    except CompileError as exc:
-        errors = [d for d in exc.diagnostics if d.is_error]
-        if not errors or any(d.code != "E206" for d in errors):
-            return fail(exc, args.json, wrapped=True)
-        # Only params without a value: the simulated constants may not need them.
-        try:
-            checked = load(args.file, overrides(args), text=text, run_checks=False,
-                           open_params=True)
-        except CompileError:
-            return fail(exc, args.json, wrapped=True)
-        cache = checked.model.cache
-        missing = cast("dict[str, Diagnostic]", cache["open_params"])
-        reads = cast("dict[str, frozenset[str]]", cache["open_reads"])
-        needed = sorted({p for c in checked.model.constants if c.source is not None
-                         for p in reads.get(c.name, ())})
-        if needed:
-            return fail(CompileError([missing[p] for p in needed]), args.json, wrapped=True)
-        open_ = sorted(missing)
-        has, it = ("has", "it") if len(open_) == 1 else ("have", "them")
-        print(f"sim-check: {', '.join(open_)} {has} no value, and no simulated constant "
-              f"depends on {it}: the simulated constants are judged without the model's other "
-              "checks (`afsmc check --const ...` runs those)", file=sys.stderr)
-    model = checked.model
-    sourced = [c for c in model.constants if c.source is not None]
-    results: list[Evidence] = []
-    started = time.monotonic()
-    for i, c in enumerate(sourced, 1):
-        assert c.source is not None
-        print(f"sim-check: [{i}/{len(sourced)}] {c.name} <- {c.source.ref} "
-              f"({args.runs} runs, {time.monotonic() - started:.1f} s)", file=sys.stderr)
-        try:
-            results.append(judge(c, args.runs, args.seed))
-        except Exception as exc:  # a broken third-party simulator: report, don't crash
-            return fail(CompileError([Diagnostic(
-                "E505", Severity.ERROR, f"simulator '{c.source.ref}' failed: {exc}",
-                c.source.span)]), args.json, wrapped=True)
+    checked = _load(args, text)
+    if isinstance(checked, int):
+        return checked
+    sourced = [c for c in checked.model.constants if c.source is not None]
+    results = _judge_all(args, sourced)
+    if isinstance(results, int):
+        return results
     by_name = {c.name: c for c in sourced}
     drifted = [e for e in results if not e.consistent]
     # No value its own rule accepts (an int whose accepted range holds no integer):
@@ -108,14 +67,9 @@ def run(args: argparse.Namespace) -> int:
     updated = False
     if args.update and drifted:
         assert text is not None
-        date = _today()
-        changes = {e.name: (e.suggestion, f"{e.ref}, {e.runs} runs, seed {e.seed}, {date}")
-                   for e in drifted}
-        # Rewriting the input is the point here: no `protect`; keep its line endings and mode.
-        try:
-            write_atomic(args.file, rewrite(text, args.file, changes), newline=None)
-        except CompileError as exc:  # E003: the file cannot be written (it is left as it was)
-            return fail(exc, args.json, wrapped=True)
+        failed = _update(args, text, drifted)
+        if failed is not None:
+            return failed
         updated = True
     # Nothing to reject at this many runs: said, rather than called consistent.
     few = [Diagnostic(
@@ -145,6 +99,81 @@ def run(args: argparse.Namespace) -> int:
     if (diags or few) and not args.json:
         report(diags + few)
     return 1 if diags else 0
+
+
+def _list(args: argparse.Namespace) -> int:
+    """--list: the registered simulator outputs."""
+    if args.file is not None:
+        print(f"afsmc sim-check: error: --list lists every simulator output; it takes no "
+              f"FILE (got {args.file})", file=sys.stderr)
+        return 2
+    if args.json:
+        print_json({"outputs": [{"ref": ref, "kind": registry.kind(ref)}
+                                for ref in registry.available()]})
+        return 0
+    for ref in registry.available():
+        print(f"{ref}  ({registry.kind(ref)})")
+    return 0
+
+
+def _load(args: argparse.Namespace, text: str | None) -> Checked | int:
+    """The checked model, or the exit code of its errors. When the only errors are params
+    without a value (E206), the model without its checks, if no simulated constant reads
+    those params."""
+    try:
+        return load(args.file, overrides(args), text=text)
+    except CompileError as exc:
+        errors = [d for d in exc.diagnostics if d.is_error]
+        if not errors or any(d.code != "E206" for d in errors):
+            return fail(exc, args.json, wrapped=True)
+        # Only params without a value: the simulated constants may not need them.
+        try:
+            checked = load(args.file, overrides(args), text=text, run_checks=False,
+                           open_params=True)
+        except CompileError:
+            return fail(exc, args.json, wrapped=True)
+    missing, reads = checked.open_params, checked.open_reads
+    needed = sorted({p for c in checked.model.constants if c.source is not None
+                     for p in reads.get(c.name, ())})
+    if needed:
+        return fail(CompileError([missing[p] for p in needed]), args.json, wrapped=True)
+    open_ = sorted(missing)
+    has, it = ("has", "it") if len(open_) == 1 else ("have", "them")
+    print(f"sim-check: {', '.join(open_)} {has} no value, and no simulated constant "
+          f"depends on {it}: the simulated constants are judged without the model's other "
+          "checks (`afsmc check --const ...` runs those)", file=sys.stderr)
+    return checked
+
+
+def _judge_all(args: argparse.Namespace, sourced: list[ir.Constant]) -> list[Evidence] | int:
+    """Each simulated constant judged against its simulation, with progress on stderr; the
+    exit code of E505 if a simulator fails."""
+    results: list[Evidence] = []
+    started = time.monotonic()
+    for i, c in enumerate(sourced, 1):
+        assert c.source is not None
+        print(f"sim-check: [{i}/{len(sourced)}] {c.name} <- {c.source.ref} "
+              f"({args.runs} runs, {time.monotonic() - started:.1f} s)", file=sys.stderr)
+        try:
+            results.append(judge(c, args.runs, args.seed))
+        except Exception as exc:  # a broken third-party simulator: report, don't crash
+            return fail(CompileError([Diagnostic(
+                "E505", Severity.ERROR, f"simulator '{c.source.ref}' failed: {exc}",
+                c.source.span)]), args.json, wrapped=True)
+    return results
+
+
+def _update(args: argparse.Namespace, text: str, drifted: list[Evidence]) -> int | None:
+    """--update: rewrite the drifted constants in FILE; the exit code if it cannot."""
+    date = _today()
+    changes = {e.name: (e.suggestion, f"{e.ref}, {e.runs} runs, seed {e.seed}, {date}")
+               for e in drifted}
+    # Rewriting the input is the point here: no `protect`; keep its line endings and mode.
+    try:
+        write_atomic(args.file, rewrite(text, args.file, changes), newline=None)
+    except CompileError as exc:  # E003: the file cannot be written (it is left as it was)
+        return fail(exc, args.json, wrapped=True)
+    return None
 
 
 def _today() -> str:

@@ -44,7 +44,7 @@ from afsmc.lsp import index as I
 from afsmc.model import ir
 from afsmc.model.expr import FUNCTIONS
 from afsmc.model.names import AFSM_KEYWORDS
-from afsmc.resolve.resolver import resolve
+from afsmc.resolve import resolve
 from afsmc.syntax import ast
 from afsmc.syntax.fmt import format_text, line_ending
 from afsmc.syntax.parser import parse
@@ -82,7 +82,7 @@ def analyse_fast(text: str, path: str) -> Fast:
     except CompileError as exc:
         return Fast(None, None, exc.diagnostics)
     try:
-        model = resolve(module)
+        model = resolve(module).model
     except CompileError as exc:
         return Fast(module, None, exc.diagnostics)
     return Fast(module, model, [])

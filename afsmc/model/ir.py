@@ -8,10 +8,13 @@ is a pair of integers and every later stage can enumerate states.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Literal, Union
+from typing import TYPE_CHECKING, Literal, Union
 
 from afsmc.diagnostics import Source, Span
 from afsmc.model.expr import Expr, Type
+
+if TYPE_CHECKING:
+    from afsmc.model.search import Witness
 
 Value = Union[int, float, bool]
 
@@ -172,6 +175,22 @@ class Property:
     bound_site: tuple[int, int] | None = None
 
 
+@dataclass
+class Memo:
+    """What later stages derive from a model, kept with it (the model itself is frozen):
+    each is computed on first use, once per model, and only from the model.
+    `dataclasses.replace(model, ...)` hands the same memo to the new model, like any other
+    field: what was derived already is shared, so replace only what it does not read."""
+
+    # afsmc.model.semantics.inline: a formula ("f:NAME"), weight ("w:ACTION") or label
+    # ("label:NAME") inlined
+    inline: dict[str, Expr] = field(default_factory=dict)
+    # afsmc.model.search.deadlock_witness: by mode number, a state with no action enabled
+    deadlocks: dict[int, Witness | None] = field(default_factory=dict)
+    # afsmc.check.modegraph.analyse's ModeGraph; a later stage's type, so not named here
+    modegraph: object | None = None
+
+
 @dataclass(frozen=True)
 class Model:
     name: str
@@ -185,7 +204,7 @@ class Model:
     labels: tuple[Label, ...]
     rewards: tuple[RewardStruct, ...]
     properties: tuple[Property, ...]
-    cache: dict[str, object] = field(default_factory=dict, compare=False, repr=False)
+    memo: Memo = field(default_factory=Memo, compare=False, repr=False)
 
     # Lookups; models are small, so linear scans keep the IR plain data.
     def constant(self, name: str) -> Constant:

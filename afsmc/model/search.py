@@ -66,11 +66,10 @@ def exists(model: ir.Model, mode: int, pred: E.Expr,
 def deadlock_witness(model: ir.Model, mode: int) -> Witness | None:
     """A state of the (non-final) mode where no action is enabled, or None. The lowering
     asks too (it makes such states absorbing), so the answer is kept on the model."""
-    memo = model.cache.setdefault("deadlocks", {})
-    assert isinstance(memo, dict)
+    memo = model.memo.deadlocks
     if mode not in memo:
         memo[mode] = find(model, mode, stuck(model, mode))
-    return memo[mode]  # type: ignore[no-any-return]
+    return memo[mode]
 
 
 def _prepare(model: ir.Model, pred: E.Expr, consts: Mapping[str, Any] | None

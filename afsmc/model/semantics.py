@@ -51,25 +51,24 @@ def inline(e: E.Expr, model: ir.Model) -> E.Expr:
     """Replace formulas and weight references by what they stand for."""
     # What a name stands for depends on the model only: the checks and reductions inline
     # the same formulas hundreds of times, so the model keeps them.
-    memo = model.cache.setdefault("inline", {})
-    assert isinstance(memo, dict)
+    memo = model.memo.inline
 
     def fn(n: E.Expr) -> E.Expr | None:
         if isinstance(n, E.FormulaRef):
             key = "f:" + n.name
             if key not in memo:
                 memo[key] = inline(model.formula(n.name).value, model)
-            return memo[key]  # type: ignore[no-any-return]
+            return memo[key]
         if isinstance(n, E.WeightRef):
             key = "w:" + n.action
             if key not in memo:
                 memo[key] = inline(effective_weight(model, model.action(n.action)), model)
-            return memo[key]  # type: ignore[no-any-return]
+            return memo[key]
         if isinstance(n, E.LabelRef):
             key = key_label(n.name)
             if key not in memo:
                 memo[key] = inline(model.label(n.name).value, model)
-            return memo[key]  # type: ignore[no-any-return]
+            return memo[key]
         return None
 
     return E.transform(e, fn)

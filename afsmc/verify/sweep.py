@@ -30,7 +30,7 @@ from afsmc.lower.lowering import lower
 from afsmc.lower.reduce import Reductions
 from afsmc.model import expr as E
 from afsmc.model import ir
-from afsmc.resolve.resolver import INT64
+from afsmc.model.limits import INT64
 from afsmc.stack import deep
 from afsmc.verify.core import (
     Checks,
