@@ -25,14 +25,9 @@ from afsmc.model.names import (
     safe_identifier,
 )
 from afsmc.syntax import ast
-from afsmc.syntax.parser import (
-    MAX_DEPTH,
-    NESTED_TEMPORAL,
-    NOT_OPERATOR,
-    OPERATORS,
-    flat_text,
-    tokens,
-)
+from afsmc.syntax.errors.messages import NESTED_TEMPORAL, NOT_OPERATOR, OPERATORS
+from afsmc.syntax.parser import MAX_DEPTH
+from afsmc.syntax.scan import flat_text, tokens
 
 # How deeply a formula may nest once the formulas it uses are inlined (E246): the checks
 # and the JANI backend inline them, recursively (see afsmc.stack).
