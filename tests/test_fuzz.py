@@ -15,7 +15,8 @@ from hypothesis.extra.lark import from_lark
 from afsmc.compiler import load
 from afsmc.diagnostics import CompileError, render_all
 from afsmc.syntax.fmt import format_text
-from afsmc.syntax.parser import grammar_text, parse
+from afsmc.syntax.grammar import grammar_text
+from afsmc.syntax.parser import parse
 from tests.conftest import EXAMPLES
 
 SETTINGS = settings(max_examples=100, deadline=None,

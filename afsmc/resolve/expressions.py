@@ -17,7 +17,7 @@ from afsmc.model.limits import NUMBERS_HINT, unrepresentable
 from afsmc.model.names import did_you_mean
 from afsmc.resolve.base import Ctx, ResolverBase, a
 from afsmc.syntax import ast
-from afsmc.syntax.parser import NESTED_TEMPORAL, NOT_OPERATOR, OPERATORS
+from afsmc.syntax.errors.messages import NESTED_TEMPORAL, NOT_OPERATOR, OPERATORS
 
 _ARITY = {"floor": 1, "ceil": 1, "pow": 2, "mod": 2}  # min and max take 2 or more
 

@@ -13,7 +13,7 @@ from afsmc.model.expr import Type
 from afsmc.model.names import did_you_mean
 from afsmc.resolve.base import Ctx, ResolverBase
 from afsmc.syntax import ast
-from afsmc.syntax.parser import flat_text, tokens
+from afsmc.syntax.scan import flat_text, tokens
 
 _PROPERTY = Ctx("a property", labels=True)
 

@@ -1,6 +1,6 @@
 """The abstract syntax tree of an .afsm file: exactly what was written, with spans.
 
-Nothing here is resolved or checked; :mod:`afsmc.model` turns it into the typed IR.
+Nothing here is resolved or checked; :mod:`afsmc.resolve` turns it into the typed IR.
 The formatter and the language server work on this tree, so it keeps every construct
 the author wrote (e.g. `mode in {...}` and `+=` stay as written).
 """

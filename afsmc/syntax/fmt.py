@@ -8,10 +8,10 @@ inside a literal the parser folded a minus into (`-(-1.5)`); none are added or d
 Two minus signs are printed apart (`- -a`): `--` would read as a decrement.
 
 Comments are not in the AST (the grammar ignores them), so they are found by lexing the
-text again with the grammar's own terminals and placed back by position: a comment at the
-end of a line stays at the end of that line (aligned with its neighbours), a comment on
-its own line stays before what follows it, and a comment in the middle of a statement
-moves onto its own line just before that statement.
+text again with the grammar's own terminals and placed back by position (fmt_layout): a
+comment at the end of a line stays at the end of that line (aligned with its neighbours),
+a comment on its own line stays before what follows it, and a comment in the middle of a
+statement moves onto its own line just before that statement.
 
 Safety net: the result is parsed again and must give the same AST (spans aside) and the
 same comments; otherwise the file is reported, not rewritten.
@@ -21,19 +21,19 @@ from __future__ import annotations
 
 import bisect
 import dataclasses
-from dataclasses import dataclass, field
-from functools import cache, cached_property
+from functools import cache
 from typing import Any
 
 import lark
 from lark.exceptions import LarkError
 
-from afsmc.diagnostics import BOM, CompileError, Diagnostic, Severity, Span, line_starts
+from afsmc.diagnostics import BOM, CompileError, Diagnostic, Severity, Span
 from afsmc.syntax import ast
-from afsmc.syntax.parser import grammar_text, parse
+from afsmc.syntax.fmt_layout import INDENT, Unit, lay_out
+from afsmc.syntax.grammar import grammar_text
+from afsmc.syntax.parser import parse
 
 WIDTH = 100
-INDENT = "    "
 
 # Binding strength, as in the grammar: larger binds tighter.
 _ITE, _IMPLIES, _OR, _AND, _NOT, _CMP, _SUM, _PRODUCT, _NEG, _ATOM = range(1, 11)
@@ -101,48 +101,18 @@ def _shape(node: Any) -> Any:
     return node
 
 
-# ---- layout units ----------------------------------------------------------------
-
-
-@dataclass
-class _Unit:
-    """Source text [start, end) printed as `lines` (indentation included)."""
-
-    start: int
-    end: int
-    depth: int
-    lines: list[str]
-    kind: str = "item"  # "open" (a block header ending in '{'), "close" ('}'), "item"
-    leading: list[tuple[lark.Token, bool]] = field(default_factory=list)  # (comment, blank before)
-    trailing: list[lark.Token] = field(default_factory=list)
-    blank: bool = False
-    cols: list[str] | None = None  # a one-line declaration in columns, aligned with neighbours
-    group: str = ""  # which declarations align together
-    cont: list[lark.Token] = field(default_factory=list)  # lines continuing `trailing`
-
-
-@dataclass
-class _Line:
-    code: str
-    comment: str | None = None
-    blank: bool = False  # a blank line before this one
-    is_comment: bool = False
-    cont: bool = False  # continues the trailing comment of the line above, in its column
-    col: int = 0
-
-    @property
-    def indent(self) -> int:
-        return len(self.code) - len(self.code.lstrip(" "))
+# ---- the AST printed as layout units ---------------------------------------------
 
 
 class _Formatter:
+    """Prints a module's declarations and statements as layout units (fmt_layout.Unit)."""
+
     def __init__(self, text: str, module: ast.Module, toks: list[lark.Token]):
         self.text = text
         self.module = module
         self.toks = toks
         self.code = [t for t in toks if t.type != "COMMENT"]
         self.code_starts = [t.start_pos or 0 for t in self.code]
-        self.ends = sorted(t.end_pos or 0 for t in toks)
         # Parenthesis depth before each code token, and a sparse table of its range minima:
         # whether an expression's tokens are balanced is then O(1), not a scan per node
         # (quadratic on deeply nested expressions).
@@ -411,7 +381,7 @@ class _Formatter:
                 cur += ", " + p
         return [*lines, cur + ";"]
 
-    def body_units(self, body: ast.Body, depth: int) -> list[_Unit]:
+    def body_units(self, body: ast.Body, depth: int) -> list[Unit]:
         units = []
         # the updates of a body's outcomes start in one column
         width = max((len(self.expr(o.prob)) + 1 for o in body.outcomes if o.prob is not None),
@@ -420,7 +390,7 @@ class _Formatter:
             if o.prob is not None:
                 prefix = f"{self.expr(o.prob)}:".ljust(width) + " "
                 lines = self.fill(prefix, [self.update(u) for u in o.updates], depth)
-                units.append(_Unit(o.span.start, o.span.end, depth, lines))
+                units.append(Unit(o.span.start, o.span.end, depth, lines))
                 continue
             # A plain body: the parser merged its statements; keep the author's grouping.
             groups: list[list[ast.Update]] = []
@@ -433,167 +403,42 @@ class _Formatter:
             if not groups:  # `skip;`
                 skip = self._next(body.span.start, "SKIP")
                 end = self._next(skip.end_pos or 0, "SEMICOLON").end_pos or 0
-                units.append(_Unit(skip.start_pos or 0, end, depth, [INDENT * depth + "skip;"]))
+                units.append(Unit(skip.start_pos or 0, end, depth, [INDENT * depth + "skip;"]))
             for g in groups:
                 end = self._next(g[-1].span.end, "SEMICOLON").end_pos or g[-1].span.end
-                units.append(_Unit(g[0].span.start, end, depth,
-                                   self.fill("", [self.update(u) for u in g], depth)))
+                units.append(Unit(g[0].span.start, end, depth,
+                                  self.fill("", [self.update(u) for u in g], depth)))
         return units
 
-    def units(self) -> list[_Unit]:
-        out: list[_Unit] = []
+    def units(self) -> list[Unit]:
+        out: list[Unit] = []
         m = self.module
         if m.machine is not None:
-            out.append(_Unit(m.machine.span.start, m.machine.span.end, 0,
-                             [" ".join(self.simple(m.machine))]))
+            out.append(Unit(m.machine.span.start, m.machine.span.end, 0,
+                            [" ".join(self.simple(m.machine))]))
         for d in m.decls:
             if isinstance(d, (ast.ActionDecl, ast.HazardDecl)):
-                out.append(_Unit(d.span.start, d.body.span.start + 1, 0, self.header(d, 0), "open"))
+                out.append(Unit(d.span.start, d.body.span.start + 1, 0, self.header(d, 0), "open"))
                 out.extend(self.body_units(d.body, 1))
-                out.append(_Unit(d.span.end - 1, d.span.end, 0, ["}"], "close"))
+                out.append(Unit(d.span.end - 1, d.span.end, 0, ["}"], "close"))
             elif isinstance(d, ast.RewardsDecl):
                 brace = self._next(d.name.span.end, "LBRACE")
-                out.append(_Unit(d.span.start, brace.end_pos or 0, 0,
-                                 [f"rewards {d.name.text} {{"], "open"))
+                out.append(Unit(d.span.start, brace.end_pos or 0, 0,
+                                [f"rewards {d.name.text} {{"], "open"))
                 for item in d.items:
                     head = f"[{item.action.text}] " if item.action is not None else ""
-                    out.append(_Unit(item.span.start, item.span.end, 1, [
+                    out.append(Unit(item.span.start, item.span.end, 1, [
                         f"{INDENT}{head}{self.expr(item.guard)} : {self.expr(item.value)};"]))
-                out.append(_Unit(d.span.end - 1, d.span.end, 0, ["}"], "close"))
+                out.append(Unit(d.span.end - 1, d.span.end, 0, ["}"], "close"))
             else:
                 cols = self.simple(d)
-                out.append(_Unit(d.span.start, d.span.end, 0, [" ".join(cols)], cols=cols,
-                                 group=type(d).__name__))
+                out.append(Unit(d.span.start, d.span.end, 0, [" ".join(cols)], cols=cols,
+                                group=type(d).__name__))
         return out
 
-    # -- comments and blank lines
-    def _blank_before(self, offset: int) -> bool:
-        i = bisect.bisect_right(self.ends, offset) - 1
-        prev = self.ends[i] if i >= 0 else None
-        return prev is not None and self.text.count("\n", prev, offset) >= 2
-
-    def _continues(self, u: _Unit, c: lark.Token) -> bool:
-        """A `//` comment right under the trailing `//` comment of `u`, in its column, goes on
-        with it (a trailing comment too long for one line)."""
-        if not u.trailing or not str(c).startswith("//"):
-            return False
-        first, last = u.trailing[-1], (u.cont or u.trailing)[-1]
-        pos, at = c.start_pos or 0, first.start_pos or 0
-        return (str(first).startswith("//")
-                and self._line(pos) == self._line(last.start_pos or 0) + 1
-                and self._column(pos) == self._column(at))
-
-    def _column(self, offset: int) -> int:
-        return offset - (self.text.rfind("\n", 0, offset) + 1)
-
-    def _line(self, offset: int) -> int:
-        # by bisection: counting the newlines before each comment was quadratic in the file
-        return bisect.bisect_right(self._starts, offset) - 1
-
-    @cached_property
-    def _starts(self) -> list[int]:
-        return line_starts(self.text)
-
     def run(self) -> str:
-        units = self.units()
-        for u in units:
-            u.blank = self._blank_before(u.start)
-        tail: list[tuple[lark.Token, bool]] = []
-        starts = [u.start for u in units]
-        for c in (t for t in self.toks if t.type == "COMMENT"):
-            pos = c.start_pos or 0
-            k = bisect.bisect_right(starts, pos) - 1  # the last unit starting before c
-            if k >= 0 and pos < units[k].end:
-                units[k].leading.append((c, False))  # inside a statement: move it before
-            elif k >= 0 and self._line(pos) == self._line(units[k].end):
-                units[k].trailing.append(c)
-            elif k >= 0 and self._continues(units[k], c):
-                units[k].cont.append(c)
-            elif k + 1 < len(units):
-                units[k + 1].leading.append((c, self._blank_before(pos)))
-            else:
-                tail.append((c, self._blank_before(pos)))
-
-        _align_columns(units)
-        lines: list[_Line] = []
-        for i, u in enumerate(units):
-            # no blank line just after a '{', nor just before a '}'
-            allow = not (i > 0 and units[i - 1].kind == "open")
-            depth = u.depth + 1 if u.kind == "close" else u.depth
-            blank = u.blank
-            for c, cblank in sorted(u.leading, key=lambda x: x[0].start_pos or 0):
-                if (c.start_pos or 0) >= u.start:  # a hoisted comment takes the unit's blank
-                    cblank, blank = blank, False
-                self._comment(lines, c, depth, cblank and allow)
-                allow = True
-            first = len(lines)
-            lines.extend(_Line(text) for text in u.lines)
-            lines[first].blank = blank and allow and u.kind != "close"
-            if u.trailing:
-                lines[-1].comment = " ".join(str(t).rstrip() for t in u.trailing)
-            lines.extend(_Line("", str(c).rstrip(), cont=True) for c in u.cont)
-        for c, cblank in tail:
-            self._comment(lines, c, 0, cblank)
-        if lines:
-            lines[0].blank = False
-        return _render(lines)
-
-    def _comment(self, lines: list[_Line], c: lark.Token, depth: int, blank: bool) -> None:
-        text = str(c).rstrip().split("\n")
-        lines.append(_Line(INDENT * depth + text[0], blank=blank and bool(lines), is_comment=True))
-        for rest in text[1:]:  # inside a block comment: kept as written
-            lines.append(_Line(rest.rstrip(), is_comment=True))
-
-
-def _align_columns(units: list[_Unit]) -> None:
-    """Neighbouring declarations of one kind (no blank line or comment line between them)
-    line up their columns: `const int T_MOVE = [5, 6]   from sim ...`."""
-    i = 0
-    while i < len(units):
-        j = i + 1
-        if units[i].cols is not None:
-            while (j < len(units) and units[j].cols is not None and units[j].group == units[i].group
-                   and not units[j].blank and not units[j].leading):
-                j += 1
-            run = [u.cols for u in units[i:j] if u.cols is not None]
-            for c in range(max(len(cols) for cols in run) - 1):
-                width = max((len(cols[c]) for cols in run if len(cols) > c + 1), default=0)
-                for cols in run:
-                    if len(cols) > c + 1:
-                        cols[c] = cols[c].ljust(width)
-            for u in units[i:j]:
-                u.lines = [" ".join(u.cols or [])]
-        i = j
-
-
-def _render(lines: list[_Line]) -> str:
-    # Trailing comments of neighbouring lines (same indentation, no blank line or comment line
-    # between) start in one column.
-    main = [ln for ln in lines if not ln.cont]
-    i = 0
-    while i < len(main):
-        j = i + 1
-        while (j < len(main) and not main[j].blank and not main[j].is_comment
-               and not main[i].is_comment and main[j].indent == main[i].indent):
-            j += 1
-        group = [ln for ln in main[i:j] if ln.comment is not None]
-        col = max((len(ln.code) for ln in group), default=0) + 2
-        for ln in group:
-            ln.col = col
-        i = j
-    out = []
-    col = 0
-    for ln in lines:
-        if ln.blank:
-            out.append("")
-        if ln.cont:
-            out.append(" " * col + (ln.comment or ""))
-        elif ln.comment is not None:
-            col = ln.col
-            out.append(ln.code.ljust(col) + ln.comment)
-        else:
-            out.append(ln.code.rstrip())
-    return "\n".join(out) + "\n" if out else ""
+        """The formatted text: the units laid out with the file's comments."""
+        return lay_out(self.text, self.toks, self.units())
 
 
 def line_ending(raw: str) -> str:

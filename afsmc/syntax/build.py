@@ -1,0 +1,391 @@
+"""Parse tree -> AST: the lark Transformer that builds :mod:`afsmc.syntax.ast` nodes.
+
+It also reports the few mistakes only visible once a rule is complete (E110 mode numbers,
+E111 mixed bodies, E118 repeated mode attributes, E119 empty bodies).
+"""
+
+from __future__ import annotations
+
+from typing import Any, cast
+
+from lark import Token, Transformer, v_args
+
+from afsmc.diagnostics import Reporter, Source, Span
+from afsmc.syntax import ast
+
+
+def span_of(source: Source, meta_or_tok: Any) -> Span:
+    """The span of a token, or of a rule's meta (empty rules: the start of the file)."""
+    if isinstance(meta_or_tok, Token):
+        return Span.at_offset(source, meta_or_tok.start_pos or 0, meta_or_tok.end_pos)
+    if getattr(meta_or_tok, "empty", True):
+        return Span.at_offset(source, 0, 0)
+    return Span.at_offset(source, meta_or_tok.start_pos, meta_or_tok.end_pos)
+
+
+@v_args(meta=True)
+class Builder(Transformer[Token, Any]):
+    """Builds AST nodes; children arrive already transformed."""
+
+    def __init__(self, source: Source, reporter: Reporter):
+        super().__init__()
+        self.source = source
+        self.reporter = reporter
+
+    def _s(self, meta: Any) -> Span:
+        return span_of(self.source, meta)
+
+    def _id(self, tok: Token) -> ast.Ident:
+        return ast.Ident(str(tok), span_of(self.source, tok))
+
+    # -- module
+    def start(self, meta: Any, children: list[Any]) -> ast.Module:
+        machine = None
+        decls = []
+        for child in children:
+            if isinstance(child, ast.MachineDecl):
+                machine = child
+            else:
+                decls.append(child)
+        return ast.Module(machine, tuple(decls), Span.at_offset(self.source, 0, len(self.source.text)))
+
+    def machine_decl(self, meta: Any, c: list[Any]) -> ast.MachineDecl:
+        return ast.MachineDecl(self._id(c[0]), self._s(meta))
+
+    # -- constants
+    def type_name(self, meta: Any, c: list[Token]) -> str:
+        return str(c[0])
+
+    def const_decl(self, meta: Any, c: list[Any]) -> ast.ConstDecl:
+        source = c[3] if len(c) > 3 else None
+        return ast.ConstDecl(c[0], self._id(c[1]), c[2], source, self._s(meta))
+
+    def interval(self, meta: Any, c: list[Any]) -> ast.Interval:
+        return ast.Interval(c[0], c[1], self._s(meta))
+
+    def sim_source(self, meta: Any, c: list[Any]) -> ast.SimSource:
+        policy = c[1] if len(c) > 1 else ()
+        return ast.SimSource(c[0], policy, self._s(meta))
+
+    def sim_policy(self, meta: Any, c: list[Any]) -> tuple[tuple[ast.Ident, float], ...]:
+        return tuple(c)
+
+    def policy_item(self, meta: Any, c: list[Any]) -> tuple[ast.Ident, float]:
+        return (self._id(c[0]), c[1])
+
+    def signed_number(self, meta: Any, c: list[Token]) -> float:
+        # The minus is an anonymous token; comments and line breaks may stand between it and
+        # the number, so only the number's own text is converted.
+        value = float(c[-1])
+        return -value if self.source.text[meta.start_pos:meta.end_pos].startswith("-") else value
+
+    def dotted_name(self, meta: Any, c: list[Token]) -> ast.Ident:
+        return ast.Ident(".".join(str(t) for t in c), self._s(meta))
+
+    def param_decl(self, meta: Any, c: list[Any]) -> ast.ParamDecl:
+        default = c[2] if len(c) > 2 else None
+        return ast.ParamDecl(c[0], self._id(c[1]), default, self._s(meta))
+
+    # -- variables
+    def var_decl(self, meta: Any, c: list[Any]) -> ast.VarDecl:
+        name, vtype, rest = c[0], c[1], c[2:]
+        init = None
+        clamp = False
+        for item in rest:
+            if item == "clamp":
+                clamp = True
+            else:
+                init = item
+        return ast.VarDecl(self._id(name), vtype, init, clamp, self._s(meta))
+
+    def clamp(self, meta: Any, c: list[Any]) -> str:
+        return "clamp"
+
+    def range_type(self, meta: Any, c: list[Any]) -> ast.RangeType:
+        return ast.RangeType(c[0], c[1], self._s(meta))
+
+    def bool_type(self, meta: Any, c: list[Any]) -> ast.BoolType:
+        return ast.BoolType(self._s(meta))
+
+    def tuple_type(self, meta: Any, c: list[Any]) -> ast.TupleType:
+        return ast.TupleType(tuple(c), self._s(meta))
+
+    def field(self, meta: Any, c: list[Any]) -> ast.FieldDecl:
+        return ast.FieldDecl(self._id(c[0]), c[1], self._s(meta))
+
+    def var_init(self, meta: Any, c: list[Any]) -> Any:
+        return c[0]
+
+    def tuple_init(self, meta: Any, c: list[Any]) -> ast.TupleLit:
+        return ast.TupleLit(tuple(c), self._s(meta))
+
+    # -- modes
+    def mode_decl(self, meta: Any, c: list[Any]) -> ast.ModeDecl:
+        name = self._id(c[0])
+        number = None
+        number_span = None
+        attrs = []
+        for item in c[1:]:
+            if isinstance(item, Token) and item.type == "NUMBER":
+                number_span = span_of(self.source, item)
+                number = self._int(item)
+            else:
+                if item in attrs:
+                    self.reporter.error("E118", f"'{item!s}' is given twice for mode {name.text}",
+                                        span_of(self.source, item),
+                                        hint=f"write '{item!s}' once")
+                attrs.append(item)
+        return ast.ModeDecl(name, number, number_span, "initial" in attrs, "final" in attrs,
+                            self._s(meta))
+
+    def mode_attr(self, meta: Any, c: list[Token]) -> Token:
+        return c[0]  # a Token (a str) keeps its position for E118
+
+    def _int(self, tok: Token) -> int:
+        text = str(tok)
+        if not text.isdigit():
+            self.reporter.error("E110", f"a mode number must be a whole number, not {text}",
+                                span_of(self.source, tok))
+            return 0
+        return int(text)
+
+    # -- mode sets
+    def mode_set(self, meta: Any, c: list[Any]) -> ast.ModeSet:
+        return ast.ModeSet(tuple(c), False, self._s(meta))
+
+    def all_modes(self, meta: Any, c: list[Any]) -> ast.ModeSet:
+        return ast.ModeSet((), True, self._s(meta))
+
+    def all_modes_except(self, meta: Any, c: list[Any]) -> ast.ModeSet:
+        return ast.ModeSet(tuple(c), True, self._s(meta))
+
+    def mode_name(self, meta: Any, c: list[Token]) -> ast.ModeName:
+        return ast.ModeName(self._id(c[0]), self._s(meta))
+
+    def mode_number(self, meta: Any, c: list[Token]) -> ast.ModeNumber:
+        return ast.ModeNumber(self._int(c[0]), self._s(meta))
+
+    def mode_range(self, meta: Any, c: list[Token]) -> ast.ModeRange:
+        return ast.ModeRange(self._int(c[0]), self._int(c[1]), self._s(meta))
+
+    # -- actions and hazards
+    def action_decl(self, meta: Any, c: list[Any]) -> ast.ActionDecl:
+        guard = weight = None
+        for item in c[2:-1]:
+            if item[0] == "guard":
+                guard = item[1]
+            else:
+                weight = item[1]
+        return ast.ActionDecl(self._id(c[0]), c[1], guard, weight, c[-1], self._s(meta))
+
+    def guard(self, meta: Any, c: list[Any]) -> tuple[str, Any]:
+        return ("guard", c[0])
+
+    def weight(self, meta: Any, c: list[Any]) -> tuple[str, Any]:
+        return ("weight", c[0])
+
+    def hazard_decl(self, meta: Any, c: list[Any]) -> ast.HazardDecl:
+        kind, trigger = c[2]
+        weight = c[3][1] if len(c) > 4 else None
+        return ast.HazardDecl(self._id(c[0]), c[1], kind, trigger, weight, c[-1], self._s(meta))
+
+    def probabilistic(self, meta: Any, c: list[Any]) -> tuple[str, Any]:
+        return ("probabilistic", c[0])
+
+    def preemptive(self, meta: Any, c: list[Any]) -> tuple[str, Any]:
+        return ("preemptive", c[0])
+
+    def body(self, meta: Any, c: list[Any]) -> ast.Body:
+        if not c:
+            # `{ }` read as `{ skip; }` would hide a body left unwritten
+            self.reporter.error("E119", "an empty body: say what the action does",
+                                self._s(meta), hint="write '{ skip; }' for an action that "
+                                "changes nothing")
+        outcomes = [x for x in c if x.prob is not None]
+        plain = [x for x in c if x.prob is None]
+        if outcomes and plain:
+            self.reporter.error(
+                "E111", "a body has either outcomes 'p: updates;' or plain updates, not both",
+                plain[0].span,
+                hint="give this line a probability, or move it into every outcome")
+        if plain and not outcomes:
+            # `goto A; t += 1;` -- several statements of one certain outcome
+            updates = tuple(u for stmt in plain for u in stmt.updates)
+            return ast.Body((ast.Outcome(None, updates, self._s(meta)),), self._s(meta))
+        return ast.Body(tuple(c), self._s(meta))
+
+    def outcome(self, meta: Any, c: list[Any]) -> ast.Outcome:
+        return ast.Outcome(c[0], c[1], self._s(meta))
+
+    def update_stmt(self, meta: Any, c: list[Any]) -> ast.Outcome:
+        return ast.Outcome(None, c[0], self._s(meta))
+
+    def updates(self, meta: Any, c: list[Any]) -> tuple[ast.Update, ...]:
+        return tuple(c)
+
+    def no_update(self, meta: Any, c: list[Any]) -> tuple[ast.Update, ...]:
+        return ()
+
+    def goto(self, meta: Any, c: list[Token]) -> ast.Goto:
+        return ast.Goto(self._id(c[0]), self._s(meta))
+
+    def _assign(self, meta: Any, c: list[Any], op: Any) -> ast.Assign:
+        return ast.Assign(c[0], op, c[1], self._s(meta))
+
+    def assign(self, meta: Any, c: list[Any]) -> ast.Assign:
+        return self._assign(meta, c, ":=")
+
+    def add_assign(self, meta: Any, c: list[Any]) -> ast.Assign:
+        return self._assign(meta, c, "+=")
+
+    def sub_assign(self, meta: Any, c: list[Any]) -> ast.Assign:
+        return self._assign(meta, c, "-=")
+
+    def lvalue(self, meta: Any, c: list[Token]) -> ast.LValue:
+        return ast.LValue(self._id(c[0]), self._id(c[1]) if len(c) > 1 else None, self._s(meta))
+
+    # -- formulas, labels, rewards, properties
+    def formula_decl(self, meta: Any, c: list[Any]) -> ast.FormulaDecl:
+        return ast.FormulaDecl(self._id(c[0]), c[1], self._s(meta))
+
+    def label_decl(self, meta: Any, c: list[Any]) -> ast.LabelDecl:
+        return ast.LabelDecl(self._id(c[0]), c[1], self._s(meta))
+
+    def rewards_decl(self, meta: Any, c: list[Any]) -> ast.RewardsDecl:
+        return ast.RewardsDecl(self._id(c[0]), tuple(c[1:]), self._s(meta))
+
+    def action_reward(self, meta: Any, c: list[Any]) -> ast.RewardItem:
+        return ast.RewardItem(self._id(c[0]), c[1], c[2], self._s(meta))
+
+    def state_reward(self, meta: Any, c: list[Any]) -> ast.RewardItem:
+        return ast.RewardItem(None, c[0], c[1], self._s(meta))
+
+    def property_decl(self, meta: Any, c: list[Any]) -> ast.PropertyDecl:
+        return ast.PropertyDecl(self._id(c[0]), c[1], self._s(meta))
+
+    def p_op(self, meta: Any, c: list[Token]) -> str:
+        return str(c[0])
+
+    def minmax(self, meta: Any, c: list[Token]) -> str:
+        return str(c[0])
+
+    def p_query(self, meta: Any, c: list[Any]) -> ast.PQuery:
+        return ast.PQuery(c[0], c[1], self._s(meta))
+
+    def r_query(self, meta: Any, c: list[Any]) -> ast.RQuery:
+        reward = reward_span = None
+        opt = ""
+        for item in c[:-1]:
+            if isinstance(item, Token):
+                reward = str(item)[1:-1]
+                reward_span = span_of(self.source, item)
+            else:
+                opt = item
+        return ast.RQuery(reward, reward_span, cast(Any, opt), c[-1], self._s(meta))
+
+    def time_bound(self, meta: Any, c: list[Any]) -> Any:
+        return ("bound", c[0])
+
+    def _bounded(self, c: list[Any]) -> tuple[Any, list[Any]]:
+        bound = None
+        rest = []
+        for item in c:
+            if isinstance(item, tuple) and item and item[0] == "bound":
+                bound = item[1]
+            else:
+                rest.append(item)
+        return bound, rest
+
+    def eventually(self, meta: Any, c: list[Any]) -> ast.Eventually:
+        bound, rest = self._bounded(c)
+        return ast.Eventually(bound, rest[0], self._s(meta))
+
+    def globally(self, meta: Any, c: list[Any]) -> ast.Globally:
+        bound, rest = self._bounded(c)
+        return ast.Globally(bound, rest[0], self._s(meta))
+
+    def until(self, meta: Any, c: list[Any]) -> ast.Until:
+        bound, rest = self._bounded(c)
+        return ast.Until(rest[0], bound, rest[1], self._s(meta))
+
+    def next(self, meta: Any, c: list[Any]) -> ast.Next:
+        return ast.Next(c[0], self._s(meta))
+
+    def reach_reward(self, meta: Any, c: list[Any]) -> ast.ReachReward:
+        return ast.ReachReward(c[0], self._s(meta))
+
+    def cumulative_reward(self, meta: Any, c: list[Any]) -> ast.CumulativeReward:
+        bound, _ = self._bounded(c)
+        return ast.CumulativeReward(bound, self._s(meta))
+
+    def instant_reward(self, meta: Any, c: list[Any]) -> ast.InstantReward:
+        return ast.InstantReward(c[0], self._s(meta))
+
+    # -- expressions
+    def number(self, meta: Any, c: list[Token]) -> ast.Num:
+        text = str(c[0])
+        value: int | float = int(text) if text.isdigit() else float(text)
+        return ast.Num(value, text, self._s(meta))
+
+    def true(self, meta: Any, c: list[Any]) -> ast.BoolLit:
+        return ast.BoolLit(True, self._s(meta))
+
+    def false(self, meta: Any, c: list[Any]) -> ast.BoolLit:
+        return ast.BoolLit(False, self._s(meta))
+
+    def name(self, meta: Any, c: list[Token]) -> ast.Name:
+        return ast.Name(self._id(c[0]), self._s(meta))
+
+    def field_ref(self, meta: Any, c: list[Token]) -> ast.FieldRef:
+        return ast.FieldRef(self._id(c[0]), self._id(c[1]), self._s(meta))
+
+    def mode_ref(self, meta: Any, c: list[Any]) -> ast.ModeRef:
+        return ast.ModeRef(self._s(meta))
+
+    def label_ref(self, meta: Any, c: list[Token]) -> ast.LabelRef:
+        return ast.LabelRef(str(c[0])[1:-1], self._s(meta))
+
+    def call(self, meta: Any, c: list[Any]) -> ast.Call:
+        func = c[0]
+        ident = self._id(func) if isinstance(func, Token) else ast.Ident(func, self._s(meta))
+        return ast.Call(ident, tuple(x for x in c[1:] if x is not None), self._s(meta))
+
+    def neg(self, meta: Any, c: list[Any]) -> ast.Expr:
+        operand = c[-1]
+        if isinstance(operand, ast.Num):
+            value = -operand.value
+            return ast.Num(value, "-" + operand.text, self._s(meta))
+        return ast.Unary("-", operand, self._s(meta))
+
+    def not_(self, meta: Any, c: list[Any]) -> ast.Unary:
+        return ast.Unary("!", c[-1], self._s(meta))
+
+    def _binary(self, meta: Any, op: str, left: Any, right: Any) -> ast.Binary:
+        return ast.Binary(cast(Any, op), left, right, self._s(meta))
+
+    def arith(self, meta: Any, c: list[Any]) -> ast.Binary:
+        return self._binary(meta, str(c[1]), c[0], c[2])
+
+    def add_op(self, meta: Any, c: list[Token]) -> str:
+        return str(c[0])
+
+    mul_op = add_op
+    comp_op = add_op
+
+    def compare(self, meta: Any, c: list[Any]) -> ast.Binary:
+        return self._binary(meta, c[1], c[0], c[2])
+
+    def and_(self, meta: Any, c: list[Any]) -> ast.Binary:
+        return self._binary(meta, "&&", c[0], c[-1])
+
+    def or_(self, meta: Any, c: list[Any]) -> ast.Binary:
+        return self._binary(meta, "||", c[0], c[-1])
+
+    def implies(self, meta: Any, c: list[Any]) -> ast.Binary:
+        return self._binary(meta, "=>", c[0], c[-1])
+
+    def ite(self, meta: Any, c: list[Any]) -> ast.Ite:
+        return ast.Ite(c[0], c[1], c[2], self._s(meta))
+
+    def mode_in(self, meta: Any, c: list[Any]) -> ast.ModeIn:
+        return ast.ModeIn(c[0], self._s(meta))
