@@ -31,7 +31,7 @@ UAV = ROOT / "examples" / "uav.afsm"
 
 def stages(text: str, repeat: int) -> None:
     from afsmc.compiler import load
-    from afsmc.lsp.server import analyse_fast
+    from afsmc.lsp.analysis import analyse_fast
 
     fast, full = [], []
     for _ in range(repeat):

@@ -128,8 +128,8 @@ def _jani_type(t: E.Type) -> str:
 
 def _never_assigned(low: Lowered) -> set[str]:
     """The variables (`mode` too) that no command assigns. Storm's JANI builder drops such a
-    variable and then evaluates the expressions that read it wrongly (`G cfg == 1` gave 0
-    for `cfg` that stays 1), so they are written as constants of their initial value, which
+    variable and then evaluates the expressions that read it wrongly (`G cfg == 1` is 0
+    for a `cfg` that stays 1), so they are written as constants of their initial value, which
     is what they are."""
     assigned = {var for c in low.commands for b in c.branches for var, _ in b.updates}
     return {v.name for v in low.model.variables if v.name not in assigned} | (

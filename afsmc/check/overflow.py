@@ -90,7 +90,7 @@ def check_overflow(model: ir.Model, rep: Reporter) -> None:
         x = inline(site.expr, model)
         # One pass, inner parts first (an outer expression overflows because an inner one
         # does), with each node's facts computed from its children's: linear in the size
-        # of the expression (a 2000-term sum took 12 s when each node walked its subtree).
+        # of the expression (a node that walked its subtree would make a 2000-term sum take 12 s).
         memo: dict[int, tuple[float, float]] = {}
         exact: dict[int, tuple[int, int] | None] = {}
         free: dict[int, bool] = {}  # made of numbers and constants only

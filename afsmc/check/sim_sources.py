@@ -14,6 +14,7 @@ from dataclasses import dataclass
 from afsmc.diagnostics import Reporter
 from afsmc.model import ir
 from afsmc.simlib import registry
+from afsmc.text import article
 
 # What a constant backed by a simulation is checked as (see docs/monte-carlo.md).
 INTERVAL = "interval"  # const int X = [lo, hi] from sim <duration|battery>
@@ -131,4 +132,5 @@ def _check_kind(c: ir.Constant, kind: str, shape: str, rep: Reporter) -> None:
 
 
 def _a(type_name: str) -> str:
-    return ("an" if type_name[0] in "aeiou" else "a") + f" '{type_name}'"
+    """"an 'int'", "a 'bool'"."""
+    return f"{article(type_name)} '{type_name}'"

@@ -2,7 +2,7 @@
 
 Storm compiles the expressions of a model for its explicit builder with ExprTk, which
 stops at a stack depth of 10,000, about two per level of nesting: a label `x + x + ... > 100`
-with 4,998 `+` failed to build (E403) through PRISM and JANI, and a guard with 4,997 through
+with 4,998 `+` fails to build (E403) through PRISM and JANI, and a guard with 4,997 through
 JANI, though the parser takes 5,000 levels (E113). afsmc's output inlines formulas, so a
 short expression that uses a deep formula nests as deeply as both together.
 """

@@ -17,6 +17,9 @@ PREC = {"ite": 1, "=>": 2, "||": 3, "&&": 4, "!": 5, "==": 6, "!=": 6, "<": 6, "
 
 
 def number(v: int | float | bool) -> str:
+    """A literal as the IR printer writes it for PRISM and JANI: a whole double keeps its
+    `.0` (`2.0`, never `2`), so the backends see its type; afsmc.text's helpers are for
+    wording in messages and tables, where `2` reads better."""
     if isinstance(v, bool):
         return "true" if v else "false"
     if isinstance(v, int):

@@ -209,34 +209,59 @@ def _as_arr(v: Any, n: int) -> npt.NDArray[Any]:
 
 def simulate_batch(prog: Program, runs: int, rng: np.random.Generator, max_steps: int,
                    trace: int = 0) -> BatchResult:
-    n = runs
-    state: dict[str, npt.NDArray[Any]] = {v: np.full(n, prog.init[v], dtype=prog.dtypes[v])
-                                          for v in prog.variables}
-    state["mode"] = np.full(n, prog.model.initial_mode.number, dtype=np.int64)
-    ids = np.arange(n)
-    mons = prog.monitors
-    nm = len(mons)
-    status = np.zeros((nm, n), dtype=np.int8)
-    acc = np.zeros((nm, n), dtype=np.float64)
-    # outcome collectors
-    n_true = [0] * nm
-    n_und = [0] * nm
-    tot = [0.0] * nm
-    m2 = [0.0] * nm
-    n_fin = [0] * nm  # R: finite values so far, for merge_moments
-    n_inf = [0] * nm
-    absorbed = np.zeros(n, dtype=bool)
-    traces: list[list[dict[str, Any]]] = [[] for _ in range(min(trace, n))]
-    fired = np.full(n, -1, dtype=np.int64)
-    branch = np.full(n, -1, dtype=np.int64)
-    steps_done = 0
+    """Simulate `runs` runs of `prog` together for at most `max_steps` steps; keep the first
+    `trace` runs' traces."""
+    batch = _Batch(prog, runs, trace)
+    if batch.traces:
+        batch.record(0)
+    batch.retire(batch.observe(0, None))
     t = 0
+    while len(batch.ids) and t < max_steps:
+        batch.step(rng, t)
+        t += 1
+    return batch.result(runs)
 
-    def record(t: int) -> None:
-        sel = np.flatnonzero(ids < len(traces))
+
+_Updates = list[tuple[npt.NDArray[np.intp] | None, str, npt.NDArray[Any]]]
+_Plan = list[tuple[CCommand, npt.NDArray[np.intp] | None]]
+
+
+class _Batch:
+    """The live runs of one batch (their state, and each monitor's status and accumulated
+    reward per run) and the outcome of the runs already retired. Every per-run array holds
+    the live runs only: a run leaves them once it is finished."""
+
+    def __init__(self, prog: Program, n: int, trace: int) -> None:
+        self.prog = prog
+        self.state: dict[str, npt.NDArray[Any]] = {
+            v: np.full(n, prog.init[v], dtype=prog.dtypes[v]) for v in prog.variables}
+        self.state["mode"] = np.full(n, prog.model.initial_mode.number, dtype=np.int64)
+        self.ids = np.arange(n)
+        self.mons = prog.monitors
+        nm = self.nm = len(self.mons)
+        self.status = np.zeros((nm, n), dtype=np.int8)
+        self.acc = np.zeros((nm, n), dtype=np.float64)
+        # outcome collectors
+        self.n_true = [0] * nm
+        self.n_und = [0] * nm
+        self.tot = [0.0] * nm
+        self.m2 = [0.0] * nm
+        self.n_fin = [0] * nm  # R: finite values so far, for merge_moments
+        self.n_inf = [0] * nm
+        self.absorbed = np.zeros(n, dtype=bool)
+        self.traces: list[list[dict[str, Any]]] = [[] for _ in range(min(trace, n))]
+        self.fired = np.full(n, -1, dtype=np.int64)
+        self.branch = np.full(n, -1, dtype=np.int64)
+        self.steps_done = 0
+        self.has_rewards = any(mo.kind == "R" for mo in self.mons)
+
+    def record(self, t: int) -> None:
+        """Append step t to the trace of every traced run still live."""
+        prog, state = self.prog, self.state
+        sel = np.flatnonzero(self.ids < len(self.traces))
         for j in sel:
-            rid = int(ids[j])
-            cmd_i, br = int(fired[j]), int(branch[j])
+            rid = int(self.ids[j])
+            cmd_i, br = int(self.fired[j]), int(self.branch[j])
             entry: dict[str, Any] = {"step": t,
                                      "mode": prog.model.mode_by_number(int(state["mode"][j])).name}
             if t > 0 and cmd_i >= 0:
@@ -250,233 +275,269 @@ def simulate_batch(prog: Program, runs: int, rng: np.random.Generator, max_steps
                 entry["action"] = "(no enabled action)"
             entry["vars"] = {d: _py(state[v][j]) for v, d in zip(prog.variables, prog.displays,
                                                                     strict=True)}
-            traces[rid].append(entry)
+            self.traces[rid].append(entry)
 
-    def state_reward(k: int, fr: Frame, size: int) -> npt.NDArray[np.float64]:
+    def state_reward(self, k: int, fr: Frame, size: int) -> npt.NDArray[np.float64]:
+        """Reward structure k's state reward in each run of `fr`."""
         out = np.zeros(size)
         if k < 0:
             return out
-        for g, v in prog.state_rewards[k]:
+        for g, v in self.prog.state_rewards[k]:
             out = out + np.where(_as_bool(g(fr), size), _as_arr(v(fr), size), 0.0)
         return out
 
-    def observe(t: int, act_rw: npt.NDArray[np.float64] | None) -> npt.NDArray[np.bool_]:
+    def observe(self, t: int, act_rw: npt.NDArray[np.float64] | None) -> npt.NDArray[np.bool_]:
         """Decide properties at step t (state s_t); return the runs that are finished."""
-        size = len(ids)
-        done = absorbed.copy() if t >= 1 else np.zeros(size, dtype=bool)
+        size = len(self.ids)
+        done = self.absorbed.copy() if t >= 1 else np.zeros(size, dtype=bool)
         all_decided = np.ones(size, dtype=bool)
-        for k, mo in enumerate(mons):
-            st = status[k]
+        for k, mo in enumerate(self.mons):
+            st = self.status[k]
             und = st == UNDECIDED
             if not und.any():
                 continue
             if mo.kind == "P":
-                tgt = _as_bool(mo.target(state), size) if mo.target else None
-                assert tgt is not None
-                if mo.path == "F" or mo.path == "U":
-                    st[und & tgt] = TRUE
-                    if mo.path == "U":
-                        assert mo.left is not None
-                        st[und & ~tgt & ~_as_bool(mo.left(state), size)] = FALSE
-                    st[(st == UNDECIDED) & ((t >= mo.bound) | absorbed)] = FALSE
-                elif mo.path == "G":
-                    st[und & ~tgt] = FALSE
-                    st[(st == UNDECIDED) & ((t >= mo.bound) | absorbed)] = TRUE
-                elif mo.path == "X" and t == 1:
-                    st[und] = np.where(tgt[und], TRUE, FALSE)
+                self._observe_path(mo, st, und, t, size)
             else:
-                rho = state_reward(mo.reward, state, size)
-                if mo.path == "I":
-                    hit = und & ((t >= mo.bound) | absorbed)
-                    acc[k][hit] = rho[hit]
-                    st[hit] = TRUE
-                elif mo.path == "F":
-                    assert mo.target is not None
-                    tgt = _as_bool(mo.target(state), size)
-                    st[und & tgt] = TRUE
-                    inf = (st == UNDECIDED) & absorbed
-                    acc[k][inf] = math.inf
-                    st[inf] = TRUE
-                else:  # C, C<=k
-                    per = rho + (act_rw[k] if act_rw is not None else 0.0)
-                    hit = und & (t >= mo.bound)
-                    st[hit] = TRUE
-                    ab = (st == UNDECIDED) & absorbed
-                    if ab.any():
-                        if math.isinf(mo.bound):
-                            acc[k][ab] = np.where(per[ab] > 0, math.inf, acc[k][ab])
-                        else:
-                            acc[k][ab] += per[ab] * (mo.bound - t)
-                        st[ab] = TRUE
+                self._observe_reward(k, mo, st, und, t, size, act_rw)
             all_decided &= st != UNDECIDED
-        if nm:
+        if self.nm:
             done |= all_decided
         return done
 
-    def accumulate_rewards(fr_rho: list[npt.NDArray[np.float64]],
+    def _observe_path(self, mo: Monitor, st: npt.NDArray[np.int8], und: npt.NDArray[np.bool_],
+                      t: int, size: int) -> None:
+        """Decide a P monitor's undecided runs where step t decides them."""
+        absorbed = self.absorbed
+        tgt = _as_bool(mo.target(self.state), size) if mo.target else None
+        assert tgt is not None
+        if mo.path == "F" or mo.path == "U":
+            st[und & tgt] = TRUE
+            if mo.path == "U":
+                assert mo.left is not None
+                st[und & ~tgt & ~_as_bool(mo.left(self.state), size)] = FALSE
+            st[(st == UNDECIDED) & ((t >= mo.bound) | absorbed)] = FALSE
+        elif mo.path == "G":
+            st[und & ~tgt] = FALSE
+            st[(st == UNDECIDED) & ((t >= mo.bound) | absorbed)] = TRUE
+        elif mo.path == "X" and t == 1:
+            st[und] = np.where(tgt[und], TRUE, FALSE)
+
+    def _observe_reward(self, k: int, mo: Monitor, st: npt.NDArray[np.int8],
+                        und: npt.NDArray[np.bool_], t: int, size: int,
+                        act_rw: npt.NDArray[np.float64] | None) -> None:
+        """Decide an R monitor's undecided runs where step t decides them, and settle their
+        accumulated reward."""
+        absorbed, acc = self.absorbed, self.acc
+        rho = self.state_reward(mo.reward, self.state, size)
+        if mo.path == "I":
+            hit = und & ((t >= mo.bound) | absorbed)
+            acc[k][hit] = rho[hit]
+            st[hit] = TRUE
+        elif mo.path == "F":
+            assert mo.target is not None
+            tgt = _as_bool(mo.target(self.state), size)
+            st[und & tgt] = TRUE
+            inf = (st == UNDECIDED) & absorbed
+            acc[k][inf] = math.inf
+            st[inf] = TRUE
+        else:  # C, C<=k
+            per = rho + (act_rw[k] if act_rw is not None else 0.0)
+            hit = und & (t >= mo.bound)
+            st[hit] = TRUE
+            ab = (st == UNDECIDED) & absorbed
+            if ab.any():
+                if math.isinf(mo.bound):
+                    acc[k][ab] = np.where(per[ab] > 0, math.inf, acc[k][ab])
+                else:
+                    acc[k][ab] += per[ab] * (mo.bound - t)
+                st[ab] = TRUE
+
+    def accumulate_rewards(self, fr_rho: list[npt.NDArray[np.float64]],
                            act_rw: npt.NDArray[np.float64], t: int) -> None:
-        for k, mo in enumerate(mons):
+        for k, mo in enumerate(self.mons):
             if mo.kind != "R" or mo.path == "I":
                 continue
-            und = status[k] == UNDECIDED
+            und = self.status[k] == UNDECIDED
             if mo.path == "C" and not t < mo.bound:
                 continue
-            acc[k][und] += fr_rho[k][und] + act_rw[k][und]
+            self.acc[k][und] += fr_rho[k][und] + act_rw[k][und]
 
-    def retire(done: npt.NDArray[np.bool_]) -> None:
-        nonlocal ids, status, acc, absorbed, fired, branch, state
+    def _count(self, k: int, st: npt.NDArray[np.int8], acc: npt.NDArray[np.float64]) -> None:
+        """Add finished runs (their statuses and accumulated rewards) to monitor k's outcome."""
+        self.n_und[k] += int(np.count_nonzero(st == UNDECIDED))
+        if self.mons[k].kind == "P":
+            self.n_true[k] += int(np.count_nonzero(st == TRUE))
+        else:
+            vals = acc[st != UNDECIDED]
+            inf = np.isinf(vals)
+            self.n_inf[k] += int(np.count_nonzero(inf))
+            merge_moments(self.n_fin, self.tot, self.m2, k, vals[~inf])
+
+    def retire(self, done: npt.NDArray[np.bool_]) -> None:
+        """Count the finished runs and drop them from the live arrays."""
         if not done.any():
             return
-        for k, mo in enumerate(mons):
-            st = status[k][done]
-            n_und[k] += int(np.count_nonzero(st == UNDECIDED))
-            if mo.kind == "P":
-                n_true[k] += int(np.count_nonzero(st == TRUE))
-            else:
-                vals = acc[k][done][st != UNDECIDED]
-                inf = np.isinf(vals)
-                n_inf[k] += int(np.count_nonzero(inf))
-                merge_moments(n_fin, tot, m2, k, vals[~inf])
+        for k in range(self.nm):
+            self._count(k, self.status[k][done], self.acc[k][done])
         keep = ~done
-        ids = ids[keep]
-        status = status[:, keep]
-        acc = acc[:, keep]
-        absorbed = absorbed[keep]
-        fired = fired[keep]
-        branch = branch[keep]
-        state = {k: v[keep] for k, v in state.items()}
+        self.ids = self.ids[keep]
+        self.status = self.status[:, keep]
+        self.acc = self.acc[:, keep]
+        self.absorbed = self.absorbed[keep]
+        self.fired = self.fired[keep]
+        self.branch = self.branch[keep]
+        self.state = {k: v[keep] for k, v in self.state.items()}
 
-    if traces:
-        record(0)
-    retire(observe(0, None))
-    while len(ids) and t < max_steps:
-        size = len(ids)
-        rhos = [state_reward(mo.reward, state, size) if mo.kind == "R" else np.zeros(0)
+    def step(self, rng: np.random.Generator, t: int) -> None:
+        """Advance every live run from step t to t + 1, then observe and retire."""
+        prog, state, mons = self.prog, self.state, self.mons
+        size = len(self.ids)
+        rhos = [self.state_reward(mo.reward, state, size) if mo.kind == "R" else np.zeros(0)
                 for mo in mons]
-        act_rw = np.zeros((nm, size))
+        act_rw = np.zeros((self.nm, size))
         new_absorbed = np.zeros(size, dtype=bool)
         mode = state["mode"]
         counts = np.bincount(mode - prog.mode_base, minlength=prog.mode_span)
         present = np.flatnonzero(counts) + prog.mode_base
-        updates: list[tuple[npt.NDArray[np.intp] | None, str, npt.NDArray[Any]]] = []
+        updates: _Updates = []
         for m_np in present:
             m = int(m_np)
             idx: npt.NDArray[np.intp] | None = None if counts[m - prog.mode_base] == size \
                 else np.flatnonzero(mode == m)
-            nmode = size if idx is None else len(idx)
-            cmds = prog.modes.get(m, [])
-            which: npt.NDArray[np.int64] | None = None
-            plan: list[tuple[CCommand, npt.NDArray[np.intp] | None]]
-            if len(cmds) == 1 and cmds[0].guard_static is True:
-                plan = [(cmds[0], None)]  # everyone fires cmds[0]
-            else:
-                sub = _gather(state, idx, set().union(*[c.reads for c in cmds]) if cmds else set())
-                sub["mode"] = m
-                which = np.full(nmode, -1, dtype=np.int64)
-                for ci in range(len(cmds) - 1, -1, -1):
-                    g = cmds[ci].guard(sub)
-                    if np.ndim(g) == 0:
-                        if g:
-                            which[:] = ci
-                    else:
-                        which[g] = ci
-                stuck = which < 0
-                if stuck.any():  # no enabled action: the run stays put (absorbed)
-                    where_stuck = np.flatnonzero(stuck) if idx is None else idx[stuck]
-                    new_absorbed[where_stuck] = True
-                    if traces:
-                        fired[where_stuck] = -1
-                plan = []
-                for ci, c in enumerate(cmds):
-                    sel = which == ci
-                    cnt = int(np.count_nonzero(sel))
-                    if cnt == 0:
-                        continue
-                    plan.append((c, None if cnt == nmode else np.flatnonzero(sel)))
-            for c, local in plan:
+            for c, local in self._plan(m, idx, size, new_absorbed):
                 gidx = idx if local is None else (local if idx is None else idx[local])
-                cnt = size if gidx is None else len(gidx)
-                fr = _gather(state, gidx, c.reads)
-                fr["mode"] = m
-                if traces:
-                    if gidx is None:
-                        fired[:] = c.index
-                    else:
-                        fired[gidx] = c.index
-                for k, v in c.rewards:
-                    for j, mo in enumerate(mons):
-                        if mo.reward == k and mo.kind == "R":
-                            if gidx is None:
-                                act_rw[j] += _as_arr(v(fr), cnt)
-                            else:
-                                act_rw[j][gidx] += _as_arr(v(fr), cnt)
-                nb = len(c.branches)
-                if nb == 1:
-                    choice: npt.NDArray[np.int64] | None = None
-                else:
-                    u = rng.random(cnt)
-                    choice = np.zeros(cnt, dtype=np.int64)
-                    cum: Any = 0.0
-                    for b in c.branches[:-1]:
-                        cum = cum + b.prob(fr)
-                        choice += u >= cum
-                if traces:
-                    if gidx is None:
-                        branch[:] = 0 if choice is None else choice
-                    else:
-                        branch[gidx] = 0 if choice is None else choice
-                new: dict[str, Any] = {}
-                for bi, b in enumerate(c.branches):
-                    for var, f in b.updates:
-                        val = f(fr)
-                        if choice is None:
-                            new[var] = val
-                        else:
-                            old = new.get(var)
-                            if old is None:
-                                old = fr["mode"] if var == "mode" else fr[var]
-                            new[var] = np.where(choice == bi, val, old)
-                if c.selfloop:
-                    same = np.ones(cnt, dtype=bool)
-                    for var, val in new.items():
-                        old = m if var == "mode" else fr[var]
-                        same &= np.asarray(np.equal(val, old), dtype=bool)
-                    if gidx is None:
-                        new_absorbed |= same
-                    else:
-                        new_absorbed[gidx] |= same
-                for var, val in new.items():
-                    updates.append((gidx, var, val))
+                self._fire(c, m, gidx, size, rng, act_rw, new_absorbed, updates)
         # Updates are applied after every partition was evaluated on the old state.
         for gidx, var, val in updates:
             if gidx is None:
                 state[var] = np.array(np.broadcast_to(val, (size,)), dtype=state[var].dtype)
             else:
                 state[var][gidx] = val
-        if any(mo.kind == "R" for mo in mons):
-            accumulate_rewards(rhos, act_rw, t)
-        steps_done += size
+        if self.has_rewards:
+            self.accumulate_rewards(rhos, act_rw, t)
+        self.steps_done += size
         t += 1
-        absorbed |= new_absorbed
+        self.absorbed |= new_absorbed
         for fm in prog.model.modes:
             if fm.final:
-                absorbed |= state["mode"] == fm.number
-        if traces:
-            record(t)
+                self.absorbed |= state["mode"] == fm.number
+        if self.traces:
+            self.record(t)
         # Once absorbed by a self-loop, its action reward recurs every step.
-        retire(observe(t, act_rw * new_absorbed))
-    hit = len(ids)
-    for k in range(nm):
-        und = status[k] == UNDECIDED
-        n_und[k] += int(np.count_nonzero(und))
-        if mons[k].kind == "P":
-            n_true[k] += int(np.count_nonzero(status[k] == TRUE))
-        else:
-            vals = acc[k][~und]
-            inf = np.isinf(vals)
-            n_inf[k] += int(np.count_nonzero(inf))
-            merge_moments(n_fin, tot, m2, k, vals[~inf])
-    return BatchResult(runs, n_true, n_und, tot, m2, n_inf, steps_done, hit, traces)
+        self.retire(self.observe(t, act_rw * new_absorbed))
+
+    def _plan(self, m: int, idx: npt.NDArray[np.intp] | None, size: int,
+              new_absorbed: npt.NDArray[np.bool_]) -> _Plan:
+        """Which command each run in mode m (all runs if `idx` is None) fires: the first
+        enabled one. Each command with the runs that fire it (None: all of `idx`); runs
+        with none enabled are marked absorbed."""
+        nmode = size if idx is None else len(idx)
+        cmds = self.prog.modes.get(m, [])
+        if len(cmds) == 1 and cmds[0].guard_static is True:
+            return [(cmds[0], None)]  # everyone fires cmds[0]
+        sub = _gather(self.state, idx, set().union(*[c.reads for c in cmds]) if cmds else set())
+        sub["mode"] = m
+        which = np.full(nmode, -1, dtype=np.int64)
+        for ci in range(len(cmds) - 1, -1, -1):
+            g = cmds[ci].guard(sub)
+            if np.ndim(g) == 0:
+                if g:
+                    which[:] = ci
+            else:
+                which[g] = ci
+        stuck = which < 0
+        if stuck.any():  # no enabled action: the run stays put (absorbed)
+            where_stuck = np.flatnonzero(stuck) if idx is None else idx[stuck]
+            new_absorbed[where_stuck] = True
+            if self.traces:
+                self.fired[where_stuck] = -1
+        plan: _Plan = []
+        for ci, c in enumerate(cmds):
+            sel = which == ci
+            cnt = int(np.count_nonzero(sel))
+            if cnt == 0:
+                continue
+            plan.append((c, None if cnt == nmode else np.flatnonzero(sel)))
+        return plan
+
+    def _fire(self, c: CCommand, m: int, gidx: npt.NDArray[np.intp] | None, size: int,
+              rng: np.random.Generator, act_rw: npt.NDArray[np.float64],
+              new_absorbed: npt.NDArray[np.bool_], updates: _Updates) -> None:
+        """Fire command c in the runs `gidx` (all if None), which are in mode m: add its
+        action rewards, draw a branch per run, and queue the branch's updates."""
+        cnt = size if gidx is None else len(gidx)
+        fr = _gather(self.state, gidx, c.reads)
+        fr["mode"] = m
+        if self.traces:
+            if gidx is None:
+                self.fired[:] = c.index
+            else:
+                self.fired[gidx] = c.index
+        for k, v in c.rewards:
+            for j, mo in enumerate(self.mons):
+                if mo.reward == k and mo.kind == "R":
+                    if gidx is None:
+                        act_rw[j] += _as_arr(v(fr), cnt)
+                    else:
+                        act_rw[j][gidx] += _as_arr(v(fr), cnt)
+        choice = _choose(c, fr, cnt, rng)
+        if self.traces:
+            if gidx is None:
+                self.branch[:] = 0 if choice is None else choice
+            else:
+                self.branch[gidx] = 0 if choice is None else choice
+        new = _next_values(c, fr, choice)
+        if c.selfloop:
+            same = np.ones(cnt, dtype=bool)
+            for var, val in new.items():
+                old = m if var == "mode" else fr[var]
+                same &= np.asarray(np.equal(val, old), dtype=bool)
+            if gidx is None:
+                new_absorbed |= same
+            else:
+                new_absorbed[gidx] |= same
+        for var, val in new.items():
+            updates.append((gidx, var, val))
+
+    def result(self, runs: int) -> BatchResult:
+        """Count the runs still live (they hit `max_steps`) and return the outcome."""
+        hit = len(self.ids)
+        for k in range(self.nm):
+            self._count(k, self.status[k], self.acc[k])
+        return BatchResult(runs, self.n_true, self.n_und, self.tot, self.m2, self.n_inf,
+                           self.steps_done, hit, self.traces)
+
+
+def _choose(c: CCommand, fr: Frame, cnt: int,
+            rng: np.random.Generator) -> npt.NDArray[np.int64] | None:
+    """The branch of c each of `cnt` runs takes; None when c has one branch."""
+    if len(c.branches) == 1:
+        return None
+    u = rng.random(cnt)
+    choice = np.zeros(cnt, dtype=np.int64)
+    cum: Any = 0.0
+    for b in c.branches[:-1]:
+        cum = cum + b.prob(fr)
+        choice += u >= cum
+    return choice
+
+
+def _next_values(c: CCommand, fr: Frame,
+                 choice: npt.NDArray[np.int64] | None) -> dict[str, Any]:
+    """The value each variable that c's branches update takes in each run, by its branch."""
+    new: dict[str, Any] = {}
+    for bi, b in enumerate(c.branches):
+        for var, f in b.updates:
+            val = f(fr)
+            if choice is None:
+                new[var] = val
+            else:
+                old = new.get(var)
+                if old is None:
+                    old = fr["mode"] if var == "mode" else fr[var]
+                new[var] = np.where(choice == bi, val, old)
+    return new
 
 
 def _gather(state: dict[str, npt.NDArray[Any]], idx: npt.NDArray[np.intp] | None,

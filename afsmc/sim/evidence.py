@@ -19,6 +19,7 @@ from afsmc.sim import stats
 from afsmc.simlib import registry
 from afsmc.syntax import ast
 from afsmc.syntax.parser import parse
+from afsmc.text import short
 
 
 @dataclass(frozen=True)
@@ -64,10 +65,6 @@ class Evidence:
         }
 
 
-def _num(v: float) -> str:
-    return f"{v:.6g}"
-
-
 def judge(const: ir.Constant, runs: int, seed: int) -> Evidence:
     """Sample the constant's simulator output and apply the rule for its shape."""
     assert const.source is not None
@@ -82,8 +79,9 @@ def judge(const: ir.Constant, runs: int, seed: int) -> Evidence:
         k = int(np.count_nonzero(x))
         low, high = stats.clopper_pearson(k, n, conf)
         p = float(const.value)
-        return Evidence(const.name, ref, kind, pol.shape, _num(p), runs, seed, mean, low, high,
-                        None, None, None, f"p in [{_num(low)}, {_num(high)}] (Clopper-Pearson)",
+        return Evidence(const.name, ref, kind, pol.shape, short(p, 6), runs, seed, mean, low, high,
+                        None, None, None,
+                        f"p in [{short(low, 6)}, {short(high, 6)}] (Clopper-Pearson)",
                         low <= p <= high, stats.shortest_decimal(mean, low, high), conf, None)
     low, high = stats.mean_interval(x, conf)
     if pol.shape == NUMBER:
@@ -99,9 +97,10 @@ def judge(const: ir.Constant, runs: int, seed: int) -> Evidence:
             sugg = str(min(max(round(mean), first), last) if fits else round(mean))
         else:
             sugg = stats.shortest_decimal(mean, low, high)
-        return Evidence(const.name, ref, kind, pol.shape, _num(v), runs, seed, mean, low, high,
-                        None, None, None, f"value in [{_num(low - tol)}, {_num(high + tol)}] "
-                        f"(mean interval +- tolerance {_num(tol)})", ok, sugg, conf, None, fits)
+        return Evidence(const.name, ref, kind, pol.shape, short(v, 6), runs, seed, mean, low, high,
+                        None, None, None,
+                        f"value in [{short(low - tol, 6)}, {short(high + tol, 6)}] "
+                        f"(mean interval +- tolerance {short(tol, 6)})", ok, sugg, conf, None, fits)
     assert pol.shape == INTERVAL and const.interval is not None
     lo, hi = const.interval
     c = pol.coverage
@@ -117,7 +116,7 @@ def judge(const: ir.Constant, runs: int, seed: int) -> Evidence:
         return lo_ok[0] <= a <= lo_ok[1] and hi_ok[0] <= b <= hi_ok[1]
     ok = accepted(lo, hi)
     accept = (f"floor in [{lo_ok[0]}, {lo_ok[1]}], ceil in [{hi_ok[0]}, {hi_ok[1]}] "
-              f"(hull of the central {_num(c * 100)}% at confidence {_num(conf)})")
+              f"(hull of the central {short(c * 100, 6)}% at confidence {short(conf, 6)})")
     cdf_lo = float(np.searchsorted(xs, lo, side="right")) / n
     cdf_hi = float(np.searchsorted(xs, hi, side="right")) / n
     return Evidence(const.name, ref, kind, pol.shape, f"[{lo}, {hi}]", runs, seed, mean, low,
@@ -149,8 +148,8 @@ def rewrite(text: str, path: str, changes: dict[str, tuple[str, str]]) -> str:
     `// sim-check: ...` comment at the end of the line on which the declaration ends."""
     spans = value_spans(text, path)
     edits: list[tuple[int, int, str]] = []
-    # One comment per line: declarations that share a line share it. Each used to edit the
-    # same old comment, and the overlapping edits cut into the next line.
+    # One comment per line: declarations that share a line share it (an edit per declaration
+    # of the same old comment would overlap, and cut into the next line).
     lines: dict[int, tuple[int, list[str]]] = {}  # end of line -> (last decl end, notes)
     for name, (value, note) in changes.items():
         start, end = spans[name]

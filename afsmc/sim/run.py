@@ -29,8 +29,8 @@ from afsmc.sim.engine import BatchResult, Program, build, merge_moments, simulat
 Strategy = Literal["uniform", "floor", "ceil", "lo", "hi"]
 STRATEGIES: tuple[Strategy, ...] = ("uniform", "floor", "ceil", "lo", "hi")
 # lo/hi as `compile --resolve` spells them. No "min"/"max": a simulation follows one fixed
-# strategy and cannot find the MDP's optimum (always the floor gave the higher probability
-# on patrol.afsm, so "min" was taken for Pmax).
+# strategy and cannot find the MDP's optimum (the floor is no minimum: on patrol.afsm it
+# gives the higher probability, so a "min" strategy would estimate Pmax).
 LOWERING = {"uniform": "uniform", "floor": "lo", "ceil": "hi", "lo": "lo", "hi": "hi"}
 BATCH = 65_536
 # Every batch's seed is made before the runs, and a batch holds each variable of each of
