@@ -48,8 +48,8 @@ progress=None) -> SweepResult``
 The modules: ``api`` (``run``, ``check``, loading with ad-hoc formulas, and ``ask`` for
 PRISM queries of the caller's own), ``results`` (the result types), ``queries`` (the queries
 asked for each property: bounded G as duals, Pmax as complements), ``runner`` (the Storm
-processes of one check), ``failures`` (Storm's failures as diagnostics), ``guard`` and
-``storm`` (one watched Storm process), ``sweep``.
+processes of one check), ``jobs`` (a Storm job for a lowered model), ``failures`` (Storm's
+failures as diagnostics), ``guard`` and ``storm`` (one watched Storm process), ``sweep``.
 """
 
 from afsmc.verify.api import Loaded, check, load_with_formulas, run, select

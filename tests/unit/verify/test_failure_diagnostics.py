@@ -9,8 +9,8 @@ from afsmc.diagnostics import Diagnostic, Severity
 from afsmc.lower.lowering import Lowered
 from afsmc.model import ir
 from afsmc.verify.failures import failure_diagnostic, one_query
+from afsmc.verify.jobs import make_job
 from afsmc.verify.queries import TERMINATES
-from afsmc.verify.runner import make_job
 from afsmc.verify.storm import Engine, Job, JobResult, Stage, StormFailure
 from tests.unit.verify.models import TEXT, prop, tiny
 
