@@ -15,7 +15,10 @@ from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, field
 from enum import StrEnum
 from functools import cached_property
-from typing import Any
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:  # afsmc.interrupt imports this module
+    from afsmc.interrupt import JsonResult
 
 
 class Severity(StrEnum):
@@ -207,11 +210,14 @@ class Reporter:
 class CompileError(Exception):
     """Raised by a stage that cannot go on; carries every diagnostic collected so far.
 
-    `partial`: what the stage had finished when it failed, for the caller to keep (verify's
-    answered queries, a sweep's points), so that one failed query does not lose an hour's
-    others; None if there is nothing to keep."""
+    `partial`: what the stage had finished when it failed, for the caller to keep, so that
+    one failed query does not lose an hour's others; None if there is nothing to keep. A
+    result with a JSON form (verify's `Partial`, a `SweepResult`), which `--json` prints,
+    or the points a sweep task answered in part, which the sweep merges; readers tell them
+    apart with isinstance."""
 
-    def __init__(self, diagnostics: Sequence[Diagnostic], partial: Any = None):
+    def __init__(self, diagnostics: Sequence[Diagnostic],
+                 partial: JsonResult | Sequence[object] | None = None):
         super().__init__("; ".join(d.message for d in diagnostics))
         self.diagnostics = list(diagnostics)
         self.partial = partial

@@ -312,11 +312,13 @@ def test_max_states_stops_patrol() -> None:
 def test_default_max_states_binds_the_sparse_engine_only(monkeypatch: pytest.MonkeyPatch) -> None:
     """The default limit predicts sparse memory; the symbolic engines are held by the
     memory guard (scenario 1's 77.6 M states are over the default of 50 M)."""
-    import afsmc.verify.core as core
+    import afsmc.verify.api as api
+    import afsmc.verify.runner as runner
     from afsmc.compiler import CompileError
     from afsmc.verify import run
 
-    monkeypatch.setattr(core, "default_max_states", lambda: 10)
+    monkeypatch.setattr(api, "default_max_states", lambda: 10)
+    monkeypatch.setattr(runner, "default_max_states", lambda: 10)
     hybrid = run(PATROL, engine="hybrid", isolate=False)
     assert hybrid.model.states > 10
     with pytest.raises(CompileError) as sparse:

@@ -239,7 +239,7 @@ def test_auto_hybrid_process_stopped_keeps_its_answers(
     # rest (termination, the complement) run one per process.
     import pathlib
 
-    from afsmc.verify import core
+    from afsmc.verify import runner
     from afsmc.verify.guard import run_job as real
     from afsmc.verify.storm import JobResult, StormFailure
 
@@ -260,7 +260,7 @@ def test_auto_hybrid_process_stopped_keeps_its_answers(
 
     sparse = run(str(path), properties=["reach"], engine="sparse", isolate=False,
                  uniform=False)
-    monkeypatch.setattr(core, "run_job", run_job)
+    monkeypatch.setattr(runner, "run_job", run_job)
     said: list[str] = []
     tight = run(str(path), properties=["reach"], engine="auto", memory_budget=1,
                 uniform=False, progress=said.append)
@@ -364,11 +364,11 @@ def test_too_small_decision_diagram_tables_are_retried_with_storm_s_default() ->
 def test_complementary_queries_keep_the_larger_tables_once_one_needed_them(
         monkeypatch: pytest.MonkeyPatch) -> None:
     # Every first attempt gets 1 MB tables, too small for any query of the small UAV.
-    from afsmc.verify import core
+    from afsmc.verify import runner
     from afsmc.verify.storm import DD_MEMORY_RETRY
 
-    make_job = core.make_job
-    monkeypatch.setattr(core, "make_job", lambda *a, **k: dataclasses.replace(
+    make_job = runner.make_job
+    monkeypatch.setattr(runner, "make_job", lambda *a, **k: dataclasses.replace(
         make_job(*a, **k), dd_memory_mb=1))
     said: list[str] = []
     names = ["success", "missed"]
@@ -403,7 +403,7 @@ def test_full_tables_in_a_grouped_process_replan_the_queries_it_had_not_answered
         monkeypatch: pytest.MonkeyPatch, answered: int) -> None:
     # The guard's verdict when Sylvan ends a process of several queries while checking
     # (seen on scenario 1 after one answer): stand in for it with Storm's real answers.
-    from afsmc.verify import core
+    from afsmc.verify import runner
     from afsmc.verify.storm import JobResult, StormFailure
 
     names = ["success", "drops"]
@@ -423,7 +423,7 @@ def test_full_tables_in_a_grouped_process_replan_the_queries_it_had_not_answered
                                    f"MDP were full after {answered} of its 2 queries")
         return res
 
-    monkeypatch.setattr(core, "run_job", run_job)
+    monkeypatch.setattr(runner, "run_job", run_job)
     said: list[str] = []
     hybrid = run(UAV, consts=SMALL["uav"], properties=names, engine="hybrid", uniform=False,
                  progress=said.append)
@@ -444,7 +444,7 @@ def _stop_after_first_answer(monkeypatch: pytest.MonkeyPatch, stop: Callable[
         [dict[str, float]], BaseException | None]) -> None:
     """Run the first Storm job for real, then fail it (or raise) with its first answer only:
     what a memory stop or a Ctrl-C leaves, with Storm's real value."""
-    from afsmc.verify import core
+    from afsmc.verify import runner
     from afsmc.verify.guard import run_job as real
     from afsmc.verify.storm import JobResult, StormFailure
 
@@ -463,7 +463,7 @@ def _stop_after_first_answer(monkeypatch: pytest.MonkeyPatch, stop: Callable[
                                    "of the memory that was available")
         return res
 
-    monkeypatch.setattr(core, "run_job", run_job)
+    monkeypatch.setattr(runner, "run_job", run_job)
 
 
 def test_a_failed_run_reports_the_values_it_had(monkeypatch: pytest.MonkeyPatch) -> None:
@@ -524,18 +524,18 @@ def test_ctrl_c_with_json_still_prints_one_json_object(monkeypatch: pytest.Monke
 
 
 def test_kept_values_give_each_pmax_from_its_complement() -> None:
-    from afsmc.verify import core
+    from afsmc.verify.queries import TERMINATES, complements, kept_note
 
     model = load(UAV, SMALL["uav"]).model
-    comp = core.complements(model, [p for p in model.properties if p.name == "success"])
+    comp = complements(model, [p for p in model.properties if p.name == "success"])
     rest = comp["success_max"].name
-    ends = core._kept([("MDP", {"success_min": 0.5, core.TERMINATES: 1.0, rest: 0.25})], comp)
+    ends = kept_note([("MDP", {"success_min": 0.5, TERMINATES: 1.0, rest: 0.25})], comp)
     assert [d.message for d in ends] == [
         "answered before this:\n  success_min = 0.5 on the MDP\n  success_max = 0.75 on the MDP"]
     # if not every path ends, the complement does not give the Pmax: it is left out
-    open_ = core._kept([("MDP", {"success_min": 0.5, core.TERMINATES: 0.9, rest: 0.25})], comp)
+    open_ = kept_note([("MDP", {"success_min": 0.5, TERMINATES: 0.9, rest: 0.25})], comp)
     assert [d.message for d in open_] == ["answered before this:\n  success_min = 0.5 on the MDP"]
-    assert core._kept([("MDP", {})], comp) == []
+    assert kept_note([("MDP", {})], comp) == []
 
 
 def test_a_users_address_space_limit_is_kept_not_raised(tmp_path: Path) -> None:
@@ -810,7 +810,7 @@ def test_a_memory_stop_names_the_query_and_the_others_go_on(
     """The guard names the query it stopped (its "check" phase); the run goes on with the
     process's other queries in a fresh one, and the error says which query it was."""
     from afsmc.diagnostics import CompileError
-    from afsmc.verify import core
+    from afsmc.verify import runner
     from afsmc.verify.guard import _checking
     from afsmc.verify.guard import run_job as real
     from afsmc.verify.storm import JobResult, StormFailure
@@ -832,7 +832,7 @@ def test_a_memory_stop_names_the_query_and_the_others_go_on(
     names = ["success", "drops"]
     sparse = run(UAV, consts=SMALL["uav"], properties=names, engine="sparse", isolate=False,
                  uniform=False)
-    monkeypatch.setattr(core, "run_job", run_job)
+    monkeypatch.setattr(runner, "run_job", run_job)
     with pytest.raises(CompileError) as info:
         run(UAV, consts=SMALL["uav"], properties=names, engine="sparse", uniform=False)
     e406, note = info.value.diagnostics
@@ -897,7 +897,7 @@ def test_a_failed_complement_does_not_matter_where_not_every_path_ends(
     1 - Pmin of its complement. A complement that failed (here, faked to run out of memory)
     is then no error: every value is answered, equal to the sparse engine's, and no error
     is raised."""
-    from afsmc.verify import core
+    from afsmc.verify import runner
     from afsmc.verify.guard import run_job as real
     from afsmc.verify.storm import JobResult, StormFailure
 
@@ -914,7 +914,7 @@ def test_a_failed_complement_does_not_matter_where_not_every_path_ends(
             res.failure = StormFailure("memory", "stopped the MDP", prop="__afsmc_rest_r1")
         return res
 
-    monkeypatch.setattr(core, "run_job", run_job)
+    monkeypatch.setattr(runner, "run_job", run_job)
     said: list[str] = []
     got = run(str(path), engine="hybrid", uniform=False, split=True, progress=said.append)
     assert any("while checking r1_max as 1 - Pmin" in s for s in said), said

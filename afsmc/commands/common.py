@@ -9,6 +9,7 @@ from collections.abc import Iterable
 
 from afsmc.diagnostics import CompileError, Diagnostic, render_all
 from afsmc.diagnostics import to_json as diags_to_json
+from afsmc.interrupt import JsonResult
 from afsmc.lower.lowering import RESOLUTIONS
 from afsmc.lower.reduce import Reductions
 from afsmc.resolve import parse_override
@@ -119,9 +120,8 @@ def fail(exc: CompileError, as_json: bool = False, wrapped: bool = False) -> int
     exit code 1."""
     if as_json and wrapped:
         obj: dict[str, object] = {"diagnostics": [d.to_json() for d in exc.diagnostics]}
-        to_json = getattr(exc.partial, "to_json", None)
-        if callable(to_json):
-            obj |= to_json()
+        if isinstance(exc.partial, JsonResult):
+            obj |= exc.partial.to_json()
         print(json.dumps(obj, indent=2))
         return 1
     report(exc.diagnostics, as_json)

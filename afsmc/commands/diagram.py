@@ -19,7 +19,6 @@ from typing import Any
 import graphviz
 
 from afsmc.backends.dot import Overlay, diagram
-from afsmc.backends.prism import emit
 from afsmc.check.modegraph import analyse
 from afsmc.commands.common import (
     add_consts,
@@ -36,8 +35,11 @@ from afsmc.diagnostics import CompileError, Diagnostic, Severity
 from afsmc.files import write_atomic
 from afsmc.lower.lowering import Resolution
 from afsmc.model import ir
-from afsmc.verify.guard import Progress, default_max_states, run_job, upper_bound
-from afsmc.verify.storm import Job
+from afsmc.text import short
+from afsmc.verify import upper_bound
+from afsmc.verify.api import ask
+from afsmc.verify.guard import Progress
+from afsmc.verify.storm import StormFailure
 
 FORMATS = ("svg", "png", "pdf")
 
@@ -64,16 +66,8 @@ def _error(code: str, message: str, hint: str | None = None) -> CompileError:
     return CompileError([Diagnostic(code, Severity.ERROR, message, None, hint=hint)])
 
 
-def _fmt(v: object) -> str:
-    if isinstance(v, bool) or not isinstance(v, (int, float)):
-        return "n/a"
-    if math.isnan(v):
-        return "n/a"
-    return f"{v:.4g}"
-
-
 def _range(lo: object, hi: object) -> str:
-    a, b = _fmt(lo), _fmt(hi)
+    a, b = short(lo), short(hi)
     return a if a == b else f"{a} – {b}"
 
 
@@ -88,9 +82,9 @@ def _value(entry: dict[str, Any]) -> str:
     if get("min") is not None or get("max") is not None:
         text = _range(get("min"), get("max"))
     else:
-        text = _fmt(get("value"))
+        text = short(get("value"))
     if get("uniform") is not None:
-        text += f" (uniform {_fmt(get('uniform'))})"
+        text += f" (uniform {short(get('uniform'))})"
     return text
 
 
@@ -226,11 +220,7 @@ def mode_reachability(model: ir.Model, resolution: Resolution, *,
 
     def query(n: int, op: str) -> str:
         return f"reach_{n}_{op}" if op else f"reach_{n}"
-    names = tuple(query(n, op) for n in numbers for op in ops)
-    props = "".join(f'"{query(n, op)}": P{op}=? [ F mode={n} ];\n' for n in numbers for op in ops)
-    limit = default_max_states() if max_states is None else max_states
-    job = Job("prism", emit(low).model, props, names, "sparse", limit,
-              f"{low.kind.upper()} (--reach)")
+    queries = {query(n, op): f"P{op}=? [ F mode={n} ]" for n in numbers for op in ops}
     say = progress or (lambda text: None)
 
     def relay(text: str) -> None:
@@ -241,27 +231,33 @@ def mode_reachability(model: ir.Model, resolution: Resolution, *,
     say(f"reach: building the {low.kind.upper()} with Storm and checking {len(numbers)} "
         f"modes ...")
     t0 = time.monotonic()
-    res = run_job(job, upper_bound(model), isolate=None, progress=relay)
-    if res.failure is not None:
-        f = res.failure
-        if f.stage == "too-big":
-            raise _error("E405", " ".join(f.message.split()),
-                         "raise --max-states if the machine has the memory (the sparse engine "
-                         "needs about 250 bytes per state), or draw a smaller instance with "
-                         "--const")
-        if f.stage == "memory":
-            raise _error("E406", " ".join(f.message.split()),
-                         "draw a smaller instance with --const")
-        raise _error("E612", f"Storm could not compute the reachability of the modes: "
-                     f"{' '.join(f.message.split()) or f.stage}",
-                     hint="check the model with `afsmc compile -t prism`")
-    say(f"reach: {res.states:,} states, {res.transitions:,} transitions, "
-        f"{len(names)} checks in {time.monotonic() - t0:.1f} s")
+    got = ask(low, queries, bound=upper_bound(model), what=f"{low.kind.upper()} (--reach)",
+              max_states=max_states, progress=relay)
+    if got.failure is not None:
+        raise _reach_error(got.failure)
+    say(f"reach: {got.states:,} states, {got.transitions:,} transitions, "
+        f"{len(queries)} checks in {time.monotonic() - t0:.1f} s")
     out: dict[int, tuple[float, float]] = {n: (0.0, 0.0) for n in unreachable}
     for n in numbers:
-        vs = [res.values[query(n, op)] for op in ops]
+        vs = [got.values[query(n, op)] for op in ops]
         out[n] = (min(vs), max(vs))
     return out, mdp
+
+
+def _reach_error(f: StormFailure) -> CompileError:
+    """Storm's failure at --reach in the diagram's words: E405 too big, E406 out of
+    memory, E612 anything else."""
+    if f.stage == "too-big":
+        return _error("E405", " ".join(f.message.split()),
+                      "raise --max-states if the machine has the memory (the sparse engine "
+                      "needs about 250 bytes per state), or draw a smaller instance with "
+                      "--const")
+    if f.stage == "memory":
+        return _error("E406", " ".join(f.message.split()),
+                      "draw a smaller instance with --const")
+    return _error("E612", f"Storm could not compute the reachability of the modes: "
+                  f"{' '.join(f.message.split()) or f.stage}",
+                  hint="check the model with `afsmc compile -t prism`")
 
 
 def reach_overlay(reach: dict[int, tuple[float, float]], mdp: bool) -> Overlay:

@@ -37,7 +37,7 @@ from afsmc.sim.run import (
     program,
     simulate,
 )
-from afsmc.verify.core import const_text
+from afsmc.text import literal as const_text
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:

@@ -20,8 +20,8 @@ from afsmc.commands.common import (
     usage_error,
 )
 from afsmc.diagnostics import CompileError
+from afsmc.text import literal
 from afsmc.verify import VerifyResult
-from afsmc.verify.core import const_text
 from afsmc.verify.storm import ENGINES, SOLVERS, VIAS
 
 
@@ -141,7 +141,7 @@ def render(res: VerifyResult) -> str:
     for name, m in models:
         if m.engine_reason and res.engine == "auto":
             lines.append(f"{name}: engine {m.engine} ({m.engine_reason})")
-    consts = ", ".join(f"{k}={const_text(v)}" for k, v in res.constants.items())
+    consts = ", ".join(f"{k}={literal(v)}" for k, v in res.constants.items())
     lines.append("")
     lines.append(f"engine {res.engine}, via {res.via}"
                  + (f", constants {consts}" if consts else "")

@@ -44,21 +44,17 @@ progress=None) -> SweepResult``
 
 ``parse_values(text) -> list[int | float]``: ``"0:900:25"`` (inclusive) or ``"1,2,5"``.
 ``upper_bound(model) -> int``: modes × the product of the variables' ranges.
+
+The modules: ``api`` (``run``, ``check``, loading with ad-hoc formulas, and ``ask`` for
+PRISM queries of the caller's own), ``results`` (the result types), ``queries`` (the queries
+asked for each property: bounded G as duals, Pmax as complements), ``runner`` (the Storm
+processes of one check), ``jobs`` (a Storm job for a lowered model), ``failures`` (Storm's
+failures as diagnostics), ``guard`` and ``storm`` (one watched Storm process), ``sweep``.
 """
 
-from afsmc.verify.core import (
-    Checks,
-    Loaded,
-    ModelStats,
-    Partial,
-    PropertyResult,
-    VerifyResult,
-    check,
-    load_with_formulas,
-    run,
-    select,
-)
+from afsmc.verify.api import Loaded, check, load_with_formulas, run, select
 from afsmc.verify.guard import default_max_states, upper_bound
+from afsmc.verify.results import Checks, ModelStats, Partial, PropertyResult, VerifyResult
 from afsmc.verify.sweep import SweepPoint, SweepResult, parse_values, sweep
 
 __all__ = [

@@ -59,7 +59,7 @@ class Job:
     memory_budget: int | None = None  # bytes the sparse engine may use ("auto" decides with it)
     # If "auto" picks hybrid, leave these names out: the caller checks them in a later
     # process, with the decision-diagram tables they need (a Pmax as 1 - Pmin of its
-    # complement; see afsmc.verify.core.check).
+    # complement; see afsmc.verify.runner).
     hybrid_skip: tuple[str, ...] = ()
     # If "auto" picks hybrid, check these after the others (the queries that stand in for
     # each Pmax); the sparse engine leaves them out, as it asks each Pmax itself.

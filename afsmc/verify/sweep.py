@@ -32,19 +32,10 @@ from afsmc.model import expr as E
 from afsmc.model import ir
 from afsmc.model.limits import INT64
 from afsmc.stack import deep
-from afsmc.verify.core import (
-    Checks,
-    Partial,
-    PropertyResult,
-    check,
-    check_choice,
-    const_text,
-    find_property,
-    load_with_formulas,
-    select,
-    shown,
-)
+from afsmc.text import literal as const_text
+from afsmc.verify.api import check, check_choice, load_with_formulas, select
 from afsmc.verify.guard import Progress
+from afsmc.verify.results import Checks, Partial, PropertyResult, find_property, shown
 from afsmc.verify.storm import Engine, Solver, Via, finite
 
 Kind = Literal["const", "bound"]
