@@ -59,7 +59,9 @@ from afsmc.verify.core import (
     select,
 )
 from afsmc.verify.guard import default_max_states, upper_bound
-from afsmc.verify.sweep import SweepPoint, SweepResult, parse_values, sweep
+from afsmc.verify.sweep import sweep
+from afsmc.verify.sweep_result import SweepPoint, SweepResult
+from afsmc.verify.sweep_values import parse_values
 
 __all__ = [
     "Checks",

@@ -32,11 +32,11 @@ from afsmc.model.pretty import show
 from afsmc.model.semantics import bounded_globally, globally_dual, inline, static_value
 from afsmc.stack import deep
 from afsmc.syntax.parser import parse, parse_property
+from afsmc.text import count as human
 from afsmc.verify.guard import (
     Interrupted,
     Progress,
     default_max_states,
-    human,
     mem_available,
     run_job,
     upper_bound,
