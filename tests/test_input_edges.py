@@ -19,8 +19,8 @@ from afsmc.lower.lowering import lower
 from afsmc.model.names import RESERVED, STORM_KEYWORDS
 from afsmc.model.pretty import number
 from afsmc.syntax.fmt import format_text
-from afsmc.verify.guard import human
-from afsmc.verify.sweep import parse_values
+from afsmc.text import count
+from afsmc.verify.sweep_values import parse_values
 from tests.conftest import EXAMPLES, run_cli
 from tests.storm_util import storm_prism
 
@@ -167,7 +167,7 @@ def test_printing_never_fails_on_a_non_finite_double() -> None:
 
 
 def test_huge_state_counts_read_as_powers_of_ten() -> None:
-    assert [human(n) for n in (12_345_678, 2.5e9, 2e19, 2 * 10**400, math.inf)] == \
+    assert [count(n) for n in (12_345_678, 2.5e9, 2e19, 2 * 10**400, math.inf)] == \
         ["12.3 M", "2.5 G", "2.0e19", "2.0e400", "inf"]
 
 

@@ -37,7 +37,7 @@ from afsmc.sim.run import (
     program,
     simulate,
 )
-from afsmc.text import literal as const_text
+from afsmc.text import literal
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
@@ -269,7 +269,7 @@ def _traces_text(traces: list[list[dict[str, Any]]]) -> str:
         for st in tr:
             changed = {k: v for k, v in st["vars"].items() if prev.get(k) != v} if prev \
                 else st["vars"]
-            vals = " ".join(f"{k}={const_text(v)}" for k, v in changed.items())
+            vals = " ".join(f"{k}={literal(v)}" for k, v in changed.items())
             act = st.get("action")
             how = f"--{act}" + (f" [hazard {st['hazard']}]" if "hazard" in st else "") + "--> " \
                 if act else ""

@@ -23,7 +23,9 @@ from afsmc.commands.verify import (
 )
 from afsmc.diagnostics import CompileError, Diagnostic, Severity
 from afsmc.files import check_writable, write_atomic
-from afsmc.verify.sweep import Number, SweepResult, parse_values, without_kept_note
+from afsmc.verify.sweep import without_kept_note
+from afsmc.verify.sweep_result import SweepResult
+from afsmc.verify.sweep_values import Number, parse_values
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:

@@ -55,7 +55,9 @@ failures as diagnostics), ``guard`` and ``storm`` (one watched Storm process), `
 from afsmc.verify.api import Loaded, check, load_with_formulas, run, select
 from afsmc.verify.guard import default_max_states, upper_bound
 from afsmc.verify.results import Checks, ModelStats, Partial, PropertyResult, VerifyResult
-from afsmc.verify.sweep import SweepPoint, SweepResult, parse_values, sweep
+from afsmc.verify.sweep import sweep
+from afsmc.verify.sweep_result import SweepPoint, SweepResult
+from afsmc.verify.sweep_values import parse_values
 
 __all__ = [
     "Checks",

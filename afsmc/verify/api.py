@@ -23,8 +23,8 @@ from afsmc.model import ir
 from afsmc.model.names import did_you_mean
 from afsmc.stack import deep
 from afsmc.syntax.parser import parse, parse_property
-from afsmc.text import literal
-from afsmc.verify.guard import Progress, default_max_states, human, run_job, upper_bound
+from afsmc.text import count, literal
+from afsmc.verify.guard import Progress, default_max_states, run_job, upper_bound
 from afsmc.verify.results import Checks, VerifyResult
 from afsmc.verify.runner import CheckRun, ModelLoop, Options
 from afsmc.verify.storm import Engine, Job, Solver, StormFailure, Via
@@ -203,7 +203,7 @@ def run(path: str, *, consts: Mapping[str, str | bool | int | float] | None = No
     limit = default_max_states() if max_states is None else max_states
     bound = upper_bound(model)
     if progress is not None:
-        progress(f"state space: at most {human(bound)} states (modes × variable ranges); "
+        progress(f"state space: at most {count(bound)} states (modes × variable ranges); "
                  f"--max-states {limit:,}" + (" for the sparse engine" if max_states is None
                                                and engine != "sparse" else ""))
     try:

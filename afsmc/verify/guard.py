@@ -2,8 +2,7 @@
 
 Storm has neither a state limit nor a progress callback. So a build that might be big
 runs in a child process (spawned, so it is safe from a threaded parent) that this process
-watches: its memory use gives an estimate of the states explored so far (the sparse
-builder needs about 110-260 bytes per state, /work/shared/notes/performance.md), which is
+watches: its memory use gives an estimate of the states explored so far, which is
 shown as progress and compared with --max-states; the child is killed when it exceeds the
 budget, and RLIMIT_AS backs this up inside the child. After the build the exact number of
 states is compared with --max-states before anything is checked.
@@ -11,7 +10,6 @@ states is compared with --max-states before anything is checked.
 
 from __future__ import annotations
 
-import math
 import multiprocessing
 import os
 import signal
@@ -19,18 +17,23 @@ import sys
 import time
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
-from dataclasses import replace
-from decimal import Decimal
+from dataclasses import dataclass, field, replace
+from multiprocessing.connection import Connection
+from multiprocessing.process import BaseProcess
 from typing import Any
 
 from afsmc.lifetime import die_with_parent
 from afsmc.model import ir
+from afsmc.text import count
 from afsmc.verify.storm import DD_MEMORY_RETRY, Job, JobResult, StormFailure, execute
 
 # Below this upper bound a build takes well under a second: no child process needed.
 IN_PROCESS_STATES = 200_000
-# Bytes per state of a sparse build as it runs: the low end of the measured range, so the
-# estimate of states explored errs on the high side.
+# Bytes per state of a sparse build as it runs, low in the measured range so that the
+# estimate of states explored errs on the high side. Measured with stormpy 2.0 on a 2-core,
+# 23 GB machine, on hand-written PRISM models of the UAV mission at 5.5-11 M states: the
+# build alone about 100 bytes per state, a build and one check 200-260 (about 90 bytes per
+# transition).
 BYTES_PER_STATE = 150
 # The child is stopped when its memory grows past max_states states at a generous rate.
 BUDGET_BYTES_PER_STATE = 400
@@ -98,22 +101,6 @@ def default_max_states() -> int:
         return 10_000_000
     n = int(avail * 0.7 / 250)
     return max(100_000, min(DEFAULT_CAP, n - n % 100_000))
-
-
-def human(n: float) -> str:
-    """12_345_678 -> '12.3 M'; from 10^12 on, powers of ten: 2e19 -> '2.0e19'."""
-    if isinstance(n, float) and not math.isfinite(n):
-        return str(n)
-    if n >= 1e12:
-        mantissa, exponent = f"{Decimal(n):.1e}".split("e")  # Decimal: ints beyond floats too
-        return f"{mantissa}e{int(exponent)}"
-    if n >= 1e9:
-        return f"{n / 1e9:.1f} G"
-    if n >= 1e6:
-        return f"{n / 1e6:.1f} M"
-    if n >= 1e4:
-        return f"{n / 1e3:.0f} k"
-    return f"{int(n):,}"
 
 
 def _rss(pid: int) -> int | None:
@@ -219,8 +206,10 @@ class Interrupted(KeyboardInterrupt):
 
 def _run_isolated(job: Job, progress: Progress | None, every: float,
                   first: float) -> tuple[JobResult, int | None]:
+    """Run `job` once in a watched child: its result and the child's exit code (None when
+    this process stopped the child for its memory)."""
     ctx = multiprocessing.get_context("spawn")
-    parent, child_end = ctx.Pipe(duplex=False)
+    conn, child_end = ctx.Pipe(duplex=False)
     avail = mem_available()
     # Never let the child take more than 85% of what is free now.
     cap = int(avail * 0.85) if avail is not None else None
@@ -237,107 +226,146 @@ def _run_isolated(job: Job, progress: Progress | None, every: float,
         proc.start()
     child_end.close()
     start = time.monotonic()
-    next_report = start + first
-    baseline: int | None = None
-    phase = "start"
-    phase_start = start
-    peak = 0
-    result: JobResult | None = None
-    answered: dict[str, float] = {}  # values the child sent before it may die
-    seconds: dict[str, float] = {}  # and how long each took
-    built = 0  # states, once the child has built the model
-    engine = ""  # the engine it checks with ("auto" decides after building)
-
-    def say(text: str) -> None:
-        if progress is not None:
-            progress(text)
-
+    watch = _Watch(job, progress, every, budget, cap, start=start, phase_start=start,
+                   next_report=start + first)
     try:
-        while result is None:
-            if parent.poll(0.2):
-                try:
-                    event, data = parent.recv()
-                except EOFError:
-                    break
-                if event == "ready":
-                    baseline = data
-                elif event == "phase":
-                    phase, phase_start = data, time.monotonic()
-                elif event == "engine":
-                    engine = data
-                elif event == "built":
-                    states, transitions, secs = data
-                    built = states
-                    say(f"built the {job.what}: {states:,} states, {transitions:,} transitions "
-                        f"in {secs:.1f} s")
-                elif event == "refused":
-                    say(f"the hybrid engine cannot check {', '.join(data)}: E404 follows "
-                        "once the other queries of this process are checked")
-                elif event == "value":
-                    name, value, secs = data
-                    answered[name], seconds[name] = value, secs
-                    say(f"checked {name} on the {job.what} in {seconds[name]:.0f} s "
-                        f"({time.monotonic() - start:.0f} s into this process)")
-                elif event == "result":
-                    result = data
-                continue
-            if not proc.is_alive():
-                break
-            rss = _rss(proc.pid or 0)
-            if rss is None or baseline is None:
-                continue
-            peak = max(peak, rss)
-            grown = max(0, rss - baseline)
-            explored = grown / BYTES_PER_STATE
-            now = time.monotonic()
-            if phase == "build" and budget is not None and grown > budget:
-                proc.kill()
-                proc.join()
-                assert job.max_states is not None
-                return JobResult(failure=StormFailure(
-                    "too-big", f"stopped building the {job.what} after {now - start:.0f} s: about "
-                    f"{human(explored)} states explored (estimated from memory use), more than "
-                    f"--max-states {job.max_states:,}", states=int(explored))), None
-            if cap is not None and rss > cap:
-                proc.kill()
-                proc.join()
-                return JobResult(states=built, values=answered, seconds=seconds,
-                                 elapsed=now - start,
-                                 engine=engine, failure=StormFailure(
-                    "memory", f"stopped the {job.what} after {now - start:.0f} s: it used "
-                    f"{rss / 2**30:.1f} GB, 85% of the memory that was available",
-                    prop=_checking(phase))), None
-            if now >= next_report:
-                next_report = now + report_interval(now - phase_start, every)
-                if phase == "build":
-                    est = (f", about {human(explored)} states so far (estimated from memory use)"
-                           if job.engine == "sparse" else f", {rss / 2**30:.1f} GB")
-                    say(f"building the {job.what}: {now - start:.0f} s{est}")
-                elif phase.startswith("check "):
-                    say(f"checking {phase[6:]} on the {job.what}: {now - start:.0f} s, "
-                        f"{rss / 2**30:.1f} GB")
+        stopped = _follow(watch, proc, conn)
     except KeyboardInterrupt as exc:
-        raise Interrupted(dict(answered)) from exc
+        raise Interrupted(dict(watch.answered)) from exc
     finally:
-        if proc.is_alive() and result is None:
+        if proc.is_alive() and watch.result is None:
             proc.kill()
         proc.join()
-        parent.close()
-    if result is not None:
-        return result, proc.exitcode
-    code = proc.exitcode
-    why = (f"was killed by signal {-code}" if code is not None and code < 0
-           else f"exited with code {code}")
-    if _tables_full(code, job):
-        why += (f" (with decision-diagram tables of {job.dd_memory_mb} MB; Sylvan exits when "
-                "they are full)")
-    gb = f"; it had used {peak / 2**30:.1f} GB" if peak else ""
-    return JobResult(states=built, values=answered, seconds=seconds,
-                     elapsed=time.monotonic() - start,
-                     engine=engine, failure=StormFailure(
-        "memory" if code is not None and code < 0 else "internal",
-        f"the Storm process {'checking' if phase.startswith('check') else 'building'} the "
-        f"{job.what} {why}{gb}", prop=_checking(phase))), code
+        conn.close()
+    if stopped is not None:
+        return stopped, None
+    if watch.result is not None:
+        return watch.result, proc.exitcode
+    return watch.died(proc.exitcode), proc.exitcode
+
+
+def _follow(watch: _Watch, proc: BaseProcess, conn: Connection) -> JobResult | None:
+    """Read the child's events and watch its memory until it sends its result or dies
+    (None), or stop it when it outgrows the budget or the cap (a result saying so)."""
+    while watch.result is None:
+        if conn.poll(0.2):
+            try:
+                event, data = conn.recv()
+            except EOFError:
+                return None
+            watch.on(event, data)
+            continue
+        if not proc.is_alive():
+            return None
+        rss = _rss(proc.pid or 0)
+        if rss is None or watch.baseline is None:
+            continue
+        stopped = watch.measure(rss)
+        if stopped is not None:
+            proc.kill()
+            proc.join()
+            return stopped
+    return None
+
+
+@dataclass
+class _Watch:
+    """What this process knows of a watched child as it runs, from its events and its
+    memory: what to say as progress, and what to report when it is stopped or dies."""
+
+    job: Job
+    progress: Progress | None
+    every: float  # seconds between progress lines, at first (see report_interval)
+    budget: int | None  # bytes the build may grow by: --max-states at a generous rate
+    cap: int | None  # bytes the child may use: 85% of the memory free at its start
+    start: float
+    phase_start: float
+    next_report: float
+    baseline: int | None = None  # the child's memory once stormpy is imported
+    phase: str = "start"
+    peak: int = 0
+    result: JobResult | None = None
+    answered: dict[str, float] = field(default_factory=dict)  # values sent before it may die
+    seconds: dict[str, float] = field(default_factory=dict)  # and how long each took
+    built: int = 0  # states, once the child has built the model
+    engine: str = ""  # the engine it checks with ("auto" decides after building)
+
+    def say(self, text: str) -> None:
+        if self.progress is not None:
+            self.progress(text)
+
+    def on(self, event: str, data: Any) -> None:
+        """One event from the child (see :func:`afsmc.verify.storm.execute`)."""
+        what = self.job.what
+        if event == "ready":
+            self.baseline = data
+        elif event == "phase":
+            self.phase, self.phase_start = data, time.monotonic()
+        elif event == "engine":
+            self.engine = data
+        elif event == "built":
+            states, transitions, secs = data
+            self.built = states
+            self.say(f"built the {what}: {states:,} states, {transitions:,} transitions "
+                     f"in {secs:.1f} s")
+        elif event == "refused":
+            self.say(f"the hybrid engine cannot check {', '.join(data)}: E404 follows "
+                     "once the other queries of this process are checked")
+        elif event == "value":
+            name, value, secs = data
+            self.answered[name], self.seconds[name] = value, secs
+            self.say(f"checked {name} on the {what} in {self.seconds[name]:.0f} s "
+                     f"({time.monotonic() - self.start:.0f} s into this process)")
+        elif event == "result":
+            self.result = data
+
+    def measure(self, rss: int) -> JobResult | None:
+        """The child's memory now: a result if it must be stopped, else a progress line
+        when one is due."""
+        assert self.baseline is not None
+        job, start = self.job, self.start
+        self.peak = max(self.peak, rss)
+        grown = max(0, rss - self.baseline)
+        explored = grown / BYTES_PER_STATE
+        now = time.monotonic()
+        if self.phase == "build" and self.budget is not None and grown > self.budget:
+            assert job.max_states is not None
+            return JobResult(failure=StormFailure(
+                "too-big", f"stopped building the {job.what} after {now - start:.0f} s: about "
+                f"{count(explored)} states explored (estimated from memory use), more than "
+                f"--max-states {job.max_states:,}", states=int(explored)))
+        if self.cap is not None and rss > self.cap:
+            return JobResult(states=self.built, values=self.answered, seconds=self.seconds,
+                             elapsed=now - start, engine=self.engine, failure=StormFailure(
+                "memory", f"stopped the {job.what} after {now - start:.0f} s: it used "
+                f"{rss / 2**30:.1f} GB, 85% of the memory that was available",
+                prop=_checking(self.phase)))
+        if now >= self.next_report:
+            self.next_report = now + report_interval(now - self.phase_start, self.every)
+            if self.phase == "build":
+                est = (f", about {count(explored)} states so far (estimated from memory use)"
+                       if job.engine == "sparse" else f", {rss / 2**30:.1f} GB")
+                self.say(f"building the {job.what}: {now - start:.0f} s{est}")
+            elif self.phase.startswith("check "):
+                self.say(f"checking {self.phase[6:]} on the {job.what}: {now - start:.0f} s, "
+                         f"{rss / 2**30:.1f} GB")
+        return None
+
+    def died(self, code: int | None) -> JobResult:
+        """The child ended without a result: the failure, with what it had answered."""
+        job = self.job
+        why = (f"was killed by signal {-code}" if code is not None and code < 0
+               else f"exited with code {code}")
+        if _tables_full(code, job):
+            why += (f" (with decision-diagram tables of {job.dd_memory_mb} MB; Sylvan exits "
+                    "when they are full)")
+        gb = f"; it had used {self.peak / 2**30:.1f} GB" if self.peak else ""
+        return JobResult(states=self.built, values=self.answered, seconds=self.seconds,
+                         elapsed=time.monotonic() - self.start,
+                         engine=self.engine, failure=StormFailure(
+            "memory" if code is not None and code < 0 else "internal",
+            f"the Storm process {'checking' if self.phase.startswith('check') else 'building'} "
+            f"the {job.what} {why}{gb}", prop=_checking(self.phase)))
 
 
 def _checking(phase: str) -> str | None:

@@ -12,7 +12,8 @@ from afsmc.backends.prism import property_variants
 from afsmc.diagnostics import CompileError, Diagnostic, Severity
 from afsmc.lower.lowering import Lowered
 from afsmc.model import ir
-from afsmc.verify.guard import human, mem_available
+from afsmc.text import count
+from afsmc.verify.guard import mem_available
 from afsmc.verify.storm import Engine, Job, Via
 
 # Below this upper bound (modes × variable ranges) "auto" goes straight to the sparse
@@ -25,7 +26,7 @@ AUTO_SPARSE_BOUND = 1_000_000_000
 def choose_engine(engine: Engine, bound: int) -> tuple[Engine, str]:
     """`auto` with a small upper bound is simply sparse; otherwise the job decides."""
     if engine == "auto" and bound <= AUTO_SPARSE_BOUND:
-        return "sparse", (f"at most {human(bound)} states by the variables' ranges: the sparse "
+        return "sparse", (f"at most {count(bound)} states by the variables' ranges: the sparse "
                           "engine is fastest at this size")
     return engine, ""
 

@@ -19,8 +19,10 @@ from typing import Any, Literal
 
 Engine = Literal["sparse", "dd", "hybrid", "auto"]
 ENGINES: tuple[Engine, ...] = ("auto", "sparse", "dd", "hybrid")
-# The sparse engine needs about this much per state (model plus one property's vectors),
-# measured on UAV-like models (shared/notes/performance.md: 200-260 bytes per state).
+# The sparse engine needs about this much per state (model plus one property's vectors):
+# about 90 bytes per transition, 200-260 bytes per state, measured with stormpy 2.0 on a
+# 2-core, 23 GB machine, building and checking hand-written PRISM models of the UAV mission
+# (5.5-11 M states; 11.3 M states took 2.9 GB).
 SPARSE_BYTES_PER_STATE = 260
 Via = Literal["prism", "jani"]
 VIAS: tuple[Via, ...] = ("prism", "jani")
@@ -181,108 +183,35 @@ def _execute(job: Job, notify: Notify) -> JobResult:
     res = JobResult()
     t0 = time.perf_counter()
     notify("phase", "parse")
-    if job.via == "prism":
-        with tempfile.TemporaryDirectory(prefix="afsmc-") as tmp:
-            path = os.path.join(tmp, "model.prism")
-            with open(path, "w", encoding="utf-8") as f:
-                f.write(job.model_text)
-            try:
-                program: Any = stormpy.parse_prism_program(path)
-            except RuntimeError as exc:
-                msg = _message(exc)
-                res.failure = StormFailure("parse", msg, line=_parse_line(msg))
-                return res
-        props, failure = _prism_properties(stormpy, program, job.props_text, job.wanted)
-    else:
-        try:
-            program, all_props = stormpy.parse_jani_model_from_string(job.model_text)
-        except RuntimeError as exc:
-            res.failure = StormFailure("parse", _message(exc))
-            return res
-        by_name = {p.get_name(): p for p in all_props}
-        missing = [n for n in job.wanted if n not in by_name]
-        failure = StormFailure("property", "the JANI model has no property named "
-                               + ", ".join(missing), prop=missing[0]) if missing else None
-        props = [by_name[n] for n in job.wanted if n in by_name]
-    if failure is not None:
-        res.failure = failure
+    parsed = _parse(stormpy, job)
+    if isinstance(parsed, StormFailure):
+        res.failure = parsed
         return res
+    program, props = parsed
     res.parse_time = time.perf_counter() - t0
 
     notify("phase", "build")
     t0 = time.perf_counter()
-    engine_name: str = job.engine
-    # the queries this process checks, in the order of `props` (the extras go once the
-    # engine is known)
-    names = list(job.wanted)
-    symbolic = engine_name != "sparse"
-    deferred: StormFailure | None = None  # the failure to report after the other checks
-    refused: list[str] = []  # ... of these queries, which the hybrid engine cannot check
     try:
-        if symbolic:
-            # Labels and guards that mention constants fail in the symbolic builder otherwise.
-            sprog = program.substitute_constants()
-            if hasattr(sprog, "substitute_formulas"):
-                # PRISM: a formula in a label or reward has no decision diagram otherwise
-                sprog = sprog.substitute_formulas()
-            if hasattr(sprog, "substitute_functions"):
-                sprog.substitute_functions()  # JANI: in place
-            env = stormpy.Environment()
-            env.dd().sylvan().maximal_memory = job.dd_memory_mb
-            model: Any = stormpy.build_symbolic_model(sprog, _for_builder(props, job),
-                                                      environment=env)
-            if engine_name == "auto":
-                # The symbolic build counts the states exactly at little memory; the sparse
-                # engine is much faster to check but needs ~260 bytes per state.
-                need = int(model.nr_states) * SPARSE_BYTES_PER_STATE
-                budget = job.memory_budget
-                if budget is None or need <= budget:
-                    engine_name = "sparse"
-                    names, props = _keep(names, props, job.hybrid_extra)
-                    res.engine_reason = (f"{int(model.nr_states):,} states need about "
-                                         f"{need / 1e9:.1f} GB as sparse matrices"
-                                         + (f", within the {budget / 1e9:.1f} GB available"
-                                            if budget else ""))
-                    notify("phase", "build")
-                    del model
-                    model = stormpy.build_model(program, _for_builder(props, job))
-                    symbolic = False
-                else:
-                    engine_name = "hybrid"
-                    res.engine_reason = (f"{int(model.nr_states):,} states would need about "
-                                         f"{need / 1e9:.1f} GB as sparse matrices, more than "
-                                         f"the {budget / 1e9:.1f} GB available")
-                    if job.hybrid_skip:
-                        names, props = _keep(names, props, job.hybrid_skip)
-                        res.engine_reason += "; queries grouped by the tables they need"
-                    refused = [n for n in names if n in job.symbolic_refused]
-                    if refused:
-                        # not a second build for the others: they are checked here
-                        deferred = StormFailure(
-                            "check", f"its {int(model.nr_states):,} states are too many for "
-                            f"the sparse engine (about {need / 1e9:.1f} GB as sparse "
-                            "matrices), and the hybrid engine cannot check this property "
-                            "(docs/verification.md, \"Engines and routes\")",
-                            prop=refused[0])
-                        names, props = _keep(names, props, tuple(refused))
-        else:
-            names, props = _keep(names, props, job.hybrid_extra)
-            model = stormpy.build_model(program, _for_builder(props, job))
+        built = _build(stormpy, job, program, props, res, notify)
     except RuntimeError as exc:
         res.failure = StormFailure("build", _message(exc))
         return res
-    res.engine = engine_name
-    res.solver = solver_for(job.solver, engine_name)
+    res.engine = built.engine
+    res.solver = solver_for(job.solver, built.engine)
     check_env = _value_iteration(stormpy, job) if res.solver == "value-iteration" else None
-    notify("engine", engine_name)  # a process that dies later still says which engine ran
+    notify("engine", built.engine)  # a process that dies later still says which engine ran
     res.build_time = time.perf_counter() - t0
+    model = built.model
     res.states, res.transitions = int(model.nr_states), int(model.nr_transitions)
-    res.choices = int(getattr(model, "nr_choices", res.transitions) or 0) if not symbolic else 0
+    res.choices = (int(getattr(model, "nr_choices", res.transitions) or 0)
+                   if not built.symbolic else 0)
     res.kind = "mdp" if str(model.model_type).upper().endswith("MDP") else "dtmc"
+    del model  # built.model alone holds it: a bisimulation quotient replaces it there
     notify("built", (res.states, res.transitions, res.build_time))
-    if deferred is not None:
-        notify("refused", tuple(refused))
-    if symbolic and res.states == 0:
+    if built.deferred is not None:
+        notify("refused", tuple(built.refused))
+    if built.symbolic and res.states == 0:
         # A model whose variables all keep their values: Storm's symbolic builder counts no
         # state, and its hybrid engine then crashes (segmentation fault) on some properties.
         res.failure = StormFailure("build", f"Storm's symbolic build of the {job.what} has no "
@@ -293,54 +222,173 @@ def _execute(job: Job, notify: Notify) -> JobResult:
         res.failure = StormFailure("too-big", f"the {job.what} has {res.states:,} states, more "
                                    f"than --max-states {job.max_states:,}", states=res.states)
         return res
-
-    if job.bisimulation and not symbolic:
-        notify("phase", "bisimulation")
-        t0 = time.perf_counter()
-        try:
-            import stormpy.transformations as transformations
-
-            model = transformations.perform_bisimulation(
-                model, props, bisimulation_type=transformations.BisimulationType.STRONG)
-        except RuntimeError as exc:
-            res.failure = StormFailure("build", "bisimulation failed: " + _message(exc))
-            return res
-        res.bisimulation_time = time.perf_counter() - t0
-        res.quotient_states = int(model.nr_states)
-        res.quotient_transitions = int(model.nr_transitions)
-
+    if job.bisimulation and not built.symbolic and not _bisimulation(built, res, notify):
+        return res
     t0 = time.perf_counter()
-    engine = {"dd": stormpy.Engine.DD, "hybrid": stormpy.Engine.HYBRID}.get(engine_name)
-    for name, prop in zip(names, props, strict=True):
+    if not _check_each(stormpy, built, check_env, res, notify):
+        return res
+    res.check_time = time.perf_counter() - t0
+    res.failure = built.deferred
+    return res
+
+
+def _parse(stormpy: Any, job: Job) -> tuple[Any, list[Any]] | StormFailure:
+    """The model and the properties the job may check, as Storm parsed them, or why Storm
+    rejected one of them."""
+    if job.via == "prism":
+        with tempfile.TemporaryDirectory(prefix="afsmc-") as tmp:
+            path = os.path.join(tmp, "model.prism")
+            with open(path, "w", encoding="utf-8") as f:
+                f.write(job.model_text)
+            try:
+                program: Any = stormpy.parse_prism_program(path)
+            except RuntimeError as exc:
+                msg = _message(exc)
+                return StormFailure("parse", msg, line=_parse_line(msg))
+        props, failure = _prism_properties(stormpy, program, job.props_text, job.wanted)
+    else:
+        try:
+            program, all_props = stormpy.parse_jani_model_from_string(job.model_text)
+        except RuntimeError as exc:
+            return StormFailure("parse", _message(exc))
+        by_name = {p.get_name(): p for p in all_props}
+        missing = [n for n in job.wanted if n not in by_name]
+        failure = StormFailure("property", "the JANI model has no property named "
+                               + ", ".join(missing), prop=missing[0]) if missing else None
+        props = [by_name[n] for n in job.wanted if n in by_name]
+    return failure if failure is not None else (program, props)
+
+
+@dataclass
+class _Built:
+    """A built model and what this process checks on it."""
+
+    model: Any
+    engine: str  # the engine that checks: "auto" resolved to sparse or hybrid
+    names: list[str]  # the queries this process checks, in the order of `props`
+    props: list[Any]
+    symbolic: bool  # a decision-diagram model (dd, hybrid), not sparse matrices
+    deferred: StormFailure | None = None  # the failure to report after the other checks
+    refused: list[str] = field(default_factory=list)  # ... of these queries, which the
+    # hybrid engine cannot check
+
+
+def _build(stormpy: Any, job: Job, program: Any, props: list[Any], res: JobResult,
+           notify: Notify) -> _Built:
+    """Build the model for the job's engine. "auto" builds symbolically first, which counts
+    the states exactly at little memory, then keeps that model for the hybrid engine or
+    builds sparse matrices if they fit (see :func:`_choose`)."""
+    names = list(job.wanted)  # the extras go once the engine is known
+    if job.engine == "sparse":
+        names, props = _keep(names, props, job.hybrid_extra)
+        return _Built(stormpy.build_model(program, _for_builder(props, job)), "sparse",
+                      names, props, symbolic=False)
+    # Labels and guards that mention constants fail in the symbolic builder otherwise.
+    sprog = program.substitute_constants()
+    if hasattr(sprog, "substitute_formulas"):
+        # PRISM: a formula in a label or reward has no decision diagram otherwise
+        sprog = sprog.substitute_formulas()
+    if hasattr(sprog, "substitute_functions"):
+        sprog.substitute_functions()  # JANI: in place
+    env = stormpy.Environment()
+    env.dd().sylvan().maximal_memory = job.dd_memory_mb
+    model: Any = stormpy.build_symbolic_model(sprog, _for_builder(props, job), environment=env)
+    if job.engine != "auto":
+        return _Built(model, job.engine, names, props, symbolic=True)
+    built = _choose(job, int(model.nr_states), names, props, res)
+    if built.symbolic:
+        built.model = model
+        return built
+    notify("phase", "build")
+    del model  # before the sparse build: only one of the two models in memory at a time
+    built.model = stormpy.build_model(program, _for_builder(built.props, job))
+    return built
+
+
+def _choose(job: Job, states: int, names: list[str], props: list[Any],
+            res: JobResult) -> _Built:
+    """The engine "auto" picks for a model of `states` states: sparse if its matrices fit
+    in the job's memory budget, else hybrid; the reason goes to `res.engine_reason`. The
+    model is for the caller to set."""
+    # The sparse engine is much faster to check but needs ~260 bytes per state.
+    need = states * SPARSE_BYTES_PER_STATE
+    budget = job.memory_budget
+    if budget is None or need <= budget:
+        names, props = _keep(names, props, job.hybrid_extra)
+        res.engine_reason = (f"{states:,} states need about {need / 1e9:.1f} GB as sparse "
+                             "matrices" + (f", within the {budget / 1e9:.1f} GB available"
+                                           if budget else ""))
+        return _Built(None, "sparse", names, props, symbolic=False)
+    res.engine_reason = (f"{states:,} states would need about {need / 1e9:.1f} GB as sparse "
+                         f"matrices, more than the {budget / 1e9:.1f} GB available")
+    if job.hybrid_skip:
+        names, props = _keep(names, props, job.hybrid_skip)
+        res.engine_reason += "; queries grouped by the tables they need"
+    refused = [n for n in names if n in job.symbolic_refused]
+    deferred = None
+    if refused:
+        # not a second build for the others: they are checked here
+        deferred = StormFailure(
+            "check", f"its {states:,} states are too many for the sparse engine (about "
+            f"{need / 1e9:.1f} GB as sparse matrices), and the hybrid engine cannot check "
+            "this property (docs/verification.md, \"Engines and routes\")", prop=refused[0])
+        names, props = _keep(names, props, tuple(refused))
+    return _Built(None, "hybrid", names, props, True, deferred, refused)
+
+
+def _bisimulation(built: _Built, res: JobResult, notify: Notify) -> bool:
+    """Replace the sparse model by its strong-bisimulation quotient; False, with
+    `res.failure` set, if Storm fails."""
+    notify("phase", "bisimulation")
+    t0 = time.perf_counter()
+    try:
+        import stormpy.transformations as transformations
+
+        built.model = transformations.perform_bisimulation(
+            built.model, built.props, bisimulation_type=transformations.BisimulationType.STRONG)
+    except RuntimeError as exc:
+        res.failure = StormFailure("build", "bisimulation failed: " + _message(exc))
+        return False
+    res.bisimulation_time = time.perf_counter() - t0
+    res.quotient_states = int(built.model.nr_states)
+    res.quotient_transitions = int(built.model.nr_transitions)
+    return True
+
+
+def _check_each(stormpy: Any, built: _Built, check_env: Any, res: JobResult,
+                notify: Notify) -> bool:
+    """Check the queries one at a time, each value sent as soon as it is known; False,
+    with `res.failure` set, at the first that fails."""
+    model = built.model
+    engine = {"dd": stormpy.Engine.DD, "hybrid": stormpy.Engine.HYBRID}.get(built.engine)
+    for name, prop in zip(built.names, built.props, strict=True):
         notify("phase", f"check {name}")
         started = time.perf_counter()
         try:
-            if symbolic:
+            if built.symbolic:
                 r = stormpy.model_checking(model, prop, only_initial_states=True, engine=engine,
                                            environment=check_env)
                 # The value of the (one) initial state: not the maximum over all states, and
                 # not the filtered result's get_max, which counts the 0 of every state outside
-                # the filter (a negative expected reward came out as 0).
+                # the filter (a negative expected reward would read 0).
                 value = None if r is None else stormpy.filter_initial_states(r, model).average()
             else:
                 r = stormpy.model_checking(model, prop, environment=check_env)
                 value = r.get_value(model.initial_states[0])
         except RuntimeError as exc:
             res.failure = StormFailure("check", _message(exc), prop=name)
-            return res
+            return False
         if value is None:
-            res.failure = StormFailure("check", f"the {engine_name} engine does not support "
+            res.failure = StormFailure("check", f"the {built.engine} engine does not support "
                                        "this property (Storm returned no result)", prop=name)
-            return res
+            return False
         res.values[name] = float(value)
         del r  # before the next check: the result holds decision diagrams of this model
         _give_back()
         res.seconds[name] = time.perf_counter() - started
         # A process that dies later (memory) has still answered this one: the watcher keeps it.
         notify("value", (name, float(value), res.seconds[name]))
-    res.check_time = time.perf_counter() - t0
-    res.failure = deferred
-    return res
+    return True
 
 
 def solver_for(solver: Solver, engine: str) -> str:

@@ -1,0 +1,145 @@
+"""The result of a sweep: its points, and the CSV, JSON and plot that `afsmc sweep` writes."""
+
+from __future__ import annotations
+
+import csv
+import io
+import os
+from dataclasses import dataclass, field
+
+from afsmc.diagnostics import CompileError, Diagnostic, Severity
+from afsmc.files import write_atomic
+from afsmc.text import literal
+from afsmc.verify.results import PropertyResult, find_property
+from afsmc.verify.storm import finite
+from afsmc.verify.sweep_values import Kind, Number
+
+
+@dataclass
+class SweepPoint:
+    x: Number
+    properties: list[PropertyResult]  # a value is None where its query failed (a partial result)
+    states: int | None  # None: the model's every process failed (a partial result)
+    transitions: int | None
+    uniform_states: int | None = None
+    uniform_transitions: int | None = None
+    seconds: float = 0.0  # wall time of the point (not written to the outputs)
+
+    def property(self, name: str) -> PropertyResult:
+        return find_property(self.properties, name)
+
+
+@dataclass
+class SweepResult:
+    path: str
+    variable: str  # the constant's name, or "bound"
+    kind: Kind
+    type: str  # "mdp" | "dtmc"
+    points: list[SweepPoint]
+    names: list[str] = field(default_factory=list)  # the properties, in order
+    seconds: float = 0.0
+
+    def curve(self, name: str, key: str) -> list[float | None]:
+        """The values of one property: key is "min", "max", "uniform" or "value"."""
+        out: list[float | None] = [getattr(pt.property(name), key) for pt in self.points]
+        return out
+
+    @property
+    def xs(self) -> list[Number]:
+        return [pt.x for pt in self.points]
+
+    def to_csv(self) -> str:
+        buf = io.StringIO()
+        w = csv.writer(buf, lineterminator="\n")
+        w.writerow([self.variable, "property", "min", "max", "uniform", "value", "states",
+                    "transitions", "uniform_states", "uniform_transitions"])
+
+        def cell(v: float | int | None) -> str:
+            return "" if v is None else str(v) if isinstance(v, int) else repr(float(v))
+
+        for pt in self.points:
+            for r in pt.properties:
+                w.writerow([literal(pt.x), r.name, cell(r.min), cell(r.max), cell(r.uniform),
+                            cell(r.value), pt.states, pt.transitions, cell(pt.uniform_states),
+                            cell(pt.uniform_transitions)])
+        return buf.getvalue()
+
+    def to_json(self) -> dict[str, object]:
+        first = self.points[0].properties if self.points else []
+        return {
+            "file": self.path,
+            "variable": self.variable,
+            "kind": self.kind,
+            "type": self.type,
+            "properties": [{"name": r.name, "formula": r.formula} for r in first]
+            if self.kind == "const" else [{"name": r.name} for r in first],
+            "points": [{
+                "x": pt.x,
+                "states": pt.states,
+                "transitions": pt.transitions,
+                "uniform_states": pt.uniform_states,
+                "uniform_transitions": pt.uniform_transitions,
+                # no check times: a sweep's output is the same however it was split
+                "properties": [{k: v for k, v in r.to_json().items()
+                                if k != "seconds" and (k != "formula" or self.kind == "bound")}
+                               for r in pt.properties],
+            } for pt in self.points],
+        }
+
+    def plot(self, path: str, *, protect: tuple[str, ...] = ()) -> None:
+        """Min, max and uniform curves (or the value) per property, as PNG or SVG."""
+        from matplotlib import rc_context
+        from matplotlib.backends.backend_agg import FigureCanvasAgg
+        from matplotlib.figure import Figure
+        from matplotlib.ticker import MaxNLocator
+
+        ext = os.path.splitext(path)[1].lower()
+        if ext not in (".png", ".svg"):
+            raise CompileError([Diagnostic("E003", Severity.ERROR,
+                                           f"--plot {path}: the name must end in .png or .svg",
+                                           None)])
+        n = max(1, len(self.names))
+        with rc_context({"svg.hashsalt": "afsmc", "font.size": 9}):
+            fig = Figure(figsize=(6.4, 3.6 * n), layout="constrained")
+            FigureCanvasAgg(fig)
+            xs = [float(x) for x in self.xs]
+            for i, name in enumerate(self.names):
+                ax = fig.add_subplot(n, 1, i + 1)
+                first = self.points[0].property(name) if self.points else None
+                if self.type == "mdp":
+                    lo = [_nan(v) for v in self.curve(name, "min")]
+                    hi = [_nan(v) for v in self.curve(name, "max")]
+                    ax.fill_between(xs, lo, hi, color="tab:blue", alpha=0.12, linewidth=0)
+                    ax.plot(xs, hi, color="tab:blue", label="max", linewidth=1.6)
+                    ax.plot(xs, lo, color="tab:red", label="min", linewidth=1.6)
+                    un = self.curve(name, "uniform")
+                    if any(v is not None for v in un):
+                        ax.plot(xs, [_nan(v) for v in un], color="black", linestyle="--",
+                                label="uniform", linewidth=1.2)
+                else:
+                    ax.plot(xs, [_nan(v) for v in self.curve(name, "value")],
+                            color="tab:blue", label="value", linewidth=1.6)
+                what = "probability" if first is None or first.kind == "P" else "expected reward"
+                title = name if first is None or self.kind == "bound" else \
+                    f"{name}: {first.formula}"
+                ax.set_title(title)
+                ax.set_xlabel(self.variable if self.kind == "const" else "step bound k")
+                ax.set_ylabel(what)
+                if what == "probability":
+                    ax.set_ylim(-0.02, 1.02)
+                if any(isinstance(x, bool) for x in self.xs):
+                    ax.set_xticks(xs, [literal(x) for x in self.xs])
+                elif all(isinstance(x, int) for x in self.xs):  # no tick at ROUNDS = 1.5
+                    ax.xaxis.set_major_locator(MaxNLocator(integer=True))
+                ax.grid(True, alpha=0.3)
+                ax.legend(loc="best")
+            buf = io.BytesIO()
+            if ext == ".png":
+                fig.savefig(buf, format="png", dpi=120, metadata={"Software": None})
+            else:
+                fig.savefig(buf, format="svg", metadata={"Date": None, "Creator": None})
+        write_atomic(path, buf.getvalue(), protect=protect)
+
+
+def _nan(v: float | None) -> float:
+    return float("nan") if v is None or finite(v) is None else v
