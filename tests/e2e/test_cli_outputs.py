@@ -46,6 +46,7 @@ def test_an_output_that_is_a_device_or_pipe_is_written_into_not_replaced(tmp_pat
     assert r.code == 2 and "not a directory or a regular file" in r.err
 
 
+@pytest.mark.slow
 @pytest.mark.storm
 @pytest.mark.parametrize("command", [
     ["simulate", "--runs", "50", "--json"], ["simulate", "--runs", "50"],
