@@ -21,7 +21,7 @@ from afsmc.files import read_source  # noqa: E402
 from afsmc.sim.run import job_for, simulate  # noqa: E402
 
 DEFAULT = [os.path.join(ROOT, "examples", "uav.afsm"), os.path.join(ROOT, "examples", "patrol.afsm"),
-           os.path.join(ROOT, "tests", "cases", "sim_mission", "mission.afsm")]
+           os.path.join(ROOT, "tests", "golden", "cases", "sim_mission", "mission.afsm")]
 
 
 def main() -> int:

@@ -39,7 +39,7 @@ def _run(argv: list[str]) -> tuple[int, str, str]:
 
 
 def inputs() -> list[Path]:
-    return sorted(ROOT.glob("examples/*.afsm")) + sorted(ROOT.glob("tests/cases/*/input.afsm"))
+    return sorted(ROOT.glob("examples/*.afsm")) + sorted(ROOT.glob("tests/golden/cases/*/input.afsm"))
 
 
 def main(dest: str) -> int:

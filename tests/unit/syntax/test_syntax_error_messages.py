@@ -1,5 +1,5 @@
 """A syntax error raises CompileError with one diagnostic explaining the mistake (cases
-taken from tests/cases/err_syntax_*/expected.txt, called on the parser directly)."""
+taken from tests/golden/cases/err_syntax_*/expected.txt, called on the parser directly)."""
 
 from __future__ import annotations
 

@@ -1,0 +1,35 @@
+"""A bug in afsmc (an exception escaping a command) is exit 3, one line on stderr and a
+traceback file, never a traceback on the terminal."""
+
+from __future__ import annotations
+
+import re
+from pathlib import Path
+
+import pytest
+
+from tests.conftest import run_cli
+
+
+def test_a_bug_in_afsmc_is_one_line_and_a_traceback_file(monkeypatch: pytest.MonkeyPatch) -> None:
+    """An exception that escapes a command is afsmc's bug, not the user's: exit 3, one line
+    on stderr naming a file that holds the traceback, and no traceback on the terminal."""
+    import afsmc.commands.check as check
+
+    def broken(args: object) -> int:
+        raise ValueError("an impossible state")
+
+    monkeypatch.delenv("AFSMC_TRACEBACK", raising=False)
+    monkeypatch.setattr(check, "run", broken)
+    result = run_cli("check", "examples/patrol.afsm")
+    assert result.code == 3
+    assert "Traceback" not in result.err
+    match = re.search(r"internal error .*ValueError: an impossible state; the traceback is in "
+                      r"(\S+); please report it", result.err)
+    assert match, result.err
+    saved = Path(match.group(1))
+    try:
+        text = saved.read_text()
+        assert "Traceback" in text and "an impossible state" in text
+    finally:
+        saved.unlink()
