@@ -20,7 +20,14 @@ FILES = sorted(DIRECTORY.glob("*.md")) if DIRECTORY.is_dir() else []
 
 
 def _parsed() -> dict[str, Explanation]:
-    return {p.stem: parse(p.read_text(encoding="utf-8")) for p in FILES}
+    """The files that parse (the others fail their own test below)."""
+    out = {}
+    for path in FILES:
+        try:
+            out[path.stem] = parse(path.read_text(encoding="utf-8"))
+        except ValueError:
+            continue
+    return out
 
 
 def test_every_code_has_an_explanation_file() -> None:
@@ -52,7 +59,7 @@ def _check(text: str) -> list[Diagnostic]:
         return exc.diagnostics
 
 
-CHECKABLE = [(p.stem, ex) for p, ex in zip(FILES, _parsed().values(), strict=True)
+CHECKABLE = [(code, ex) for code, ex in _parsed().items()
              if ex.wrong.checkable and ex.right.checkable]
 
 
