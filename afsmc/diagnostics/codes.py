@@ -52,10 +52,10 @@ class Code(str):
 
 # E0xx: reading and writing files, afsmc's own failures
 
-E001 = Code("E001", Severity.ERROR, "cannot read an input file")
-E002 = Code("E002", Severity.ERROR, "refusing to overwrite an input file")
+E001 = Code("E001", Severity.ERROR, "cannot read the input file")
+E002 = Code("E002", Severity.ERROR, "refusing to overwrite the input")
 E003 = Code("E003", Severity.ERROR, "cannot write an output")
-E009 = Code("E009", Severity.ERROR, "an internal error (a bug in afsmc)")
+E009 = Code("E009", Severity.ERROR, "internal error")
 
 
 # E1xx: syntax
@@ -84,7 +84,7 @@ E121 = Code("E121", Severity.ERROR, "a step bound that is an expression is writt
 E122 = Code("E122", Severity.ERROR, "a keyword is run into a name")
 E123 = Code("E123", Severity.ERROR, "another language's spelling")
 E124 = Code("E124", Severity.ERROR, "a hazard has one trigger")
-E190 = Code("E190", Severity.ERROR, "the formatter failed on a file")
+E190 = Code("E190", Severity.ERROR, "the formatter failed")
 
 
 # E2xx: names and types
@@ -165,41 +165,41 @@ W309 = Code("W309", Severity.WARNING, "a check could not be completed")
 
 # E4xx: verification with Storm, and sweeps
 
-W401 = Code("W401", Severity.WARNING, "the JANI file asks a step-bounded G as its dual")
-E402 = Code("E402", Severity.ERROR, "a property that Storm cannot check")
-E403 = Code("E403", Severity.ERROR, "a model that Storm cannot build")
-E404 = Code("E404", Severity.ERROR, "checking a property failed in Storm")
+W401 = Code("W401", Severity.WARNING, "a step-bounded G in JANI is asked as its dual")
+E402 = Code("E402", Severity.ERROR, "a property Storm cannot check")
+E403 = Code("E403", Severity.ERROR, "a model Storm cannot build")
+E404 = Code("E404", Severity.ERROR, "a property the chosen Storm engine cannot check")
 E405 = Code("E405", Severity.ERROR, "the model has more states than --max-states")
-E406 = Code("E406", Severity.ERROR, "out of memory, or an internal failure, in Storm")
-E407 = Code("E407", Severity.ERROR, "no property to check")
+E406 = Code("E406", Severity.ERROR, "the Storm process ran out of memory or died")
+E407 = Code("E407", Severity.ERROR, "no such property, or none declared")
 E408 = Code("E408", Severity.ERROR, "the JANI backend is not available")
 E409 = Code("E409", Severity.ERROR, "--formula holds more than one property")
 E410 = Code("E410", Severity.ERROR, "nothing to sweep")
-E411 = Code("E411", Severity.ERROR, "a generated model that Storm cannot read")
-N412 = Code("N412", Severity.NOTE, "the answers found before a failure or an interrupt")
-E413 = Code("E413", Severity.ERROR, "a sweep failed")
+E411 = Code("E411", Severity.ERROR, "the generated model cannot be read by Storm")
+N412 = Code("N412", Severity.NOTE, "the values that were answered before a failure")
+E413 = Code("E413", Severity.ERROR, "the sweep's workers cannot be reached or started")
 E414 = Code("E414", Severity.ERROR, "a process of the sweep died")
 
 
 # E5xx: simulation and simulation-backed constants
 
-E501 = Code("E501", Severity.ERROR, "an unknown simulator output")
+E501 = Code("E501", Severity.ERROR, "unknown simulator output")
 E502 = Code("E502", Severity.ERROR, "a constant has drifted from its simulation")
-E503 = Code("E503", Severity.ERROR, "a simulated figure does not fit the constant's type")
-W503 = Code("W503", Severity.WARNING, "too few runs to judge a constant")
-E504 = Code("E504", Severity.ERROR, "a policy key is unknown, repeated or does not apply")
+E503 = Code("E503", Severity.ERROR, "a simulator output does not fit its constant")
+W503 = Code("W503", Severity.WARNING, "too few simulation runs to judge a constant")
+E504 = Code("E504", Severity.ERROR, "a bad policy key of a simulation-backed constant")
 E505 = Code("E505", Severity.ERROR, "a simulator failed")
 E506 = Code("E506", Severity.ERROR, "the machine cannot be simulated")
-E507 = Code("E507", Severity.ERROR, "a simulation failed")
-E508 = Code("E508", Severity.ERROR, "a drifted constant has no value its rule accepts")
+E507 = Code("E507", Severity.ERROR, "the simulation's workers cannot be reached")
+E508 = Code("E508", Severity.ERROR, "a constant has drifted and no value of its type fits")
 
 
 # E6xx: diagrams
 
-E610 = Code("E610", Severity.ERROR, "the Graphviz program dot is not found")
-E611 = Code("E611", Severity.ERROR, "a results file holds a value that is not a number")
-E612 = Code("E612", Severity.ERROR, "the reachability of the modes cannot be computed")
-E613 = Code("E613", Severity.ERROR, "rendering the diagram with Graphviz failed")
+E610 = Code("E610", Severity.ERROR, "the Graphviz program dot was not found")
+E611 = Code("E611", Severity.ERROR, "the --results file cannot be used")
+E612 = Code("E612", Severity.ERROR, "the reachability of the modes could not be computed")
+E613 = Code("E613", Severity.ERROR, "the Graphviz program dot failed")
 
 
 # W6xx: the mode graph
@@ -211,7 +211,7 @@ W603 = Code("W603", Severity.WARNING, "an action can never fire")
 
 # E9xx: the language server
 
-E999 = Code("E999", Severity.ERROR, "the language server failed on a file (a bug in afsmc)")
+E999 = Code("E999", Severity.ERROR, "the language server could not process the file")
 
 
 # The groups of docs/diagnostics.md and of `afsmc explain`: a heading and the prefixes
