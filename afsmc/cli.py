@@ -37,6 +37,7 @@ COMMANDS: dict[str, str] = {
     "diagram": "render a mission diagram (SVG, PNG or PDF) with Graphviz",
     "sim-check": "re-run the simulations behind `from sim` constants and judge them",
     "simulate": "Monte Carlo simulation of the machine: estimate its properties",
+    "explain": "explain a diagnostic code (e.g. E301) with a wrong and a right example, or list all",
 }
 
 

@@ -1,5 +1,6 @@
 """`afsmc check FILE...`: report every problem of each file; exit 1 if any is an error.
-`-` reads standard input (as `fmt -` does)."""
+`-` reads standard input (as `fmt -` does). `--format json|sarif` writes the diagnostics
+on standard output for other programs (`--json` is `--format json`)."""
 
 from __future__ import annotations
 
@@ -9,20 +10,31 @@ import sys
 from afsmc.commands.common import add_consts, overrides, report, usage_error
 from afsmc.compiler import load
 from afsmc.diagnostics import CompileError, Diagnostic, Severity
+from afsmc.diagnostics.formats import to_sarif
 from afsmc.files import decode_source
+
+FORMATS = ("text", "json", "sarif")
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("files", nargs="+", metavar="FILE",
                    help="the .afsm files ('-': standard input)")
     add_consts(p)
-    p.add_argument("--json", action="store_true", help="print diagnostics as JSON")
+    p.add_argument("--format", choices=FORMATS, default=None,
+                   help="text on standard error (the default), or JSON or SARIF 2.1.0 on "
+                        "standard output")
+    p.add_argument("--json", action="store_true", help="print diagnostics as JSON "
+                   "(--format json)")
     p.add_argument("--werror", action="store_true", help="treat warnings as errors")
 
 
 def run(args: argparse.Namespace) -> int:
     if args.files.count("-") > 1:
         usage_error("'-' (standard input) is given more than once")
+    if args.json and args.format not in (None, "json"):
+        usage_error(f"--json is --format json; it cannot go with --format {args.format}")
+    fmt = "json" if args.json else args.format or "text"
+    args.json = fmt == "json"  # an internal error is reported as JSON too (cli.main)
     # Every file's diagnostics, in the order of the files: one report (one JSON list).
     diags: list[Diagnostic] = []
     for path in args.files:
@@ -34,12 +46,15 @@ def run(args: argparse.Namespace) -> int:
                 diags += load(path, overrides(args)).diagnostics
         except CompileError as exc:
             diags += exc.diagnostics
-    report(diags, args.json)
+    if fmt == "sarif":
+        print(to_sarif(diags))
+    else:
+        report(diags, fmt == "json")
     if any(d.severity is Severity.ERROR for d in diags):
         return 1
     warnings = sum(d.severity is Severity.WARNING for d in diags)
     if args.werror and warnings:
-        if not args.json:  # the summary above counts them as warnings: say why exit 1
+        if fmt == "text":  # the summary above counts them as warnings: say why exit 1
             print(f"afsmc: --werror: {warnings} warning(s) treated as errors", file=sys.stderr)
         return 1
     return 0
