@@ -53,8 +53,8 @@ EXPLANATIONS = ROOT / "afsmc" / "diagnostics" / "explanations"
 
 # Conditions no command line sets up reliably: internal errors, resources, third parties.
 NOT_RUNNABLE = frozenset({
-    "E003", "E009", "E190", "E406", "E408", "E411", "E413", "E414", "E505", "E507",
-    "E610", "E613", "E999",
+    "E009", "E190", "E402", "E406", "E408", "E411", "E414", "E505", "E506", "E612",
+    "E999", "N412", "W309",
 })
 
 _TITLE = re.compile(r"# ([EWN]\d{3}): (\S.*)")
