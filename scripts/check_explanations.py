@@ -129,7 +129,8 @@ def run_sh(section: Section, timeout: float) -> str:
             done = subprocess.run(["bash", "-c", script], cwd=work, env=env, text=True,
                                   capture_output=True, timeout=timeout, check=False)
         except subprocess.TimeoutExpired as exc:
-            return f"(timed out after {timeout:.0f} s)\n{exc.stdout or ''}{exc.stderr or ''}"
+            said = [x.decode() if isinstance(x, bytes) else x or "" for x in (exc.stdout, exc.stderr)]
+            return f"(timed out after {timeout:.0f} s)\n" + "".join(said)
         return done.stdout + done.stderr
 
 
