@@ -54,7 +54,7 @@ EXPLANATIONS = ROOT / "afsmc" / "diagnostics" / "explanations"
 # Conditions no command line sets up reliably: internal errors, resources, third parties.
 NOT_RUNNABLE = frozenset({
     "E009", "E190", "E402", "E406", "E408", "E411", "E414", "E505", "E506", "E612",
-    "E999", "N412", "W309",
+    "E999", "N412",
 })
 
 _TITLE = re.compile(r"# ([EWN]\d{3}): (\S.*)")
