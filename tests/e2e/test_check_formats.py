@@ -12,8 +12,8 @@ from sarif_kit import validation_errors
 from afsmc.diagnostics import Diagnostic, Source
 from tests.conftest import ROOT, run_cli
 
-TIE = "tests/cases/err_weight_tie/input.afsm"
-FILES = [TIE, "tests/cases/err_undefined/input.afsm", "tests/cases/warn_deadlock/input.afsm"]
+TIE = "tests/golden/cases/err_weight_tie/input.afsm"
+FILES = [TIE, "tests/golden/cases/err_undefined/input.afsm", "tests/golden/cases/warn_deadlock/input.afsm"]
 
 
 @pytest.fixture(autouse=True)
@@ -62,7 +62,7 @@ def test_sarif_of_a_clean_file_has_no_results_and_exits_0() -> None:
 
 
 def test_werror_exits_1_in_every_format() -> None:
-    warn = "tests/cases/warn_deadlock/input.afsm"
+    warn = "tests/golden/cases/warn_deadlock/input.afsm"
     for fmt in ("text", "json", "sarif"):
         r = run_cli("check", warn, "--format", fmt, "--werror")
         assert r.code == 1, fmt

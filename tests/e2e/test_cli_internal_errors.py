@@ -33,3 +33,20 @@ def test_a_bug_in_afsmc_is_one_line_and_a_traceback_file(monkeypatch: pytest.Mon
         assert "Traceback" in text and "an impossible state" in text
     finally:
         saved.unlink()
+
+
+def test_a_bug_under_json_is_one_json_object_with_e009(monkeypatch: pytest.MonkeyPatch) -> None:
+    import json
+
+    import afsmc.commands.check as check
+
+    def broken(args: object) -> int:
+        raise ValueError("an impossible state")
+
+    monkeypatch.delenv("AFSMC_TRACEBACK", raising=False)
+    monkeypatch.setattr(check, "run", broken)
+    result = run_cli("check", "--json", "examples/patrol.afsm")
+    assert result.code == 3
+    (d,) = json.loads(result.out)["diagnostics"]
+    assert d["code"] == "E009" and d["severity"] == "error"
+    Path(re.search(r"the traceback is in (\S+);", d["message"]).group(1)).unlink()  # type: ignore[union-attr]

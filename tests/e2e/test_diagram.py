@@ -419,3 +419,29 @@ def test_uav_diagram_has_every_arrow_of_figure1(tmp_path: Path) -> None:
     group_edges = {(nodes[a], int(b[1:])) for a, b in edges if nodes.get(a, "").startswith("{")}
     assert group_edges == {(paper_set(s), t) for s, ts in hazards.values() for t in ts}
     assert group_edges >= FIGURE1_GROUPS
+
+
+def test_a_failing_dot_program_is_e613_and_writes_nothing(tmp_path: Path,
+                                                          monkeypatch: pytest.MonkeyPatch) -> None:
+    broken = tmp_path / "bin"
+    broken.mkdir()
+    dot = broken / "dot"
+    dot.write_text("#!/bin/sh\necho 'dot: cannot load plugins' >&2\nexit 1\n")
+    dot.chmod(0o755)
+    monkeypatch.setenv("PATH", f"{broken}:/usr/bin:/bin")
+    r = run_cli("diagram", str(EXAMPLES / "patrol.afsm"), "-o", str(tmp_path / "x.svg"))
+    assert r.code == 1
+    assert "error[E613]" in r.err and "cannot load plugins" in r.err
+    assert not (tmp_path / "x.svg").exists()
+
+
+def test_a_storm_failure_at_reach_other_than_size_is_e612() -> None:
+    from afsmc.commands.diagram import _reach_error
+    from afsmc.verify.storm import StormFailure
+
+    err = _reach_error(StormFailure("check", "Storm  could not\n solve it"))
+    (d,) = err.diagnostics
+    assert d.code == "E612"
+    assert d.message == ("Storm could not compute the reachability of the modes: "
+                         "Storm could not solve it")
+    assert [x.code for x in _reach_error(StormFailure("too-big", "big")).diagnostics] == ["E405"]

@@ -78,7 +78,7 @@ NOT_TRIGGERS = {Path(__file__).parent, ROOT / "tests" / "e2e" / "test_explain_co
 
 
 def triggered() -> set[str]:
-    """Codes that appear in a test (a .py file, or a golden file of tests/cases), or whose
+    """Codes that appear in a test (a .py file, or a golden file of tests/golden/cases), or whose
     explanation `test_check_reports_the_code_on_wrong_and_not_on_right` runs."""
     found = {code for code, _ in CHECKABLE}
     tests = ROOT / "tests"

@@ -120,7 +120,7 @@ def test_a_hint_follows_the_message() -> None:
 
 
 @pytest.mark.parametrize(("path", "uri"), [
-    ("tests/cases/a b/input.afsm", "tests/cases/a%20b/input.afsm"),
+    ("tests/golden/cases/a b/input.afsm", "tests/golden/cases/a%20b/input.afsm"),
     ("/tmp/m.afsm", "file:///tmp/m.afsm"),
     ("<stdin>", "%3Cstdin%3E"),
 ])
