@@ -22,7 +22,7 @@ from collections.abc import Sequence
 from typing import Any, TextIO
 
 from afsmc import __version__
-from afsmc.diagnostics import CompileError, Diagnostic, Severity, render_all
+from afsmc.diagnostics import CompileError, Diagnostic, Severity, codes, render_all
 from afsmc.interrupt import JsonResult, Stopped
 from afsmc.stack import run_deep
 
@@ -133,7 +133,7 @@ def _run(args: argparse.Namespace) -> int:
         from afsmc.commands.common import fail
 
         return fail(CompileError([Diagnostic(
-            "E114", Severity.ERROR, f"{getattr(args, 'file', 'the input')}: an expression is "
+            codes.E114, Severity.ERROR, f"{getattr(args, 'file', 'the input')}: an expression is "
             "nested too deeply for afsmc", None,
             hint="shorten the longest expressions (long chains of operators or formulas "
             "that use each other)")]), getattr(args, "json", False),
@@ -177,7 +177,7 @@ def main(argv: Sequence[str] | None = None) -> int:
             # --json promises one JSON object on stdout, a Ctrl-C included
             obj: dict[str, object] = {
                 "interrupted": True, "diagnostics": [d.to_json() for d in errors] + [
-                    {"code": "N412", "severity": "note", "message": n} for n in notes]}
+                    {"code": codes.N412, "severity": "note", "message": n} for n in notes]}
             partial = stopped.partial if stopped else None  # the answers so far, as data
             if isinstance(partial, JsonResult):
                 obj |= partial.to_json()
@@ -239,7 +239,7 @@ def _stdout_failed(exc: StdoutError, stdout: TextIO | None) -> int:
     points at /dev/null, so that Python's last flush at the exit prints no traceback."""
     from afsmc.commands.common import color_enabled
 
-    print(render_all([Diagnostic("E003", Severity.ERROR, f"cannot write to standard output: "
+    print(render_all([Diagnostic(codes.E003, Severity.ERROR, f"cannot write to standard output: "
                                  f"{exc}; the results are lost", None,
                                  hint="write them to a file with -o where the command has "
                                  "it, or free space where standard output goes")],
@@ -267,7 +267,7 @@ def _internal_error(exc: Exception, as_json: bool) -> int:
     print(f"afsmc: {message}", file=sys.stderr)
     if as_json:
         print(json.dumps({"diagnostics": [
-            {"code": "E009", "severity": "error", "message": message}]}, indent=2))
+            {"code": codes.E009, "severity": "error", "message": message}]}, indent=2))
     return 3
 
 

@@ -10,7 +10,7 @@ import contextlib
 import os
 import tempfile
 
-from afsmc.diagnostics import CompileError, Diagnostic, Severity, Source, Span
+from afsmc.diagnostics import CompileError, Diagnostic, Severity, Source, Span, codes
 
 
 def read_source(path: str, *, newline: str | None = None) -> str:
@@ -21,7 +21,7 @@ def read_source(path: str, *, newline: str | None = None) -> str:
     except FileNotFoundError:
         if path == "-":  # the commands that read standard input handle '-' before this
             raise CompileError([Diagnostic(
-                "E001", Severity.ERROR, "cannot read -: this command reads a file, not "
+                codes.E001, Severity.ERROR, "cannot read -: this command reads a file, not "
                 "standard input", None, hint="'afsmc check -' and 'afsmc fmt -' read standard "
                 "input; save the model to a file for the others")]) from None
         raise CompileError([_io_error(path, "no such file")]) from None
@@ -52,14 +52,14 @@ def _not_utf8(path: str, exc: UnicodeDecodeError, raw: bytes | None = None) -> D
             return _io_error(path, "is not UTF-8 text")
     source = Source(path, raw.decode("utf-8", errors="replace"))
     at = len(raw[:exc.start].decode("utf-8", errors="replace"))
-    return Diagnostic("E001", Severity.ERROR, f"cannot read {path}: byte 0x{raw[exc.start]:02x} "
+    return Diagnostic(codes.E001, Severity.ERROR, f"cannot read {path}: byte 0x{raw[exc.start]:02x} "
                       "is not UTF-8 text", Span.at_offset(source, at),
                       hint="save the file as UTF-8 (it may be Latin-1 or another 8-bit "
                            "encoding)")
 
 
 def _io_error(path: str, why: str) -> Diagnostic:
-    return Diagnostic("E001", Severity.ERROR, f"cannot read {path}: {why}", None)
+    return Diagnostic(codes.E001, Severity.ERROR, f"cannot read {path}: {why}", None)
 
 
 def refuse_inputs(paths: list[str], protect: tuple[str, ...]) -> None:
@@ -69,7 +69,7 @@ def refuse_inputs(paths: list[str], protect: tuple[str, ...]) -> None:
         real = os.path.realpath(path)
         for p in protect:
             if os.path.exists(p) and os.path.realpath(p) == real:
-                raise CompileError([Diagnostic("E002", Severity.ERROR,
+                raise CompileError([Diagnostic(codes.E002, Severity.ERROR,
                                                f"refusing to overwrite the input {p}", None,
                                                hint="choose another output path")])
 
@@ -82,7 +82,7 @@ def check_writable(path: str, *, protect: tuple[str, ...] = ()) -> None:
     real = os.path.realpath(path)
 
     def cannot(why: str) -> CompileError:
-        return CompileError([Diagnostic("E003", Severity.ERROR, f"cannot write {path}: {why}",
+        return CompileError([Diagnostic(codes.E003, Severity.ERROR, f"cannot write {path}: {why}",
                                         None)])
 
     if os.path.isdir(real):
@@ -141,7 +141,7 @@ def write_atomic(path: str, content: str | bytes, *, protect: tuple[str, ...] = 
                 fb.write(content if isinstance(content, bytes) else content.encode()
                          if newline is None else content.replace("\n", newline).encode())
         except OSError as exc:
-            raise CompileError([Diagnostic("E003", Severity.ERROR,
+            raise CompileError([Diagnostic(codes.E003, Severity.ERROR,
                                            f"cannot write {path}: {exc.strerror or exc}",
                                            None)]) from None
         return
@@ -185,5 +185,5 @@ def write_atomic(path: str, content: str | bytes, *, protect: tuple[str, ...] = 
         if isinstance(exc, (FileExistsError, NotADirectoryError)) and \
                 not os.path.isdir(near := _nearest_existing(real)):
             why = f"{near} is not a directory"  # not makedirs' "File exists"
-        raise CompileError([Diagnostic("E003", Severity.ERROR,
+        raise CompileError([Diagnostic(codes.E003, Severity.ERROR,
                                        f"cannot write {path}: {why}", None)]) from None

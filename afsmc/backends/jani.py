@@ -24,7 +24,7 @@ from typing import Any
 
 from afsmc.backends.prism import describe, property_variants
 from afsmc.backends.storm_safe import signed_pow
-from afsmc.diagnostics import Diagnostic, Severity, Span
+from afsmc.diagnostics import Diagnostic, Severity, Span, codes
 from afsmc.lower.lowering import Command, Lowered
 from afsmc.model import expr as E
 from afsmc.model import ir
@@ -325,7 +325,7 @@ def notes(low: Lowered) -> list[Diagnostic]:
             variants = property_variants(low, prop)
             said = ", ".join(f"{n} = 1 - {dual_name(low, n)}" for n, _ in variants)
             out.append(Diagnostic(
-                "W401", Severity.WARNING,
+                codes.W401, Severity.WARNING,
                 f"property {prop.name}: Storm's JANI has no step-bounded G, so the file asks "
                 f"P [ F<=k !(...) ] instead: {said}"
                 # a DTMC's one value has no min and max to swap (_properties agrees)

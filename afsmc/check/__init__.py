@@ -21,7 +21,7 @@ from afsmc.check import (
     weights,
 )
 from afsmc.check.sim_sources import check_sim_sources
-from afsmc.diagnostics import Diagnostic, Reporter
+from afsmc.diagnostics import Diagnostic, Reporter, codes
 from afsmc.model import ir
 from afsmc.model.evaluate import EvalError
 from afsmc.model.search import Undecided
@@ -66,7 +66,7 @@ def run(model: ir.Model, *, used_names: frozenset[str] = frozenset()) -> list[Di
     rep = Reporter()
     for rule in RULES:
         if rule is not overflow.check_overflow and rule not in STRUCTURAL and any(
-                d.code == "E307" for d in rep.diagnostics):
+                d.code == codes.E307 for d in rep.diagnostics):
             continue
         try:
             if rule is unused.check_unused:
@@ -77,6 +77,6 @@ def run(model: ir.Model, *, used_names: frozenset[str] = frozenset()) -> list[Di
             # OverflowError: a value beyond numpy's int64 (E307 says where).
             # An unproven property is said, never passed over in silence.
             name = rule.__name__.removeprefix("check_").replace("_", " ")
-            rep.warning("W309", f"the {name} check could not be completed: {exc}", None,
+            rep.warning(codes.W309, f"the {name} check could not be completed: {exc}", None,
                         hint="the model may still violate it; simplify the expressions involved")
     return rep.sorted()

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 from afsmc.check.ranges import value_at
 from afsmc.check.undefined import defined
-from afsmc.diagnostics import Reporter, Span
+from afsmc.diagnostics import Reporter, Span, codes
 from afsmc.model import expr as E
 from afsmc.model import ir
 from afsmc.model.expr import Type
@@ -23,7 +23,7 @@ def _check(model: ir.Model, rep: Reporter, owner: str, when: dict[int, E.Expr],
         for mode, cond in when.items():
             wit = find(model, mode, E.conj(cond, defined(o.prob, model), bad))
             if wit is not None:
-                rep.error("E304", f"a probability of {owner} is "
+                rep.error(codes.E304, f"a probability of {owner} is "
                           f"{value_at(model, o.prob, wit, mode)}, outside [0, 1], in the state {wit}",
                           o.prob.span or o.span)
                 break
@@ -37,7 +37,7 @@ def _check(model: ir.Model, rep: Reporter, owner: str, when: dict[int, E.Expr],
     static = static_value(total, model)
     if static is not None:
         if abs(static - 1.0) > EPSILON:
-            rep.error("E305", f"the outcome probabilities of {owner} sum to {static:.12g}, not 1",
+            rep.error(codes.E305, f"the outcome probabilities of {owner} sum to {static:.12g}, not 1",
                       span, hint="make the last outcome '1 - ...' of the others")
         return
     off = E.disj(E.Binary(">", total, E.lit(1 + EPSILON), Type.BOOL),
@@ -45,7 +45,7 @@ def _check(model: ir.Model, rep: Reporter, owner: str, when: dict[int, E.Expr],
     for mode, cond in when.items():
         wit = find(model, mode, E.conj(cond, defined(total, model), off))
         if wit is not None:
-            rep.error("E305", f"the outcome probabilities of {owner} sum to "
+            rep.error(codes.E305, f"the outcome probabilities of {owner} sum to "
                       f"{value_at(model, total, wit, mode)}, not 1, in the state {wit}", span,
                       hint="make the last outcome '1 - ...' of the others")
             return
@@ -63,7 +63,7 @@ def check_distributions(model: ir.Model, rep: Reporter) -> None:
         for mode, cond in when.items():
             wit = find(model, mode, E.conj(cond, defined(h.prob, model), bad))
             if wit is not None:
-                rep.error("E304", f"the probability of hazard {h.name} is "
+                rep.error(codes.E304, f"the probability of hazard {h.name} is "
                           f"{value_at(model, h.prob, wit, mode)}, outside [0, 1], in the "
                           f"state {wit}", h.prob.span or h.span)
                 break

@@ -12,7 +12,7 @@ from __future__ import annotations
 from collections.abc import Iterator
 
 from afsmc.check.undefined import sites
-from afsmc.diagnostics import Reporter
+from afsmc.diagnostics import Reporter, codes
 from afsmc.model import expr as E
 from afsmc.model import ir
 from afsmc.model.bounds import bounds
@@ -55,7 +55,7 @@ def check_int_pow(model: ir.Model, rep: Reporter) -> None:
             if hit is None:
                 continue
             var = model.variable(site.target).display
-            rep.error("E308", f"{show(p)} is a fraction where {show(k)} < 0, as in the state "
+            rep.error(codes.E308, f"{show(p)} is a fraction where {show(k)} < 0, as in the state "
                       f"{hit[1]}, but {site.what} assigns it to the integer variable {var}",
                       p.span if p.span is not None else site.expr.span,
                       hint="Storm's engines disagree on such a value; keep the exponent >= 0, "

@@ -9,7 +9,7 @@ values it takes: a two-mode machine numbered 0 and 1000000 did not build in a mi
 
 from __future__ import annotations
 
-from afsmc.diagnostics import Reporter
+from afsmc.diagnostics import Reporter, codes
 from afsmc.model import ir
 
 # A span this wide costs Storm's symbolic build seconds; the paper's UAV spans 17.
@@ -21,7 +21,7 @@ def check_mode_numbers(model: ir.Model, rep: Reporter) -> None:
     if not numbers or numbers[-1] - numbers[0] + 1 <= WIDE:
         return
     wide = max(model.modes, key=lambda m: m.number)
-    rep.warning("W305", f"the mode numbers span {numbers[-1] - numbers[0] + 1:,} values for "
+    rep.warning(codes.W305, f"the mode numbers span {numbers[-1] - numbers[0] + 1:,} values for "
                 f"{len(numbers)} modes: Storm's symbolic engines (hybrid, dd; verify's "
                 "choice for large models) build in time that grows with that span",
                 wide.span, hint="number the modes densely (e.g. 0, 1, 2, ...), or leave the "

@@ -32,7 +32,7 @@ from typing import Any, Literal
 
 import networkx as nx
 
-from afsmc.diagnostics import Reporter, Span
+from afsmc.diagnostics import Reporter, Span, codes
 from afsmc.model import expr as E
 from afsmc.model import ir
 from afsmc.model.search import exists
@@ -161,7 +161,7 @@ def check_unreachable(model: ir.Model, rep: Reporter) -> None:
     mg = analyse(model)
     for n in mg.unreachable:
         m = model.mode_by_number(n)
-        rep.warning("W601", f"mode {m.name} ({n}) is unreachable from the initial mode "
+        rep.warning(codes.W601, f"mode {m.name} ({n}) is unreachable from the initial mode "
                     f"{model.initial_mode.name}", m.span,
                     hint="no action or hazard that can fire leads here; add a 'goto "
                          f"{m.name}' or remove the mode")
@@ -175,7 +175,7 @@ def check_cannot_end(model: ir.Model, rep: Reporter) -> None:
     for n in mg.cannot_end:
         m = model.mode_by_number(n)
         region = sorted(nx.descendants(g, n) | {n})
-        rep.warning("W602", f"the mission cannot end once in mode {m.name} ({n}): no path "
+        rep.warning(codes.W602, f"the mission cannot end once in mode {m.name} ({n}): no path "
                     "leads to a final mode, nor to a mode the machine stays in for good", m.span,
                     hint=f"every path from here stays among modes {compact(region)}; mark a "
                          "mode 'final' or add a way out")
@@ -210,7 +210,7 @@ def check_never_fires(model: ir.Model, rep: Reporter) -> None:
             continue
         live = [n for n in a.modes if n not in finals]
         where = "" if len(never) == len(live) else f" in mode(s) {_names(model, never)}"
-        rep.warning("W603", f"{what} {a.name} can never fire{where}: {_why(mg, a, never)}",
+        rep.warning(codes.W603, f"{what} {a.name} can never fire{where}: {_why(mg, a, never)}",
                     a.name_span, hint="its outcomes are left out of the mode graph; check its "
                     "guard and weight against the other actions of " + _names(model, never))
 

@@ -14,7 +14,7 @@ from __future__ import annotations
 import math
 
 from afsmc.check.undefined import node_key, sites
-from afsmc.diagnostics import Reporter
+from afsmc.diagnostics import Reporter, codes
 from afsmc.model import expr as E
 from afsmc.model import ir
 from afsmc.model.bounds import bounds
@@ -106,7 +106,7 @@ def check_overflow(model: ir.Model, rep: Reporter) -> None:
                 # route dies of SIGFPE (constants too: no other check sees them so).
                 reported.add(key)
                 tainted[id(n)] = True
-                rep.error("E307", f"{show(n)} divides -2^63 by -1 in some state, which "
+                rep.error(codes.E307, f"{show(n)} divides -2^63 by -1 in some state, which "
                           f"overflows a 64-bit integer (Storm stops with a floating-point "
                           f"exception), where {site.what} is evaluated",
                           n.span if n.span is not None else site.expr.span,
@@ -132,7 +132,7 @@ def check_overflow(model: ir.Model, rep: Reporter) -> None:
             shown = str(end) if isinstance(end, int) else f"{end:.3g}"
             ranges = ", ".join(f"{v.display} in [{v.lo}..{v.hi}]" for v in model.variables
                                if v.name in E.vars_read(n))
-            rep.error("E307", f"{show(n)} can reach {shown} ({ranges}), beyond a 64-bit "
+            rep.error(codes.E307, f"{show(n)} can reach {shown} ({ranges}), beyond a 64-bit "
                       f"integer, where {site.what} is evaluated",
                       n.span if n.span is not None else site.expr.span,
                       hint="Storm and the simulator compute integers with 64 bits and would "

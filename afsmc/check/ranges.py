@@ -9,7 +9,7 @@ from __future__ import annotations
 import math
 
 from afsmc.check.undefined import defined, interval_choices
-from afsmc.diagnostics import Reporter
+from afsmc.diagnostics import Reporter, codes
 from afsmc.model import expr as E
 from afsmc.model import ir
 from afsmc.model.bounds import bounds
@@ -80,7 +80,7 @@ def _check_updates(model: ir.Model, rep: Reporter, when: dict[int, E.Expr],
                     what = f"{written} = {value}" if written != value else \
                         f"{var.display} := {value}"
                     rep.error(
-                        "E303",
+                        codes.E303,
                         f"this update can take {var.display} out of its range [{var.lo}..{var.hi}]: "
                         f"{what} in the state {wit}{chosen}",
                         u.span,

@@ -11,7 +11,7 @@ from __future__ import annotations
 import difflib
 from dataclasses import dataclass
 
-from afsmc.diagnostics import Reporter
+from afsmc.diagnostics import Reporter, codes
 from afsmc.model import ir
 from afsmc.simlib import registry
 from afsmc.text import article
@@ -80,7 +80,7 @@ def check_sim_sources(model: ir.Model, rep: Reporter) -> None:
             hint = ("did you mean " + ", ".join(f"'{r}'" for r in close) + "?") if close else (
                 "simulators are named, never imported: see `afsmc sim-check --list` for the "
                 "registered outputs (built-in ones and those of the 'afsmc.simulators' entry points)")
-            rep.error("E501", f"unknown simulator output '{src.ref}' for constant '{c.name}'",
+            rep.error(codes.E501, f"unknown simulator output '{src.ref}' for constant '{c.name}'",
                       src.span, hint=hint)
         shape = shape_of(c)
         if kind is not None:
@@ -91,24 +91,24 @@ def check_sim_sources(model: ir.Model, rep: Reporter) -> None:
         for i, (key, value) in enumerate(src.policy):
             at = src.keys[i] if i < len(src.keys) else src.span
             if key in seen:
-                rep.error("E504", f"policy key '{key}' is given twice", at)
+                rep.error(codes.E504, f"policy key '{key}' is given twice", at)
                 continue
             seen.add(key)
             if key not in POLICY_KEYS:
                 close = difflib.get_close_matches(key, list(POLICY_KEYS), n=1, cutoff=0.5)
-                rep.error("E504", f"unknown policy key '{key}' for constant '{c.name}'", at,
+                rep.error(codes.E504, f"unknown policy key '{key}' for constant '{c.name}'", at,
                           hint=(f"did you mean '{close[0]}'? " if close else "")
                           + "known keys: " + ", ".join(sorted(POLICY_KEYS)))
                 continue
             shapes, meaning = POLICY_KEYS[key]
             if shape not in shapes:
-                rep.error("E504", f"policy key '{key}' does not apply to {_shape_text(shape)} "
+                rep.error(codes.E504, f"policy key '{key}' does not apply to {_shape_text(shape)} "
                           f"'{c.name}'", at, hint=f"'{key}': {meaning}; it applies to "
                           + " and ".join(_shape_text(s) for s in sorted(shapes)))
             elif key in ("coverage", "confidence") and not 0.0 < value < 1.0:
-                rep.error("E504", f"policy '{key} = {value}' is not in (0, 1)", at)
+                rep.error(codes.E504, f"policy '{key} = {value}' is not in (0, 1)", at)
             elif key == "tolerance" and value < 0:
-                rep.error("E504", f"policy 'tolerance = {value}' is negative", at)
+                rep.error(codes.E504, f"policy 'tolerance = {value}' is negative", at)
 
 
 def _shape_text(shape: str) -> str:
@@ -121,11 +121,11 @@ def _check_kind(c: ir.Constant, kind: str, shape: str, rep: Reporter) -> None:
     if kind == "probability":
         if shape == INTERVAL or c.declared_type not in ("prob", "double"):
             what = "an interval" if shape == INTERVAL else f"{_a(c.declared_type)} constant"
-            rep.error("E503", f"'{c.source.ref}' is a probability, but '{c.name}' is {what}",
+            rep.error(codes.E503, f"'{c.source.ref}' is a probability, but '{c.name}' is {what}",
                       c.source.span, hint=f"declare it as 'const prob {c.name} = p from sim "
                       f"{c.source.ref};'")
     elif c.declared_type not in ("int", "double"):
-        rep.error("E503", f"'{c.source.ref}' is a {kind} figure, but '{c.name}' is "
+        rep.error(codes.E503, f"'{c.source.ref}' is a {kind} figure, but '{c.name}' is "
                   f"{_a(c.declared_type)} constant", c.source.span,
                   hint="a duration or battery figure is an int (optionally an interval "
                   "[floor, ceil]) or a double")

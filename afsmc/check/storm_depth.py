@@ -10,7 +10,7 @@ short expression that uses a deep formula nests as deeply as both together.
 from __future__ import annotations
 
 from afsmc.check.undefined import sites
-from afsmc.diagnostics import Reporter
+from afsmc.diagnostics import Reporter, codes
 from afsmc.model import expr as E
 from afsmc.model import ir
 
@@ -35,7 +35,7 @@ def check_storm_depth(model: ir.Model, rep: Reporter) -> None:
             continue
         seen.add(key)
         uses = any(isinstance(n, E.FormulaRef) for n in E.walk(site.expr))
-        rep.error("E310", f"{site.what} nests {d:,} levels deep"
+        rep.error(codes.E310, f"{site.what} nests {d:,} levels deep"
                   f"{' once its formulas are inlined' if uses else ''}; Storm evaluates at "
                   f"most {STORM_DEPTH:,}", site.expr.span,
                   hint="shorten it or the formulas it uses (each operator of a chain like "

@@ -16,7 +16,7 @@ import itertools
 from collections.abc import Iterator
 from dataclasses import dataclass
 
-from afsmc.diagnostics import Reporter
+from afsmc.diagnostics import Reporter, codes
 from afsmc.model import expr as E
 from afsmc.model import ir
 from afsmc.model.bounds import bounds
@@ -187,14 +187,14 @@ def check_undefined(model: ir.Model, rep: Reporter) -> None:
                 span = p.node.span if p.node.span is not None else site.expr.span
                 chosen = "".join(f", {k} = {v}" for k, v in consts.items())
                 if E.state_free(p.divisor):
-                    rep.error("E245", f"this expression cannot be compiled: {show(p.node)} is "
+                    rep.error(codes.E245, f"this expression cannot be compiled: {show(p.node)} is "
                               f"undefined ({p.why}), where {site.what} is evaluated", span,
                               hint="Storm fails on a constant part it cannot compute; "
                                    "check the constants it uses")
                 else:
                     d = show(p.divisor)
                     ok, bad = (">= 0", "< 0") if p.why == FRACTIONAL_POWER else ("!= 0", "== 0")
-                    rep.error("E306", f"{show(p.node)} is undefined ({p.why}) in the state "
+                    rep.error(codes.E306, f"{show(p.node)} is undefined ({p.why}) in the state "
                               f"{hit[1]}{chosen}, where {site.what} is evaluated", span,
                               hint="Storm would go on with an infinite or NaN value and verify "
                                    "another model than the simulator runs; exclude the state, "

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from afsmc.diagnostics import Reporter
+from afsmc.diagnostics import Reporter, codes
 from afsmc.model import expr as E
 from afsmc.model import ir
 
@@ -39,11 +39,11 @@ def check_unused(model: ir.Model, rep: Reporter, used_names: frozenset[str] = fr
                 read.add(n.name)
     for v in model.variables:
         if v.name not in read:
-            rep.warning("W303", f"variable {v.display} is never read", v.span,
+            rep.warning(codes.W303, f"variable {v.display} is never read", v.span,
                         hint="it only multiplies the state space; remove it or use it")
     for c in model.constants:
         if c.name not in read and not c.is_param:
-            rep.warning("W304", f"constant {c.name} is never used", c.span)
+            rep.warning(codes.W304, f"constant {c.name} is never used", c.span)
     for f in model.formulas:
         if f.name not in read:
-            rep.warning("W304", f"formula {f.name} is never used", f.span)
+            rep.warning(codes.W304, f"formula {f.name} is never used", f.span)

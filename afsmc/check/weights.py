@@ -6,7 +6,7 @@ from __future__ import annotations
 import itertools
 
 from afsmc.check.undefined import defined
-from afsmc.diagnostics import Related, Reporter
+from afsmc.diagnostics import Related, Reporter, codes
 from afsmc.model import expr as E
 from afsmc.model import ir
 from afsmc.model.bounds import bounds
@@ -50,7 +50,7 @@ def check_weight_range(model: ir.Model, rep: Reporter) -> None:
             if wit is not None:
                 value = _value_at(model, w, wit, mode)
                 where = "" if value.startswith("undefined") or value == "nan" else ", outside [0, 1],"
-                rep.error("E302", f"the weight of {a.name} is {value}{where} in the state {wit}",
+                rep.error(codes.E302, f"the weight of {a.name} is {value}{where} in the state {wit}",
                           a.weight_span or a.name_span, hint="Definition 2 maps weights into [0, 1]")
                 break
 
@@ -77,7 +77,7 @@ def check_weight_uniqueness(model: ir.Model, rep: Reporter) -> None:
             vb = _value_at(model, b.weight, wit, m.number)
             both = f"both {va}" if _same(va, vb) else f"{va} and {vb} are equal within {TIE:g}"
             rep.error(
-                "E301",
+                codes.E301,
                 f"weights of {a.name} and {b.name} tie ({both}) in the state {wit}",
                 a.weight_span or a.name_span,
                 hint="in every state the enabled actions need distinct weights, so that one "
@@ -96,13 +96,13 @@ def check_deadlock(model: ir.Model, rep: Reporter) -> None:
             continue
         acts = model.actions_in(m.number)
         if not acts:
-            rep.warning("W301", f"mode {m.name} has no actions: the machine stops there",
+            rep.warning(codes.W301, f"mode {m.name} has no actions: the machine stops there",
                         m.span, hint=f"mark it final ('mode {m.name} final;') if it ends the mission")
             continue
         wit = deadlock_witness(model, m.number)
         if wit is not None:
             names = ", ".join(a.name for a in acts)
-            rep.warning("W302", f"no action is enabled in the state {wit}: the machine stops "
+            rep.warning(codes.W302, f"no action is enabled in the state {wit}: the machine stops "
                         f"there (actions of {m.name}: {names})", m.span,
                         hint="add an action for this case, or widen a guard")
 
@@ -122,7 +122,7 @@ def check_weight_refs(model: ir.Model, rep: Reporter) -> None:
             target = by_name.get(n.action)
             if target is None or set(target.modes) & set(a.modes):
                 continue
-            rep.warning("W306", f"w({n.action}) in the weight of {a.name} is always 0: "
+            rep.warning(codes.W306, f"w({n.action}) in the weight of {a.name} is always 0: "
                         f"{n.action} acts in none of {a.name}'s modes "
                         f"({', '.join(names[m] for m in a.modes)})",
                         n.span or a.weight_span or a.name_span,

@@ -31,7 +31,7 @@ from afsmc.commands.common import (
 )
 from afsmc.commands.verify import positive
 from afsmc.compiler import load, lowered
-from afsmc.diagnostics import CompileError, Diagnostic, Severity
+from afsmc.diagnostics import CompileError, Diagnostic, Severity, codes
 from afsmc.files import write_atomic
 from afsmc.lower.lowering import Resolution
 from afsmc.model import ir
@@ -99,19 +99,19 @@ def _check_numbers(path: str, entry: dict[str, Any], what: str,
         if v is None:
             continue
         if isinstance(v, bool) or not isinstance(v, (int, float)):
-            raise _error("E611", f"{path}: {what} has {key} {v!r}, not a number",
+            raise _error(codes.E611, f"{path}: {what} has {key} {v!r}, not a number",
                          hint="pass the output of `afsmc verify --json`")
         if not math.isfinite(v):
             # Python's json reads NaN and Infinity; verify writes neither (null + "infinite")
-            raise _error("E611", f"{path}: {what} has {key} {v!r}, not a finite number",
+            raise _error(codes.E611, f"{path}: {what} has {key} {v!r}, not a finite number",
                          hint="`afsmc verify --json` writes an infinite value as null and "
                          "names it in \"infinite\"")
         if probability and not 0 <= v <= 1:
-            raise _error("E611", f"{path}: {what} has {key} {v!r}, not a probability",
+            raise _error(codes.E611, f"{path}: {what} has {key} {v!r}, not a probability",
                          hint="a mode's number is the probability of reaching it, in [0, 1]")
     low, high = entry.get("min"), entry.get("max")
     if isinstance(low, (int, float)) and isinstance(high, (int, float)) and low > high:
-        raise _error("E611", f"{path}: {what} has min {low!r} above its max {high!r}",
+        raise _error(codes.E611, f"{path}: {what} has min {low!r} above its max {high!r}",
                      hint="pass the output of `afsmc verify --json`")
 
 
@@ -121,34 +121,34 @@ def read_results(path: str, model: ir.Model) -> Overlay:
         with open(path, encoding="utf-8") as f:
             data = json.load(f)
     except OSError as exc:
-        raise _error("E611", f"cannot read {path}: {exc.strerror or exc}") from None
+        raise _error(codes.E611, f"cannot read {path}: {exc.strerror or exc}") from None
     except (json.JSONDecodeError, UnicodeDecodeError) as exc:
-        raise _error("E611", f"{path} is not JSON: {exc}",
+        raise _error(codes.E611, f"{path} is not JSON: {exc}",
                      hint="pass the output of `afsmc verify --json`") from None
     if not isinstance(data, dict) or not isinstance(data.get("properties"), list) or not all(
             isinstance(e, dict) and isinstance(e.get("name"), str) for e in data["properties"]):
-        raise _error("E611", f"{path}: expected an object with a \"properties\" list of "
+        raise _error(codes.E611, f"{path}: expected an object with a \"properties\" list of "
                      "named results", hint="pass the output of `afsmc verify --json`")
     if "points" in data:
-        raise _error("E611", f"{path} is the output of `afsmc sweep`, a value per point: the "
+        raise _error(codes.E611, f"{path} is the output of `afsmc sweep`, a value per point: the "
                      "diagram takes one result per property",
                      hint="pass the output of `afsmc verify --json` at the constants drawn")
     if "runs" in data or any("estimate" in e for e in data["properties"]):
         # its numbers would show as n/a: they are estimates, not min/max/uniform/value
-        raise _error("E611", f"{path} is the output of `afsmc simulate`, estimates with "
+        raise _error(codes.E611, f"{path} is the output of `afsmc simulate`, estimates with "
                      "confidence intervals: the diagram shows the values Storm computes",
                      hint="pass the output of `afsmc verify --json`")
     if data["properties"] and not any(k in e for e in data["properties"]
                                       for k in ("min", "max", "uniform", "value")):
-        raise _error("E611", f"{path}: no property has a min, max, uniform or value",
+        raise _error(codes.E611, f"{path}: no property has a min, max, uniform or value",
                      hint="pass the output of `afsmc verify --json`")
     machine = data.get("machine")
     if isinstance(machine, str) and machine != model.name:
-        raise _error("E611", f"{path} holds the results of machine {machine}, not {model.name}",
+        raise _error(codes.E611, f"{path} holds the results of machine {machine}, not {model.name}",
                      hint=f"run `afsmc verify --json` on the file of machine {model.name}")
     given = data.get("constants")
     if given is not None and not isinstance(given, dict):
-        raise _error("E611", f"{path}: \"constants\" is not an object of NAME: value",
+        raise _error(codes.E611, f"{path}: \"constants\" is not an object of NAME: value",
                      hint="pass the output of `afsmc verify --json`")
     if isinstance(given, dict):
         # The diagram shows no constants: numbers of another instance would pass unnoticed.
@@ -158,13 +158,13 @@ def read_results(path: str, model: ir.Model) -> Overlay:
         if differ:
             theirs = ", ".join(f"{n}={given.get(n, 'unset')}" for n in differ)
             mine = ", ".join(f"{n}={here.get(n, 'unset')}" for n in differ)
-            raise _error("E611", f"{path} holds results for {theirs}; the diagram is of {mine}",
+            raise _error(codes.E611, f"{path} holds results for {theirs}; the diagram is of {mine}",
                          hint="pass the --const values the results were computed with")
     notes: list[str] = []
     seen: set[str] = set()
     for entry in data.get("properties", []):
         if entry["name"] in seen:
-            raise _error("E611", f"{path}: property {entry['name']} is listed twice",
+            raise _error(codes.E611, f"{path}: property {entry['name']} is listed twice",
                          hint="give each property one entry")
         seen.add(entry["name"])
         _check_numbers(path, entry, f"property {entry['name']}")
@@ -173,14 +173,14 @@ def read_results(path: str, model: ir.Model) -> Overlay:
     modes: dict[int, str] = {}
     listed = data.get("modes", []) or []
     if not isinstance(listed, list):
-        raise _error("E611", f"{path}: \"modes\" is not a list", hint=MODES_HINT)
+        raise _error(codes.E611, f"{path}: \"modes\" is not a list", hint=MODES_HINT)
 
     def no_mode(which: object) -> CompileError:
-        return _error("E611", f"{path}: machine {model.name} has no mode {which!r}",
+        return _error(codes.E611, f"{path}: machine {model.name} has no mode {which!r}",
                       hint="modes are named as in the .afsm file, or numbered")
     for entry in listed:
         if not isinstance(entry, dict):
-            raise _error("E611", f"{path}: an entry of \"modes\" is not an object",
+            raise _error(codes.E611, f"{path}: an entry of \"modes\" is not an object",
                          hint=MODES_HINT)
         named = by_name.get(str(entry["mode"])) if "mode" in entry else None
         if "mode" in entry and named is None:
@@ -190,14 +190,14 @@ def read_results(path: str, model: ir.Model) -> Overlay:
                 number not in model.mode_names:
             raise no_mode(number)
         if named is not None and number != named:
-            raise _error("E611", f"{path}: an entry of \"modes\" names mode "
+            raise _error(codes.E611, f"{path}: an entry of \"modes\" names mode "
                          f"{entry['mode']} (number {named}) and number {number} "
                          f"({model.mode_names[number]})", hint=MODES_HINT)
         if all(entry.get(k) is None for k in ("min", "max", "value", "uniform")):
-            raise _error("E611", f"{path}: mode {model.mode_names[number]} has no value",
+            raise _error(codes.E611, f"{path}: mode {model.mode_names[number]} has no value",
                          hint=MODES_HINT)
         if number in modes:
-            raise _error("E611", f"{path}: mode {model.mode_names[number]} is listed twice in "
+            raise _error(codes.E611, f"{path}: mode {model.mode_names[number]} is listed twice in "
                          "\"modes\"", hint="give each mode one entry")
         _check_numbers(path, entry, f"mode {model.mode_names[number]}", probability=True)
         modes[number] = f"P(reach) {_value(entry)}"
@@ -248,14 +248,14 @@ def _reach_error(f: StormFailure) -> CompileError:
     """Storm's failure at --reach in the diagram's words: E405 too big, E406 out of
     memory, E612 anything else."""
     if f.stage == "too-big":
-        return _error("E405", " ".join(f.message.split()),
+        return _error(codes.E405, " ".join(f.message.split()),
                       "raise --max-states if the machine has the memory (the sparse engine "
                       "needs about 250 bytes per state), or draw a smaller instance with "
                       "--const")
     if f.stage == "memory":
-        return _error("E406", " ".join(f.message.split()),
+        return _error(codes.E406, " ".join(f.message.split()),
                       "draw a smaller instance with --const")
-    return _error("E612", f"Storm could not compute the reachability of the modes: "
+    return _error(codes.E612, f"Storm could not compute the reachability of the modes: "
                   f"{' '.join(f.message.split()) or f.stage}",
                   hint="check the model with `afsmc compile -t prism`")
 
@@ -281,13 +281,13 @@ def render(g: graphviz.Digraph, fmt: str) -> bytes:
     try:
         data: bytes = g.pipe(format=fmt, engine="dot")
     except graphviz.ExecutableNotFound:
-        raise _error("E610", "the Graphviz program `dot` was not found on PATH",
+        raise _error(codes.E610, "the Graphviz program `dot` was not found on PATH",
                      hint="install Graphviz (e.g. `apt-get install graphviz`), or write the "
                           "DOT source with `afsmc compile FILE -t dot` and render it elsewhere"
                      ) from None
     except graphviz.CalledProcessError as exc:
         stderr = exc.stderr.decode("utf-8", "replace").strip() if exc.stderr else ""
-        raise _error("E613", f"Graphviz `dot` failed: {stderr or exc}") from None
+        raise _error(codes.E613, f"Graphviz `dot` failed: {stderr or exc}") from None
     return data
 
 

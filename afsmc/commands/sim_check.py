@@ -12,7 +12,7 @@ import time
 
 from afsmc.commands.common import add_consts, add_seed, fail, overrides, print_json, report
 from afsmc.compiler import Checked, load
-from afsmc.diagnostics import CompileError, Diagnostic, Severity
+from afsmc.diagnostics import CompileError, Diagnostic, Severity, codes
 from afsmc.files import write_atomic
 from afsmc.model import ir
 from afsmc.sim.evidence import Evidence, judge, rewrite
@@ -58,7 +58,7 @@ def run(args: argparse.Namespace) -> int:
     # No value its own rule accepts (an int whose accepted range holds no integer):
     # --update would write a value the next sim-check rejects again.
     unfit = [Diagnostic(
-        "E508", Severity.ERROR,
+        codes.E508, Severity.ERROR,
         f"constant '{e.name}' has drifted from simulation '{e.ref}' (mean {e.mean:.4g}), and "
         f"no {by_name[e.name].type.value} fits the rule: it accepts {e.accept}",
         by_name[e.name].span, hint="widen its `tolerance`, or declare the constant double")
@@ -73,12 +73,12 @@ def run(args: argparse.Namespace) -> int:
         updated = True
     # Nothing to reject at this many runs: said, rather than called consistent.
     few = [Diagnostic(
-        "W503", Severity.WARNING, f"constant '{e.name}': {e.runs} runs of '{e.ref}' are too "
+        codes.W503, Severity.WARNING, f"constant '{e.name}': {e.runs} runs of '{e.ref}' are too "
         f"few to judge it (the rule accepts {e.accept})", by_name[e.name].span,
         hint="raise --runs: the quantiles of the rule need more samples to be bounded")
         for e in results if e.inconclusive]
     diags = unfit + ([] if updated else [Diagnostic(
-        "E502", Severity.ERROR,
+        codes.E502, Severity.ERROR,
         f"constant '{e.name}' = {e.declared} has drifted from simulation '{e.ref}' "
         f"(mean {e.mean:.4g}; the rule accepts {e.accept})", by_name[e.name].span,
         hint=f"the simulation suggests {e.suggestion}; `afsmc sim-check --update` rewrites it")
@@ -124,7 +124,7 @@ def _load(args: argparse.Namespace, text: str | None) -> Checked | int:
         return load(args.file, overrides(args), text=text)
     except CompileError as exc:
         errors = [d for d in exc.diagnostics if d.is_error]
-        if not errors or any(d.code != "E206" for d in errors):
+        if not errors or any(d.code != codes.E206 for d in errors):
             return fail(exc, args.json, wrapped=True)
         # Only params without a value: the simulated constants may not need them.
         try:
@@ -158,7 +158,7 @@ def _judge_all(args: argparse.Namespace, sourced: list[ir.Constant]) -> list[Evi
             results.append(judge(c, args.runs, args.seed))
         except Exception as exc:  # a broken third-party simulator: report, don't crash
             return fail(CompileError([Diagnostic(
-                "E505", Severity.ERROR, f"simulator '{c.source.ref}' failed: {exc}",
+                codes.E505, Severity.ERROR, f"simulator '{c.source.ref}' failed: {exc}",
                 c.source.span)]), args.json, wrapped=True)
     return results
 

@@ -21,7 +21,7 @@ from afsmc.commands.common import (
     print_json,
     report,
 )
-from afsmc.diagnostics import CompileError, Diagnostic, Severity
+from afsmc.diagnostics import CompileError, Diagnostic, Severity, codes
 from afsmc.files import check_writable, read_source, write_atomic
 from afsmc.interrupt import Stopped
 from afsmc.sim.compile import SimError
@@ -113,7 +113,7 @@ def run(args: argparse.Namespace) -> int:
         # the one use of such a file, as verify has none (E407 there too).
         if not args.traces and not program(job).monitors:
             raise CompileError([Diagnostic(
-                "E407", Severity.ERROR, f"{args.file} declares no properties", None,
+                codes.E407, Severity.ERROR, f"{args.file} declares no properties", None,
                 hint="declare one ('property ok = P=? [ F \"done\" ];'), or watch sample "
                      "runs with --traces K")])
         last = [-1]
@@ -153,11 +153,11 @@ def run(args: argparse.Namespace) -> int:
     except CompileError as exc:
         return fail(exc, args.json, wrapped=True)
     except SimError as exc:
-        return fail(CompileError([Diagnostic("E506", Severity.ERROR,
+        return fail(CompileError([Diagnostic(codes.E506, Severity.ERROR,
                                              f"cannot simulate {args.file}: {exc}", None)]),
                     args.json, wrapped=True)
     except OSError as exc:  # e.g. the Dask scheduler is unreachable
-        return fail(CompileError([Diagnostic("E507", Severity.ERROR,
+        return fail(CompileError([Diagnostic(codes.E507, Severity.ERROR,
                                              f"simulation failed: {exc}", None,
                                              hint=f"is a Dask scheduler running at {args.dask}?"
                                              if args.dask else None)]),
@@ -166,7 +166,7 @@ def run(args: argparse.Namespace) -> int:
         print_json(_json(out, args, model.name,
                          {c.name: c.value for c in model.constants if c.is_param}, warnings))
     else:
-        _print(out, args, intervals, endless=any(d.code == "W602" for d in warnings))
+        _print(out, args, intervals, endless=any(d.code == codes.W602 for d in warnings))
     return 0
 
 

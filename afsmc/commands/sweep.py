@@ -21,7 +21,7 @@ from afsmc.commands.verify import (
     progress_printer,
     refuse_bisim_on_symbolic,
 )
-from afsmc.diagnostics import CompileError, Diagnostic, Severity
+from afsmc.diagnostics import CompileError, Diagnostic, Severity, codes
 from afsmc.files import check_writable, write_atomic
 from afsmc.verify.sweep import without_kept_note
 from afsmc.verify.sweep_result import SweepResult
@@ -159,7 +159,7 @@ def run(args: argparse.Namespace) -> int:
         return _failed_in_part(exc, exc.partial, write, args, to_stdout)
     except OSError as exc:  # the Dask scheduler is unreachable, or no process could start
         # (writing the outputs fails as E003 in write_atomic)
-        return fail(CompileError([Diagnostic("E413", Severity.ERROR, f"sweep failed: {exc}",
+        return fail(CompileError([Diagnostic(codes.E413, Severity.ERROR, f"sweep failed: {exc}",
                                              None, hint="is a Dask scheduler running at "
                                              f"{args.dask}?" if args.dask else None)]),
                     args.json)

@@ -13,7 +13,7 @@ from lsprotocol import types as T
 from pygls.uris import to_fs_path
 from pygls.workspace import TextDocument
 
-from afsmc.diagnostics import Diagnostic, Severity
+from afsmc.diagnostics import Diagnostic, Severity, codes
 from afsmc.lsp import index as I
 from afsmc.lsp.analysis import Fast, analyse_fast, analyse_full
 from afsmc.lsp.positions import snapshot, to_range
@@ -45,7 +45,7 @@ def _publish(ls: AfsmServer, uri: str, version: int | None, text: str,
 
 
 def _internal_diag(what: str) -> Diagnostic:
-    return Diagnostic("E999", Severity.ERROR, f"afsmc could not {what} this file (an internal "
+    return Diagnostic(codes.E999, Severity.ERROR, f"afsmc could not {what} this file (an internal "
                       "error; see the language server's log)", None)
 
 

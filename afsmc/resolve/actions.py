@@ -8,7 +8,7 @@ its modes.
 
 from __future__ import annotations
 
-from afsmc.diagnostics import Related, Reporter, Span
+from afsmc.diagnostics import Related, Reporter, Span, codes
 from afsmc.model import expr as E
 from afsmc.model import ir
 from afsmc.model.expr import Type
@@ -33,7 +33,7 @@ class _Assignments:
 
     def add(self, var: str, value: E.Expr, span: Span, display: str) -> None:
         if var in self.seen:
-            self.rep.error("E236", f"'{display}' is assigned twice in one outcome", span,
+            self.rep.error(codes.E236, f"'{display}' is assigned twice in one outcome", span,
                            related=[Related("first assigned here", self.seen[var])])
             return
         self.seen[var] = span
@@ -61,7 +61,7 @@ class ActionsMixin(ResolverBase):
         modes = self._mode_set(d.modes, f"hazard {d.name.text}")
         prob = self._num(d.trigger, Ctx("a hazard's probability"))
         if d.weight is not None:
-            self.rep.error("E235", "a probabilistic hazard has no weight: it can happen "
+            self.rep.error(codes.E235, "a probabilistic hazard has no weight: it can happen "
                            "during any action", d.weight.span)
         outcomes = self._outcomes(d.body, f"hazard {d.name.text}")
         return ir.Hazard(d.name.text, modes, prob, outcomes, d.span, d.name.span)
@@ -81,7 +81,7 @@ class ActionsMixin(ResolverBase):
             if isinstance(u, ast.Goto):
                 mode = self.modes.get(u.mode.text)
                 if mode is None:
-                    self.rep.error("E215", f"'{u.mode.text}' is not a mode", u.mode.span,
+                    self.rep.error(codes.E215, f"'{u.mode.text}' is not a mode", u.mode.span,
                                    hint=did_you_mean(u.mode.text, self.modes))
                     continue
                 assigned.add("mode", E.ModeVal(mode.name, mode.number, u.mode.span), u.span, "mode")
@@ -98,11 +98,11 @@ class ActionsMixin(ResolverBase):
         if any(base == t.name.text for base, _ in self.dropped_fields):
             return  # its shape is unknown after an E201 on one of its fields
         if u.op != ":=":
-            self.rep.error("E237", f"'{u.op}' needs a number; '{t.name.text}' is a tuple", u.span)
+            self.rep.error(codes.E237, f"'{u.op}' needs a number; '{t.name.text}' is a tuple", u.span)
             return
         values = self._tuple_value(u.value, fields)
         if values is None:
-            self.rep.error("E237", f"assign '{t.name.text}' a tuple of {len(fields)} values "
+            self.rep.error(codes.E237, f"assign '{t.name.text}' a tuple of {len(fields)} values "
                            f"or another tuple with fields {', '.join(fields)}", u.value.span)
             return
         for fname, v in zip(fields, values, strict=True):
@@ -118,12 +118,12 @@ class ActionsMixin(ResolverBase):
             return
         var = self.vars[flat]
         if isinstance(u.value, ast.TupleLit):
-            self.rep.error("E237", f"'{var.display}' is not a tuple", u.value.span)
+            self.rep.error(codes.E237, f"'{var.display}' is not a tuple", u.value.span)
             return
         value = self._expr(u.value, _UPDATE)
         if u.op != ":=":
             if var.type is not Type.INT:
-                self.rep.error("E237", f"'{u.op}' needs an integer; '{var.display}' is a bool",
+                self.rep.error(codes.E237, f"'{u.op}' needs an integer; '{var.display}' is a bool",
                                u.span)
                 return
             value = E.Binary(u.op[0], E.VarRef(flat, Type.INT, t.span), value,
@@ -138,24 +138,24 @@ class ActionsMixin(ResolverBase):
         elif t.field is not None and (t.name.text, t.field.text) in self.dropped_fields:
             pass
         elif t.field is not None:
-            self.rep.error("E223", f"'{t.name.text}' has no field '{t.field.text}'",
+            self.rep.error(codes.E223, f"'{t.name.text}' has no field '{t.field.text}'",
                            t.field.span)
         elif kind != "variable":
-            self.rep.error("E238", f"'{t.text}' is {a(kind)}; only variables can be assigned",
+            self.rep.error(codes.E238, f"'{t.text}' is {a(kind)}; only variables can be assigned",
                            t.span)
 
     def _assign(self, assigned: _Assignments, flat: str, display: str, value: E.Expr,
                 span: Span, vspan: Span) -> None:
         var = self.vars[flat]
         if var.type is Type.BOOL and value.type is not Type.BOOL:
-            self.rep.error("E239", f"'{display}' is a bool; cannot assign {a(value.type.value)}", vspan)
+            self.rep.error(codes.E239, f"'{display}' is a bool; cannot assign {a(value.type.value)}", vspan)
             return
         if var.type is Type.INT and value.type is Type.DOUBLE:
-            self.rep.error("E239", f"'{display}' is an int; cannot assign a double", vspan,
+            self.rep.error(codes.E239, f"'{display}' is an int; cannot assign a double", vspan,
                            hint="round it with floor(...) or ceil(...)")
             return
         if var.type is Type.INT and not value.type.numeric:
-            self.rep.error("E239", f"'{display}' is an int; cannot assign {a(value.type.value)}", vspan)
+            self.rep.error(codes.E239, f"'{display}' is an int; cannot assign {a(value.type.value)}", vspan)
             return
         assigned.add(flat, value, span, display)
 
@@ -185,7 +185,7 @@ class ActionsMixin(ResolverBase):
             for m in sorted(deps.get(n, ())):
                 if state.get(m) == 1:
                     cycle = [*path[path.index(m):], m] if m in path else [n, m]
-                    self.rep.error("E240", "weights refer to each other in a cycle: "
+                    self.rep.error(codes.E240, "weights refer to each other in a cycle: "
                                    + " -> ".join(f"w({x})" for x in cycle), spans[n])
                 elif m not in state:
                     visit(m, [*path, m])

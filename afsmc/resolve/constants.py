@@ -11,7 +11,7 @@ from __future__ import annotations
 import re
 from typing import Any
 
-from afsmc.diagnostics import Diagnostic, Severity, Span
+from afsmc.diagnostics import Diagnostic, Severity, Span, codes
 from afsmc.model import expr as E
 from afsmc.model import ir
 from afsmc.model.evaluate import EvalError, scalar
@@ -68,7 +68,7 @@ class ConstantsMixin(ResolverBase):
         if self.tainted or len(self.rep.diagnostics) > errors:
             self.poisoned.add(name)
         elif d.type == "prob" and not (0.0 <= float(value) <= 1.0):
-            self.rep.error("E207", f"probability '{name}' = {value} is not in [0, 1]", d.span)
+            self.rep.error(codes.E207, f"probability '{name}' = {value} is not in [0, 1]", d.span)
         self.consts[name] = ir.Constant(name, t, value, interval, is_param, source, d.span, d.type)
 
     def _interval(self, d: ast.ConstDecl, iv: ast.Interval, t: Type) -> tuple[int, int]:
@@ -79,11 +79,11 @@ class ConstantsMixin(ResolverBase):
         hi = self._const_value(iv.hi, Type.INT)
         self.tainted = self.tainted or lo_tainted
         if t is not Type.INT:
-            self.rep.error("E204", f"interval constant '{name}' must be an int",
+            self.rep.error(codes.E204, f"interval constant '{name}' must be an int",
                            d.span, hint="timing and battery figures are whole numbers; "
                            "write 'const int' (the paper's floor and ceiling)")
         elif isinstance(lo, int) and isinstance(hi, int) and lo > hi and not self.tainted:
-            self.rep.error("E205", f"interval [{lo}, {hi}] of '{name}' is empty",
+            self.rep.error(codes.E205, f"interval [{lo}, {hi}] of '{name}' is empty",
                            iv.span, hint="write [low, high] with low <= high")
         return int(lo), int(hi)
 
@@ -95,7 +95,7 @@ class ConstantsMixin(ResolverBase):
         if isinstance(d, ast.ParamDecl) and name in self.overrides:
             return self._parse_override(name, self.overrides[name], t, d.name.span)
         if expr is None:
-            missing = Diagnostic("E206", Severity.ERROR,
+            missing = Diagnostic(codes.E206, Severity.ERROR,
                                  f"open constant '{name}' has no value", d.name.span,
                                  hint=f"pass --const {name}=VALUE, or give it a default")
             if self.open_params:
@@ -120,11 +120,11 @@ class ConstantsMixin(ResolverBase):
                 raise ValueError
             value: int | float = int(text) if t is Type.INT else float(text)
         except ValueError:
-            self.rep.error("E208", f"--const {name}={text}: not {a(t.value)}", span)
+            self.rep.error(codes.E208, f"--const {name}={text}: not {a(t.value)}", span)
             return placeholder
         why = unrepresentable(value)
         if why is not None:
-            self.rep.error("E208", f"--const {name}={text}: "
+            self.rep.error(codes.E208, f"--const {name}={text}: "
                            + (why if t is Type.INT else "not a finite double"), span,
                            hint=NUMBERS_HINT)
             return placeholder
@@ -135,12 +135,12 @@ class ConstantsMixin(ResolverBase):
             c = self.consts.get(name)
             if c is None:
                 params = sorted(n for n, k in self.consts.items() if k.is_param)
-                self.rep.error("E209", f"--const {name}: no open constant named '{name}'", None,
+                self.rep.error(codes.E209, f"--const {name}: no open constant named '{name}'", None,
                                hint=(did_you_mean(name, params) or
                                      ("open constants: " + ", ".join(params) if params
                                       else "this file declares no 'param'")))
             elif not c.is_param:
-                self.rep.error("E209", f"--const {name}: '{name}' is a fixed constant", c.span,
+                self.rep.error(codes.E209, f"--const {name}: '{name}' is a fixed constant", c.span,
                                hint="declare it with 'param' to let the command line set it")
 
     def _const_value(self, e: ast.Expr, want: Type) -> Any:
@@ -153,15 +153,15 @@ class ConstantsMixin(ResolverBase):
             r in self.poisoned for r in refs)
         self.reading_open |= {p for r in refs for p in self.open_reads.get(r, ())}
         if (want.numeric and not x.type.numeric) or (want is Type.BOOL and x.type is not Type.BOOL):
-            self.rep.error("E210", f"expected {a(want.value)} value, found {a(x.type.value)}", e.span)
+            self.rep.error(codes.E210, f"expected {a(want.value)} value, found {a(x.type.value)}", e.span)
         if want is Type.INT and x.type is Type.DOUBLE:
-            self.rep.error("E210", "expected an int value, found a double", e.span,
+            self.rep.error(codes.E210, "expected an int value, found a double", e.span,
                            hint="use floor(...) or ceil(...)")
         try:
             v = scalar(x, self._const_env())
         except (EvalError, ZeroDivisionError, OverflowError) as exc:
             if not self.tainted:  # not 100 / N after N's own E206: a stand-in's consequence
-                self.rep.error("E211", f"cannot evaluate this constant: {exc}", e.span)
+                self.rep.error(codes.E211, f"cannot evaluate this constant: {exc}", e.span)
             return 0
         if want is Type.DOUBLE and isinstance(v, int) and not isinstance(v, bool):
             v = float(v)

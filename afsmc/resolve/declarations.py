@@ -4,7 +4,7 @@ tuples with their ranges and initial values (E217-E220, E249), and formulas (E22
 
 from __future__ import annotations
 
-from afsmc.diagnostics import Related, Span
+from afsmc.diagnostics import Related, Span, codes
 from afsmc.model import expr as E
 from afsmc.model import ir
 from afsmc.model.expr import Type
@@ -42,15 +42,15 @@ class DeclarationsMixin(ResolverBase):
             self.modes[d.name.text] = ir.Mode(d.name.text, number, d.initial, d.final, d.span)
         initial = [d for d in decls if d.initial]
         if not decls:
-            self.rep.error("E213", "the machine declares no modes", Span.whole_file(self.src),
+            self.rep.error(codes.E213, "the machine declares no modes", Span.whole_file(self.src),
                            hint="add e.g. 'mode Idle = 0 initial;'")
         elif not initial:
-            self.rep.error("E213", "no mode is marked initial", decls[0].span,
+            self.rep.error(codes.E213, "no mode is marked initial", decls[0].span,
                            hint=f"write 'mode {decls[0].name.text}"
                            + (f" = {decls[0].number}" if decls[0].number is not None else "")
                            + " initial;'")
         elif len(initial) > 1:
-            self.rep.error("E214", "more than one mode is marked initial", initial[1].span,
+            self.rep.error(codes.E214, "more than one mode is marked initial", initial[1].span,
                            related=[Related("also initial", initial[0].span)])
 
     def _mode_numbers(self, decls: list[ast.ModeDecl]) -> dict[int, ast.ModeDecl]:
@@ -63,13 +63,13 @@ class DeclarationsMixin(ResolverBase):
             why = unrepresentable(d.number)
             if why is not None or not STATE_INT[0] <= d.number <= STATE_INT[1]:
                 self.rep.error(
-                    "E245" if why is not None else "E249", f"mode number {d.number} " + (
+                    codes.E245 if why is not None else codes.E249, f"mode number {d.number} " + (
                         why or BEYOND_STATE_INT), d.number_span or d.span,
                     hint=NUMBERS_HINT if why is not None else "number the modes with "
                     "smaller numbers")
                 continue
             if d.number in used:
-                self.rep.error("E212", f"mode number {d.number} is used twice",
+                self.rep.error(codes.E212, f"mode number {d.number} is used twice",
                                d.number_span or d.span,
                                related=[Related(f"{used[d.number].name.text} has it",
                                                 used[d.number].name.span)])
@@ -85,19 +85,19 @@ class DeclarationsMixin(ResolverBase):
             if isinstance(item, ast.ModeName):
                 mode = self.modes.get(item.name.text)
                 if mode is None:
-                    self.rep.error("E215", f"'{item.name.text}' is not a mode", item.span,
+                    self.rep.error(codes.E215, f"'{item.name.text}' is not a mode", item.span,
                                    hint=did_you_mean(item.name.text, self.modes))
                 else:
                     chosen.add(mode.number)
             elif isinstance(item, ast.ModeNumber):
                 if item.number not in by_number:
-                    self.rep.error("E215", f"no mode has number {item.number}", item.span)
+                    self.rep.error(codes.E215, f"no mode has number {item.number}", item.span)
                 else:
                     chosen.add(item.number)
             else:
                 hit = {n for n in by_number if item.lo <= n <= item.hi}
                 if item.lo > item.hi or not hit:
-                    self.rep.error("E215", f"no mode has a number in {item.lo}..{item.hi}",
+                    self.rep.error(codes.E215, f"no mode has a number in {item.lo}..{item.hi}",
                                    item.span)
                 chosen |= hit
         if ms.every:
@@ -105,13 +105,13 @@ class DeclarationsMixin(ResolverBase):
             everything = {m.number for m in self.modes.values() if not m.final}
             chosen = everything - chosen
             if not chosen:
-                self.rep.warning("W603", f"{for_what} can never fire: its mode set is empty "
+                self.rep.warning(codes.W603, f"{for_what} can never fire: its mode set is empty "
                                  "('*' leaves out the final modes)", ms.span,
                                  hint="name the modes it acts in, or remove it")
         else:
             for n in sorted(chosen):
                 if by_number[n].final:
-                    self.rep.error("E216", f"mode {by_number[n].name} is final: {for_what} "
+                    self.rep.error(codes.E216, f"mode {by_number[n].name} is final: {for_what} "
                                    "cannot act in it", ms.span,
                                    hint="final modes are absorbing; remove it from the set")
         return tuple(sorted(chosen))
@@ -124,7 +124,7 @@ class DeclarationsMixin(ResolverBase):
             self._tuple_variable(d, d.type)
             return
         if isinstance(d.init, ast.TupleLit):
-            self.rep.error("E217", f"'{d.name.text}' is not a tuple", d.init.span)
+            self.rep.error(codes.E217, f"'{d.name.text}' is not a tuple", d.init.span)
             init = None
         else:
             init = d.init
@@ -140,14 +140,14 @@ class DeclarationsMixin(ResolverBase):
         elif len(tt.fields) == 1 and not isinstance(d.init, ast.TupleLit):
             inits = [d.init]  # `(1)` is the number 1: one field takes a plain value
         else:
-            self.rep.error("E217", f"'{d.name.text}' has {len(tt.fields)} fields; "
+            self.rep.error(codes.E217, f"'{d.name.text}' has {len(tt.fields)} fields; "
                            "give one initial value per field", d.init.span)
             inits = [None] * len(tt.fields)
         names = []
         for f, init in zip(tt.fields, inits, strict=True):
             flat = f"{d.name.text}_{f.name.text}"
             if flat in self.value_names:
-                self.rep.error("E201", f"field {d.name.text}.{f.name.text} would be named "
+                self.rep.error(codes.E201, f"field {d.name.text}.{f.name.text} would be named "
                                f"'{flat}' in PRISM, which is already declared", f.span,
                                hint=f"rename the field or the other '{flat}'",
                                related=[Related(f"'{flat}' is declared here",
@@ -155,7 +155,7 @@ class DeclarationsMixin(ResolverBase):
                 self.dropped_fields.add((d.name.text, f.name.text))
                 continue
             if f.name.text in names:
-                self.rep.error("E201", f"field '{f.name.text}' is declared twice", f.span)
+                self.rep.error(codes.E201, f"field '{f.name.text}' is declared twice", f.span)
                 continue
             names.append(f.name.text)
             self._one_var(flat, f"{d.name.text}.{f.name.text}", f.type, init, d.clamp, f.span)
@@ -165,7 +165,7 @@ class DeclarationsMixin(ResolverBase):
                  init: ast.Expr | None, clamp: bool, span: Span) -> None:
         if isinstance(t, ast.BoolType):
             if clamp:
-                self.rep.error("E218", f"'{display}' is a bool; only integers can clamp", span)
+                self.rep.error(codes.E218, f"'{display}' is a bool; only integers can clamp", span)
             value = False if init is None else bool(self._const_value(init, Type.BOOL))
             self.vars[flat] = ir.Variable(flat, display, Type.BOOL, 0, 1, value, False, span)
             return
@@ -179,19 +179,19 @@ class DeclarationsMixin(ResolverBase):
         elif tainted and lo > hi:  # a stand-in value of a reported constant: not also E219
             hi, broken = lo, True
         if lo > hi:
-            self.rep.error("E219", f"range [{lo}..{hi}] of '{display}' is empty", t.span)
+            self.rep.error(codes.E219, f"range [{lo}..{hi}] of '{display}' is empty", t.span)
             hi, broken = lo, True
         if broken:
             init = None
         if not (STATE_INT[0] <= lo and hi <= STATE_INT[1]):
-            self.rep.error("E249", f"range [{lo}..{hi}] of '{display}' {BEYOND_STATE_INT}",
+            self.rep.error(codes.E249, f"range [{lo}..{hi}] of '{display}' {BEYOND_STATE_INT}",
                            t.span, hint=STATE_INT_HINT)
             # go on with a range Storm holds, and no second error about the initial value
             lo, hi = (min(max(v, STATE_INT[0]), STATE_INT[1]) for v in (lo, hi))
             init = None
         iv = lo if init is None else self._const_value(init, Type.INT)
         if not isinstance(iv, int) or not lo <= iv <= hi:
-            self.rep.error("E220", f"initial value {iv} of '{display}' is outside [{lo}..{hi}]",
+            self.rep.error(codes.E220, f"initial value {iv} of '{display}' is outside [{lo}..{hi}]",
                            init.span if init is not None else span)
             iv = lo
         self.vars[flat] = ir.Variable(flat, display, Type.INT, lo, hi, iv, clamp, span)
@@ -203,7 +203,7 @@ class DeclarationsMixin(ResolverBase):
             return self.formulas[name]
         d = self.formula_decls[name]
         if name in self.formula_stack:
-            self.rep.error("E221", f"formula '{name}' refers to itself",
+            self.rep.error(codes.E221, f"formula '{name}' refers to itself",
                            d.name.span, hint=" -> ".join([*self.formula_stack, name]))
             return None
         self.formula_stack.append(name)
@@ -212,7 +212,7 @@ class DeclarationsMixin(ResolverBase):
         depth = E.depth(value, lambda n: self.formula_depth.get(n, 1))
         self.formula_depth[name] = depth
         if depth > MAX_INLINED_DEPTH:
-            self.rep.error("E246", f"formula '{name}' nests {depth} levels deep once the "
+            self.rep.error(codes.E246, f"formula '{name}' nests {depth} levels deep once the "
                            f"formulas it uses are inlined; afsmc supports {MAX_INLINED_DEPTH}",
                            d.name.span, hint="shorten it or the formulas it uses (each "
                            "operator of a chain like 'a + b + c' is one level)")

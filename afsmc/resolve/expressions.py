@@ -10,6 +10,7 @@ from __future__ import annotations
 
 from typing import Any
 
+from afsmc.diagnostics import codes
 from afsmc.model import expr as E
 from afsmc.model.evaluate import EvalError, RangeError, scalar
 from afsmc.model.expr import Type
@@ -36,7 +37,7 @@ class ExpressionsMixin(ResolverBase):
         if id(x) in self.placeholders:
             return E.TRUE
         if x.type is not Type.BOOL:
-            self.rep.error("E222", f"{ctx.what} must be true or false, not {a(x.type.value)}", e.span,
+            self.rep.error(codes.E222, f"{ctx.what} must be true or false, not {a(x.type.value)}", e.span,
                            hint="compare it, e.g. 'x > 0'")
             return E.TRUE
         return x
@@ -44,7 +45,7 @@ class ExpressionsMixin(ResolverBase):
     def _num(self, e: ast.Expr, ctx: Ctx) -> E.Expr:
         x = self._expr(e, ctx)
         if not x.type.numeric and id(x) not in self.placeholders:
-            self.rep.error("E222", f"{ctx.what} must be a number, not {a(x.type.value)}", e.span)
+            self.rep.error(codes.E222, f"{ctx.what} must be a number, not {a(x.type.value)}", e.span)
             return E.Lit(0, Type.INT, e.span)
         return x
 
@@ -63,7 +64,7 @@ class ExpressionsMixin(ResolverBase):
             except (EvalError, ArithmeticError):
                 return x  # e.g. 1/0 under a `?:` that never takes it
             if why is not None:
-                self.rep.error("E245", f"this expression cannot be compiled: {why}", e.span,
+                self.rep.error(codes.E245, f"this expression cannot be compiled: {why}", e.span,
                                hint=NUMBERS_HINT)
                 return E.Lit(0 if x.type is Type.INT else 0.0, x.type, e.span)
         return x
@@ -92,12 +93,12 @@ class ExpressionsMixin(ResolverBase):
             return self._field_ref(e, ctx)
         if isinstance(e, ast.ModeRef):
             if not ctx.state:
-                self.rep.error("E224", f"{ctx.what} cannot depend on the mode", s)
+                self.rep.error(codes.E224, f"{ctx.what} cannot depend on the mode", s)
                 return E.Lit(0, Type.MODE, s)
             return E.CurrentMode(s)
         if isinstance(e, ast.ModeIn):
             if not ctx.state:
-                self.rep.error("E224", f"{ctx.what} cannot depend on the mode", s)
+                self.rep.error(codes.E224, f"{ctx.what} cannot depend on the mode", s)
                 return E.FALSE
             return E.mode_in(set(self._mode_set_any(e.modes)),
                              {m.number: m.name for m in self.modes.values()})
@@ -122,7 +123,7 @@ class ExpressionsMixin(ResolverBase):
         t = Type.INT if isinstance(e.value, int) else Type.DOUBLE
         why = unrepresentable(e.value)
         if why is not None:
-            self.rep.error("E245", f"{e.text} " + (why if t is Type.INT else "is too large for a "
+            self.rep.error(codes.E245, f"{e.text} " + (why if t is Type.INT else "is too large for a "
                                                    "double: it would be infinite"),
                            e.span, hint=NUMBERS_HINT)
             return E.Lit(0 if t is Type.INT else 0.0, t, e.span)
@@ -131,11 +132,11 @@ class ExpressionsMixin(ResolverBase):
     def _label_ref(self, e: ast.LabelRef, ctx: Ctx) -> E.Expr:
         s = e.span
         if not ctx.labels:
-            self.rep.error("E225", f"labels like \"{e.name}\" can only be used in properties", s,
+            self.rep.error(codes.E225, f"labels like \"{e.name}\" can only be used in properties", s,
                            hint="use a formula to share an expression")
             return E.FALSE
         if e.name not in self.label_names:
-            self.rep.error("E203", f"label \"{e.name}\" is not declared", s,
+            self.rep.error(codes.E203, f"label \"{e.name}\" is not declared", s,
                            hint=did_you_mean(e.name, self.label_names))
             return E.FALSE
         return E.LabelRef(e.name, s)
@@ -158,13 +159,13 @@ class ExpressionsMixin(ResolverBase):
             return E.Binary(op, x, y, Type.BOOL, s)
         if op in ("==", "!="):
             if x.type.numeric != y.type.numeric or (not x.type.numeric and x.type is not y.type):
-                self.rep.error("E226", f"cannot compare {a(x.type.value)} with {a(y.type.value)}", s,
+                self.rep.error(codes.E226, f"cannot compare {a(x.type.value)} with {a(y.type.value)}", s,
                                hint="modes compare with modes: 'mode == Search'"
                                if Type.MODE in (x.type, y.type) else None)
             return E.Binary(op, x, y, Type.BOOL, s)
         if not (x.type.numeric and y.type.numeric):
             bad = x if not x.type.numeric else y
-            self.rep.error("E226", f"'{op}' compares numbers, not {a(bad.type.value)}", bad.span or s)
+            self.rep.error(codes.E226, f"'{op}' compares numbers, not {a(bad.type.value)}", bad.span or s)
         return E.Binary(op, x, y, Type.BOOL, s)
 
     def _unify(self, x: E.Expr, y: E.Expr, e: Any, what: str) -> Type:
@@ -175,7 +176,7 @@ class ExpressionsMixin(ResolverBase):
             return y.type if id(x) in self.placeholders else x.type
         if x.type.numeric and y.type.numeric:
             return Type.DOUBLE
-        self.rep.error("E226", f"{what} have different types ({x.type.value}, {y.type.value})",
+        self.rep.error(codes.E226, f"{what} have different types ({x.type.value}, {y.type.value})",
                        e.span)
         return x.type
 
@@ -189,18 +190,18 @@ class ExpressionsMixin(ResolverBase):
                 if item.name.text in by_name:
                     out.add(by_name[item.name.text])
                 else:
-                    self.rep.error("E215", f"'{item.name.text}' is not a mode", item.span,
+                    self.rep.error(codes.E215, f"'{item.name.text}' is not a mode", item.span,
                                    hint=did_you_mean(item.name.text, by_name))
             elif isinstance(item, ast.ModeNumber):
                 # as in an action's mode set: a number no mode has is a typo, not `false`
                 if item.number in by_name.values():
                     out.add(item.number)
                 else:
-                    self.rep.error("E215", f"no mode has number {item.number}", item.span)
+                    self.rep.error(codes.E215, f"no mode has number {item.number}", item.span)
             else:
                 hit = {n for n in by_name.values() if item.lo <= n <= item.hi}
                 if not hit:
-                    self.rep.error("E215", f"no mode has a number in {item.lo}..{item.hi}",
+                    self.rep.error(codes.E215, f"no mode has a number in {item.lo}..{item.hi}",
                                    item.span)
                 out |= hit
         numbers = set(by_name.values())
@@ -213,15 +214,15 @@ class ExpressionsMixin(ResolverBase):
             return self._weight_ref(e, ctx)
         if f in ("F", "G", "X") and ctx.labels:
             # `P=? [ F F (x == 1) ]`: the inner operator reads as a call
-            self.rep.error("E115", NESTED_TEMPORAL, e.func.span,
+            self.rep.error(codes.E115, NESTED_TEMPORAL, e.func.span,
                            hint=f"the {f} here stands inside another temporal operator's "
                                 "formula; write one operator per property")
             return self._placeholder(s)
         if f == "not":  # `not (x == 1)` reads as a call
-            self.rep.error("E123", NOT_OPERATOR, e.func.span, hint=OPERATORS)
+            self.rep.error(codes.E123, NOT_OPERATOR, e.func.span, hint=OPERATORS)
             return self._placeholder(s)
         if f not in E.FUNCTIONS:
-            self.rep.error("E233", f"unknown function '{f}'", e.func.span,
+            self.rep.error(codes.E233, f"unknown function '{f}'", e.func.span,
                            hint=did_you_mean(f, [*E.FUNCTIONS, "w"]) or
                            "functions: " + ", ".join(sorted(E.FUNCTIONS)) + ", w(Action)")
             return self._placeholder(s)
@@ -229,14 +230,14 @@ class ExpressionsMixin(ResolverBase):
         arity = _ARITY.get(f)
         if (arity is not None and len(args) != arity) or (arity is None and len(args) < 2):
             want = f"{arity}" if arity else "at least 2"
-            self.rep.error("E234", f"{f} takes {want} argument(s), not {len(args)}", s)
+            self.rep.error(codes.E234, f"{f} takes {want} argument(s), not {len(args)}", s)
             return self._placeholder(s)
         if f in ("floor", "ceil"):
             t = Type.INT
         elif f == "mod":
             for arg, written in zip(args, e.args, strict=True):
                 if arg.type is not Type.INT:
-                    self.rep.error("E234", "mod takes integers", written.span)
+                    self.rep.error(codes.E234, "mod takes integers", written.span)
             t = Type.INT
         else:
             t = Type.INT if all(arg.type is Type.INT for arg in args) else Type.DOUBLE
@@ -246,18 +247,18 @@ class ExpressionsMixin(ResolverBase):
         """`w(Action)`: another action's weight, only in a weight."""
         s = e.span
         if len(e.args) != 1 or not isinstance(e.args[0], ast.Name):
-            self.rep.error("E232", "w(...) takes one action name", s)
+            self.rep.error(codes.E232, "w(...) takes one action name", s)
             return self._placeholder(s)
         target = e.args[0].name
         if not ctx.weights:
-            self.rep.error("E232", f"w({target.text}) can only be used in a weight", s)
+            self.rep.error(codes.E232, f"w({target.text}) can only be used in a weight", s)
             return self._placeholder(s)
         if target.text not in self.action_names:
-            self.rep.error("E203", f"'{target.text}' is not an action", target.span,
+            self.rep.error(codes.E203, f"'{target.text}' is not an action", target.span,
                            hint=did_you_mean(target.text, self.action_names))
             return self._placeholder(s)
         if target.text in self.branch_hazards:
-            self.rep.error("E248", f"'{target.text}' is a probabilistic hazard: it has no "
+            self.rep.error(codes.E248, f"'{target.text}' is a probabilistic hazard: it has no "
                            "weight, it is a branch of every action of its modes", target.span,
                            hint="w(...) names an action or a hazard with a condition (when)")
             return self._placeholder(s)

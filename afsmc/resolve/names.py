@@ -7,7 +7,7 @@ hazards, labels, reward structures and properties have one each.
 
 from __future__ import annotations
 
-from afsmc.diagnostics import Related, Span
+from afsmc.diagnostics import Related, Span, codes
 from afsmc.model import expr as E
 from afsmc.model.names import LABEL_RESERVED, QUOTED_RESERVED, RESERVED, did_you_mean
 from afsmc.resolve.base import Ctx, ResolverBase, a
@@ -44,7 +44,7 @@ class NamesMixin(ResolverBase):
     def _declare_value(self, name: ast.Ident, kind: str) -> None:
         if name.text in self.value_names:
             other_kind, other = self.value_names[name.text]
-            self.rep.error("E201", f"'{name.text}' is already declared as {a(other_kind)}", name.span,
+            self.rep.error(codes.E201, f"'{name.text}' is already declared as {a(other_kind)}", name.span,
                            related=[Related("first declared here", other)])
             return
         if kind != "mode":  # modes compile to numbers, never to identifiers
@@ -53,7 +53,7 @@ class NamesMixin(ResolverBase):
 
     def _declare_in(self, table: dict[str, Span], name: ast.Ident, kind: str) -> None:
         if name.text in table:
-            self.rep.error("E201", f"{kind} '{name.text}' is declared twice", name.span,
+            self.rep.error(codes.E201, f"{kind} '{name.text}' is declared twice", name.span,
                            related=[Related("first declared here", table[name.text])])
             return
         reserved = {"action": RESERVED, "label": LABEL_RESERVED,
@@ -65,7 +65,7 @@ class NamesMixin(ResolverBase):
         # __afsmc...: the queries and names afsmc generates; any other __ name: Storm's
         # parsers refuse it ("illegal identifier").
         if name.text.startswith("__"):
-            self.rep.error("E202", f"'{name.text}' cannot name {a(kind)}: names that start "
+            self.rep.error(codes.E202, f"'{name.text}' cannot name {a(kind)}: names that start "
                            "with __ are reserved for Storm and afsmc", name.span,
                            hint=f"choose another name, e.g. '{name.text.lstrip('_')}'"
                            if name.text.strip("_") else "choose another name")
@@ -74,7 +74,7 @@ class NamesMixin(ResolverBase):
         self._check_internal(name, kind)
         if name.text in reserved:
             self.rep.error(
-                "E202", f"'{name.text}' cannot name {a(kind)}: it is reserved in PRISM or Storm",
+                codes.E202, f"'{name.text}' cannot name {a(kind)}: it is reserved in PRISM or Storm",
                 name.span, hint=f"choose another name, e.g. '{name.text}_{kind.split()[0]}'")
 
     def _check_action_vs_variable(self) -> None:
@@ -84,7 +84,7 @@ class NamesMixin(ResolverBase):
         for name, span in self.action_names.items():
             var = self.vars.get(name)
             if var is not None:
-                self.rep.error("E201", f"'{name}' names both an action and the variable "
+                self.rep.error(codes.E201, f"'{name}' names both an action and the variable "
                                f"{var.display}: Storm's symbolic engines need them distinct",
                                span, hint=f"rename the action, e.g. '{name}_act'",
                                related=[Related(f"{var.display} is declared here", var.span)])
@@ -92,7 +92,7 @@ class NamesMixin(ResolverBase):
     # ---- looking up ------------------------------------------------------------------
     def _undefined(self, name: ast.Ident, ctx: Ctx) -> None:
         candidates = list(self.value_names)
-        self.rep.error("E203", f"'{name.text}' is not declared", name.span,
+        self.rep.error(codes.E203, f"'{name.text}' is not declared", name.span,
                        hint=did_you_mean(name.text, candidates))
 
     def _name(self, ident: ast.Ident, ctx: Ctx, s: Span) -> E.Expr:
@@ -100,7 +100,7 @@ class NamesMixin(ResolverBase):
         kind = self.value_names.get(n, (None, None))[0]
         if kind is None:
             if n in self.action_names:
-                self.rep.error("E227", f"'{n}' is an action, not a value", s,
+                self.rep.error(codes.E227, f"'{n}' is an action, not a value", s,
                                hint=f"its weight is written w({n})" if ctx.weights else None)
             else:
                 self._undefined(ident, ctx)
@@ -111,7 +111,7 @@ class NamesMixin(ResolverBase):
             return self._constant_ref(n, ctx, s)
         if kind == "variable":
             if n in self.tuples:
-                self.rep.error("E230", f"'{n}' is a tuple; name a field, e.g. {n}.{self.tuples[n][0]}",
+                self.rep.error(codes.E230, f"'{n}' is a tuple; name a field, e.g. {n}.{self.tuples[n][0]}",
                                s)
                 return self._placeholder(s)
             return self._var(n, ctx, s, n)
@@ -120,7 +120,7 @@ class NamesMixin(ResolverBase):
             return E.ModeVal(n, mode.number if mode else 0, s)
         # formula
         if ctx.constant_only:
-            self.rep.error("E231", f"{ctx.what} cannot use formula '{n}'", s)
+            self.rep.error(codes.E231, f"{ctx.what} cannot use formula '{n}'", s)
             return self._placeholder(s)
         f = self._formula(n) if n in self.formula_decls else None
         if f is None:
@@ -130,11 +130,11 @@ class NamesMixin(ResolverBase):
     def _constant_ref(self, n: str, ctx: Ctx, s: Span) -> E.Expr:
         c = self.consts.get(n)
         if c is None:
-            self.rep.error("E228", f"constant '{n}' is used before its declaration", s)
+            self.rep.error(codes.E228, f"constant '{n}' is used before its declaration", s)
             return self._placeholder(s)
         if c.is_interval and not ctx.intervals:
             self.rep.error(
-                "E229", f"interval constant '{n}' can only be used in updates, not in {ctx.what}",
+                codes.E229, f"interval constant '{n}' can only be used in updates, not in {ctx.what}",
                 s, hint="the floor/ceil choice is made per action; use a plain constant here")
         return E.ConstRef(n, c.type, s)
 
@@ -146,14 +146,14 @@ class NamesMixin(ResolverBase):
             return self._stateless(ctx, s, f"{e.base.text}.{e.field.text}")
         if e.base.text not in self.tuples:
             if e.base.text in self.value_names:
-                self.rep.error("E223", f"'{e.base.text}' has no fields", e.span)
+                self.rep.error(codes.E223, f"'{e.base.text}' has no fields", e.span)
             else:
                 self._undefined(e.base, ctx)
             return self._placeholder(s)
         if e.field.text not in self.tuples[e.base.text]:
             if (e.base.text, e.field.text) in self.dropped_fields:
                 return self._placeholder(s)
-            self.rep.error("E223", f"'{e.base.text}' has no field '{e.field.text}'", e.field.span,
+            self.rep.error(codes.E223, f"'{e.base.text}' has no field '{e.field.text}'", e.field.span,
                            hint=did_you_mean(e.field.text, self.tuples[e.base.text]))
             return self._placeholder(s)
         return self._var(f"{e.base.text}_{e.field.text}", ctx, s,
@@ -161,7 +161,7 @@ class NamesMixin(ResolverBase):
 
     def _stateless(self, ctx: Ctx, s: Span, display: str) -> E.Expr:
         """E224: a variable where only constants may stand."""
-        self.rep.error("E224", f"{ctx.what} cannot depend on variable '{display}'", s)
+        self.rep.error(codes.E224, f"{ctx.what} cannot depend on variable '{display}'", s)
         return self._placeholder(s)
 
     def _var(self, flat: str, ctx: Ctx, s: Span, display: str) -> E.Expr:

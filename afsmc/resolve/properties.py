@@ -5,7 +5,7 @@ afsmc asks for them (E244).
 
 from __future__ import annotations
 
-from afsmc.diagnostics import Related
+from afsmc.diagnostics import Related, codes
 from afsmc.model import expr as E
 from afsmc.model import ir
 from afsmc.model.evaluate import EvalError, scalar
@@ -26,10 +26,10 @@ class PropertiesMixin(ResolverBase):
         items = []
         for it in d.items:
             if it.action is not None and it.action.text not in self.action_names:
-                self.rep.error("E203", f"'{it.action.text}' is not an action", it.action.span,
+                self.rep.error(codes.E203, f"'{it.action.text}' is not an action", it.action.span,
                                hint=did_you_mean(it.action.text, self.action_names))
             elif it.action is not None and it.action.text in self.branch_hazards:
-                self.rep.error("E248", f"an action reward cannot name the probabilistic hazard "
+                self.rep.error(codes.E248, f"an action reward cannot name the probabilistic hazard "
                                f"'{it.action.text}': it is a branch of every action of its "
                                "modes, and an action reward counts whole actions",
                                it.action.span, hint="reward the hazard's target mode with a state "
@@ -47,7 +47,7 @@ class PropertiesMixin(ResolverBase):
             if p.name in asked:
                 other = asked[p.name]
                 self.rep.error(
-                    "E244", f"property {p.name} has the name of a query of property "
+                    codes.E244, f"property {p.name} has the name of a query of property "
                     f"{other.name}: with interval constants afsmc asks {other.name} as "
                     f"{other.name}_min and {other.name}_max", p.span,
                     hint="rename one of them", related=[Related(f"property {other.name}",
@@ -88,7 +88,7 @@ class PropertiesMixin(ResolverBase):
                 # Every Storm engine refuses it ("a reward model that does not define any
                 # state-rewards"), and the whole Storm run with it.
                 self.rep.error(
-                    "E247", f"R{{\"{rs.name}\"}}[I=k] is always 0: \"{rs.name}\" has no "
+                    codes.E247, f"R{{\"{rs.name}\"}}[I=k] is always 0: \"{rs.name}\" has no "
                     "state rewards, and an instantaneous reward counts only those", q.span,
                     hint=f"Storm refuses it; add a state reward ('condition : value;') to "
                     f"\"{rs.name}\", or ask R{{\"{rs.name}\"}}=? [ C<=k ] for the action "
@@ -100,12 +100,12 @@ class PropertiesMixin(ResolverBase):
         """The reward structure `R{"name"}` names; without a name, the only one there is."""
         if q.reward is None:
             if len(self.reward_names) != 1:
-                self.rep.error("E242", "name the reward structure: R{\"name\"}=? [...]", q.span,
+                self.rep.error(codes.E242, "name the reward structure: R{\"name\"}=? [...]", q.span,
                                hint=("reward structures: " + ", ".join(self.reward_names))
                                if self.reward_names else "declare one with 'rewards NAME { ... }'")
             return next(iter(self.reward_names), None)
         if q.reward not in self.reward_names:
-            self.rep.error("E203", f"reward structure \"{q.reward}\" is not declared",
+            self.rep.error(codes.E203, f"reward structure \"{q.reward}\" is not declared",
                            q.reward_span or q.span, hint=did_you_mean(q.reward, self.reward_names))
         return q.reward
 
@@ -115,14 +115,14 @@ class PropertiesMixin(ResolverBase):
             return None
         x = self._expr(b, Ctx("a step bound", state=False))
         if x.type is not Type.INT:
-            self.rep.error("E241", "a step bound must be an int", b.span)
+            self.rep.error(codes.E241, "a step bound must be an int", b.span)
             return x
         try:
             k = scalar(x, self._const_env())
         except (EvalError, ArithmeticError):
             return x  # reported where it is computed (E245)
         if isinstance(k, int) and k < 0:
-            self.rep.error("E241", f"a step bound must be an int >= 0, not {k}", b.span,
+            self.rep.error(codes.E241, f"a step bound must be an int >= 0, not {k}", b.span,
                            hint="it counts steps; Storm refuses a negative one")
         return x
 

@@ -10,7 +10,7 @@ from typing import Any, cast
 
 from lark import Token, Transformer, v_args
 
-from afsmc.diagnostics import Reporter, Source, Span
+from afsmc.diagnostics import Reporter, Source, Span, codes
 from afsmc.syntax import ast
 
 
@@ -131,7 +131,7 @@ class Builder(Transformer[Token, Any]):
                 number = self._int(item)
             else:
                 if item in attrs:
-                    self.reporter.error("E118", f"'{item!s}' is given twice for mode {name.text}",
+                    self.reporter.error(codes.E118, f"'{item!s}' is given twice for mode {name.text}",
                                         span_of(self.source, item),
                                         hint=f"write '{item!s}' once")
                 attrs.append(item)
@@ -144,7 +144,7 @@ class Builder(Transformer[Token, Any]):
     def _int(self, tok: Token) -> int:
         text = str(tok)
         if not text.isdigit():
-            self.reporter.error("E110", f"a mode number must be a whole number, not {text}",
+            self.reporter.error(codes.E110, f"a mode number must be a whole number, not {text}",
                                 span_of(self.source, tok))
             return 0
         return int(text)
@@ -198,14 +198,14 @@ class Builder(Transformer[Token, Any]):
     def body(self, meta: Any, c: list[Any]) -> ast.Body:
         if not c:
             # `{ }` read as `{ skip; }` would hide a body left unwritten
-            self.reporter.error("E119", "an empty body: say what the action does",
+            self.reporter.error(codes.E119, "an empty body: say what the action does",
                                 self._s(meta), hint="write '{ skip; }' for an action that "
                                 "changes nothing")
         outcomes = [x for x in c if x.prob is not None]
         plain = [x for x in c if x.prob is None]
         if outcomes and plain:
             self.reporter.error(
-                "E111", "a body has either outcomes 'p: updates;' or plain updates, not both",
+                codes.E111, "a body has either outcomes 'p: updates;' or plain updates, not both",
                 plain[0].span,
                 hint="give this line a probability, or move it into every outcome")
         if plain and not outcomes:

@@ -27,7 +27,7 @@ from typing import Any
 import lark
 from lark.exceptions import LarkError
 
-from afsmc.diagnostics import BOM, CompileError, Diagnostic, Severity, Span
+from afsmc.diagnostics import BOM, CompileError, Diagnostic, Severity, Span, codes
 from afsmc.syntax import ast
 from afsmc.syntax.fmt_layout import INDENT, Unit, lay_out
 from afsmc.syntax.grammar import grammar_text
@@ -67,7 +67,7 @@ def format_text(text: str, path: str = "<input>") -> str:
 
 
 def _internal(path: str, why: str) -> Diagnostic:
-    return Diagnostic("E190", Severity.ERROR, f"{path}: the formatter {why}; the file is left "
+    return Diagnostic(codes.E190, Severity.ERROR, f"{path}: the formatter {why}; the file is left "
                       "unchanged", None, hint="please report this with the file")
 
 

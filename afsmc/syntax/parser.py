@@ -16,7 +16,7 @@ import lark
 from lark import Token
 from lark.exceptions import UnexpectedInput
 
-from afsmc.diagnostics import BOM, CompileError, Reporter, Source, Span
+from afsmc.diagnostics import BOM, CompileError, Reporter, Source, Span, codes
 from afsmc.syntax import ast
 from afsmc.syntax.build import Builder
 from afsmc.syntax.errors.diagnose import report_glued_keyword, report_syntax_error
@@ -89,7 +89,7 @@ def _too_deep(tree: lark.Tree[Token], source: Source, reporter: Reporter) -> boo
             if id(top) not in reported:
                 reported.add(id(top))
                 reporter.error(
-                    "E113", f"this expression nests more than {MAX_DEPTH} levels deep",
+                    codes.E113, f"this expression nests more than {MAX_DEPTH} levels deep",
                     Span.at_offset(source, top.meta.start_pos),
                     hint=f"afsmc supports expressions up to {MAX_DEPTH} levels: each operator "
                     "of a chain like 'a + b + c' or '- - x' is one; shorten it (e.g. "

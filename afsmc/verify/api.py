@@ -16,7 +16,7 @@ from dataclasses import dataclass, field
 
 from afsmc.backends.prism import emit as prism_emit
 from afsmc.compiler import load
-from afsmc.diagnostics import CompileError, Diagnostic, Related, Severity, Source, Span
+from afsmc.diagnostics import CompileError, Diagnostic, Related, Severity, Source, Span, codes
 from afsmc.lower.lowering import Lowered
 from afsmc.lower.reduce import Reductions
 from afsmc.model import ir
@@ -72,7 +72,7 @@ def load_with_formulas(path: str, overrides: Mapping[str, str] | None = None,
     for f in formulas:
         if ";" in f:
             raise CompileError([Diagnostic(
-                "E409", Severity.ERROR, f"--formula {f!r}: one property, without ';'", None,
+                codes.E409, Severity.ERROR, f"--formula {f!r}: one property, without ';'", None,
                 hint="repeat --formula for several properties")])
         # Parsed on its own first, so a syntax error speaks of the formula alone and not
         # of the declaration it is wrapped in below.
@@ -117,7 +117,7 @@ def select(model: ir.Model, names: Sequence[str], adhoc: Sequence[str] = ()) -> 
     if not names and not adhoc:
         if not declared:
             raise CompileError([Diagnostic(
-                "E407", Severity.ERROR, f"{model.source.path} declares no properties", None,
+                codes.E407, Severity.ERROR, f"{model.source.path} declares no properties", None,
                 hint="declare one ('property ok = P=? [ F \"done\" ];') or pass --formula")])
         return declared
     by_name = {p.name: p for p in declared}
@@ -128,7 +128,7 @@ def select(model: ir.Model, names: Sequence[str], adhoc: Sequence[str] = ()) -> 
             if by_name[n] not in out:
                 out.append(by_name[n])
         else:
-            diags.append(Diagnostic("E407", Severity.ERROR, f"--property {n}: no property named "
+            diags.append(Diagnostic(codes.E407, Severity.ERROR, f"--property {n}: no property named "
                                     f"'{n}' in {model.source.path}", None,
                                     hint=did_you_mean(n, by_name) or (
                                         "properties: " + ", ".join(by_name) if by_name else None)))

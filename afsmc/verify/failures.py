@@ -14,7 +14,7 @@ import re
 from collections.abc import Callable, Mapping, Sequence
 
 from afsmc.backends.prism import property_variants
-from afsmc.diagnostics import CompileError, Diagnostic, Severity, Span
+from afsmc.diagnostics import CompileError, Diagnostic, Severity, Span, codes
 from afsmc.lower.lowering import Lowered
 from afsmc.model import ir
 from afsmc.verify.queries import (
@@ -77,11 +77,11 @@ def failure_diagnostic(f: StormFailure, model: ir.Model, low: Lowered,
     if f.stage == "parse":
         span = (_source_line_span(model, job.model_text, f.line)
                 if f.line is not None and job.via == "prism" else None)
-        return diag("E411", f"Storm cannot read the generated {route} model: {first}", span,
+        return diag(codes.E411, f"Storm cannot read the generated {route} model: {first}", span,
                     f"this is a bug in afsmc's {route} backend; --via "
                     f"{'jani' if job.via == 'prism' else 'prism'} may work meanwhile")
     if f.stage == "property":
-        return diag("E402", f"Storm cannot check property '{prop.name if prop else f.prop}': "
+        return diag(codes.E402, f"Storm cannot check property '{prop.name if prop else f.prop}': "
                     f"{first}", prop.span if prop else None, engine_hint)
     if f.stage == "build":
         span = None
@@ -89,24 +89,24 @@ def failure_diagnostic(f: StormFailure, model: ir.Model, low: Lowered,
             if re.search(rf"\b{re.escape(v.name)}\b", f.message):
                 span = v.span
                 break
-        return diag("E403", f"Storm cannot build the {job.what}: {first}", span, engine_hint)
+        return diag(codes.E403, f"Storm cannot build the {job.what}: {first}", span, engine_hint)
     if f.stage == "check":
-        return diag("E404", f"Storm failed to check '{prop.name if prop else f.prop}' on the "
+        return diag(codes.E404, f"Storm failed to check '{prop.name if prop else f.prop}' on the "
                     f"{job.what}: {first}", prop.span if prop else None, engine_hint)
     if f.stage == "too-big":
-        return diag("E405", first, None,
+        return diag(codes.E405, first, None,
                     "raise --max-states if the machine has the memory" + (
                         " (the sparse engine needs about 250 bytes per state)"
                         if job.engine in ("sparse", "auto") else "")
                     + ", or check a smaller instance with --const")
     if f.stage == "memory":
         if job.engine in ("hybrid", "dd"):
-            return diag("E406", first, None, "this one check needs more memory than the "
+            return diag(codes.E406, first, None, "this one check needs more memory than the "
                         "machine has, even symbolically; check a smaller instance with --const, "
                         "or leave this property out with --property")
-        return diag("E406", first, None, "check a smaller instance with --const, or try "
+        return diag(codes.E406, first, None, "check a smaller instance with --const, or try "
                     "--engine hybrid, which stores the model symbolically")
-    return diag("E406", f"internal error while running Storm: {first}", None)
+    return diag(codes.E406, f"internal error while running Storm: {first}", None)
 
 
 def one_query(res: JobResult) -> bool:
@@ -204,7 +204,7 @@ def refuse_symbolic(props: Sequence[ir.Property], model: ir.Model, engine: Engin
     bad = [(p, why) for p in props if (why := symbolic_gap(p, model, engine)) is not None]
     if bad:
         raise CompileError([Diagnostic(
-            "E404", Severity.ERROR, f"the {engine} engine cannot check '{p.name}', {why}",
+            codes.E404, Severity.ERROR, f"the {engine} engine cannot check '{p.name}', {why}",
             p.span, hint=_symbolic_hint(p)) for p, why in bad])
 
 

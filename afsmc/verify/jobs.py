@@ -9,7 +9,7 @@ from typing import Any
 
 from afsmc.backends.prism import emit as prism_emit
 from afsmc.backends.prism import property_variants
-from afsmc.diagnostics import CompileError, Diagnostic, Severity
+from afsmc.diagnostics import CompileError, Diagnostic, Severity, codes
 from afsmc.lower.lowering import Lowered
 from afsmc.model import ir
 from afsmc.text import count
@@ -56,7 +56,7 @@ def make_job(low: Lowered, props: Sequence[ir.Property], via: Via, engine: Engin
     try:
         jani: Any = importlib.import_module("afsmc.backends.jani")
     except ImportError:
-        raise CompileError([Diagnostic("E408", Severity.ERROR,
+        raise CompileError([Diagnostic(codes.E408, Severity.ERROR,
                                        "the JANI backend (afsmc.backends.jani) is not available",
                                        None, hint="use --via prism")]) from None
     return Job("jani", jani.dumps(jani.emit(low)), "", names, engine, max_states, what,

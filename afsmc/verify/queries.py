@@ -25,7 +25,7 @@ import math
 import re
 from collections.abc import Mapping, Sequence
 
-from afsmc.diagnostics import Diagnostic, Severity
+from afsmc.diagnostics import Diagnostic, Severity, codes
 from afsmc.model import expr as E
 from afsmc.model import ir
 from afsmc.model.evaluate import Env, EvalError, evaluate
@@ -157,7 +157,7 @@ def kept_note(done: Sequence[tuple[str, dict[str, float]]], comp: Mapping[str, i
             lines.append(f"  {name} = {value!r} on the {what}")
     if not lines:
         return []
-    return [Diagnostic("N412", Severity.NOTE, f"{heading}:\n" + "\n".join(lines), None)]
+    return [Diagnostic(codes.N412, Severity.NOTE, f"{heading}:\n" + "\n".join(lines), None)]
 
 
 def query_text(name: str, duals: Mapping[str, str]) -> str:

@@ -16,7 +16,7 @@ from dataclasses import dataclass
 
 from afsmc.backends.prism import property_variants
 from afsmc.compiler import lowered
-from afsmc.diagnostics import CompileError, Diagnostic, Severity
+from afsmc.diagnostics import CompileError, Diagnostic, Severity, codes
 from afsmc.interrupt import Stopped
 from afsmc.lower.lowering import Lowered
 from afsmc.lower.reduce import Reductions
@@ -215,7 +215,7 @@ class CheckRun:
                    for n in names if n not in vals]
         errors = self.errors
         if missing and not errors:  # a bug: say so rather than fail below
-            errors.append(Diagnostic("E406", Severity.ERROR, "internal error: no answer and no "
+            errors.append(Diagnostic(codes.E406, Severity.ERROR, "internal error: no answer and no "
                                      f"error for {', '.join(missing)}", None))
         if errors:
             notes = kept_note(list(zip([w for _, _, w in self.lows], self.values, strict=True)),
@@ -223,7 +223,7 @@ class CheckRun:
             if missing:
                 text = "not answered: " + ", ".join(missing)
                 notes = ([dataclasses.replace(notes[0], message=f"{notes[0].message}\n{text}")]
-                         if notes else [Diagnostic("N412", Severity.NOTE, text, None)])
+                         if notes else [Diagnostic(codes.N412, Severity.NOTE, text, None)])
             raise CompileError([*errors, *notes], self.partial())
         main, *uniform_model = self.stats  # the MDP or only DTMC, then the uniform DTMC if any
         assert main is not None and None not in uniform_model  # else `errors` above

@@ -17,7 +17,7 @@ from collections.abc import Mapping, Sequence
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from typing import Any
 
-from afsmc.diagnostics import CompileError, Diagnostic, Severity
+from afsmc.diagnostics import CompileError, Diagnostic, Severity, codes
 from afsmc.files import read_source
 from afsmc.interrupt import Stopped
 from afsmc.lifetime import die_with_parent, worker_died
@@ -54,7 +54,7 @@ def sweep(path: str, variable: str, values: Sequence[Number], *, kind: Kind = "c
     check_choice("solver", solver, Solver)
     t0 = time.perf_counter()
     if not values:
-        raise CompileError([Diagnostic("E410", Severity.ERROR, "the sweep has no values", None)])
+        raise CompileError([Diagnostic(codes.E410, Severity.ERROR, "the sweep has no values", None)])
     source = read_source(path) if text is None else text
     texts = {k: literal(v) for k, v in (consts or {}).items()}  # as run() takes them
     if kind == "const":
@@ -88,7 +88,7 @@ def sweep(path: str, variable: str, values: Sequence[Number], *, kind: Kind = "c
         result, errors, notes = _gather(tasks, finished, t0)
         got = len(result.points) if result else 0
         raise CompileError([Diagnostic(
-            "E414", Severity.ERROR, f"a process of the sweep died before it finished: "
+            codes.E414, Severity.ERROR, f"a process of the sweep died before it finished: "
             f"{got} of {len(values)} points were evaluated", None,
             hint="was it killed, or out of memory? --jobs 1 runs one point at a time; "
                  "--max-states stops a model that is too large before it is built"),
@@ -148,7 +148,7 @@ def without_kept_note(exc: CompileError) -> list[Diagnostic]:
     """A failed sweep's diagnostics without its note of the points kept (the last), for a
     caller that writes those points itself (`exc.partial`, a SweepResult)."""
     if isinstance(exc.partial, SweepResult) and exc.partial.points and exc.diagnostics \
-            and exc.diagnostics[-1].code == "N412":
+            and exc.diagnostics[-1].code == codes.N412:
         return exc.diagnostics[:-1]
     return exc.diagnostics
 
@@ -162,7 +162,7 @@ def _check_bounds(path: str, text: str, consts: dict[str, str], properties: Sequ
         or [literal(x) for x in values if isinstance(x, float)]
     if bad:
         # (Storm reads a bound as a 64-bit integer: one beyond it would fail every point, E402)
-        raise CompileError([Diagnostic("E410", Severity.ERROR,
+        raise CompileError([Diagnostic(codes.E410, Severity.ERROR,
                                        f"--bound {', '.join(bad)}: step bounds are integers "
                                        f"from 0 to 2^63 - 1 ({INT64[1]:,})", None)])
     loaded = load_with_formulas(path, consts, formulas, text=text)
@@ -194,7 +194,7 @@ def _check_names(path: str, text: str, consts: dict[str, str], variable: str,
     doubles = [literal(x) for x in values if isinstance(x, float)]
     if const is not None and const.type is E.Type.INT and doubles:
         raise loaded.remap_error(CompileError([Diagnostic(
-            "E208", Severity.ERROR, f"--const {variable}: {', '.join(doubles[:5])}"
+            codes.E208, Severity.ERROR, f"--const {variable}: {', '.join(doubles[:5])}"
             f"{', ...' if len(doubles) > 5 else ''} "
             f"{'is not an int' if len(doubles) == 1 else 'are not ints'}", const.span,
             hint=f"{variable} is declared int: write its values as integers (1, not 1.0 "
@@ -211,7 +211,7 @@ def _check_names(path: str, text: str, consts: dict[str, str], variable: str,
             message = "true and false are not numbers"
             hint = f"{variable} is declared {const.type.value}: sweep it over numbers, e.g. '0:10'"
         raise loaded.remap_error(CompileError([Diagnostic(
-            "E208", Severity.ERROR, f"--const {variable}: {message}", const.span, hint=hint)]))
+            codes.E208, Severity.ERROR, f"--const {variable}: {message}", const.span, hint=hint)]))
     try:
         select(loaded.model, properties, loaded.adhoc)
     except CompileError as exc:
@@ -225,7 +225,7 @@ def _kept(path: str, variable: str, kind: Kind, points: list[SweepPoint],
         return []
     points = sorted(points, key=lambda pt: pt.x)
     part = SweepResult(path, variable, kind, "", points)
-    return [Diagnostic("N412", Severity.NOTE, f"{plural(len(points), 'point')} "
+    return [Diagnostic(codes.N412, Severity.NOTE, f"{plural(len(points), 'point')} "
                        f"{'were' if len(points) != 1 else 'was'} evaluated before "
                        "this" + (", some in part (the cells of the queries that failed are "
                                  "empty)" if in_part else "") + ":\n"

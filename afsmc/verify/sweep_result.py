@@ -7,7 +7,7 @@ import io
 import os
 from dataclasses import dataclass, field
 
-from afsmc.diagnostics import CompileError, Diagnostic, Severity
+from afsmc.diagnostics import CompileError, Diagnostic, Severity, codes
 from afsmc.files import write_atomic
 from afsmc.text import literal
 from afsmc.verify.results import PropertyResult, find_property
@@ -95,7 +95,7 @@ class SweepResult:
 
         ext = os.path.splitext(path)[1].lower()
         if ext not in (".png", ".svg"):
-            raise CompileError([Diagnostic("E003", Severity.ERROR,
+            raise CompileError([Diagnostic(codes.E003, Severity.ERROR,
                                            f"--plot {path}: the name must end in .png or .svg",
                                            None)])
         n = max(1, len(self.names))

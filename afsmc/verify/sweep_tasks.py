@@ -17,7 +17,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from afsmc.backends.prism import emit as prism_emit
-from afsmc.diagnostics import CompileError, Diagnostic, Severity
+from afsmc.diagnostics import CompileError, Diagnostic, Severity, codes
 from afsmc.lower.lowering import lower
 from afsmc.lower.reduce import Reductions
 from afsmc.model import expr as E
@@ -66,7 +66,7 @@ def unbounded(p: ir.Property) -> Diagnostic | None:
     if p.path.bound is not None:
         return None
     return Diagnostic(
-        "E410", Severity.ERROR, f"property '{p.name}' has no step bound to sweep", p.span,
+        codes.E410, Severity.ERROR, f"property '{p.name}' has no step bound to sweep", p.span,
         hint="--bound sweeps the k of F<=k, G<=k, U<=k, C<=k and I=k; write a bound "
              "(F<=K, any K) or choose other properties with --property")
 
@@ -110,7 +110,7 @@ def user_words(diags: list[Diagnostic], task: Task | None = None) -> list[Diagno
 
     out: list[Diagnostic] = []
     for d in diags:
-        message = (_POINT_NAME.sub(point, d.message) if d.code == "N412" else
+        message = (_POINT_NAME.sub(point, d.message) if d.code == codes.N412 else
                    _POINT_NAME.sub(r"\1\3", d.message))
         d = dataclasses.replace(d, message=message)
         if d not in out:  # the same failure at every point of a shared model: once
@@ -304,4 +304,4 @@ def _answered(exc: CompileError) -> tuple[Partial, list[Diagnostic]] | None:
     points (None where a query failed), so its note of them (internal names) is not."""
     if not isinstance(exc.partial, Partial):
         return None
-    return exc.partial, [d for d in exc.diagnostics if d.code != "N412"]
+    return exc.partial, [d for d in exc.diagnostics if d.code != codes.N412]

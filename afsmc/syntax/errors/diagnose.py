@@ -15,7 +15,7 @@ from dataclasses import dataclass
 from lark import Token
 from lark.exceptions import UnexpectedCharacters, UnexpectedInput, UnexpectedToken
 
-from afsmc.diagnostics import Related, Reporter, Source, Span
+from afsmc.diagnostics import Related, Reporter, Source, Span, codes
 from afsmc.syntax.errors.examples import E115, E120, MISSING_SEMICOLON, Mistake, match_example
 from afsmc.syntax.errors.hints import foreign, hazard_hint, mod_hint
 from afsmc.syntax.errors.messages import expected_hint, found
@@ -55,7 +55,7 @@ def report_glued_keyword(tok: Token, source: Source, reporter: Reporter) -> None
     end = tok.end_pos or 0
     word = re.match(r"\w*", text[end:])
     rest = word.group() if word else ""
-    reporter.error("E122", f"'{tok}{rest}' is not a keyword, and no name may stand here",
+    reporter.error(codes.E122, f"'{tok}{rest}' is not a keyword, and no name may stand here",
                    Span.at_offset(source, tok.start_pos or 0, end + len(rest)),
                    hint=f"if the keyword '{tok}' is meant, put a space after it: "
                         f"'{tok} {rest}'; else check the spelling")
@@ -75,7 +75,7 @@ def report_syntax_error(exc: UnexpectedInput, source: Source, reporter: Reporter
     elif isinstance(exc, UnexpectedToken):
         _report_token(_failure(exc, source, formula), reporter)
     else:  # UnexpectedEOF: lark's LALR does not raise it
-        reporter.error("E101", "the file ends in the middle of a declaration",
+        reporter.error(codes.E101, "the file ends in the middle of a declaration",
                        Span.at_offset(source, scan(text, len(text)).last_end),
                        hint=expected_hint(set(getattr(exc, "expected", ())), the_end))
 
@@ -86,13 +86,13 @@ def _unterminated(text: str, pos: int, source: Source, reporter: Reporter) -> bo
     if text.startswith("*", pos) and text.startswith("/*", pos - 1):
         pos -= 1  # '/' lexed as division, then '*' failed
     if text.startswith("/*", pos) and text.find("*/", pos + 2) < 0:
-        reporter.error("E117", "this comment is not closed", Span.at_offset(source, pos, pos + 2),
+        reporter.error(codes.E117, "this comment is not closed", Span.at_offset(source, pos, pos + 2),
                        hint="close it with '*/'; everything after '/*' is part of it until then")
         return True
     if text.startswith('"', pos):
         j = string_end(text, pos)
         if j >= len(text) or text[j] == "\n":
-            reporter.error("E117", "this label name is not closed",
+            reporter.error(codes.E117, "this label name is not closed",
                            Span.at_offset(source, pos, pos + 1),
                            hint="close it with '\"' on the same line; a quoted name does not "
                            "span lines")
@@ -107,10 +107,10 @@ def _report_character(exc: UnexpectedCharacters, source: Source, reporter: Repor
     pos = len(text) if exc.pos_in_stream is None else exc.pos_in_stream
     char = text[pos] if pos < len(text) else "?"
     if char == "%":
-        reporter.error("E123", "'%' is not an operator in afsm: write 'mod(a, b)'",
+        reporter.error(codes.E123, "'%' is not an operator in afsm: write 'mod(a, b)'",
                        Span.at_offset(source, pos), hint=mod_hint(text, pos, pos + 1))
         return
-    reporter.error("E101", f"unexpected character {char!r}", Span.at_offset(source, pos),
+    reporter.error(codes.E101, f"unexpected character {char!r}", Span.at_offset(source, pos),
                    hint=expected_hint(exc.allowed, the_end) if exc.allowed else None)
 
 
@@ -168,12 +168,12 @@ def _report_token(f: _Failure, reporter: Reporter) -> None:
     if _prism_updates(f, body, reporter) or _foreign_spelling(f, body, reporter):
         return
     matched = _refine(f, matched, owner)
-    if matched is not None and not (f.formula and matched[0] == "E102"):
+    if matched is not None and not (f.formula and matched[0] == codes.E102):
         _report_mistake(f, matched, reporter)
         return
     if _missing_operator(f, reporter):
         return
-    reporter.error("E101", f"unexpected {found(f.tok, f.the_end)}", f.span,
+    reporter.error(codes.E101, f"unexpected {found(f.tok, f.the_end)}", f.span,
                    hint=expected_hint(f.accepts, f.the_end))
 
 
@@ -187,7 +187,7 @@ def _unclosed(f: _Failure, reporter: Reporter) -> bool:
         if terminal not in f.accepts:
             return False
         the_end = "the formula" if f.formula else "the file"
-        reporter.error("E112", f"missing {closer!r}", f.after_last,
+        reporter.error(codes.E112, f"missing {closer!r}", f.after_last,
                        hint=f"add {closer!r} here; {the_end} ends before it", related=[note])
         return True
     if char != "{" or f.formula:
@@ -202,7 +202,7 @@ def _unclosed(f: _Failure, reporter: Reporter) -> bool:
     if len(between) > 1:
         return False
     before = scan(f.text, head[0]).last_end
-    reporter.error("E112", "missing '}' before the next declaration",
+    reporter.error(codes.E112, "missing '}' before the next declaration",
                    Span.at_offset(f.source, before),
                    hint=f"add '}}' here; the next line starts a new declaration ({head[1]!r})",
                    related=[note])
@@ -218,7 +218,7 @@ def _step_bound(f: _Failure, reporter: Reporter) -> bool:
     op, value = re.sub(r"\s+", "", bound.group(1)), bound.group(2)
     rest = re.sub(r"\s*([-+*/])\s*", r" \1 ", bound.group(3)).strip() \
         if bound.group(3) else f"{f.tok} ..."
-    reporter.error("E121", "a step bound that is an expression is written in brackets",
+    reporter.error(codes.E121, "a step bound that is an expression is written in brackets",
                    Span.at_offset(f.source, bound.start(1), max(f.pos, bound.end(2))),
                    hint=f"write '{op}({value} {rest})'")
     return True
@@ -230,7 +230,7 @@ def _next_declaration(f: _Failure, matched: Mistake | None, reporter: Reporter) 
     line_start = f.text.rfind("\n", 0, f.pos) + 1
     if (f.word in _DECL_KEYWORDS and not f.scan.open and not f.text[line_start:f.pos].strip()
             and ("SEMICOLON" in f.accepts or matched in MISSING_SEMICOLON)):
-        reporter.error("E102", "missing ';' at the end of the declaration", f.after_last,
+        reporter.error(codes.E102, "missing ';' at the end of the declaration", f.after_last,
                        hint=f"add ';' here; the next line starts with {f.word!r}")
         return True
     return False
@@ -241,7 +241,7 @@ def _hazard_with_both(f: _Failure, reporter: Reporter) -> bool:
     header = _HAZARD_BOTH.search(f.text, 0, f.pos) if f.word in ("when", "with") else None
     if header is None or not re.search(r"\b(?:when|with)\b", header.group(0)):
         return False
-    reporter.error("E124", "a hazard is either preemptive ('when GUARD') or probabilistic "
+    reporter.error(codes.E124, "a hazard is either preemptive ('when GUARD') or probabilistic "
                    "('with probability P'), not both", f.span,
                    hint=hazard_hint(f.text, header.start(), f.pos))
     return True
@@ -256,7 +256,7 @@ def _prism_updates(f: _Failure, body: bool, reporter: Reporter) -> bool:
     if not (body and (f.word == "&" or (assigns and amp is not None))):
         return False
     at = f.span if f.word == "&" or amp is None else Span.at_offset(f.source, amp.start())
-    reporter.error("E107", "updates of one outcome are separated by ','", at,
+    reporter.error(codes.E107, "updates of one outcome are separated by ','", at,
                    hint="write ',' instead of '&' (PRISM joins updates with '&')")
     return True
 
@@ -267,7 +267,7 @@ def _foreign_spelling(f: _Failure, body: bool, reporter: Reporter) -> bool:
     if spelled is None:
         return False
     message, hint, word = spelled
-    reporter.error("E123", message,
+    reporter.error(codes.E123, message,
                    f.span if word is None else Span.at_offset(f.source, *word), hint=hint)
     return True
 
@@ -284,32 +284,32 @@ def _refine(f: _Failure, matched: Mistake | None, owner: str | None) -> Mistake 
             None if matched == E120 else matched
     if f.scan.open and f.scan.open[-1][0] == "[" and _NESTED_TEMPORAL.search(text, 0, pos):
         matched = E115
-    if matched is not None and matched[0] == "E115" and not _TEMPORAL_BEFORE.search(
+    if matched is not None and matched[0] == codes.E115 and not _TEMPORAL_BEFORE.search(
             text, 0, pos):
         # The parser state is the one after any operand (`label a = x "l";`): only a
         # temporal operator just before the failing token makes it a nested one.
         matched = None
-    if matched is not None and matched[0] == "E115" and _BRACKETED_TEMPORAL.search(
+    if matched is not None and matched[0] == codes.E115 and _BRACKETED_TEMPORAL.search(
             text, 0, pos):
         # `P=? [ (F "done") ]`: nothing is nested, the operator is in brackets
-        matched = ("E115", "a temporal operator (F, G, X, U) cannot stand in brackets: it "
+        matched = (codes.E115, "a temporal operator (F, G, X, U) cannot stand in brackets: it "
                    "applies to the whole path formula, 'P=? [ F \"done\" ]'")
-    if matched is not None and f.word == "}" and matched[0] in ("E102", "E103", "E116"):
+    if matched is not None and f.word == "}" and matched[0] in (codes.E102, codes.E103, codes.E116):
         # A '}' right after an expression: the parser state is shared by every context an
         # expression ends in, so the brace that is open decides what is missing.
         matched = _missing_before_brace(text, f.scan)
-    if matched is not None and matched[0] == "E116" and owner is None:
+    if matched is not None and matched[0] == codes.E116 and owner is None:
         # the state after an expression, shared by labels, formulas and properties: a ';'
         # is missing only where the text ends (a keyword on the next line: E102 above)
         matched = MISSING_SEMICOLON[0] if f.at_end else None
-    if matched is not None and matched[0] == "E103" and f.word != "=":
+    if matched is not None and matched[0] == codes.E103 and f.word != "=":
         matched = None  # only a '=' is taken for a comparison
     return matched
 
 
 def _report_mistake(f: _Failure, mistake: Mistake, reporter: Reporter) -> None:
     code, message = mistake
-    if code not in ("E102", "E116"):
+    if code not in (codes.E102, codes.E116):
         reporter.error(code, message, f.span, hint=f"found {found(f.tok, f.the_end)}")
         return
     # The mistake is before the token that revealed it: point just after the previous
@@ -330,7 +330,7 @@ def _missing_operator(f: _Failure, reporter: Reporter) -> bool:
     if "PLUS" not in f.accepts or f.tok.type not in _OPERANDS or before is None:
         return False
     end = " or end the declaration with ';'" if "SEMICOLON" in f.accepts else ""
-    reporter.error("E101", f"missing operator between {before.group(1)!r} and "
+    reporter.error(codes.E101, f"missing operator between {before.group(1)!r} and "
                    f"{f.word!r}", f.span,
                    hint=f"join them with an operator ('+', '==', '&&', ...){end}")
     return True
@@ -352,5 +352,5 @@ def _missing_before_brace(text: str, before: Scan) -> Mistake | None:
     if owner is None:
         return None
     if owner == "rewards":
-        return "E116", "missing ';' at the end of the reward item"
-    return "E116", "missing ';' at the end of the outcome"
+        return codes.E116, "missing ';' at the end of the reward item"
+    return codes.E116, "missing ';' at the end of the outcome"

@@ -8,21 +8,22 @@ from functools import cache
 
 from lark.exceptions import UnexpectedInput, UnexpectedToken
 
+from afsmc.diagnostics import codes
 from afsmc.syntax.errors.messages import NESTED_TEMPORAL
 from afsmc.syntax.grammar import lalr
 
 # A mistake: its code and message.
 Mistake = tuple[str, str]
 
-E115: Mistake = ("E115", NESTED_TEMPORAL)
+E115: Mistake = (codes.E115, NESTED_TEMPORAL)
 MISSING_SEMICOLON: tuple[Mistake, Mistake] = (
-    ("E102", "missing ';' at the end of the declaration"),
-    ("E116", "missing ';' at the end of the outcome"))
-E120: Mistake = ("E120", "the guard comes before the weight: 'action NAME in MODES when GUARD "
+    (codes.E102, "missing ';' at the end of the declaration"),
+    (codes.E116, "missing ';' at the end of the outcome"))
+E120: Mistake = (codes.E120, "the guard comes before the weight: 'action NAME in MODES when GUARD "
                  "weight W { ... }'")
 
 EXAMPLES: dict[Mistake, list[str]] = {
-    ("E102", "missing ';' at the end of the declaration"): [
+    (codes.E102, "missing ';' at the end of the declaration"): [
         "const int A = 1\nconst int B = 2;",
         "param int A = 1\nvar x : [0..1];",
         "var x : [0..1] init 0\nmode A;",
@@ -34,7 +35,7 @@ EXAMPLES: dict[Mistake, list[str]] = {
         "machine m\nmode A;",
     ],
     # Before '}': the last outcome of an action or hazard body lacks its ';'.
-    ("E116", "missing ';' at the end of the outcome"): [
+    (codes.E116, "missing ';' at the end of the outcome"): [
         "action A in S { goto B }",
         "action A in S { x := 1, goto B }",
         "action A in S { 0.5: goto B; 0.5: skip }",
@@ -56,7 +57,7 @@ EXAMPLES: dict[Mistake, list[str]] = {
         "action A in S { 0.5: x += 2 }",
         "action A in S { 0.5: x := 2, goto B; 0.5: x := y }",
     ],
-    ("E103", "'=' is not a comparison; write '==' to compare"): [
+    (codes.E103, "'=' is not a comparison; write '==' to compare"): [
         "label a = x = 1;",
         "formula f = x = 1;",
         "action A in S when x = 1 { skip; }",
@@ -70,20 +71,20 @@ EXAMPLES: dict[Mistake, list[str]] = {
         'property p = P=? [ G F "l" ];',
         'property p = P=? [ F G x > 1 ];',
     ],
-    ("E104", "a bounded integer is written [low..high]"): [
+    (codes.E104, "a bounded integer is written [low..high]"): [
         "var x : [0, 3];",
         "var x : [0 , 3] init 0;",
     ],
-    ("E105", "variables have a range [low..high] or type bool, not a type name"): [
+    (codes.E105, "variables have a range [low..high] or type bool, not a type name"): [
         "var x : int;",
         "var x : double;",
         "var x : prob;",
     ],
-    ("E106", "an outcome is written 'probability: updates;'"): [
+    (codes.E106, "an outcome is written 'probability: updates;'"): [
         "action A in S { 0.5 goto B; }",
         "action A in S { p goto B; }",
     ],
-    ("E107", "updates of one outcome are separated by ','"): [
+    (codes.E107, "updates of one outcome are separated by ','"): [
         "action A in S { 0.5: goto B x := 1; }",
         "action A in S { goto B x := 1; }",
     ],
@@ -91,11 +92,11 @@ EXAMPLES: dict[Mistake, list[str]] = {
         "action A in S weight 1 when x > 1 { skip; }",
         "action A in * weight x when x > 1 { skip; }",
     ],
-    ("E108", "an action needs its modes: 'action NAME in MODE { ... }'"): [
+    (codes.E108, "an action needs its modes: 'action NAME in MODE { ... }'"): [
         "action A { skip; }",
         "action A when x > 1 { skip; }",
     ],
-    ("E109", "an action's body is a block in braces"): [
+    (codes.E109, "an action's body is a block in braces"): [
         "action A in S goto B;",
         "action A in S weight 1 goto B;",
     ],
