@@ -3,8 +3,8 @@
     .venv/bin/python benchmarks/simlib_speed.py [--runs N] [--repeat K]
 
 Prints one line per simulator: the median of K timed runs (after one untimed warm-up),
-and the runs per second. docs/simulation.md quotes the slowest. This used to be a timed
-unit test; timings belong here, where a slow machine gives a slow number, not a failure.
+and the runs per second. docs/simulation.md quotes the slowest. Timings belong here, not
+in a unit test, where a slow machine gives a slow number, not a failure.
 """
 
 from __future__ import annotations

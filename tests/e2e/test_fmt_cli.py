@@ -57,8 +57,8 @@ def test_in_place_keeps_the_permission_bits(tmp_path: Path) -> None:
 
 @pytest.mark.skipif(os.geteuid() != 0, reason="only root can give a file to another user")
 def test_in_place_keeps_the_owner(tmp_path: Path) -> None:
-    """A `sudo afsmc fmt` in a user's checkout gave the file to root: with mode
-    640, its owner could then no longer read it."""
+    """A `sudo afsmc fmt` in a user's checkout keeps the file the user's: given to root
+    with mode 640, its owner could not read it."""
     path = tmp_path / "theirs.afsm"
     path.write_text(MESSY)
     path.chmod(0o640)

@@ -207,8 +207,8 @@ action Go in M { x += T_AP + B_AP + T_DE; }
 
 
 def test_update_of_two_constants_on_one_line_keeps_the_next_line(tmp_path: Path) -> None:
-    """Both constants edited the same old comment; the overlapping edits cut into the next
-    declaration (T_DE was gone and the file no longer compiled)."""
+    """Both constants edit the same old comment: overlapping edits would cut into the next
+    declaration (T_DE would be gone and the file would not compile)."""
     path = tmp_path / "two.afsm"
     path.write_text(TWO_ON_A_LINE)
     r = run_cli("sim-check", str(path), "--runs", "500", "--update")

@@ -69,7 +69,7 @@ def test_usage_and_model_errors(tmp_path: Path) -> None:
 
 @pytest.mark.storm
 def test_no_properties_is_e407_as_in_verify_unless_traces_are_asked(tmp_path: Path) -> None:
-    """It used to print '(no properties declared)' and exit 0 where verify exits 1."""
+    """No properties is an error (E407, exit 1), as in verify, not an empty table."""
     f = tmp_path / "bare.afsm"
     f.write_text("machine bare;\nvar x : [0..2] init 0;\nmode A = 0 initial;\nmode B = 1 final;\n"
                  "action Go in A { 0.5: x := 1; 0.5: goto B; }\n")
@@ -97,7 +97,7 @@ def test_traces_out_is_checked_before_the_runs(tmp_path: Path) -> None:
 
 
 def test_traces_out_without_traces_is_a_usage_error(tmp_path: Path) -> None:
-    # It used to write an empty list: no runs are saved unless --traces K asks for them.
+    # Not an empty list: no runs are saved unless --traces K asks for them.
     out = tmp_path / "t.json"
     r = run_cli("simulate", str(PATROL), "--runs", "10", "--traces-out", str(out))
     assert r.code == 2 and "--traces-out needs --traces K" in r.err, r.err
@@ -140,7 +140,7 @@ def test_options_that_would_be_ignored_are_refused_or_honoured() -> None:
 
 
 def test_the_header_names_the_resolution_only_for_a_model_with_intervals(tmp_path: Path) -> None:
-    """`--resolve floor` on a model without interval constants used to print 'interval
+    """`--resolve floor` on a model without interval constants does not print 'interval
     constants floor', as if the choice had changed the runs."""
     f = tmp_path / "plain.afsm"
     f.write_text("machine plain;\nvar x : [0..3] init 0;\nmode A = 0 initial;\n"
@@ -266,7 +266,7 @@ def test_an_interrupted_simulation_keeps_the_runs_that_finished(tmp_path: Path,
                                                                 jobs: int) -> None:
     # SIGTERM (as `kill` or a batch system's timeout sends it) after the first batches: the
     # estimate of those runs is printed, and for --json is the object's data. With worker
-    # processes too, which stop at once (the pool used to run every queued batch first).
+    # processes too, which stop at once (the pool does not run every queued batch first).
     import signal
     import subprocess
     import sys

@@ -185,8 +185,8 @@ def no_points(monkeypatch: pytest.MonkeyPatch) -> None:
 @pytest.mark.storm
 def test_bound_sweep_rejects_properties_without_a_step_bound(tmp_path: Path,
                                                              no_points: None) -> None:
-    """An unbounded F or G used to be given the bound silently (P[F "done"] came out as
-    P[F<=k "done"], exit 0); R[F] failed in every chunk after all points were checked."""
+    """An unbounded F or G is not given the bound silently (P[F "done"] coming out as
+    P[F<=k "done"], exit 0), and R[F] is refused once, before any point is checked."""
     p = tmp_path / "geo.afsm"
     p.write_text(GEO + 'property pd = P=? [ F "done" ];\nproperty pg = P=? [ G !"done" ];\n')
     r = run_cli("sweep", str(p), "--bound", "0:10:5", "-p", "soon", "-p", "pd", "-p", "pg",
@@ -449,7 +449,7 @@ def test_json_on_stdout_keeps_a_csv_file_csv(deadline: str, tmp_path: Path) -> N
 
 @pytest.mark.storm
 def test_an_int_constant_swept_over_doubles_is_e208_once(deadline: str, no_points: None) -> None:
-    """`D=1e0:3` used to be swept as 1, 2, 3 while `verify --const D=1e0` is E208: a value
+    """`D=1e0:3` is not swept as 1, 2, 3, since `verify --const D=1e0` is E208: a value
     is an int only as written so, and an int constant refuses the others before any point."""
     assert parse_values("1e0:2") == [1.0, 2.0] and isinstance(parse_values("1e0:2")[0], float)
     assert all(isinstance(x, int) for x in parse_values("1:3") + parse_values("4,2"))

@@ -7,8 +7,6 @@ from __future__ import annotations
 import ast
 from pathlib import Path
 
-import pytest
-
 from tests.conftest import ROOT
 
 PACKAGE = ROOT / "afsmc"
@@ -36,14 +34,12 @@ def test_the_package_has_modules() -> None:
     assert len(_modules()) > 10
 
 
-@pytest.mark.xfail(strict=False, reason="issue 31 in progress")
 def test_no_module_is_longer_than_600_lines() -> None:
     long = [f"{p.relative_to(ROOT)}: {n} lines" for p in _modules()
             if (n := len(p.read_text(encoding="utf-8").splitlines())) > MAX_MODULE_LINES]
     assert long == []
 
 
-@pytest.mark.xfail(strict=False, reason="issue 31 in progress")
 def test_no_function_is_longer_than_100_lines() -> None:
     long = [f for p in _modules()
             for f in _long_functions(p.read_text(encoding="utf-8"), str(p.relative_to(ROOT)))]

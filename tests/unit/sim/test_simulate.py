@@ -85,8 +85,8 @@ def test_interval_contains_storm_value(path: Path, consts: dict[str, str], runs:
 def test_deadlocked_and_final_states_agree_with_storm(name: str) -> None:
     """A state where no action is enabled (W302) stays put, like a final state, and keeps
     earning its state rewards; the simulator and Storm (sparse, via PRISM and via JANI)
-    agree. Storm's sparse engine used to give such a state no reward (r = 2, ri = 0 for
-    deadlock.afsm, where the simulator said 5 and 1)."""
+    agree. The lowering gives such a state a self-loop, as Storm's sparse engine gives a
+    deadlock no reward of its own (r = 2, ri = 0 for deadlock.afsm against 5 and 1)."""
     path = DEADLOCK / f"{name}.afsm"
     data = sim_json(path, "--runs", "20000", "--seed", "3")
     sim = {p["name"]: p for p in data["properties"]}  # type: ignore[union-attr]
