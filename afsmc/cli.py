@@ -133,7 +133,7 @@ def _run(args: argparse.Namespace) -> int:
         from afsmc.commands.common import fail
 
         return fail(CompileError([Diagnostic(
-            codes.E114, Severity.ERROR, f"{getattr(args, 'file', 'the input')}: an expression is "
+            codes.E114, Severity.ERROR, f"{_inputs(args)}: an expression is "
             "nested too deeply for afsmc", None,
             hint="shorten the longest expressions (long chains of operators or formulas "
             "that use each other)")]), getattr(args, "json", False),
@@ -194,6 +194,13 @@ def main(argv: Sequence[str] | None = None) -> int:
         if previous is not None:
             signal.signal(signal.SIGTERM, previous)
     return code
+
+
+def _inputs(args: argparse.Namespace) -> str:
+    """The input file(s) a command was given, for a message about them: `check` and `fmt`
+    take several."""
+    files = getattr(args, "files", None) or [getattr(args, "file", None) or "the input"]
+    return ", ".join(str(f) for f in files)
 
 
 class StdoutError(Exception):

@@ -50,3 +50,18 @@ def test_a_bug_under_json_is_one_json_object_with_e009(monkeypatch: pytest.Monke
     (d,) = json.loads(result.out)["diagnostics"]
     assert d["code"] == "E009" and d["severity"] == "error"
     Path(re.search(r"the traceback is in (\S+);", d["message"]).group(1)).unlink()  # type: ignore[union-attr]
+
+
+def test_a_recursion_error_is_e114_naming_every_input(monkeypatch: pytest.MonkeyPatch) -> None:
+    """The backstop behind E113/E246: a RecursionError in a command is E114 on the files it
+    was given (check takes several), not an internal error."""
+    import afsmc.commands.check as check
+
+    def too_deep(args: object) -> int:
+        raise RecursionError("maximum recursion depth exceeded")
+
+    monkeypatch.setattr(check, "run", too_deep)
+    result = run_cli("check", "examples/patrol.afsm", "examples/uav.afsm")
+    assert result.code == 1
+    assert ("error[E114]: examples/patrol.afsm, examples/uav.afsm: an expression is nested "
+            "too deeply for afsmc") in result.err
