@@ -3,6 +3,7 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/setup.sh
-.venv/bin/ruff check afsmc tests benchmarks
+.venv/bin/ruff check afsmc tests benchmarks scripts
 .venv/bin/mypy
-.venv/bin/pytest "$@"
+# one worker per core (`-n 0` after the script's name runs in one process)
+.venv/bin/pytest -n auto --dist worksteal "$@"
