@@ -45,10 +45,14 @@ import shlex
 import subprocess
 import sys
 import tempfile
-from dataclasses import dataclass, field
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
+sys.path.insert(0, str(ROOT))
+
+from afsmc.diagnostics.explain import Explanation, Section  # noqa: E402
+from afsmc.diagnostics.explain import parse as parse_text  # noqa: E402
+
 EXPLANATIONS = ROOT / "afsmc" / "diagnostics" / "explanations"
 
 # Conditions no command line sets up reliably: internal errors, resources, third parties.
@@ -57,39 +61,9 @@ NOT_RUNNABLE = frozenset({
     "E999", "N412",
 })
 
-_TITLE = re.compile(r"# ([EWN]\d{3}): (\S.*)")
-_BLOCK = re.compile(r"^```(\w+)\n(.*?)^```\s*$", re.S | re.M)
-
-
-@dataclass
-class Section:
-    blocks: list[tuple[str, str]] = field(default_factory=list)  # (language, text)
-
-    def of(self, lang: str) -> list[str]:
-        return [text for kind, text in self.blocks if kind == lang]
-
-
-@dataclass
-class Explanation:
-    code: str
-    title: str
-    prose: str
-    wrong: Section
-    right: Section
-
-
 def parse(path: Path) -> Explanation:
-    text = path.read_text(encoding="utf-8")
-    first, _, rest = text.partition("\n")
-    m = _TITLE.fullmatch(first)
-    if m is None:
-        raise ValueError(f"the first line is not '# CODE: title': {first!r}")
-    parts = re.split(r"^## (Wrong|Right)\s*$", rest, flags=re.M)
-    if len(parts) != 5 or parts[1] != "Wrong" or parts[3] != "Right":
-        raise ValueError("expected the sections '## Wrong' then '## Right'")
-    wrong, right = (Section([(b.group(1), b.group(2)) for b in _BLOCK.finditer(s)])
-                    for s in (parts[2], parts[4]))
-    return Explanation(m.group(1), m.group(2), parts[0].strip(), wrong, right)
+    """The file as afsmc reads it (afsmc.diagnostics.explain: one parser for both)."""
+    return parse_text(path.read_text(encoding="utf-8"))
 
 
 def codes_of_check(text: str, consts: dict[str, str] | None = None) -> list[tuple[str, str]]:

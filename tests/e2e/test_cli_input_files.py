@@ -8,6 +8,7 @@ from pathlib import Path
 import pytest
 
 from tests.conftest import run_cli
+from tests.specs import BOM, SMALL
 
 
 def test_missing_file_is_a_diagnostic_not_a_traceback(tmp_path: Path) -> None:
@@ -58,20 +59,6 @@ def test_verify_of_an_empty_file_names_the_file(tmp_path: Path) -> None:
     for extra in ((), ("-f", "P=? [ F true ]")):
         r = run_cli("verify", str(path), *extra)
         assert r.code == 1 and f"{path}:1:1: error[E213]" in r.err, r.err
-
-
-BOM = "\ufeff"
-
-
-SMALL = """machine small;
-var x : [0..3] init 0;
-mode A = 0 initial;
-mode B = 1 final;
-action Up in A when x < 3 { x += 1; }
-action Done in A when x == 3 { goto B; }
-label done = mode == B;
-property reach = P=? [ F "done" ];
-"""
 
 
 def test_a_leading_byte_order_mark_is_skipped(tmp_path: Path) -> None:

@@ -11,19 +11,10 @@ import stormpy
 from afsmc.compiler import load
 from afsmc.lower.lowering import lower
 from afsmc.model.names import RESERVED, STORM_KEYWORDS
+from tests.specs import SMALL
 from tests.storm_util import storm_prism
 
 pytestmark = pytest.mark.storm
-
-SMALL = """machine small;
-var x : [0..3] init 0;
-mode A = 0 initial;
-mode B = 1 final;
-action Up in A when x < 3 { x += 1; }
-action Done in A when x == 3 { goto B; }
-label done = mode == B;
-property reach = P=? [ F "done" ];
-"""
 
 
 @pytest.mark.parametrize("stem", ["init", "module", "true", "rewards", "dtmc", "floor", "F", "9lives",

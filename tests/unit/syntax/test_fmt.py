@@ -15,6 +15,7 @@ import pytest
 
 from afsmc.syntax.fmt import format_text
 from tests.conftest import CASES, EXAMPLES, run_cli
+from tests.specs import BOM, SMALL
 
 CASE_DIRS = sorted(p for p in CASES.glob("fmt_*") if (p / "input.afsm").exists())
 
@@ -103,20 +104,6 @@ def test_rmin_written_together_still_parses() -> None:
     text = " machine  a  ;  property  a  =  R  min  =?  [  C  ]  ; "
     out = format_text(text)
     assert "property a = Rmin=? [ C ];" in out and format_text(out) == out
-
-
-BOM = "\ufeff"
-
-
-SMALL = """machine small;
-var x : [0..3] init 0;
-mode A = 0 initial;
-mode B = 1 final;
-action Up in A when x < 3 { x += 1; }
-action Done in A when x == 3 { goto B; }
-label done = mode == B;
-property reach = P=? [ F "done" ];
-"""
 
 
 def test_fmt_keeps_a_byte_order_mark() -> None:
