@@ -15,6 +15,7 @@ from afsmc.backends.storm_safe import signed_pow
 from afsmc.lower.lowering import Command, Lowered
 from afsmc.model import expr as E
 from afsmc.model import ir
+from afsmc.model.limits import INT64
 from afsmc.model.pretty import Printer, number
 
 
@@ -47,14 +48,11 @@ class PrismPrinter(Printer):
         return super().atom(e)
 
 
-INT64_MIN = -(2**63)
-
-
 def pnum(v: int | float | bool) -> str:
     """A number as PRISM reads it: Storm's parser takes the literal without its sign, so
     -2^63 overflows as written ("expecting <no 64-bit integer overflow>")."""
-    if isinstance(v, int) and not isinstance(v, bool) and v == INT64_MIN:
-        return f"({INT64_MIN + 1} - 1)"
+    if isinstance(v, int) and not isinstance(v, bool) and v == INT64[0]:
+        return f"({INT64[0] + 1} - 1)"
     return number(v)
 
 
