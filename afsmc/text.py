@@ -1,7 +1,8 @@
 """User-facing wording of numbers and nouns, written once for every stage and command.
 
 - `literal(v)`: a value as the language and `--const` write it (`true`, `3`, `0.25`).
-- `short(v, digits)`: a measured or computed number for a table (`0.6351`), `n/a` for none.
+- `short(v, digits)`: a measured or computed number in a sentence (`0.6351`), `n/a` for none.
+- `num(v)`: a value in a results table (6 significant digits, large ones in fixed point).
 - `count(n)`: a state or byte count for progress lines (`12.3 M`).
 - `article(word)` and `plural(n, word)`: 'an int', '3 points'.
 
@@ -34,6 +35,17 @@ def short(v: object, digits: int = 4) -> str:
     if isinstance(v, bool) or not isinstance(v, (int, float)) or math.isnan(v):
         return "n/a"
     return f"{v:.{digits}g}"
+
+
+def num(v: float | None) -> str:
+    """A value in a table: 6 significant digits, large ones in fixed point."""
+    if v is None:
+        return "-"
+    if v != v or v in (float("inf"), float("-inf")):
+        return str(v)
+    if abs(v) >= 1e5:  # an expected reward of 3000000000.002 read "3e+09"
+        return f"{v:.4f}".rstrip("0").rstrip(".")
+    return f"{v:.6g}"
 
 
 def count(n: float) -> str:

@@ -130,14 +130,3 @@ def fail(exc: CompileError, as_json: bool = False, wrapped: bool = False) -> int
 
 def print_json(obj: object) -> None:
     print(json.dumps(obj, indent=2, sort_keys=False))
-
-
-def num(v: float | None) -> str:
-    """A value in a table: 6 significant digits, large ones in fixed point."""
-    if v is None:
-        return "-"
-    if v != v or v in (float("inf"), float("-inf")):
-        return str(v)
-    if abs(v) >= 1e5:  # an expected reward of 3000000000.002 read "3e+09"
-        return f"{v:.4f}".rstrip("0").rstrip(".")
-    return f"{v:.6g}"

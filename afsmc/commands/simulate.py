@@ -16,7 +16,6 @@ from afsmc.commands.common import (
     add_seed,
     dask_address,
     fail,
-    num,
     overrides,
     print_json,
     report,
@@ -37,7 +36,7 @@ from afsmc.sim.run import (
     program,
     simulate,
 )
-from afsmc.text import literal
+from afsmc.text import literal, num
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:

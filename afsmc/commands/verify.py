@@ -13,14 +13,13 @@ from afsmc.commands.common import (
     add_file,
     add_reductions,
     fail,
-    num,
     overrides,
     reductions,
     report,
     usage_error,
 )
 from afsmc.diagnostics import CompileError
-from afsmc.text import literal
+from afsmc.text import literal, num
 from afsmc.verify import VerifyResult
 from afsmc.verify.storm import ENGINES, SOLVERS, VIAS
 
