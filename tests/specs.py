@@ -13,4 +13,17 @@ label done = mode == B;
 property reach = P=? [ F "done" ];
 """
 
+# A bool param that switches a hazard on: sweeps and --const over true/false.
+BOOL_PARAM = """machine windy;
+param bool WINDY = false;
+var x : [0..3] init 0;
+mode A initial;
+mode B final;
+action Go in A when x < 3 { 0.5: x := x + 1; 0.5: skip; }
+action Fin in A when x == 3 weight 0.5 { goto B; }
+hazard Gust from {A} with probability (WINDY ? 0.1 : 0) { goto B; }
+label done = mode == B && x == 3;
+property p = P=? [ F "done" ];
+"""
+
 BOM = "\ufeff"

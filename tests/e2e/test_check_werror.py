@@ -5,21 +5,9 @@ from __future__ import annotations
 from pathlib import Path
 
 from tests.conftest import EXAMPLES, run_cli
+from tests.specs import BOOL_PARAM
 
 PATROL = str(EXAMPLES / "patrol.afsm")
-
-
-BOOL_PARAM = """machine windy;
-param bool WINDY = false;
-var x : [0..3] init 0;
-mode A initial;
-mode B final;
-action Go in A when x < 3 { 0.5: x := x + 1; 0.5: skip; }
-action Fin in A when x == 3 weight 0.5 { goto B; }
-hazard Gust from {A} with probability (WINDY ? 0.1 : 0) { goto B; }
-label done = mode == B && x == 3;
-property p = P=? [ F "done" ];
-"""
 
 
 def test_werror_says_why_warnings_exit_1(tmp_path: Path) -> None:

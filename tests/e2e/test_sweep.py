@@ -16,6 +16,7 @@ from afsmc.commands.sweep import split_consts
 from afsmc.diagnostics import CompileError
 from afsmc.verify import parse_values, sweep
 from tests.conftest import EXAMPLES, run_cli
+from tests.specs import BOOL_PARAM
 from tests.unit.verify.test_verify import DEADLINE, GEO, RECORD
 
 TOL = 1e-6  # Storm's value iteration stops at a relative precision of 1e-6
@@ -436,7 +437,6 @@ def test_an_unknown_property_is_reported_once_before_any_point(deadline: str,
     assert r.code == 1 and r.err.count("error[E407]") == 1, r.err
 
 
-
 @pytest.mark.slow
 @pytest.mark.storm
 def test_json_on_stdout_keeps_a_csv_file_csv(deadline: str, tmp_path: Path) -> None:
@@ -711,19 +711,6 @@ def test_a_bool_constant_is_swept_over_false_and_true(tmp_path: Path) -> None:
     assert bad.code == 2 and "mixes true/false with numbers" in bad.err
     assert run_cli("sweep", str(p), "-c", "FAST=true", "--bound", "false,true",
                    "-p", "n").code == 2
-
-
-BOOL_PARAM = """machine windy;
-param bool WINDY = false;
-var x : [0..3] init 0;
-mode A initial;
-mode B final;
-action Go in A when x < 3 { 0.5: x := x + 1; 0.5: skip; }
-action Fin in A when x == 3 weight 0.5 { goto B; }
-hazard Gust from {A} with probability (WINDY ? 0.1 : 0) { goto B; }
-label done = mode == B && x == 3;
-property p = P=? [ F "done" ];
-"""
 
 
 @pytest.mark.storm
