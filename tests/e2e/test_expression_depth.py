@@ -126,6 +126,7 @@ def test_600_minus_signs_parse(tmp_path: Path) -> None:
     assert run_cli("check", str(path)).code == 0
 
 
+@pytest.mark.slow
 def test_formulas_nesting_too_deeply_once_inlined_are_a_diagnostic(tmp_path: Path) -> None:
     n = MAX_DEPTH - 10
     path = tmp_path / "chain.afsm"

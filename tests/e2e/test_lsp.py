@@ -386,6 +386,7 @@ def test_vscode_grammar() -> None:
     assert run.returncode == 0, run.stdout[-3000:] + run.stderr[-3000:]
 
 
+@pytest.mark.slow
 @MODULE
 async def test_a_2000_term_expression_gets_diagnostics_not_a_crash(client: LanguageClient) -> None:
     # afsmc lsp runs in afsmc.stack's deep thread, as every command does
@@ -441,6 +442,7 @@ def _session(*messages: dict[str, Any]) -> tuple[int, list[dict[str, Any]]]:
     return p.returncode, replies
 
 
+@pytest.mark.slow
 def test_exit_code_follows_shutdown() -> None:
     """LSP: `exit` after `shutdown` is 0, without it 1. It was always 0."""
     shutdown = {"jsonrpc": "2.0", "id": 2, "method": "shutdown"}

@@ -713,6 +713,7 @@ def test_a_bool_constant_is_swept_over_false_and_true(tmp_path: Path) -> None:
                    "-p", "n").code == 2
 
 
+@pytest.mark.slow
 @pytest.mark.storm
 def test_sweeping_a_bool_over_numbers_fails_once_before_any_point(tmp_path: Path) -> None:
     path = tmp_path / "windy.afsm"

@@ -101,6 +101,7 @@ def _reported_at() -> list[tuple[str, str, str]]:
     return out
 
 
+@pytest.mark.slow
 def test_each_code_is_reported_at_its_declared_severity() -> None:
     sites = _reported_at()
     assert len(sites) > 100  # the scan sees the call sites

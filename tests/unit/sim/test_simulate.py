@@ -61,7 +61,7 @@ SMALL = {"OBJ": "1", "WIDTH": "2"}  # a small instance keeps Storm's build quick
 @pytest.mark.storm
 @pytest.mark.parametrize(("path", "consts", "runs", "resolve", "lowering"), [
     (PATROL, {}, 20_000, "uniform", "uniform"),
-    (MISSION, SMALL, 20_000, "uniform", "uniform"),
+    pytest.param(MISSION, SMALL, 20_000, "uniform", "uniform", marks=pytest.mark.slow),
     (MISSION, SMALL, 10_000, "floor", "lo"),
     (MISSION, SMALL, 10_000, "hi", "hi"),
     (WEIGHTS, {}, 20_000, "uniform", "uniform"),

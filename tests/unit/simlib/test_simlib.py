@@ -246,6 +246,7 @@ def test_outputs_of_a_simulator_are_paired() -> None:
     assert np.corrcoef(out["duration"], out["battery"])[0, 1] > 0.8
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("sim", uav.SIMULATORS, ids=lambda s: s.name)
 def test_100k_runs_in_one_call(sim: Simulator) -> None:
     # How fast is measured in benchmarks/simlib_speed.py, not here: a timed assertion

@@ -145,6 +145,7 @@ def arithmetic(draw: st.DrawFn, depth: int = 0) -> str:
     return inner + space + op + space + draw(arithmetic(depth + 1))
 
 
+@pytest.mark.slow
 @settings(max_examples=200, deadline=None)
 @given(arithmetic())
 def test_fmt_keeps_parentheses_and_never_joins_minus_signs(e: str) -> None:

@@ -62,6 +62,7 @@ def test_monte_carlo_agrees_with_the_bounded_g_values(model: Path) -> None:
         assert value is not None and est.low <= value <= est.high, (name, est, value)
 
 
+@pytest.mark.slow
 @pytest.mark.storm
 def test_progress_names_the_dual_queries(model: Path) -> None:
     said: list[str] = []
@@ -72,6 +73,7 @@ def test_progress_names_the_dual_queries(model: Path) -> None:
     assert not any("__afsmc" in s for s in said), said
 
 
+@pytest.mark.slow
 @pytest.mark.storm
 def test_progress_words_a_dual_by_its_property_not_its_name(tmp_path: Path) -> None:
     # A DTMC property whose own name ends in _min: its dual is no "max as 1 - Pmin".

@@ -120,6 +120,7 @@ def _stop_after_first_answer(monkeypatch: pytest.MonkeyPatch, stop: Callable[
     monkeypatch.setattr(runner, "run_job", run_job)
 
 
+@pytest.mark.slow
 @pytest.mark.storm
 def test_a_failed_run_reports_the_values_it_had(monkeypatch: pytest.MonkeyPatch) -> None:
     from afsmc.diagnostics import CompileError, Severity
