@@ -7,8 +7,8 @@ from __future__ import annotations
 import argparse
 import sys
 
+from afsmc.api.mission import Mission
 from afsmc.commands.common import add_consts, overrides, report, usage_error
-from afsmc.compiler import load
 from afsmc.diagnostics import CompileError, Diagnostic, Severity
 from afsmc.diagnostics.formats import to_sarif
 from afsmc.files import decode_source
@@ -41,9 +41,9 @@ def run(args: argparse.Namespace) -> int:
         try:
             if path == "-":  # strictly UTF-8, as a file is read
                 text = decode_source(sys.stdin.buffer.read(), "<stdin>")
-                diags += load("<stdin>", overrides(args), text=text).diagnostics
+                diags += Mission.open("<stdin>", overrides(args), text=text).check()
             else:
-                diags += load(path, overrides(args)).diagnostics
+                diags += Mission.open(path, overrides(args)).check()
         except CompileError as exc:
             diags += exc.diagnostics
     if fmt == "sarif":
