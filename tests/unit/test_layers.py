@@ -88,8 +88,8 @@ def test_lowering_imports_no_later_stage(path: Path) -> None:
 # The Python API (afsmc.api) is a top layer like the CLI: the commands call into it, and it
 # calls the stages. Below it, no stage imports it or a command; it imports no command.
 BELOW_API = ("backends", "verify", "sim", "simlib", "diagnostics")
-BELOW_API_FILES = sorted(p for layer in BELOW_API for p in (PACKAGE / layer).rglob("*.py")) + [
-    PACKAGE / "compiler.py", PACKAGE / "files.py", PACKAGE / "text.py"]
+BELOW_API_FILES = [*sorted(p for layer in BELOW_API for p in (PACKAGE / layer).rglob("*.py")),
+                   PACKAGE / "compiler.py", PACKAGE / "files.py", PACKAGE / "text.py"]
 API_FILES = sorted((PACKAGE / "api").rglob("*.py"))
 
 
