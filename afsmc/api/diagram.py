@@ -15,6 +15,7 @@ from typing import TYPE_CHECKING
 import graphviz
 
 from afsmc.api.errors import AfsmError
+from afsmc.api.processes import main_not_reimported
 from afsmc.backends.dot import Overlay
 from afsmc.backends.dot import diagram as dot_diagram
 from afsmc.check.modegraph import analyse
@@ -95,9 +96,10 @@ def diagram(mission: Mission, *, reach: bool = False, resolve: Resolution = "non
     overlay = Overlay()
     if reach:
         try:
-            overlay = reach_overlay(*mode_reachability(mission.model, resolve,
-                                                       max_states=max_states,
-                                                       progress=progress))
+            with main_not_reimported():
+                overlay = reach_overlay(*mode_reachability(mission.model, resolve,
+                                                           max_states=max_states,
+                                                           progress=progress))
         except CompileError as exc:
             raise AfsmError.of(exc) from None
     return Diagram(dot_diagram(mission.model, overlay), mission.name)

@@ -15,6 +15,7 @@ from typing import TYPE_CHECKING, Any
 
 from afsmc import verify as lib
 from afsmc.api.errors import AfsmError
+from afsmc.api.processes import main_not_reimported
 from afsmc.diagnostics import CompileError, Diagnostic
 from afsmc.text import num
 from afsmc.verify.results import PropertyResult, VerifyResult
@@ -44,8 +45,9 @@ def verify(mission: Mission, properties: Sequence[str] | str | None = None,
     with the command's defaults; every option is passed on as given."""
     kwargs = {**VERIFY_DEFAULTS, **options}
     try:
-        res = lib.run(mission.path, text=mission.text, consts=dict(mission.consts),
-                      properties=names(properties), **kwargs)
+        with main_not_reimported():
+            res = lib.run(mission.path, text=mission.text, consts=dict(mission.consts),
+                          properties=names(properties), **kwargs)
     except CompileError as exc:
         raise AfsmError.of(exc) from None
     return Results(res)

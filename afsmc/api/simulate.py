@@ -8,6 +8,7 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
 from afsmc.api.errors import AfsmError
+from afsmc.api.processes import main_not_reimported
 from afsmc.diagnostics import CompileError, Diagnostic, Severity, codes
 from afsmc.sim.compile import SimError
 from afsmc.sim.run import BATCH, Estimate, Outcome, Strategy, job_for
@@ -31,8 +32,9 @@ def simulate(mission: Mission, runs: int = 100_000, *, seed: int = 0,
         raise ValueError(f"confidence must be in (0, 1); got {confidence!r}")
     job = job_for(mission.path, mission.text, mission.consts, resolve, max_steps)
     try:
-        out = run_simulation(job, runs, seed, confidence=confidence, jobs=jobs, dask=dask,
-                             trace=traces, batch_size=batch_size)
+        with main_not_reimported():
+            out = run_simulation(job, runs, seed, confidence=confidence, jobs=jobs,
+                                 dask=dask, trace=traces, batch_size=batch_size)
     except CompileError as exc:
         raise AfsmError.of(exc) from None
     except SimError as exc:

@@ -10,6 +10,7 @@ from typing import TYPE_CHECKING, Any
 
 from afsmc import verify as lib
 from afsmc.api.errors import AfsmError
+from afsmc.api.processes import main_not_reimported
 from afsmc.api.results import VERIFY_DEFAULTS, names
 from afsmc.diagnostics import CompileError
 from afsmc.verify.sweep_result import SweepResult
@@ -37,8 +38,10 @@ def sweep(mission: Mission, variable: str, values: Sequence[Number] | str, *,
     if variable == "bound":
         kwargs.setdefault("kind", "bound")
     try:
-        res = lib.sweep(mission.path, variable, list(values), text=mission.text,
-                        consts=dict(mission.consts), properties=names(properties), **kwargs)
+        with main_not_reimported():
+            res = lib.sweep(mission.path, variable, list(values), text=mission.text,
+                            consts=dict(mission.consts), properties=names(properties),
+                            **kwargs)
     except CompileError as exc:
         raise AfsmError.of(exc) from None
     return Sweep(res)

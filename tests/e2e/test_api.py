@@ -27,7 +27,10 @@ m = afsmc.load("examples/patrol.afsm")
 df = m.verify().to_pandas()
 svg = m.diagram()._repr_svg_()
 r = m.with_consts(CELLS=6).verify(["finish"])
-print(json.dumps({"rows": list(df.index), "columns": list(df.columns),
+# Storm in its watched child process, as for a model above 200,000 states (uav.afsm)
+iso = m.verify(["finish"], isolate=True)
+print(json.dumps({"isolated": iso.to_json()["properties"][0]["uniform"],
+                  "direct": df.loc["finish", "uniform"],"rows": list(df.index), "columns": list(df.columns),
                   "svg": svg.lstrip()[:5], "has_svg": "<svg" in svg,
                   "result": r.to_json()}))
 """
@@ -69,6 +72,7 @@ def test_the_snippet_works_as_a_plain_script_and_from_stdin(tmp_path: Path, how:
     assert got["rows"] == afsmc.load(PATROL).properties  # one row per declared property
     assert got["columns"] == ["formula", "kind", "min", "max", "uniform", "value"]
     assert got["svg"] == "<?xml" and got["has_svg"]
+    assert got["isolated"] == got["direct"]
     monkeypatch.chdir(ROOT)  # the file named as the snippet names it
     cli = cli_json("examples/patrol.afsm", "--const", "CELLS=6", "--property", "finish")
     assert without_times(got["result"]) == without_times(cli)
