@@ -75,7 +75,7 @@ class Mission:
     ``model``: the checked IR (:class:`afsmc.model.ir.Model`)."""
 
     path: str
-    text: str
+    text: str = field(repr=False)
     consts: Mapping[str, str]
     checked: Checked = field(repr=False, compare=False)
 

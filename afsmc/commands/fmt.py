@@ -22,7 +22,8 @@ from afsmc.text import plural
 def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("files", nargs="+", metavar="FILE", help="the .afsm files ('-': standard input)")
     p.add_argument("--check", action="store_true",
-                   help="change nothing; list the files that are not formatted and exit 1 if any")
+                   help="change nothing; list the files that are not formatted (on standard "
+                        "error: which lines would change) and exit 1 if any")
     p.add_argument("--diff", action="store_true",
                    help="change nothing; print what would change as a unified diff (with "
                         "--check, also exit 1 if anything would)")
