@@ -102,9 +102,14 @@ def check_deadlock(model: ir.Model, rep: Reporter) -> None:
         wit = deadlock_witness(model, m.number)
         if wit is not None:
             names = ", ".join(a.name for a in acts)
+            # The search covers every value of the variables, not only the reachable states:
+            # the message says so, and how to silence it for a state that cannot occur.
             rep.warning(codes.W302, f"no action is enabled in the state {wit}: the machine stops "
-                        f"there (actions of {m.name}: {names})", m.span,
-                        hint="add an action for this case, or widen a guard")
+                        f"there if it can reach it (actions of {m.name}: {names})", m.span,
+                        hint="add an action for this case, or widen a guard. The check looks at "
+                             "every value of the variables, so the state may be unreachable; "
+                             "if it is, widen a guard to cover it or narrow the variable's "
+                             "range, and the warning goes")
 
 
 def check_weight_refs(model: ir.Model, rep: Reporter) -> None:

@@ -7,11 +7,12 @@ from __future__ import annotations
 import argparse
 import sys
 
+from afsmc.api.mission import Mission
 from afsmc.commands.common import add_consts, overrides, report, usage_error
-from afsmc.compiler import load
 from afsmc.diagnostics import CompileError, Diagnostic, Severity
 from afsmc.diagnostics.formats import to_sarif
 from afsmc.files import decode_source
+from afsmc.text import plural
 
 FORMATS = ("text", "json", "sarif")
 
@@ -37,13 +38,15 @@ def run(args: argparse.Namespace) -> int:
     args.json = fmt == "json"  # an internal error is reported as JSON too (cli.main)
     # Every file's diagnostics, in the order of the files: one report (one JSON list).
     diags: list[Diagnostic] = []
+    checked: list[Mission] = []
     for path in args.files:
         try:
             if path == "-":  # strictly UTF-8, as a file is read
                 text = decode_source(sys.stdin.buffer.read(), "<stdin>")
-                diags += load("<stdin>", overrides(args), text=text).diagnostics
+                checked.append(Mission.open("<stdin>", overrides(args), text=text))
             else:
-                diags += load(path, overrides(args)).diagnostics
+                checked.append(Mission.open(path, overrides(args)))
+            diags += checked[-1].check()
         except CompileError as exc:
             diags += exc.diagnostics
     if fmt == "sarif":
@@ -53,8 +56,22 @@ def run(args: argparse.Namespace) -> int:
     if any(d.severity is Severity.ERROR for d in diags):
         return 1
     warnings = sum(d.severity is Severity.WARNING for d in diags)
+    if fmt == "text" and not warnings:
+        # Success says so, in one line: silence could as well be a check that never ran.
+        print(clean_summary(args.files, checked), file=sys.stderr)
     if args.werror and warnings:
         if fmt == "text":  # the summary above counts them as warnings: say why exit 1
             print(f"afsmc: --werror: {warnings} warning(s) treated as errors", file=sys.stderr)
         return 1
     return 0
+
+
+def clean_summary(files: list[str], checked: list[Mission]) -> str:
+    """The line `check` prints when no file has an error or a warning: what was checked."""
+    if len(checked) != 1:
+        return f"{len(checked)} files: no errors, no warnings"
+    m = checked[0].model
+    name = "<stdin>" if files[0] == "-" else files[0]
+    sizes = ", ".join([plural(len(m.modes), "mode"), plural(len(m.variables), "variable"),
+                       plural(len(m.properties), "property", "properties")])
+    return f"{name}: no errors, no warnings (machine {m.name}: {sizes})"

@@ -3,11 +3,10 @@
 from __future__ import annotations
 
 import argparse
-import importlib
 import os
 import sys
-from collections.abc import Callable
 
+from afsmc.api.mission import Mission, available_targets, target_notes
 from afsmc.commands.common import (
     add_consts,
     add_file,
@@ -19,34 +18,8 @@ from afsmc.commands.common import (
     report,
     usage_error,
 )
-from afsmc.compiler import load, lowered
-from afsmc.diagnostics import CompileError, Diagnostic
+from afsmc.diagnostics import CompileError
 from afsmc.files import check_writable, write_atomic
-from afsmc.lower.lowering import Lowered
-
-# -t NAME -> "module:function"; the function maps a Lowered model to {suffix: text}.
-TARGETS: dict[str, str] = {
-    "prism": "afsmc.backends.prism:files",
-    "jani": "afsmc.backends.jani:files",
-    "dot": "afsmc.backends.dot:files",
-}
-
-
-def available_targets() -> dict[str, Callable[[Lowered], dict[str, str]]]:
-    out = {}
-    for name, ref in TARGETS.items():
-        module, func = ref.split(":")
-        try:
-            out[name] = getattr(importlib.import_module(module), func)
-        except (ImportError, AttributeError):
-            continue  # a backend that is not installed is not offered
-    return out
-
-
-def target_notes(name: str, low: Lowered) -> list[Diagnostic]:
-    """A backend's warnings about what it wrote (its optional `notes(low)`): JANI's W401."""
-    notes = getattr(importlib.import_module(TARGETS[name].split(":")[0]), "notes", None)
-    return list(notes(low)) if notes else []
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
@@ -93,13 +66,13 @@ def run(args: argparse.Namespace) -> int:
         usage_error(f"-o {args.output}: 'compile -t dot' writes Graphviz's DOT text, not a "
                     f"picture; 'afsmc diagram {args.file} -o {args.output}' draws it")
     try:
-        checked = load(args.file, overrides(args))
+        mission = Mission.open(args.file, overrides(args))
         try:
-            low = lowered(checked.model, args.resolve, reductions(args))
+            low = mission.lowered(args.resolve, reductions(args))
         except CompileError:
-            report(checked.diagnostics)
+            report(mission.diagnostics)
             raise
-        report([*checked.diagnostics, *target_notes(args.target, low)])
+        report([*mission.diagnostics, *target_notes(args.target, low)])
         files = available_targets()[args.target](low)
         if args.output == "-":
             stem = os.path.splitext(os.path.basename(args.file))[0]

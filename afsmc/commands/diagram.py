@@ -13,13 +13,16 @@ import json
 import math
 import os
 import sys
-import time
 from typing import Any
 
-import graphviz
-
+from afsmc.api.diagram import (  # noqa: F401  (mode_reachability, _reach_error: the tests')
+    FORMATS,
+    _reach_error,
+    mode_reachability,
+    reach_overlay,
+    render,
+)
 from afsmc.backends.dot import Overlay, diagram
-from afsmc.check.modegraph import analyse
 from afsmc.commands.common import (
     add_consts,
     add_file,
@@ -30,18 +33,11 @@ from afsmc.commands.common import (
     usage_error,
 )
 from afsmc.commands.verify import positive
-from afsmc.compiler import load, lowered
+from afsmc.compiler import load
 from afsmc.diagnostics import CompileError, Diagnostic, Severity, codes
 from afsmc.files import write_atomic
-from afsmc.lower.lowering import Resolution
 from afsmc.model import ir
 from afsmc.text import short
-from afsmc.verify import upper_bound
-from afsmc.verify.api import ask
-from afsmc.verify.guard import Progress
-from afsmc.verify.storm import StormFailure
-
-FORMATS = ("svg", "png", "pdf")
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
@@ -204,69 +200,6 @@ def read_results(path: str, model: ir.Model) -> Overlay:
     return Overlay(modes=modes, notes=notes)
 
 
-def mode_reachability(model: ir.Model, resolution: Resolution, *,
-                      max_states: int | None = None, progress: Progress | None = None
-                      ) -> tuple[dict[int, tuple[float, float]], bool]:
-    """Storm: (min, max) probability of ever reaching each mode (equal for a DTMC), and
-    whether the model is an MDP. Built once for all modes, with verify's guard: a model
-    that may be large is built in a watched process and stopped at `max_states` (default:
-    what the free memory holds) or when the memory runs short, with E405/E406."""
-    low = lowered(model, resolution)  # the reductions keep every mode's reachability
-    mdp = low.kind == "mdp"
-    unreachable = set(analyse(model).unreachable)
-    numbers = [m.number for m in sorted(model.modes, key=lambda m: m.number)
-               if m.number not in unreachable]
-    ops = ("min", "max") if mdp else ("",)
-
-    def query(n: int, op: str) -> str:
-        return f"reach_{n}_{op}" if op else f"reach_{n}"
-    queries = {query(n, op): f"P{op}=? [ F mode={n} ]" for n in numbers for op in ops}
-    say = progress or (lambda text: None)
-
-    def relay(text: str) -> None:
-        # One line per finished query would be one per mode; the guard's periodic lines
-        # ("checking ...: 15 s") still show a slow one.
-        if not text.startswith("checked "):
-            say("reach: " + text)
-    say(f"reach: building the {low.kind.upper()} with Storm and checking {len(numbers)} "
-        f"modes ...")
-    t0 = time.monotonic()
-    got = ask(low, queries, bound=upper_bound(model), what=f"{low.kind.upper()} (--reach)",
-              max_states=max_states, progress=relay)
-    if got.failure is not None:
-        raise _reach_error(got.failure)
-    say(f"reach: {got.states:,} states, {got.transitions:,} transitions, "
-        f"{len(queries)} checks in {time.monotonic() - t0:.1f} s")
-    out: dict[int, tuple[float, float]] = {n: (0.0, 0.0) for n in unreachable}
-    for n in numbers:
-        vs = [got.values[query(n, op)] for op in ops]
-        out[n] = (min(vs), max(vs))
-    return out, mdp
-
-
-def _reach_error(f: StormFailure) -> CompileError:
-    """Storm's failure at --reach in the diagram's words: E405 too big, E406 out of
-    memory, E612 anything else."""
-    if f.stage == "too-big":
-        return _error(codes.E405, " ".join(f.message.split()),
-                      "raise --max-states if the machine has the memory (the sparse engine "
-                      "needs about 250 bytes per state), or draw a smaller instance with "
-                      "--const")
-    if f.stage == "memory":
-        return _error(codes.E406, " ".join(f.message.split()),
-                      "draw a smaller instance with --const")
-    return _error(codes.E612, f"Storm could not compute the reachability of the modes: "
-                  f"{' '.join(f.message.split()) or f.stage}",
-                  hint="check the model with `afsmc compile -t prism`")
-
-
-def reach_overlay(reach: dict[int, tuple[float, float]], mdp: bool) -> Overlay:
-    modes = {n: f"P(reach) {_range(lo, hi)}" for n, (lo, hi) in sorted(reach.items())}
-    caption = ("P(reach): probability of ever reaching the mode" +
-               (", min – max over interval choices" if mdp else ""))
-    return Overlay(modes=modes, caption=caption)
-
-
 def output_path(args: argparse.Namespace) -> tuple[str, str]:
     if args.output is None:
         stem = os.path.splitext(os.path.basename(args.file))[0]
@@ -275,20 +208,6 @@ def output_path(args: argparse.Namespace) -> tuple[str, str]:
     if fmt not in FORMATS:
         usage_error(f"-o {args.output}: the picture must end in .svg, .png or .pdf")
     return args.output, fmt
-
-
-def render(g: graphviz.Digraph, fmt: str) -> bytes:
-    try:
-        data: bytes = g.pipe(format=fmt, engine="dot")
-    except graphviz.ExecutableNotFound:
-        raise _error(codes.E610, "the Graphviz program `dot` was not found on PATH",
-                     hint="install Graphviz (e.g. `apt-get install graphviz`), or write the "
-                          "DOT source with `afsmc compile FILE -t dot` and render it elsewhere"
-                     ) from None
-    except graphviz.CalledProcessError as exc:
-        stderr = exc.stderr.decode("utf-8", "replace").strip() if exc.stderr else ""
-        raise _error(codes.E613, f"Graphviz `dot` failed: {stderr or exc}") from None
-    return data
 
 
 def _say(text: str) -> None:

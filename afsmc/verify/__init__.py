@@ -1,6 +1,9 @@
 """Verification with Storm (through stormpy): the library behind `afsmc verify` and `afsmc sweep`.
 
-Other tools (benchmarks, Monte Carlo cross-checks) call these functions directly. Every
+For people, the Python API is :func:`afsmc.load` (afsmc.api): ``Mission.verify`` and
+``Mission.sweep`` call ``run`` and ``sweep`` below with the command line's defaults, and give
+tables and plots. Other tools (benchmarks, Monte Carlo cross-checks) call these functions
+directly, with their own defaults (``engine="sparse"``, where the commands use "auto"). Every
 function raises :class:`afsmc.diagnostics.CompileError` carrying diagnostics (codes E4xx for
 Storm's side) instead of letting a Storm exception escape. When some queries fail and others
 were answered, the error's ``partial`` keeps the answers: a :class:`Partial` (``.model``,
@@ -8,7 +11,8 @@ were answered, the error's ``partial`` keeps the answers: a :class:`Partial` (``
 ``check``, a ``SweepResult`` of the points evaluated (whole or in part) from ``sweep``.
 
 ``run(path, *, consts=None, properties=(), formulas=(), via="prism", engine="sparse",
-max_states=None, uniform=True, isolate=None, progress=None, text=None) -> VerifyResult``
+max_states=None, uniform=True, isolate=None, progress=None, text=None, reductions=None,
+bisimulation=False, split=False, memory_budget=None, solver="auto") -> VerifyResult``
     Load, check and lower the file, build it with Storm and check the properties: the ones
     named in `properties` (default: every declared one, unless there are ad-hoc formulas:
     then none) plus each ad-hoc formula in
@@ -31,7 +35,8 @@ transitions, choices, parse/build/check times), ``.properties`` (list of
 
 ``sweep(path, variable, values, *, kind="const", consts=None, properties=(), formulas=(),
 via="prism", engine="sparse", max_states=None, jobs=None, dask=None, uniform=True,
-progress=None) -> SweepResult``
+progress=None, text=None, reductions=None, bisimulation=False, split=False,
+solver="auto") -> SweepResult``
     Evaluate the properties for each value of one open constant (``kind="const"``) or of
     the step bound of the properties (``kind="bound"``: ``F<=k``, ``C<=k``, ``I=k``; a property
     without a step bound is E410, raised before any point; the model is built once per chunk
@@ -39,8 +44,8 @@ progress=None) -> SweepResult``
     number of cores; 1 runs in this process) or, with ``dask="tcp://host:8786"``, on that
     Dask cluster (a ``distributed.Client`` or an address). ``SweepResult.points`` is a list
     of :class:`SweepPoint` (x, properties, states, transitions) in the order of `values`;
-    ``to_csv()``, ``to_json()``, ``plot(path)`` write the outputs; ``curve(name, key)``
-    gives one curve.
+    ``to_csv()``, ``to_json()``, ``plot(path)`` write the outputs, ``figure()`` is the
+    plot as a matplotlib Figure; ``curve(name, key)`` gives one curve.
 
 ``parse_values(text) -> list[int | float]``: ``"0:900:25"`` (inclusive) or ``"1,2,5"``.
 ``upper_bound(model) -> int``: modes × the product of the variables' ranges.

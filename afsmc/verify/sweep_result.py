@@ -6,6 +6,7 @@ import csv
 import io
 import os
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Any
 
 from afsmc.diagnostics import CompileError, Diagnostic, Severity, codes
 from afsmc.files import write_atomic
@@ -13,6 +14,11 @@ from afsmc.text import literal
 from afsmc.verify.results import PropertyResult, find_property
 from afsmc.verify.storm import finite
 from afsmc.verify.sweep_values import Kind, Number
+
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
+
+RC: Any = {"svg.hashsalt": "afsmc", "font.size": 9}  # byte-identical SVGs; small print
 
 
 @dataclass
@@ -89,18 +95,30 @@ class SweepResult:
     def plot(self, path: str, *, protect: tuple[str, ...] = ()) -> None:
         """Min, max and uniform curves (or the value) per property, as PNG or SVG."""
         from matplotlib import rc_context
-        from matplotlib.backends.backend_agg import FigureCanvasAgg
-        from matplotlib.figure import Figure
-        from matplotlib.ticker import MaxNLocator
 
         ext = os.path.splitext(path)[1].lower()
         if ext not in (".png", ".svg"):
             raise CompileError([Diagnostic(codes.E003, Severity.ERROR,
                                            f"--plot {path}: the name must end in .png or .svg",
                                            None)])
+        fig = self.figure()
+        with rc_context(RC):
+            buf = io.BytesIO()
+            if ext == ".png":
+                fig.savefig(buf, format="png", dpi=120, metadata={"Software": None})
+            else:
+                fig.savefig(buf, format="svg", metadata={"Date": None, "Creator": None})
+        write_atomic(path, buf.getvalue(), protect=protect)
+
+    def figure(self) -> Figure:
+        """The plot as a matplotlib Figure: a panel per property."""
+        from matplotlib import figure, rc_context
+        from matplotlib.backends.backend_agg import FigureCanvasAgg
+        from matplotlib.ticker import MaxNLocator
+
         n = max(1, len(self.names))
-        with rc_context({"svg.hashsalt": "afsmc", "font.size": 9}):
-            fig = Figure(figsize=(6.4, 3.6 * n), layout="constrained")
+        with rc_context(RC):
+            fig = figure.Figure(figsize=(6.4, 3.6 * n), layout="constrained")
             FigureCanvasAgg(fig)
             xs = [float(x) for x in self.xs]
             for i, name in enumerate(self.names):
@@ -133,12 +151,7 @@ class SweepResult:
                     ax.xaxis.set_major_locator(MaxNLocator(integer=True))
                 ax.grid(True, alpha=0.3)
                 ax.legend(loc="best")
-            buf = io.BytesIO()
-            if ext == ".png":
-                fig.savefig(buf, format="png", dpi=120, metadata={"Software": None})
-            else:
-                fig.savefig(buf, format="svg", metadata={"Date": None, "Creator": None})
-        write_atomic(path, buf.getvalue(), protect=protect)
+        return fig
 
 
 def _nan(v: float | None) -> float:

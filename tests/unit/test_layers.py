@@ -14,7 +14,7 @@ ROOT = Path(__file__).resolve().parents[2]
 PACKAGE = ROOT / "afsmc"
 EARLY = ("syntax", "model", "resolve")
 LATER = ("afsmc.check", "afsmc.lower", "afsmc.backends", "afsmc.verify", "afsmc.sim", "afsmc.simlib",
-         "afsmc.commands", "afsmc.cli", "afsmc.lsp", "afsmc.compiler")
+         "afsmc.commands", "afsmc.cli", "afsmc.lsp", "afsmc.compiler", "afsmc.api")
 
 
 def _module_name(path: Path, root: Path = ROOT) -> str:
@@ -64,7 +64,7 @@ def test_early_layers_import_no_later_stage(path: Path) -> None:
 # The checks may use the simulator registry (afsmc.simlib: which simulators exist, for
 # `from sim` constants), but no stage that consumes their verdict.
 AFTER_CHECK = ("afsmc.lower", "afsmc.backends", "afsmc.verify", "afsmc.sim", "afsmc.commands", "afsmc.cli",
-               "afsmc.lsp", "afsmc.compiler")
+               "afsmc.lsp", "afsmc.compiler", "afsmc.api")
 CHECK_FILES = sorted((PACKAGE / "check").rglob("*.py"))
 
 
@@ -75,7 +75,7 @@ def test_checks_import_no_later_stage(path: Path) -> None:
 
 
 AFTER_LOWER = ("afsmc.backends", "afsmc.verify", "afsmc.sim", "afsmc.commands", "afsmc.cli",
-               "afsmc.lsp", "afsmc.compiler")
+               "afsmc.lsp", "afsmc.compiler", "afsmc.api")
 LOWER_FILES = sorted((PACKAGE / "lower").rglob("*.py"))
 
 
@@ -83,6 +83,28 @@ LOWER_FILES = sorted((PACKAGE / "lower").rglob("*.py"))
 def test_lowering_imports_no_later_stage(path: Path) -> None:
     bad = sorted(m for m in imported(path) if any(_is_within(m, p) for p in AFTER_LOWER))
     assert not bad, f"{_module_name(path)} imports a later stage: {', '.join(bad)}"
+
+
+# The Python API (afsmc.api) is a top layer like the CLI: the commands call into it, and it
+# calls the stages. Below it, no stage imports it or a command; it imports no command.
+BELOW_API = ("backends", "verify", "sim", "simlib", "diagnostics")
+BELOW_API_FILES = [*sorted(p for layer in BELOW_API for p in (PACKAGE / layer).rglob("*.py")),
+                   PACKAGE / "compiler.py", PACKAGE / "files.py", PACKAGE / "text.py"]
+API_FILES = sorted((PACKAGE / "api").rglob("*.py"))
+
+
+@pytest.mark.parametrize("path", BELOW_API_FILES, ids=lambda p: str(p.relative_to(PACKAGE)))
+def test_stages_import_neither_the_api_nor_the_commands(path: Path) -> None:
+    top = ("afsmc.api", "afsmc.commands", "afsmc.cli")
+    bad = sorted(m for m in imported(path) if any(_is_within(m, p) for p in top))
+    assert not bad, f"{_module_name(path)} imports a top layer: {', '.join(bad)}"
+
+
+@pytest.mark.parametrize("path", API_FILES, ids=lambda p: str(p.relative_to(PACKAGE)))
+def test_the_api_imports_no_command(path: Path) -> None:
+    bad = sorted(m for m in imported(path) if any(_is_within(m, p) for p in
+                                                  ("afsmc.commands", "afsmc.cli", "afsmc.lsp")))
+    assert not bad, f"{_module_name(path)} imports the CLI: {', '.join(bad)}"
 
 
 def test_the_import_scan_sees_function_level_and_relative_imports(tmp_path: Path) -> None:

@@ -84,3 +84,21 @@ action Back in C when x == 3 weight 0.2 { goto B; }
     assert d.code == "W306"
     assert d.message == "w(Move) in the weight of Go is always 0: Move acts in none of Go's modes (A)"
     assert line_of(d, text) == 7
+
+
+def test_w302_says_the_state_may_be_unreachable_and_how_to_silence_it() -> None:
+    # The newcomer's case: `items_left = 0` in ToPack cannot be reached (Last leaves the
+    # mode), but the check searches every value of the variables.
+    text = """machine pack;
+var items_left : [0..3] init 3;
+mode ToPack = 0 initial;
+mode Done = 1 final;
+action Pack in ToPack when items_left > 1 { items_left -= 1; }
+action Last in ToPack when items_left == 1 { items_left := 0; goto Done; }
+"""
+    (d,) = run_rule(check_deadlock, text)
+    assert d.code == "W302"
+    assert "mode = ToPack, items_left = 0: the machine stops there if it can reach it" in d.message
+    assert d.hint is not None and "may be unreachable" in d.hint and "warning goes" in d.hint
+    # following the hint: a guard widened over the unreachable state silences it
+    assert codes(check_deadlock, text.replace("items_left == 1", "items_left <= 1")) == []

@@ -1,0 +1,241 @@
+"""`Mission`: one loaded and checked .afsm file, the object the Python API hangs off.
+
+``afsmc.load(path_or_text)`` parses, resolves and checks a file (or a text) as `afsmc check`
+does and raises :class:`afsmc.AfsmError` with the same diagnostics if anything is an error.
+From a mission: ``check()`` (its warnings), ``compile(target)`` (PRISM, JANI or DOT text),
+``with_consts(**values)`` (another instance), ``verify()``, ``sweep()``, ``simulate()`` and
+``diagram()``. The commands `check` and `compile` load and compile through this module.
+"""
+
+from __future__ import annotations
+
+import importlib
+import os
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Any
+
+from afsmc.api.errors import AfsmError
+from afsmc.compiler import Checked, lowered
+from afsmc.compiler import load as load_checked
+from afsmc.diagnostics import CompileError, Diagnostic
+from afsmc.files import read_source
+from afsmc.lower.lowering import Lowered, Resolution
+from afsmc.lower.reduce import Reductions
+from afsmc.model import ir
+from afsmc.text import literal
+
+if TYPE_CHECKING:
+    from afsmc.api.diagram import Diagram
+    from afsmc.api.results import Results
+    from afsmc.api.simulate import Estimates
+    from afsmc.api.sweep import Sweep
+
+Value = str | bool | int | float
+TEXT_PATH = "<text>"  # the name diagnostics give a mission loaded from a string
+
+# target -> "module:function"; the function maps a Lowered model to {suffix: text}.
+TARGETS: dict[str, str] = {
+    "prism": "afsmc.backends.prism:files",
+    "jani": "afsmc.backends.jani:files",
+    "dot": "afsmc.backends.dot:files",
+}
+
+
+def available_targets() -> dict[str, Callable[[Lowered], dict[str, str]]]:
+    """The compile targets whose backend imports (a backend not installed is not offered)."""
+    out = {}
+    for name, ref in TARGETS.items():
+        module, func = ref.split(":")
+        try:
+            out[name] = getattr(importlib.import_module(module), func)
+        except (ImportError, AttributeError):
+            continue
+    return out
+
+
+def target_notes(name: str, low: Lowered) -> list[Diagnostic]:
+    """A backend's warnings about what it wrote (its optional `notes(low)`): JANI's W401."""
+    notes = getattr(importlib.import_module(TARGETS[name].split(":")[0]), "notes", None)
+    return list(notes(low)) if notes else []
+
+
+def texts_of(consts: Mapping[str, Value] | None) -> dict[str, str]:
+    """Constants as `--const` takes them: `True` -> "true", 5 -> "5"; a str as written."""
+    return {k: literal(v) for k, v in (consts or {}).items()}
+
+
+@dataclass(frozen=True)
+class Mission:
+    """A checked .afsm file with its open constants' values. Made by :func:`afsmc.load`
+    (or :meth:`open` / :meth:`from_text`); immutable: :meth:`with_consts` makes another.
+
+    ``path``: the file, or ``"<text>"`` for a mission given as text; ``text``: its source;
+    ``consts``: the values given to open constants (as `--const` writes them);
+    ``model``: the checked IR (:class:`afsmc.model.ir.Model`)."""
+
+    path: str
+    text: str = field(repr=False)
+    consts: Mapping[str, str]
+    checked: Checked = field(repr=False, compare=False)
+
+    @classmethod
+    def open(cls, path: str, consts: Mapping[str, Value] | None = None, *,
+             text: str | None = None) -> Mission:
+        """Load and check the file at `path` (or `text` under that name). Raises AfsmError."""
+        overrides = texts_of(consts)
+        try:
+            source = read_source(path) if text is None else text
+            checked = load_checked(path, overrides, text=source)
+        except CompileError as exc:
+            raise AfsmError.of(exc) from None
+        return cls(path, source, overrides, checked)
+
+    @classmethod
+    def from_text(cls, text: str, consts: Mapping[str, Value] | None = None, *,
+                  path: str = TEXT_PATH) -> Mission:
+        """Load and check a mission written in a string. Raises AfsmError."""
+        return cls.open(path, consts, text=text)
+
+    # -- what the file declares --------------------------------------------------------
+    @property
+    def model(self) -> ir.Model:
+        return self.checked.model
+
+    @property
+    def name(self) -> str:
+        """The machine's name (`machine NAME;`)."""
+        return self.model.name
+
+    @property
+    def properties(self) -> list[str]:
+        """The declared properties' names, in order."""
+        return [p.name for p in self.model.properties]
+
+    @property
+    def constants(self) -> dict[str, object]:
+        """The open constants (`param`) and the values this instance uses."""
+        return {c.name: c.value for c in self.model.constants if c.is_param}
+
+    @property
+    def diagnostics(self) -> list[Diagnostic]:
+        """The warnings and notes of loading (errors raise AfsmError instead)."""
+        return list(self.checked.diagnostics)
+
+    def check(self) -> list[Diagnostic]:
+        """What `afsmc check` reports on this file and constants: its warnings and notes (a
+        mission with errors does not load: :func:`afsmc.load` raises AfsmError)."""
+        return self.diagnostics
+
+    def with_consts(self, **values: Value) -> Mission:
+        """The same file with these open constants set (the others keep their values):
+        ``m.with_consts(CELLS=6)`` is ``afsmc verify --const CELLS=6``. Raises AfsmError."""
+        return Mission.open(self.path, {**self.consts, **values}, text=self.text)
+
+    # -- compiling ---------------------------------------------------------------------
+    def lowered(self, resolve: Resolution = "nondet",
+                reductions: Reductions | None = None) -> Lowered:
+        """The guarded commands every backend reads (`compile --resolve`; all the exact
+        reductions unless `reductions` says otherwise). Raises AfsmError."""
+        try:
+            return lowered(self.model, resolve, reductions)
+        except CompileError as exc:
+            raise AfsmError.of(exc) from None
+
+    def files(self, target: str = "prism", *, resolve: Resolution = "nondet",
+              reductions: Reductions | None = None) -> dict[str, str]:
+        """What `afsmc compile -t TARGET` writes: {suffix: text} (PRISM: ``.prism`` and
+        ``.props``; JANI: ``.json``; DOT: ``.gv``)."""
+        targets = available_targets()
+        if target not in targets:
+            raise ValueError(f"target must be one of {', '.join(map(repr, targets))}; "
+                             f"got {target!r}")
+        return targets[target](self.lowered(resolve, reductions))
+
+    def compile(self, target: str = "prism", *, resolve: Resolution = "nondet",
+                reductions: Reductions | None = None) -> str:
+        """The mission in `target`'s language ("prism", "jani", "dot"), as one text: the
+        output of `afsmc compile -t TARGET -o -` (PRISM: the model, then a line
+        ``// ==== NAME.props`` and the properties)."""
+        return joined(self.path, self.files(target, resolve=resolve, reductions=reductions))
+
+    # -- Storm, the simulator and the diagram ------------------------------------------
+    def verify(self, properties: Sequence[str] | str | None = None, **options: Any) -> Results:
+        """Check the properties with Storm, as `afsmc verify` does and with its defaults.
+
+        `properties`: names of declared properties (default: all of them). `options` are
+        those of :func:`afsmc.verify.run` (the CLI's options): ``formulas=[...]`` (ad-hoc
+        properties), ``engine`` ("auto", "sparse", "hybrid", "dd"), ``via`` ("prism",
+        "jani"), ``solver``, ``max_states``, ``uniform``, ``bisimulation``, ``split``,
+        ``reductions``, ``progress`` (a function that receives progress lines), and whatever
+        later versions of `afsmc verify` add. Raises AfsmError (with ``.partial``, the
+        queries answered, if some failed)."""
+        from afsmc.api.results import verify
+
+        return verify(self, properties, **options)
+
+    def sweep(self, variable: str, values: Sequence[int | float | bool] | str, *,
+              properties: Sequence[str] | str | None = None, **options: Any) -> Sweep:
+        """Each property at each value of one open constant (`afsmc sweep --const
+        T=0:900:25`), or of the properties' step bound with ``variable="bound"`` (`afsmc
+        sweep --bound`). `values`: a list, or a range text ``"0:900:25"`` (stop included) or
+        ``"1,2,5"``. `options`: those of :func:`afsmc.verify.sweep` (``jobs``, ``engine``,
+        ``formulas``, ``dask``, ...). Raises AfsmError."""
+        from afsmc.api.sweep import sweep
+
+        return sweep(self, variable, values, properties=properties, **options)
+
+    def simulate(self, runs: int = 100_000, **options: Any) -> Estimates:
+        """Monte Carlo estimates of every declared property with confidence intervals, as
+        `afsmc simulate` gives them: options ``seed`` (0), ``resolve`` ("uniform"),
+        ``confidence`` (0.999), ``max_steps`` (100000), ``jobs`` (1), ``batch_size``,
+        ``dask``, ``traces``. Raises AfsmError."""
+        from afsmc.api.simulate import simulate
+
+        return simulate(self, runs, **options)
+
+    def diagram(self, **options: Any) -> Diagram:
+        """The mission diagram (`afsmc diagram`): it shows inline in Jupyter, and
+        ``.save("m.svg")`` writes it. Options: ``reach=True`` (Storm's probability of
+        reaching each mode), ``resolve`` and ``max_states`` with it. Raises AfsmError."""
+        from afsmc.api.diagram import diagram
+
+        return diagram(self, **options)
+
+
+def joined(path: str, files: Mapping[str, str]) -> str:
+    """Several output files as one text, each after the first headed `// ==== NAME`."""
+    stem = os.path.splitext(os.path.basename(path))[0]
+    out = []
+    for i, (suffix, text) in enumerate(files.items()):
+        if i:
+            out.append(f"\n// ==== {stem}{suffix}\n")
+        out.append(text)
+    return "".join(out)
+
+
+def load(path_or_text: str | os.PathLike[str], *,
+         consts: Mapping[str, Value] | None = None) -> Mission:
+    """Load, resolve and check a mission, as `afsmc check` does.
+
+    `path_or_text`: a path to a .afsm file, or the text of one (a string that holds a
+    newline or a `;` and names no file). `consts`: open constants' values, e.g.
+    ``{"CELLS": 6}`` (as ``--const CELLS=6``).
+
+    Raises :class:`afsmc.AfsmError` with the diagnostics `afsmc check` reports if the file
+    cannot be read or has an error; warnings are in :meth:`Mission.check`.
+
+    >>> m = afsmc.load("examples/patrol.afsm")            # doctest: +SKIP
+    >>> m.verify().to_pandas()                            # doctest: +SKIP
+    """
+    if isinstance(path_or_text, os.PathLike):
+        return Mission.open(os.fspath(path_or_text), consts)
+    if is_text(path_or_text):
+        return Mission.from_text(path_or_text, consts)
+    return Mission.open(path_or_text, consts)
+
+
+def is_text(s: str) -> bool:
+    """A mission's text rather than a file name: it has a line break or a `;`, and no
+    file of that name exists."""
+    return ("\n" in s or ";" in s) and not os.path.isfile(s)

@@ -1,0 +1,145 @@
+"""`Results`: what :meth:`Mission.verify` returns, a table of one row per property.
+
+``to_pandas()`` is the table (columns ``formula``, ``kind``, ``min``, ``max``, ``uniform``,
+``value``, and ``verdict`` when the results carry verdicts), ``_repr_html_`` shows it in
+Jupyter, ``to_json()`` is the object `afsmc verify --json` prints.
+"""
+
+from __future__ import annotations
+
+import html
+import json
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
+
+from afsmc import verify as lib
+from afsmc.api.errors import AfsmError
+from afsmc.api.processes import main_not_reimported
+from afsmc.diagnostics import CompileError, Diagnostic
+from afsmc.text import num
+from afsmc.verify.results import PropertyResult, VerifyResult
+
+if TYPE_CHECKING:
+    import pandas as pd
+
+    from afsmc.api.mission import Mission
+
+# `afsmc verify`'s defaults where afsmc.verify.run's differ (tests/unit/api check them
+# against the command's parser).
+VERIFY_DEFAULTS: dict[str, Any] = {"engine": "auto"}
+VALUES = ("min", "max", "uniform", "value")
+EXTRA = ("verdict",)  # fields of a property's JSON that become columns when present
+
+
+def names(properties: Sequence[str] | str | None) -> list[str]:
+    """A property name or a list of them (None: all)."""
+    if properties is None:
+        return []
+    return [properties] if isinstance(properties, str) else list(properties)
+
+
+def verify(mission: Mission, properties: Sequence[str] | str | None = None,
+           **options: Any) -> Results:
+    """:meth:`Mission.verify`: :func:`afsmc.verify.run`, the function `afsmc verify` calls,
+    with the command's defaults; every option is passed on as given."""
+    kwargs = {**VERIFY_DEFAULTS, **options}
+    try:
+        with main_not_reimported():
+            res = lib.run(mission.path, text=mission.text, consts=dict(mission.consts),
+                          properties=names(properties), **kwargs)
+    except CompileError as exc:
+        raise AfsmError.of(exc) from None
+    return Results(res)
+
+
+@dataclass(frozen=True)
+class Results:
+    """The answer of :meth:`Mission.verify`. ``raw`` is the
+    :class:`afsmc.verify.VerifyResult` (model sizes, times, ...); ``results["finish"]`` or
+    ``results.value("finish")`` gives one property."""
+
+    raw: VerifyResult
+
+    @property
+    def kind(self) -> str:
+        """"dtmc" (one value per property) or "mdp" (min, max and uniform)."""
+        return self.raw.kind
+
+    @property
+    def properties(self) -> list[PropertyResult]:
+        return self.raw.properties
+
+    @property
+    def warnings(self) -> list[Diagnostic]:
+        return self.raw.warnings
+
+    def __getitem__(self, name: str) -> PropertyResult:
+        return self.raw.property(name)
+
+    def __len__(self) -> int:
+        return len(self.raw.properties)
+
+    def value(self, name: str) -> float | None:
+        """Property `name`'s value: a DTMC's value; for an MDP its uniform value if there
+        is one (min and max are in ``results[name]``)."""
+        p = self.raw.property(name)
+        return p.value if p.value is not None else p.uniform
+
+    def to_json(self) -> dict[str, object]:
+        """The object `afsmc verify --json` prints for the same file, constants and options."""
+        return self.raw.to_json()
+
+    def rows(self) -> list[dict[str, object]]:
+        """One dict per property: name, formula, kind, min, max, uniform, value (an infinite
+        expected reward as inf), then the extra fields of the JSON (a verdict)."""
+        entries = self.to_json()["properties"]
+        assert isinstance(entries, list)
+        extras = [k for k in EXTRA if any(k in e for e in entries)]
+        out = []
+        for p, entry in zip(self.raw.properties, entries, strict=True):
+            row: dict[str, object] = {"property": p.name, "formula": p.formula, "kind": p.kind}
+            row |= {k: getattr(p, k) for k in VALUES}
+            row |= {k: entry.get(k) for k in extras}
+            out.append(row)
+        return out
+
+    def to_pandas(self) -> pd.DataFrame:
+        """One row per property, indexed by its name: ``formula``, ``kind`` ("P" or "R"),
+        ``min``, ``max``, ``uniform``, ``value`` (NaN where not asked: a DTMC has only a
+        value, an MDP min, max and uniform), and ``verdict`` if the results have one."""
+        import pandas as pd
+
+        rows = self.rows()
+        columns = ["property", "formula", "kind", *VALUES,
+                   *[k for k in EXTRA if rows and k in rows[0]]]
+        df = pd.DataFrame(rows, columns=columns).set_index("property")
+        for k in VALUES:
+            df[k] = df[k].astype(float)
+        return df
+
+    def __str__(self) -> str:
+        return "\n".join(json.dumps(r, default=str) for r in self.rows())
+
+    def _repr_html_(self) -> str:
+        rows = self.rows()
+        keys = [k for k in (rows[0] if rows else {}) if k not in ("kind",)]
+        shown = [k for k in keys if k not in VALUES or any(r[k] is not None for r in rows)]
+        head = "".join(f"<th>{html.escape(k)}</th>" for k in shown)
+        body = "".join("<tr>" + "".join(f"<td>{html.escape(_cell(r[k]))}</td>" for k in shown)
+                       + "</tr>" for r in rows)
+        m = self.raw.model
+        what = ("an MDP (min and max over the interval constants' floor/ceil choices)"
+                if self.kind == "mdp" else "a DTMC")
+        caption = (f"{html.escape(self.raw.path)}: {what}; {m.states:,} states, "
+                   f"{m.transitions:,} transitions, engine {html.escape(m.engine)}")
+        return (f'<table class="afsmc-results"><caption>{caption}</caption>'
+                f"<thead><tr>{head}</tr></thead><tbody>{body}</tbody></table>")
+
+
+def _cell(v: object) -> str:
+    if v is None:
+        return ""
+    if isinstance(v, float):
+        return num(v)
+    return str(v)

@@ -1,0 +1,98 @@
+"""`Sweep`: what :meth:`Mission.sweep` returns, the properties at each value of one open
+constant (or of the step bound): ``to_pandas()`` (the rows of `afsmc sweep`'s CSV) and
+``plot()`` (a matplotlib Figure, the picture of `afsmc sweep --plot`)."""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
+
+from afsmc import verify as lib
+from afsmc.api.errors import AfsmError
+from afsmc.api.processes import main_not_reimported
+from afsmc.api.results import VERIFY_DEFAULTS, names
+from afsmc.diagnostics import CompileError
+from afsmc.verify.sweep_result import SweepResult
+from afsmc.verify.sweep_values import Number, parse_values
+
+if TYPE_CHECKING:
+    import pandas as pd
+    from matplotlib.figure import Figure
+
+    from afsmc.api.mission import Mission
+
+COLUMNS = ("min", "max", "uniform", "value")
+
+
+def sweep(mission: Mission, variable: str, values: Sequence[Number] | str, *,
+          properties: Sequence[str] | str | None = None, **options: Any) -> Sweep:
+    """:meth:`Mission.sweep`: :func:`afsmc.verify.sweep`, the function `afsmc sweep` calls,
+    with the command's defaults; `variable` "bound" sweeps the step bound."""
+    if isinstance(values, str):
+        try:
+            values = parse_values(values)
+        except ValueError as exc:
+            raise ValueError(f"values {values!r}: {exc}") from None
+    kwargs: dict[str, Any] = {**VERIFY_DEFAULTS, **options}
+    if variable == "bound":
+        kwargs.setdefault("kind", "bound")
+    try:
+        with main_not_reimported():
+            res = lib.sweep(mission.path, variable, list(values), text=mission.text,
+                            consts=dict(mission.consts), properties=names(properties),
+                            **kwargs)
+    except CompileError as exc:
+        raise AfsmError.of(exc) from None
+    return Sweep(res)
+
+
+@dataclass(frozen=True)
+class Sweep:
+    """The points of a sweep; ``raw`` is the :class:`afsmc.verify.SweepResult`."""
+
+    raw: SweepResult
+
+    @property
+    def variable(self) -> str:
+        """The swept constant's name, or "bound"."""
+        return self.raw.variable
+
+    @property
+    def xs(self) -> list[Number]:
+        return self.raw.xs
+
+    def to_pandas(self) -> pd.DataFrame:
+        """One row per point and property, as `afsmc sweep` writes its CSV: the swept
+        value (a column named after the constant, or "bound"), ``property``, ``min``,
+        ``max``, ``uniform``, ``value`` (NaN where not asked), ``states``, ``transitions``.
+        ``df.pivot(index=variable, columns="property", values="value")`` gives a curve
+        per column."""
+        import pandas as pd
+
+        rows = [{self.variable: pt.x, "property": r.name,
+                 **{k: getattr(r, k) for k in COLUMNS},
+                 "states": pt.states, "transitions": pt.transitions}
+                for pt in self.raw.points for r in pt.properties]
+        df = pd.DataFrame(rows, columns=[self.variable, "property", *COLUMNS, "states",
+                                         "transitions"])
+        for k in COLUMNS:
+            df[k] = df[k].astype(float)
+        return df
+
+    def to_json(self) -> dict[str, object]:
+        """The object `afsmc sweep --json` prints."""
+        return self.raw.to_json()
+
+    def to_csv(self) -> str:
+        """The CSV `afsmc sweep` writes."""
+        return self.raw.to_csv()
+
+    def plot(self) -> Figure:
+        """The curves of `afsmc sweep --plot`, a panel per property (min, max and uniform
+        for an MDP; the value for a DTMC), as a matplotlib Figure: shown inline in Jupyter,
+        ``fig.savefig("sweep.png")`` to keep it."""
+        return self.raw.figure()
+
+    def _repr_html_(self) -> str:
+        return self.to_pandas().to_html(index=False, na_rep="")
