@@ -16,6 +16,7 @@ from pygls.workspace import TextDocument
 
 from afsmc.diagnostics import Diagnostic, Severity, codes
 from afsmc.lsp import index as I
+from afsmc.lsp.actions import fixes
 from afsmc.lsp.analysis import analyse_fast, analyse_full
 from afsmc.lsp.positions import snapshot, to_range
 from afsmc.lsp.state import AfsmServer, DocState, guarded
@@ -28,7 +29,7 @@ SMALL = 64 * 1024  # characters: a bigger document is parsed in a child process 
 FAST, FULL = "fast", "full"
 
 
-def _to_lsp(d: Diagnostic, doc: TextDocument, uri: str) -> T.Diagnostic:
+def _to_lsp(d: Diagnostic, doc: TextDocument, uri: str, index: I.Index | None) -> T.Diagnostic:
     rng = to_range(doc, d.span.start, d.span.end) if d.span is not None else to_range(doc, 0, 0)
     message = d.message + (f"\nhint: {d.hint}" if d.hint else "")
     related = [T.DiagnosticRelatedInformation(
@@ -38,15 +39,20 @@ def _to_lsp(d: Diagnostic, doc: TextDocument, uri: str) -> T.Diagnostic:
     severity = {Severity.ERROR: T.DiagnosticSeverity.Error,
                 Severity.WARNING: T.DiagnosticSeverity.Warning,
                 Severity.NOTE: T.DiagnosticSeverity.Information}[d.severity]
+    quick = [f.to_data() for f in fixes(d, doc.source, index)]
     return T.Diagnostic(range=rng, message=message, severity=severity, code=d.code, source="afsmc",
-                        related_information=related or None)
+                        related_information=related or None, data=quick or None)
 
 
 def _publish(ls: AfsmServer, uri: str, version: int | None, text: str,
              diags: list[Diagnostic]) -> None:
     doc = snapshot(ls, uri, text)
+    st = ls.docs.get(uri)
+    index = st.index if st is not None and st.index is not None and st.index.text == text else None
+    if st is not None:
+        st.published = text
     ls.text_document_publish_diagnostics(T.PublishDiagnosticsParams(
-        uri=uri, diagnostics=[_to_lsp(d, doc, uri) for d in diags], version=version))
+        uri=uri, diagnostics=[_to_lsp(d, doc, uri, index) for d in diags], version=version))
 
 
 def _internal_diag(what: str) -> Diagnostic:

@@ -35,6 +35,7 @@ class DocState:
     recovered: tuple[str, int, I.Index] | None = None
     task: asyncio.Task[None] | None = None  # the analysis of the current version
     last_check: float = 0.0  # seconds the last full check of this document took
+    published: str | None = None  # the text of the diagnostics on screen (their fixes' offsets)
     shows_fast: bool = False  # the diagnostics on screen are parse or name errors
 
 
