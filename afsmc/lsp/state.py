@@ -36,6 +36,7 @@ class DocState:
     task: asyncio.Task[None] | None = None  # the analysis of the current version
     last_check: float = 0.0  # seconds the last full check of this document took
     published: str | None = None  # the text of the diagnostics on screen (their fixes' offsets)
+    current: Any = None  # the editor's text as a positions.Doc, while it is the same
     shows_fast: bool = False  # the diagnostics on screen are parse or name errors
 
 

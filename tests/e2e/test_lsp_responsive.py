@@ -119,6 +119,16 @@ async def test_hover_on_a_small_document_while_a_2mb_document_is_checked(
     symbols = await client.text_document_document_symbol_async(T.DocumentSymbolParams(
         text_document=T.TextDocumentIdentifier(uri=small)))
     assert {s.name for s in symbols or []} >= {"N", "x", "A"}
+    # completion in the big document itself, before its first analysis is done: the
+    # keywords (its names come with the analysis); the line starts of its 2 MB are found
+    # first (0.1 s, more on a loaded machine)
+    text = big_text()
+    t = time.perf_counter()
+    items = await client.text_document_completion_async(T.CompletionParams(
+        text_document=T.TextDocumentIdentifier(uri=big),
+        position=T.Position(line=text.count("\n"), character=0)))
+    assert time.perf_counter() - t < 3
+    assert isinstance(items, T.CompletionList) and "const" in {i.label for i in items.items}
 
 
 @pytest.mark.asyncio
