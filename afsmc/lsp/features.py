@@ -1,7 +1,8 @@
 """The smaller features: folding ranges (declarations and comment runs), workspace symbols
 across the open documents, inlay hints (a constant's value or interval after each use, a
 weight's expression after `w(A)`), signature help for the built-in functions, and range
-formatting (the lines of `afsmc fmt`'s changes that meet the range)."""
+formatting (the lines of `afsmc fmt`'s changes that meet the range; a big document is
+formatted in a child process)."""
 
 from __future__ import annotations
 
@@ -13,9 +14,11 @@ from pygls.uris import to_fs_path
 
 from afsmc.diagnostics import CompileError
 from afsmc.lsp import index as I
+from afsmc.lsp.documents import SMALL
 from afsmc.lsp.navigation import _SYMBOL_KINDS
 from afsmc.lsp.positions import current, new_range, shift_of, to_range
 from afsmc.lsp.state import AfsmServer, guarded
+from afsmc.lsp.worker import call
 from afsmc.model.pretty import number
 from afsmc.syntax.fmt import format_text, line_ending
 
@@ -175,14 +178,14 @@ def signature_help(ls: AfsmServer, params: T.SignatureHelpParams) -> T.Signature
 
 
 @guarded
-def range_formatting(ls: AfsmServer, params: T.DocumentRangeFormattingParams
-                     ) -> list[T.TextEdit] | None:
+async def range_formatting(ls: AfsmServer, params: T.DocumentRangeFormattingParams
+                           ) -> list[T.TextEdit] | None:
     """`afsmc fmt`'s changes to the lines that meet the range, and none elsewhere."""
     uri = params.text_document.uri
     doc = current(ls, uri)
     text = doc.source.replace("\r\n", "\n").replace("\r", "\n")
     try:
-        out = format_text(text, to_fs_path(uri) or uri)
+        out = await call(format_text, text, to_fs_path(uri) or uri, process=len(text) > SMALL)
     except CompileError:
         return None
     old, new = text.splitlines(keepends=True), out.splitlines(keepends=True)

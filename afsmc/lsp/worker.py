@@ -21,6 +21,7 @@ import traceback
 from collections.abc import Callable
 from typing import Any
 
+from afsmc.diagnostics import CompileError
 from afsmc.lifetime import die_with_parent
 
 Send = Callable[[Any], None]
@@ -157,3 +158,26 @@ def release_memory() -> None:
     gc.collect()
     with contextlib.suppress(OSError, AttributeError):
         ctypes.CDLL(None).malloc_trim(0)
+
+
+async def call(fn: Callable[..., Any], *args: Any, process: bool = True) -> Any:
+    """`fn(*args)` in a job (a child process where fork exists): its result, or its
+    exception raised here again. Cancelling the awaiting task kills the child."""
+
+    def work(send: Send) -> None:
+        try:
+            send(("ok", fn(*args)))
+        except CompileError as exc:  # its diagnostics pickle; the exception does not
+            send(("compile", list(exc.diagnostics)))
+
+    job = Job(work, process)
+    try:
+        msg = await job.next()
+    finally:
+        job.cancel()
+    if isinstance(msg, Failed) or msg is None:
+        raise RuntimeError("the job failed" + (f":\n{msg.trace}" if msg else ""))
+    how, value = msg
+    if how == "compile":
+        raise CompileError(value)
+    return value

@@ -20,6 +20,8 @@ from lsprotocol import types as T
 from pygls.exceptions import JsonRpcException
 from pytest_lsp import ClientServerConfig, LanguageClient
 
+from afsmc.syntax.fmt import format_text
+
 ROOT = Path(__file__).resolve().parents[2]
 UAV = ROOT / "examples" / "uav.afsm"
 CONFIG = ClientServerConfig(server_command=[sys.executable, "-m", "afsmc.cli", "lsp"])
@@ -178,3 +180,21 @@ async def test_protocol_errors_get_the_specified_replies(client: LanguageClient)
     assert after.value.code == -32600  # InvalidRequest
     client._shut = True  # type: ignore[attr-defined]
     client.exit(None)
+
+
+@pytest.mark.asyncio
+async def test_formatting_a_big_document_does_not_hold_up_requests(
+        client: LanguageClient) -> None:
+    small, big = "file:///tmp/small4.afsm", "file:///tmp/big4.afsm"
+    _open(client, small, SMALL)
+    await _diagnostics_of(client, small, 1)
+    text = big_text(100_000).replace(" = ", "   =   ")
+    _open(client, big, text)
+    formatting = asyncio.ensure_future(client.text_document_formatting_async(
+        T.DocumentFormattingParams(text_document=T.TextDocumentIdentifier(uri=big),
+                                   options=T.FormattingOptions(tab_size=4, insert_spaces=True))))
+    await asyncio.sleep(0.2)
+    times = [await _hover_time(client, small) for _ in range(5)]
+    assert max(times) < 0.5, times
+    edits = await asyncio.wait_for(formatting, 120)
+    assert edits and edits[0].new_text == format_text(text)
