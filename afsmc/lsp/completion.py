@@ -9,6 +9,7 @@ from lsprotocol import types as T
 from pygls.uris import to_fs_path
 
 from afsmc.lsp import index as I
+from afsmc.lsp.documents import SMALL
 from afsmc.lsp.positions import current
 from afsmc.lsp.state import AfsmServer, guarded
 from afsmc.model.expr import FUNCTIONS
@@ -60,6 +61,10 @@ def completion(ls: AfsmServer, params: T.CompletionParams) -> T.CompletionList:
         if st is not None and st.recovered is not None \
                 and st.recovered[:2] == (doc.source, line_start):
             idx = st.recovered[2]
+        elif len(doc.source) > SMALL:
+            # Parsing or scanning it here would hold up every request for seconds: the
+            # names come with its first analysis (in a child process), the keywords now.
+            idx = I.scan("", to_fs_path(uri) or uri)
         else:
             idx = I.recover(doc.source, offset, to_fs_path(uri) or uri)
             if st is not None:

@@ -1,13 +1,14 @@
-"""Document sync: every change is parsed and resolved at once and its syntax and name errors
-published; the semantic checks run in a worker thread once typing pauses (DEBOUNCE), exactly
-as `afsmc check` runs them, and replace the diagnostics when they finish if the text has not
-changed meanwhile."""
+"""Document sync: every change is parsed and resolved at once, off the event loop, and its
+syntax and name errors published (or their absence, once fixed); the semantic checks then run
+in a child process, at once when they are quick and after a pause in typing (DEBOUNCE) when
+they are slow, exactly as `afsmc check` runs them, and replace the diagnostics. A newer
+version of a document cancels the work on the older one; each document has its own."""
 
 from __future__ import annotations
 
 import asyncio
 import time
-import traceback
+from typing import Any
 
 from lsprotocol import types as T
 from pygls.uris import to_fs_path
@@ -15,15 +16,20 @@ from pygls.workspace import TextDocument
 
 from afsmc.diagnostics import Diagnostic, Severity, codes
 from afsmc.lsp import index as I
-from afsmc.lsp.analysis import Fast, analyse_fast, analyse_full
+from afsmc.lsp.actions import fixes
+from afsmc.lsp.analysis import analyse_fast, analyse_full
 from afsmc.lsp.positions import snapshot, to_range
 from afsmc.lsp.state import AfsmServer, DocState, guarded
+from afsmc.lsp.worker import Failed, Job, Send, Work, release_memory
+from afsmc.model import ir
 
 DEBOUNCE = 0.3  # seconds of quiet before the full checks run, when they are slow
-FAST_CHECK = 0.1  # a full check this quick runs at once (after a 20 ms yield)
+FAST_CHECK = 0.1  # a full check this quick runs at once
+SMALL = 64 * 1024  # characters: a bigger document is parsed in a child process too
+FAST, FULL = "fast", "full"
 
 
-def _to_lsp(d: Diagnostic, doc: TextDocument, uri: str) -> T.Diagnostic:
+def _to_lsp(d: Diagnostic, doc: TextDocument, uri: str, index: I.Index | None) -> T.Diagnostic:
     rng = to_range(doc, d.span.start, d.span.end) if d.span is not None else to_range(doc, 0, 0)
     message = d.message + (f"\nhint: {d.hint}" if d.hint else "")
     related = [T.DiagnosticRelatedInformation(
@@ -33,15 +39,20 @@ def _to_lsp(d: Diagnostic, doc: TextDocument, uri: str) -> T.Diagnostic:
     severity = {Severity.ERROR: T.DiagnosticSeverity.Error,
                 Severity.WARNING: T.DiagnosticSeverity.Warning,
                 Severity.NOTE: T.DiagnosticSeverity.Information}[d.severity]
+    quick = [f.to_data() for f in fixes(d, doc.source, index)]
     return T.Diagnostic(range=rng, message=message, severity=severity, code=d.code, source="afsmc",
-                        related_information=related or None)
+                        related_information=related or None, data=quick or None)
 
 
 def _publish(ls: AfsmServer, uri: str, version: int | None, text: str,
              diags: list[Diagnostic]) -> None:
     doc = snapshot(ls, uri, text)
+    st = ls.docs.get(uri)
+    index = st.index if st is not None and st.index is not None and st.index.text == text else None
+    if st is not None:
+        st.published = text
     ls.text_document_publish_diagnostics(T.PublishDiagnosticsParams(
-        uri=uri, diagnostics=[_to_lsp(d, doc, uri) for d in diags], version=version))
+        uri=uri, diagnostics=[_to_lsp(d, doc, uri, index) for d in diags], version=version))
 
 
 def _internal_diag(what: str) -> Diagnostic:
@@ -49,48 +60,95 @@ def _internal_diag(what: str) -> Diagnostic:
                       "error; see the language server's log)", None)
 
 
+def _fast_stage(text: str, path: str) -> tuple[list[Diagnostic], ir.Model | None, I.Index | None]:
+    fast = analyse_fast(text, path)
+    index = I.build(fast.module, text) if fast.module is not None else None
+    return fast.diagnostics, fast.model, index
+
+
+def _full_stage(text: str, path: str) -> tuple[list[Diagnostic], float]:
+    started = time.perf_counter()
+    diags = analyse_full(text, path)
+    return diags, time.perf_counter() - started
+
+
+def _work(text: str, path: str, stages: tuple[str, ...]) -> Work:
+    """The stages, run in a job: each sends its result as soon as it has one; the checks
+    do not run on a text with parse or name errors (they would stop at them too)."""
+
+    def work(send: Send) -> None:
+        for stage in stages:
+            if stage == FAST:
+                result = _fast_stage(text, path)
+                send((FAST, result))
+                if result[0]:
+                    return
+            else:
+                send((FULL, _full_stage(text, path)))
+
+    return work
+
+
 def _changed(ls: AfsmServer, uri: str) -> None:
     doc = ls.workspace.get_text_document(uri)
     st = ls.docs.setdefault(uri, DocState())
     st.version, st.text = doc.version, doc.source
-    path = to_fs_path(uri) or uri
-    try:
-        fast = analyse_fast(st.text, path)
-    except Exception:
-        ls.window_log_message(T.LogMessageParams(type=T.MessageType.Error, message=traceback.format_exc()))
-        fast = Fast(None, None, [_internal_diag("parse")])
-    if fast.module is not None:
-        st.index = I.build(fast.module, st.text)
-        st.recovered = None
-    # The facts hover shows (values, ranges) hold for the text that resolved: another text
-    # keeps none rather than show a constant's old value beside its new declaration.
-    st.model = fast.model
-    if st.task is not None:
+    if st.task is not None:  # a newer version: the work on the older one stops
         st.task.cancel()
-        st.task = None
-    if fast.diagnostics:  # syntax or name errors: the checks would stop at them too
-        _publish(ls, uri, st.version, st.text, fast.diagnostics)
-        return
-    st.task = asyncio.get_running_loop().create_task(_check_later(ls, uri, st.version, st.text))
+    st.task = asyncio.get_running_loop().create_task(_analyse(ls, uri, st, st.version, st.text))
 
 
-async def _check_later(ls: AfsmServer, uri: str, version: int | None, text: str) -> None:
-    # Quick checks run while the author types; slow ones wait for a pause.
-    await asyncio.sleep(0.02 if ls.last_check < FAST_CHECK else DEBOUNCE)
-    async with ls.check_lock:  # one check at a time: the machine is shared
-        st = ls.docs.get(uri)
-        if st is None or st.version != version:
+async def _run(ls: AfsmServer, job: Job, what: str) -> Any:
+    """The next message of `job`; None (logged) if its work failed."""
+    msg = await job.next()
+    if isinstance(msg, Failed):
+        ls.window_log_message(T.LogMessageParams(type=T.MessageType.Error, message=msg.trace))
+        return (what, None)
+    return msg
+
+
+async def _analyse(ls: AfsmServer, uri: str, st: DocState, version: int | None,
+                   text: str) -> None:
+    """Parse and resolve, publish; then check, publish. A small document is parsed in a
+    thread (tens of milliseconds: no process to start) and checked in a child process; a
+    big one is parsed and checked in one child. Cancelling the task kills the child."""
+    path = to_fs_path(uri) or uri
+    big = len(text) > SMALL
+    job = Job(_work(text, path, (FAST, FULL) if big else (FAST,)), process=big)
+    try:
+        msg = await _run(ls, job, FAST)
+        if msg is None:
             return
-        try:
-            started = time.perf_counter()
-            diags = await asyncio.to_thread(analyse_full, text, to_fs_path(uri) or uri)
-            ls.last_check = time.perf_counter() - started
-        except Exception:
-            ls.window_log_message(T.LogMessageParams(type=T.MessageType.Error, message=traceback.format_exc()))
-            diags = [_internal_diag("check")]
-    st = ls.docs.get(uri)
-    if st is not None and st.version == version:
+        if msg[1] is None:
+            _publish(ls, uri, version, text, [_internal_diag("parse")])
+            return
+        diags, model, index = msg[1]
+        if index is not None:
+            st.index = index
+            st.recovered = None
+        # The facts hover shows (values, ranges) hold for the text that resolved: another
+        # text keeps none rather than show a constant's old value beside its new declaration.
+        st.model = model
+        if diags or st.shows_fast:  # new parse or name errors, or old ones now fixed
+            _publish(ls, uri, version, text, diags)
+        st.shows_fast = bool(diags)
+        if diags:
+            return
+        if not big:
+            # Quick checks run while the author types; slow ones wait for a pause.
+            await asyncio.sleep(0 if st.last_check < FAST_CHECK else DEBOUNCE)
+            job.cancel()
+            job = Job(_work(text, path, (FULL,)), process=True)
+        msg = await _run(ls, job, FULL)
+        if msg is None:
+            return
+        if msg[1] is None:
+            _publish(ls, uri, version, text, [_internal_diag("check")])
+            return
+        diags, st.last_check = msg[1]
         _publish(ls, uri, version, text, diags)
+    finally:
+        job.cancel()
 
 
 @guarded
@@ -109,4 +167,6 @@ async def did_close(ls: AfsmServer, params: T.DidCloseTextDocumentParams) -> Non
     if st is not None and st.task is not None:
         st.task.cancel()
     ls.text_document_publish_diagnostics(T.PublishDiagnosticsParams(uri=params.text_document.uri, diagnostics=[]))
+    del st
+    release_memory()
 

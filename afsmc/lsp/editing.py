@@ -16,9 +16,11 @@ from pygls.uris import to_fs_path
 from afsmc.diagnostics import CompileError
 from afsmc.lsp import index as I
 from afsmc.lsp.analysis import analyse_fast
+from afsmc.lsp.documents import SMALL
 from afsmc.lsp.navigation import lookup
 from afsmc.lsp.positions import current, snapshot, to_range
 from afsmc.lsp.state import AfsmServer, F, guarded
+from afsmc.lsp.worker import call
 from afsmc.model.expr import FUNCTIONS
 from afsmc.model.names import AFSM_KEYWORDS
 from afsmc.syntax.fmt import format_text, line_ending
@@ -26,14 +28,15 @@ from afsmc.text import article
 
 
 @guarded
-def formatting(ls: AfsmServer, params: T.DocumentFormattingParams) -> list[T.TextEdit] | None:
+async def formatting(ls: AfsmServer, params: T.DocumentFormattingParams
+                     ) -> list[T.TextEdit] | None:
     uri = params.text_document.uri
     doc = current(ls, uri)
     # As `afsmc fmt` does: line endings alone never make a text unformatted, and the
     # formatted text keeps the document's own.
     text = doc.source.replace("\r\n", "\n").replace("\r", "\n")
     try:
-        out = format_text(text, to_fs_path(uri) or uri)
+        out = await call(format_text, text, to_fs_path(uri) or uri, process=len(text) > SMALL)
     except CompileError:
         return None  # a syntax error: it is already shown as a diagnostic
     if out == text:

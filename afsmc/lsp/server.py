@@ -16,7 +16,11 @@ This module wires the features to the server:
 - documents.py: document sync and publishing diagnostics;
 - navigation.py: hover, definition, references, document symbols;
 - completion.py: completion;
-- editing.py: formatting and rename.
+- editing.py: formatting and rename;
+- actions.py: quick fixes from the diagnostics' hints;
+- tokens.py: semantic tokens;
+- features.py: folding, workspace symbols, inlay hints, signature help, range formatting;
+- worker.py: jobs off the event loop (a killable child process, or a thread).
 """
 
 from __future__ import annotations
@@ -26,7 +30,7 @@ from typing import Any
 
 from lsprotocol import types as T
 
-from afsmc.lsp import completion, documents, editing, navigation
+from afsmc.lsp import actions, completion, documents, editing, features, navigation, tokens
 from afsmc.lsp.state import AfsmServer
 
 server = AfsmServer()
@@ -44,6 +48,15 @@ _FEATURES: list[tuple[str, Any, Callable[..., Any]]] = [
     (T.TEXT_DOCUMENT_FORMATTING, None, editing.formatting),
     (T.TEXT_DOCUMENT_PREPARE_RENAME, None, editing.prepare_rename),
     (T.TEXT_DOCUMENT_RENAME, None, editing.rename),
+    (T.TEXT_DOCUMENT_CODE_ACTION, T.CodeActionOptions(code_action_kinds=[T.CodeActionKind.QuickFix]),
+     actions.code_action),
+    (T.TEXT_DOCUMENT_SEMANTIC_TOKENS_FULL, tokens.LEGEND, tokens.semantic_tokens),
+    (T.TEXT_DOCUMENT_FOLDING_RANGE, None, features.folding_ranges),
+    (T.WORKSPACE_SYMBOL, None, features.workspace_symbols),
+    (T.TEXT_DOCUMENT_INLAY_HINT, None, features.inlay_hints),
+    (T.TEXT_DOCUMENT_SIGNATURE_HELP, T.SignatureHelpOptions(trigger_characters=["(", ","]),
+     features.signature_help),
+    (T.TEXT_DOCUMENT_RANGE_FORMATTING, None, features.range_formatting),
 ]
 for _name, _options, _handler in _FEATURES:
     server.feature(_name, _options)(_handler)

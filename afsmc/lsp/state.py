@@ -12,9 +12,10 @@ from dataclasses import dataclass
 from typing import Any, TypeVar
 
 from lsprotocol import types as T
-from pygls.exceptions import JsonRpcException
+from pygls.exceptions import JsonRpcException, JsonRpcInvalidRequest
 from pygls.lsp.server import LanguageServer
 from pygls.protocol import LanguageServerProtocol
+from pygls.protocol.json_rpc import RPCRequest
 
 from afsmc import __version__
 from afsmc.lsp import index as I
@@ -32,7 +33,11 @@ class DocState:
     # completion before the first good parse: names from the text with its broken part
     # blanked (I.recover), for the (text, line) it was computed for
     recovered: tuple[str, int, I.Index] | None = None
-    task: asyncio.Task[None] | None = None
+    task: asyncio.Task[None] | None = None  # the analysis of the current version
+    last_check: float = 0.0  # seconds the last full check of this document took
+    published: str | None = None  # the text of the diagnostics on screen (their fixes' offsets)
+    current: Any = None  # the editor's text as a positions.Doc, while it is the same
+    shows_fast: bool = False  # the diagnostics on screen are parse or name errors
 
 
 
@@ -52,14 +57,21 @@ class _Protocol(LanguageServerProtocol):
             # where an exception would also pop up "Error in server" in the editor.
             return types.SimpleNamespace(jsonrpc="answered")
 
+    def handle_message(self, message: Any) -> Any:
+        # pygls drops a request that comes after `shutdown`, and the client would wait
+        # forever: LSP asks for an InvalidRequest error.
+        if self._shutdown and isinstance(message, RPCRequest) and message.method != T.EXIT:
+            self._send_response(message.id, error=JsonRpcInvalidRequest(
+                f"the server is shut down: {message.method} is refused").to_response_error())
+            return None
+        return super().handle_message(message)
+
 
 class AfsmServer(LanguageServer):
     def __init__(self) -> None:
         super().__init__("afsmc", __version__, protocol_cls=_Protocol)
 
         self.docs: dict[str, DocState] = {}
-        self.check_lock = asyncio.Lock()
-        self.last_check = 0.0  # seconds the last full check took
         self.shut_down = False  # a `shutdown` request came: `exit` is then 0
 
 

@@ -37,6 +37,7 @@ MODULE = pytest.mark.asyncio(loop_scope="module")
 async def client(lsp_client: LanguageClient):  # type: ignore[no-untyped-def]
     await lsp_client.initialize_session(T.InitializeParams(
         capabilities=T.ClientCapabilities(), root_uri=ROOT.as_uri()))
+    _record(lsp_client)
     yield
     await lsp_client.shutdown_session()
 
@@ -72,21 +73,45 @@ def code_only(text: str) -> str:
 _version = 1
 
 
+_published: dict[tuple[str, int | None], list[T.Diagnostic]] = {}
+
+
+def _record(client: LanguageClient) -> None:
+    """Keep the first diagnostics published for each version of each document (a document
+    gets one publish per stage that has something to say; another document's late publish
+    must not be taken for this one's)."""
+    default = client.protocol.fm.features[T.TEXT_DOCUMENT_PUBLISH_DIAGNOSTICS]
+
+    def publish(params: T.PublishDiagnosticsParams) -> None:
+        _published.setdefault((params.uri, params.version), list(params.diagnostics))
+        default(params)
+
+    client.protocol.fm.features[T.TEXT_DOCUMENT_PUBLISH_DIAGNOSTICS] = publish
+
+
+async def _first_publish(client: LanguageClient, uri: str) -> list[T.Diagnostic]:
+    while (uri, _version) not in _published:
+        await client.wait_for_notification("textDocument/publishDiagnostics")
+    return _published[(uri, _version)]
+
+
 async def open_doc(client: LanguageClient, uri: str, text: str) -> list[T.Diagnostic]:
+    global _version
+    _version += 1
+    _published.pop((uri, _version), None)
     client.text_document_did_open(T.DidOpenTextDocumentParams(
         text_document=T.TextDocumentItem(uri=uri, language_id="afsm", version=_version, text=text)))
-    await client.wait_for_notification("textDocument/publishDiagnostics")
-    return client.diagnostics[uri]
+    return await _first_publish(client, uri)
 
 
 async def change(client: LanguageClient, uri: str, text: str) -> list[T.Diagnostic]:
     global _version
     _version += 1
+    _published.pop((uri, _version), None)
     client.text_document_did_change(T.DidChangeTextDocumentParams(
         text_document=T.VersionedTextDocumentIdentifier(uri=uri, version=_version),
         content_changes=[T.TextDocumentContentChangeWholeDocument(text=text)]))
-    await client.wait_for_notification("textDocument/publishDiagnostics")
-    return client.diagnostics[uri]
+    return await _first_publish(client, uri)
 
 
 async def hover_at(client: LanguageClient, doc: T.TextDocumentIdentifier,

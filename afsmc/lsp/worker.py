@@ -1,0 +1,183 @@
+"""Work off the language server's event loop: a job runs a function that reports messages as
+it goes, in a forked child process (where fork exists) or else in a thread.
+
+A child can be killed, so a newer version of a document stops the work on the older one at
+once, and whatever the work allocated goes back to the system with the child: the server's
+own memory stays at its baseline however big the documents were. Messages come back pickled
+through a pipe that the event loop watches (`add_reader`), so the loop never waits for them.
+A thread cannot be killed: its messages are dropped once the job is cancelled.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+import os
+import pickle
+import signal
+import struct
+import threading
+import traceback
+from collections.abc import Callable
+from typing import Any
+
+from afsmc.diagnostics import CompileError
+from afsmc.lifetime import die_with_parent
+
+Send = Callable[[Any], None]
+Work = Callable[[Send], None]
+
+_HEADER = struct.Struct("<Q")
+FORK = hasattr(os, "fork")
+
+
+class Failed:
+    """The message a job sends when its work raised: the traceback, for the server's log."""
+
+    def __init__(self, trace: str) -> None:
+        self.trace = trace
+
+
+class Job:
+    """`work(send)` running in a child process (`process=True`, where fork exists) or a
+    thread; `await job.next()` gives each message it sends, then None when it is done."""
+
+    def __init__(self, work: Work, process: bool) -> None:
+        self._loop = asyncio.get_running_loop()
+        self._queue: asyncio.Queue[Any] = asyncio.Queue()
+        self.cancelled = False
+        self.pid = 0
+        self._fd = -1
+        self._buf = bytearray()
+        if process and FORK:
+            self._fork(work)
+        else:
+            threading.Thread(target=self._thread, args=(work,), daemon=True).start()
+
+    # ---- in a thread -------------------------------------------------------------------
+
+    def _thread(self, work: Work) -> None:
+        def send(msg: Any) -> None:
+            if not self.cancelled:
+                self._loop.call_soon_threadsafe(self._queue.put_nowait, msg)
+
+        try:
+            work(send)
+        except BaseException:
+            send(Failed(traceback.format_exc()))
+        self._loop.call_soon_threadsafe(self._queue.put_nowait, None)
+
+    # ---- in a child process ------------------------------------------------------------
+
+    def _fork(self, work: Work) -> None:
+        parent = os.getpid()
+        r, w = os.pipe()
+        pid = os.fork()
+        if pid == 0:  # the child: never returns, never touches the server's streams
+            code = 0
+            try:
+                os.close(r)
+                signal.set_wakeup_fd(-1)
+                die_with_parent(parent)
+
+                def send(msg: Any) -> None:
+                    data = pickle.dumps(msg, protocol=pickle.HIGHEST_PROTOCOL)
+                    view = memoryview(_HEADER.pack(len(data)) + data)
+                    while view:
+                        view = view[os.write(w, view):]
+
+                try:
+                    work(send)
+                except BaseException:
+                    send(Failed(traceback.format_exc()))
+            except BaseException:
+                code = 1
+            os._exit(code)  # no atexit, no flush of the server's buffered output
+        os.close(w)
+        self.pid, self._fd = pid, r
+        os.set_blocking(r, False)
+        self._loop.add_reader(r, self._readable)
+
+    def _readable(self) -> None:
+        try:
+            chunk = os.read(self._fd, 1 << 20)
+        except BlockingIOError:
+            return
+        except OSError:
+            chunk = b""
+        if chunk:
+            self._buf += chunk
+            while len(self._buf) >= _HEADER.size:
+                (n,) = _HEADER.unpack_from(self._buf)
+                if len(self._buf) < _HEADER.size + n:
+                    break
+                data = bytes(self._buf[_HEADER.size:_HEADER.size + n])
+                del self._buf[:_HEADER.size + n]
+                if not self.cancelled:
+                    self._queue.put_nowait(pickle.loads(data))
+            return
+        self._close()
+        self._queue.put_nowait(None)
+
+    def _close(self) -> None:
+        if self._fd >= 0:
+            self._loop.remove_reader(self._fd)
+            os.close(self._fd)
+            self._fd = -1
+        if self.pid:
+            with contextlib.suppress(ChildProcessError):
+                os.waitpid(self.pid, 0)
+            self.pid = 0
+
+    # ---- for the server ----------------------------------------------------------------
+
+    async def next(self) -> Any:
+        """The next message, or None once the job is done or cancelled."""
+        if self.cancelled:
+            return None
+        return await self._queue.get()
+
+    def cancel(self) -> None:
+        """Stop the work now (a child is killed) and drop whatever it would still send."""
+        if self.cancelled:
+            return
+        self.cancelled = True
+        if self.pid:
+            with contextlib.suppress(ProcessLookupError):
+                os.kill(self.pid, signal.SIGKILL)
+            self._close()
+        self._queue.put_nowait(None)
+
+
+def release_memory() -> None:
+    """Give the memory of closed documents back to the system: collect their cycles and
+    return the C allocator's free pages (glibc only)."""
+    import ctypes
+    import gc
+
+    gc.collect()
+    with contextlib.suppress(OSError, AttributeError):
+        ctypes.CDLL(None).malloc_trim(0)
+
+
+async def call(fn: Callable[..., Any], *args: Any, process: bool = True) -> Any:
+    """`fn(*args)` in a job (a child process where fork exists): its result, or its
+    exception raised here again. Cancelling the awaiting task kills the child."""
+
+    def work(send: Send) -> None:
+        try:
+            send(("ok", fn(*args)))
+        except CompileError as exc:  # its diagnostics pickle; the exception does not
+            send(("compile", list(exc.diagnostics)))
+
+    job = Job(work, process)
+    try:
+        msg = await job.next()
+    finally:
+        job.cancel()
+    if isinstance(msg, Failed) or msg is None:
+        raise RuntimeError("the job failed" + (f":\n{msg.trace}" if msg else ""))
+    how, value = msg
+    if how == "compile":
+        raise CompileError(value)
+    return value
