@@ -120,7 +120,9 @@ class Parametric:
     def __init__(self, src: Source, formulas: Sequence[str]):
         import stormpy
         import stormpy.environments
+        from stormpy import developer
 
+        developer.set_log_level(developer.LogLevel.OFF)  # warnings per state on stdout
         self.stormpy = stormpy
         self.src = src
         try:
@@ -143,6 +145,7 @@ class Parametric:
         except RuntimeError as exc:
             raise _fail(codes.E443, f"Storm's parametric engine: {_message(exc)}") from None
         self.vars = {v.name: v for v in self.model.collect_all_parameters()}
+        self._checkers: dict[str, Any] = {}
         self.env = stormpy.environments.sound()
 
     def parse(self, text: str) -> Any:
@@ -195,28 +198,50 @@ class Parametric:
                             return f"at {at} a transition's probability {key} is {v:g}"
         return None
 
+    # Storm's own graph-preservation test refuses boxes of two or more parameters that it
+    # cannot prove well-defined; `well_defined` has checked every transition at every
+    # corner of the whole box (afsmc's probabilities are multilinear in the parameters:
+    # products of P and 1 - P), so the checkers below are told the precondition holds.
+    def _task(self, prop: Any) -> Any:
+        from stormpy import developer
+
+        return developer.CheckTask[self.stormpy.RationalFunction](prop.get_raw_formula(), True)
+
     def extremal(self, q: Query, box: Box, precision: float) -> tuple[float, dict[str, float]]:
         import stormpy.pars as sp
+        import stormpy.pars.developer as pd
 
         d = sp.OptimizationDirection
         try:
-            value, at = sp.compute_extremal_value(
-                self.model, self.prop(q), region=self.region(box),
-                direction=d.MINIMIZE if q.direction == "min" else d.MAXIMIZE,
-                precision=precision, absolute_precision=True, environment=self.env)
+            checker = pd.initialize_region_refinement_checker(
+                self.env, self.model, self._task(self.prop(q)), preconditions_validated=True)
+            value, at = checker.compute_extremal_value(
+                self.env, self.region(box), d.MINIMIZE if q.direction == "min" else d.MAXIMIZE,
+                self.stormpy.RationalFunction(sp.Polynomial(sp.RationalFunctionCoefficient(
+                    rational(precision)))), True)
         except RuntimeError as exc:
             raise _fail(codes.E443, f"Storm's parametric engine on {q.prop}: "
                         f"{_message(exc)}") from None
         return float(value), {v.name: float(x) for v, x in at.items()}
 
-    def verify(self, formula: str, box: Box) -> bool:
-        import stormpy.pars as sp
+    def analyze(self, formula: str, box: Box) -> str:
+        """"holds" if every valuation in `box` satisfies `formula` (parameter lifting),
+        "fails" if none does, else "unknown"."""
+        import stormpy.pars.developer as pd
 
         try:
-            return bool(sp.verify(self.model, self.formulas[formula], region=self.region(box),
-                                  environment=self.env))
+            checker = self._checkers.get(formula)
+            if checker is None:
+                checker = pd.initialize_region_model_checker(
+                    self.env, self.model, self._task(self.formulas[formula]),
+                    preconditions_validated=True)
+                self._checkers[formula] = checker
+            res = checker.analyze_region(self.env, self.region(box),
+                                         pd.RegionResultHypothesis.UNKNOWN, False)
         except RuntimeError as exc:
             raise _fail(codes.E443, f"Storm's parametric engine: {_message(exc)}") from None
+        return {pd.RegionResult.ALL_SAT: "holds",
+                pd.RegionResult.ALL_VIOLATED: "fails"}.get(res, "unknown")
 
     def feasible(self, formula: str, box: Box) -> dict[str, float] | None:
         import stormpy.pars as sp
@@ -226,12 +251,10 @@ class Parametric:
                                        region=self.region(box), environment=self.env)
         except RuntimeError as exc:
             raise _fail(codes.E443, f"Storm's parametric engine: {_message(exc)}") from None
-        witness = getattr(res, "valuation", None)
-        if witness is None and hasattr(res, "result"):
-            witness = getattr(res.result, "valuation", None)
-        if not witness:
+        witness = res.witness
+        if witness is None:
             return None
-        return {v.name: float(x) for v, x in witness.items()}
+        return {v.name: float(x) for v, x in witness.valuation.items()}
 
 
 def _message(exc: BaseException) -> str:
