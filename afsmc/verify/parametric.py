@@ -195,7 +195,8 @@ class Parametric:
                                               for n, x in c.items()}))
                         if not 0.0 < v <= 1.0:
                             at = ", ".join(f"{n}={x:g}" for n, x in c.items())
-                            return f"at {at} a transition's probability {key} is {v:g}"
+                            shown = key[:-4] if key.endswith("/(1)") else key
+                            return f"at {at} a transition's probability {shown} is {v:g}"
         return None
 
     # Storm's own graph-preservation test refuses boxes of two or more parameters that it
@@ -290,7 +291,8 @@ def ill_defined(model: ir.Model, box: Box, why: str) -> CompileError:
     edge = [n for n, (lo, hi) in box.items() if lo == 0.0 or hi == 1.0]
     hint = ("Storm's parameter lifting needs every transition to keep a positive "
             "probability in the whole box: use an open bound, e.g. "
-            + ", ".join(f"{n} = [{_open(lo, 'lo')}, {_open(hi, 'hi')}]"
+            + ", ".join(f"{n} in [{_open(lo, 'lo')}, {_open(hi, 'hi')}] "
+                        f"(--param {n}={_open(lo, 'lo')}:{_open(hi, 'hi')})"
                         for n, (lo, hi) in box.items() if n in edge)
             if edge else "narrow the box so that every probability stays positive")
     span = next((c.span for c in model.constants if c.name in edge), None)
