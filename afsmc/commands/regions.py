@@ -132,7 +132,7 @@ def check_params(low: Lowered, box: dict[str, tuple[float, float]]) -> None:
                          "probabilities", c.span,
                          hint="Storm's parametric engine takes parameters in transition "
                               "probabilities only; sweep it with `afsmc sweep` instead")
-        if c.declared_type == "prob" and not (0.0 <= lo and hi <= 1.0):
+        if c.declared_type == "prob" and not (lo >= 0.0 and hi <= 1.0):
             raise _error(codes.E441, f"--param {n}={lo:g}:{hi:g}: a probability's range lies "
                          "within [0, 1]", c.span)
 
@@ -210,7 +210,7 @@ def feasible(built: object, formula: str, res: R.RegionResult
 
 def render(res: R.RegionResult) -> str:
     names = list(res.box)
-    rows = [names + ["verdict"]]
+    rows = [[*names, "verdict"]]
     order = {"holds": 0, "fails": 1, "unknown": 2}
     for r in sorted(res.regions, key=lambda r: (order[r.verdict],
                                                 [r.bounds[n] for n in names])):

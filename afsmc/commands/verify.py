@@ -20,8 +20,7 @@ from afsmc.commands.common import (
 )
 from afsmc.diagnostics import CompileError
 from afsmc.text import literal, num
-from afsmc.verify import VerifyResult
-from afsmc.verify import parametric
+from afsmc.verify import VerifyResult, parametric
 from afsmc.verify.storm import ENGINES, SOLVERS, VIAS
 
 

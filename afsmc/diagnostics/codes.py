@@ -183,7 +183,7 @@ E414 = Code("E414", Severity.ERROR, "a process of the sweep died")
 E440 = Code("E440", Severity.ERROR, "a parameter region makes the model ill-defined")
 E441 = Code("E441", Severity.ERROR, "--param names no probability or param constant")
 E442 = Code("E442", Severity.ERROR, "--require is not a bounded P or R property")
-E443 = Code("E443", Severity.ERROR, "Storm's parametric engine cannot check this")
+E443 = Code("E443", Severity.ERROR, "a property the parametric engine cannot check")
 
 
 # E5xx: simulation and simulation-backed constants

@@ -90,7 +90,7 @@ class ConstantsMixin(ResolverBase):
         if lo > hi:
             self.rep.error(codes.E205, f"interval [{lo:g}, {hi:g}] of '{name}' is empty",
                            iv.span, hint="write [low, high] with low <= high")
-        elif not (0.0 <= lo and hi <= 1.0):
+        elif not (lo >= 0.0 and hi <= 1.0):
             self.rep.error(codes.E207, f"interval probability '{name}' = [{lo:g}, {hi:g}] is "
                            "not within [0, 1]", iv.span,
                            hint="both ends of a probability interval lie in [0, 1]")

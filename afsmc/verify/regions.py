@@ -15,6 +15,8 @@ choice: it holds where Pmin >= b and fails where Pmin < b (Pmax for `<=` and `<`
 
 from __future__ import annotations
 
+import multiprocessing
+import os
 import re
 from collections.abc import Mapping, Sequence
 from concurrent.futures import ProcessPoolExecutor
@@ -22,6 +24,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from afsmc.diagnostics import CompileError, Diagnostic, Severity, codes
+from afsmc.lifetime import die_with_parent
 from afsmc.lower.lowering import Lowered
 from afsmc.model import ir
 from afsmc.verify.parametric import Parametric, Source, ill_defined, source, with_parameters
@@ -143,7 +146,9 @@ def split(b: Bounds, whole: Bounds) -> list[Bounds]:
 _WORKER: dict[str, Any] = {}
 
 
-def _init(src: Source, formulas: tuple[str, str]) -> None:
+def _init(src: Source, formulas: tuple[str, str], parent: int | None = None) -> None:
+    if parent is not None:
+        die_with_parent(parent)
     _WORKER["built"] = Parametric(src, list(formulas))
     _WORKER["formulas"] = formulas
 
@@ -177,12 +182,21 @@ def refine(model: ir.Model, src: Source, formulas: tuple[str, str], built: Param
     done: list[Region] = []
     todo: list[Bounds] = [dict(box)]
     rounds = 0
-    pool = ProcessPoolExecutor(jobs, initializer=_init, initargs=(src, formulas)) \
-        if jobs > 1 and dask is None else None
+    pool = None
+    client = None
+    if dask is not None:
+        import distributed
+
+        dd: Any = distributed  # untyped
+        client = dask if isinstance(dask, dd.Client) else dd.Client(dask)
+    elif jobs > 1:
+        ctx = multiprocessing.get_context("spawn")  # safe even if the caller has threads
+        pool = ProcessPoolExecutor(jobs, mp_context=ctx, initializer=_init,
+                                   initargs=(src, formulas, os.getpid()))
     try:
         while todo and rounds < max_rounds:
             rounds += 1
-            verdicts = _round(todo, src, formulas, built, pool, dask, jobs)
+            verdicts = _round(todo, src, formulas, built, pool, client, jobs)
             unknown = [b for b, v in zip(todo, verdicts, strict=True) if v == "unknown"]
             done += [Region(b, v) for b, v in zip(todo, verdicts, strict=True)
                      if v != "unknown"]
@@ -197,14 +211,13 @@ def refine(model: ir.Model, src: Source, formulas: tuple[str, str], built: Param
     finally:
         if pool is not None:
             pool.shutdown(cancel_futures=True)
+        if client is not None and client is not dask:
+            client.close()
 
 
 def _round(todo: list[Bounds], src: Source, formulas: tuple[str, str], built: Parametric,
-           pool: ProcessPoolExecutor | None, dask: Any, jobs: int) -> list[str]:
-    if dask is not None:
-        import dask.distributed as dd
-
-        client = dask if isinstance(dask, dd.Client) else dd.Client(dask)
+           pool: ProcessPoolExecutor | None, client: Any, jobs: int) -> list[str]:
+    if client is not None:
         n = max(1, len(todo) // max(1, 4 * jobs))
         chunks = [todo[i:i + n] for i in range(0, len(todo), n)]
         futures = client.map(_check_on_dask, [src] * len(chunks), [formulas] * len(chunks),

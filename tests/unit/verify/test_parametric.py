@@ -87,3 +87,17 @@ def test_an_interval_reaching_zero_is_ill_defined_and_an_open_bound_is_suggested
     (d,) = info.value.diagnostics
     assert d.code == "E440" and "P_SLIP=0" in d.message
     assert d.hint is not None and "[1e-6, 0.1]" in d.hint and d.span is not None
+
+
+def test_a_property_the_parametric_engine_lacks_is_e443(tmp_path: object) -> None:
+    import pathlib
+
+    path = pathlib.Path(str(tmp_path)) / "p.afsm"
+    text = (EXAMPLES / "patrol.afsm").read_text(encoding="utf-8")
+    path.write_text(text.replace("const prob P_SLIP   = 0.1;", f"const prob P_SLIP   = [{LO}, {HI}];")
+                    + 'property now = R{"steps"}=? [ I=2 ];\n', encoding="utf-8")
+    model = load(str(path)).model
+    with pytest.raises(CompileError) as info:
+        extremes(lowered(model, "nondet"), [p for p in model.properties if p.name == "now"])
+    (d,) = info.value.diagnostics
+    assert d.code == "E443" and "now" in d.message and "not supported" in d.message
