@@ -81,3 +81,18 @@ def test_verify_reports_the_bounds_over_the_interval_and_the_midpoint(patrol: st
     assert e["min"] <= p["min"] <= p["max"] <= e["max"]
     text = run_cli("verify", patrol, "-p", "finish").out
     assert "at the midpoint" in text and "P_SLIP in [0.05, 0.15]" in text
+
+
+def test_simulate_at_an_end_of_the_interval_agrees_with_verify_there(
+        patrol: str, tmp_path: Path) -> None:
+    fixed = tmp_path / "fixed.afsm"
+    fixed.write_text(Path(patrol).read_text(encoding="utf-8").replace(
+        "[0.05, 0.15]", "0.05"), encoding="utf-8")
+    exact = json.loads(run_cli("verify", str(fixed), "--json", "-p", "finish").out)
+    (p,) = exact["properties"]
+    r = run_cli("simulate", patrol, "--at", "min", "--runs", "4000", "--seed", "3", "--json")
+    assert r.code == 0, r.err
+    out = json.loads(r.out)
+    assert out["at"] == "min"
+    est = next(e for e in out["properties"] if e["name"] == "finish")
+    assert est["low"] <= p["uniform"] <= est["high"]
