@@ -37,8 +37,10 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                         "(default 0.95)")
     p.add_argument("--max-rounds", type=int, default=12,
                    help="stop refining after this many rounds of halving (default 12)")
-    p.add_argument("--jobs", "-j", type=int, default=os.cpu_count() or 1,
-                   help="local processes checking the boxes of a round (default: one per core)")
+    p.add_argument("--jobs", "-j", type=int, default=1,
+                   help="local processes checking the boxes of a round (default 1); each "
+                        "builds the parametric model once, which on the UAV costs more than "
+                        "the checks it shares out")
     p.add_argument("--dask", metavar="ADDRESS", type=dask_address,
                    help="check the boxes on a Dask cluster (scheduler address) instead")
     p.add_argument("--via", choices=VIAS, default="prism",
@@ -176,7 +178,7 @@ def solve(args: argparse.Namespace, low: Lowered, req: R.Requirement, prop: ir.P
 
     query = formula_text(prop, prop.opt, PrismPrinter({}, low))
     src, formulas, built = R.prepare(low, list(box), req, query, args.via)
-    regions, rounds = R.refine(low.model, src, formulas, built, box, coverage=args.coverage,
+    regions, rounds = R.refine(low, src, formulas, built, box, coverage=args.coverage,
                                jobs=max(1, args.jobs), dask=args.dask,
                                max_rounds=args.max_rounds, progress=say)
     res = R.RegionResult(req.text, box, regions, 0.0, args.coverage, rounds,

@@ -286,6 +286,55 @@ def interval_box(model: ir.Model) -> dict[str, tuple[float, float]]:
     return {c.name: c.prob_interval for c in model.prob_intervals if c.prob_interval}
 
 
+def _corners(box: Box) -> list[dict[str, float]]:
+    import itertools
+
+    names = sorted(box)
+    return [dict(zip(names, c, strict=True)) for c in itertools.product(*(box[n] for n in names))]
+
+
+def well_defined_ir(low: Lowered, box: Box) -> tuple[bool, str | None]:
+    """Whether every branch probability of `low` that reads a parameter stays in (0, 1] at
+    every corner of `box`: (True, None) if so, (True, why) if not, and (False, None) when
+    a probability also reads the state (then Storm's transitions are checked instead)."""
+    from afsmc.model.evaluate import EvalError, scalar
+    from afsmc.model.pretty import show
+    from afsmc.model.semantics import inline
+
+    model = low.model
+    consts: dict[str, Any] = dict(model.const_values)
+    consts |= {gen: value for gen, (_, value) in low.bounds.items()}
+    seen: set[E.Expr] = set()
+    corners = _corners(box)
+    for cmd in low.commands:
+        for b in cmd.branches:
+            e = inline(b.prob, model)
+            if e in seen or not E.consts_read(e) & set(box):
+                continue
+            seen.add(e)
+            if E.vars_read(e) or E.reads_mode(e):
+                return False, None
+            for c in corners:
+                try:
+                    v = float(scalar(e, consts | c))
+                except (EvalError, ZeroDivisionError, OverflowError):
+                    return False, None
+                if not 0.0 < v <= 1.0:
+                    at = ", ".join(f"{n}={x:g}" for n, x in c.items())
+                    return True, (f"at {at} the probability {show(e)} of a branch of "
+                                  f"{cmd.action} is {v:g}")
+    return True, None
+
+
+def check_box(low: Lowered, built: Parametric, box: Box) -> None:
+    """E440 unless `box` is a graph-preserving region of the parametric model."""
+    decided, why = well_defined_ir(low, box)
+    if not decided:
+        why = built.well_defined(box)
+    if why is not None:
+        raise ill_defined(low.model, box, why)
+
+
 def ill_defined(model: ir.Model, box: Box, why: str) -> CompileError:
     """E440: the box reaches a valuation where a transition disappears."""
     edge = [n for n, (lo, hi) in box.items() if lo == 0.0 or hi == 1.0]
@@ -316,9 +365,7 @@ def extremes(low: Lowered, props: Sequence[ir.Property], *, via: str = "prism",
     plow = with_parameters(low, box)
     qs = {p.name: queries(plow, p) for p in props}
     built = Parametric(source(plow, via), sorted({q.text for v in qs.values() for q in v}))
-    why = built.well_defined(box)
-    if why is not None:
-        raise ill_defined(low.model, box, why)
+    check_box(low, built, box)
     out = []
     for p in props:
         got: dict[str, tuple[float, float, dict[str, float]]] = {}

@@ -26,8 +26,7 @@ from typing import Any
 from afsmc.diagnostics import CompileError, Diagnostic, Severity, codes
 from afsmc.lifetime import die_with_parent
 from afsmc.lower.lowering import Lowered
-from afsmc.model import ir
-from afsmc.verify.parametric import Parametric, Source, ill_defined, source, with_parameters
+from afsmc.verify.parametric import Parametric, Source, check_box, source, with_parameters
 
 Bounds = dict[str, tuple[float, float]]
 _NEGATE = {">=": "<", ">": "<=", "<=": ">", "<": ">="}
@@ -172,13 +171,11 @@ def prepare(low: Lowered, params: Sequence[str], req: Requirement, prism_query: 
     return src, formulas, Parametric(src, list(formulas))
 
 
-def refine(model: ir.Model, src: Source, formulas: tuple[str, str], built: Parametric,
+def refine(low: Lowered, src: Source, formulas: tuple[str, str], built: Parametric,
            box: Bounds, *, coverage: float = 0.95, jobs: int = 1, dask: Any = None,
            max_rounds: int = 12, progress: Any = None) -> tuple[list[Region], int]:
     """The regions of `box`, refined round by round (see the module docstring)."""
-    why = built.well_defined(box)
-    if why is not None:
-        raise ill_defined(model, box, why)
+    check_box(low, built, box)
     done: list[Region] = []
     todo: list[Bounds] = [dict(box)]
     rounds = 0

@@ -35,7 +35,7 @@ def test_regions_are_confirmed_at_their_corners_and_centre(patrol: object) -> No
     box = {"P_FAULT": (0.005, 0.02), "P_SLIP": (0.05, 0.15)}
     src, formulas, built = R.prepare(low, list(box), req, 'P=? [ F "done" ]', "prism")
     assert formulas == (f'Pmin>={BOUND} [ F "done" ]', f'Pmin<{BOUND} [ F "done" ]')
-    regions, rounds = R.refine(low.model, src, formulas, built, box, coverage=0.8, max_rounds=8)
+    regions, rounds = R.refine(low, src, formulas, built, box, coverage=0.8, max_rounds=8)
     decided = [r for r in regions if r.verdict != "unknown"]
     assert {r.verdict for r in decided} == {"holds", "fails"}
     covered = sum(r.volume(box) for r in decided)
@@ -86,7 +86,7 @@ def test_local_processes_and_dask_give_the_regions_of_one_process(patrol: object
     src, formulas, built = R.prepare(low, list(box), req, 'P=? [ F "done" ]', "prism")
 
     def run(**kw: object) -> list[R.Region]:
-        return R.refine(low.model, src, formulas, built, box, coverage=0.7, max_rounds=5,
+        return R.refine(low, src, formulas, built, box, coverage=0.7, max_rounds=5,
                         **kw)[0]  # type: ignore[arg-type]
 
     one = run(jobs=1)
