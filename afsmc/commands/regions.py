@@ -11,7 +11,15 @@ import re
 import sys
 import time
 
-from afsmc.commands.common import add_consts, add_file, dask_address, fail, overrides
+from afsmc.commands.common import (
+    add_consts,
+    add_file,
+    dask_address,
+    fail,
+    overrides,
+    usage_error,
+)
+from afsmc.commands.verify import positive
 from afsmc.compiler import lowered
 from afsmc.diagnostics import CompileError, Diagnostic, Severity, codes
 from afsmc.files import write_atomic
@@ -35,9 +43,9 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--coverage", type=float, default=0.95,
                    help="refine until this fraction of the box's volume is decided "
                         "(default 0.95)")
-    p.add_argument("--max-rounds", type=int, default=12,
+    p.add_argument("--max-rounds", type=positive, default=12,
                    help="stop refining after this many rounds of halving (default 12)")
-    p.add_argument("--jobs", "-j", type=int, default=1,
+    p.add_argument("--jobs", "-j", type=positive, default=1,
                    help="local processes checking the boxes of a round (default 1); each "
                         "builds the parametric model once, which on the UAV costs more than "
                         "the checks it shares out")
@@ -141,6 +149,8 @@ def check_params(low: Lowered, box: dict[str, tuple[float, float]]) -> None:
 
 def run(args: argparse.Namespace) -> int:
     t0 = time.perf_counter()
+    if not 0.0 < args.coverage <= 1.0:
+        usage_error(f"--coverage {args.coverage}: a fraction in (0, 1]")
     say = None if args.json else (lambda s: print(f"afsmc: {s}", file=sys.stderr, flush=True))
     try:
         req = R.parse_requirement(args.require)
@@ -155,6 +165,10 @@ def run(args: argparse.Namespace) -> int:
                          hint="or declare an interval probability, const prob P = [lo, hi]")
         low = lowered(model, "nondet")
         check_params(low, box)
+        axes = args.axes.split(",") if args.axes else list(box)[:2]
+        if args.plot and (not 1 <= len(axes) <= 2 or any(a not in box for a in axes)):
+            usage_error(f"--axes {args.axes}: name one or two of the parameters "
+                        + ", ".join(box))
         prop = next(p for p in model.properties if p.name == loaded.adhoc[0])
         res = solve(args, low, req, prop, box, say)
     except CompileError as exc:
@@ -163,7 +177,6 @@ def run(args: argparse.Namespace) -> int:
     if args.plot:
         from afsmc.commands.regions_plot import plot
 
-        axes = args.axes.split(",") if args.axes else list(res.box)[:2]
         write_atomic(args.plot, plot(res, axes, os.path.splitext(args.plot)[1].lstrip(".")))
     if args.json:
         print(json.dumps(res.to_json(), indent=2))

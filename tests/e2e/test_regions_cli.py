@@ -96,3 +96,16 @@ def test_simulate_at_an_end_of_the_interval_agrees_with_verify_there(
     assert out["at"] == "min"
     est = next(e for e in out["properties"] if e["name"] == "finish")
     assert est["low"] <= p["uniform"] <= est["high"]
+
+
+def test_the_plot_takes_the_axes_asked_for_and_refuses_others(patrol: str, tmp_path: Path) -> None:
+    png = tmp_path / "r.png"
+    r = run_cli("regions", patrol, "--param", "P_FAULT=0.005:0.02", "--require",
+                'P>=0.81 [ F "done" ]', "--plot", str(png), "--axes", "P_SLIP,P_FAULT",
+                "--max-rounds", "2")
+    assert r.code == 0 and png.is_file(), r.err
+    r = run_cli("regions", patrol, "--require", 'P>=0.81 [ F "done" ]', "--plot", str(png),
+                "--axes", "P_SLIP,NOPE")
+    assert r.code == 2 and "--axes P_SLIP,NOPE" in r.err
+    r = run_cli("regions", patrol, "--require", 'P>=0.81 [ F "done" ]', "--coverage", "1.5")
+    assert r.code == 2 and "--coverage" in r.err
