@@ -1,11 +1,12 @@
 """Parameter regions (`afsmc regions`): a box of parameter values split into sub-boxes
 where a requirement holds for every value, fails for every value, or is not decided.
 
-Each sub-box is checked twice with Storm's parameter lifting (`stormpy.pars.verify`, sound:
-it over-approximates the box): once for the requirement, once for its negation. Neither
-proven: the box is halved along its widest side (relative to the whole box) and its halves
-are checked in the next round, until the decided volume reaches the coverage asked for
-(default 95%) or `max_rounds` rounds have run. The boxes of one round are independent and
+Each sub-box is analysed by Storm's parameter lifting (sound: it over-approximates the box),
+which proves the requirement for every value of the box (holds), proves its negation for
+every value (fails), or neither. Neither: the box is halved along its widest side
+(relative to the whole box) and its halves are checked in the next round, until the
+decided volume reaches the coverage asked for (default 95%) or `max_rounds` rounds have
+run. The boxes of one round are independent and
 run on local processes or on a Dask cluster.
 
 A requirement is `P>=0.6 [ F "success" ]` (also `>`, `<=`, `<`, `Pmin`, `Pmax`, `R{"r"}`).
@@ -67,8 +68,9 @@ def parse_requirement(text: str) -> Requirement:
 
 
 def storm_formulas(req: Requirement, prism_query: str, mdp: bool) -> tuple[str, str]:
-    """Storm's formulas for "holds everywhere" and "fails everywhere", from the PRISM
-    text of the requirement's `=?` query on the generated model."""
+    """Storm's formulas of the requirement and of its negation, from the PRISM text of the
+    requirement's `=?` query on the generated model. The region checker proves or refutes
+    the first; the second says what "fails" means (for the tests and the docs)."""
     opt = req.opt or ("" if not mdp else "min" if req.cmp in (">=", ">") else "max")
     head = re.match(r"(P|R\{\"[^\"]*\"\})(min|max)?=\?", prism_query)
     assert head is not None
