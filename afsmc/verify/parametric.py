@@ -41,6 +41,8 @@ from afsmc.model.semantics import bounded_globally, globally_dual
 
 Box = Mapping[str, tuple[float, float]]
 DEFAULT_PRECISION = 1e-4
+# how an interval probability is declared (a match in a comment costs one more load only)
+_MAY_HAVE_INTERVAL = re.compile(r"\bprob\s+[A-Za-z_][A-Za-z0-9_]*\s*=\s*\[")
 
 
 def _fail(code: Any, message: str, span: Any = None, hint: str | None = None) -> CompileError:
@@ -389,8 +391,11 @@ def for_file(path: str, consts: Mapping[str, str] | None, properties: Sequence[s
     """`afsmc verify`'s bounds over the file's interval probabilities: their box and one
     `Extreme` per property checked (nothing when the file has none)."""
     from afsmc.compiler import lowered
+    from afsmc.files import read_source
     from afsmc.verify.api import load_with_formulas, select
 
+    if not _MAY_HAVE_INTERVAL.search(read_source(path)):
+        return {}, []  # not loaded a second time: most files have none
     loaded = load_with_formulas(path, consts, formulas)
     box = interval_box(loaded.model)
     if not box:
