@@ -22,7 +22,7 @@ from afsmc.commands.common import (
 from afsmc.commands.verify import positive
 from afsmc.compiler import lowered
 from afsmc.diagnostics import CompileError, Diagnostic, Severity, codes
-from afsmc.files import write_atomic
+from afsmc.files import check_writable, write_atomic
 from afsmc.lower.lowering import Lowered
 from afsmc.model import expr as E
 from afsmc.model import ir
@@ -153,6 +153,8 @@ def run(args: argparse.Namespace) -> int:
         usage_error(f"--coverage {args.coverage}: a fraction in (0, 1]")
     say = None if args.json else (lambda s: print(f"afsmc: {s}", file=sys.stderr, flush=True))
     try:
+        if args.plot:  # said before the run, not after it
+            check_writable(args.plot, protect=(args.file,))
         req = R.parse_requirement(args.require)
         box = parse_params(args.param)
         loaded = load_with_formulas(args.file, overrides(args), [req.query()])
@@ -171,13 +173,19 @@ def run(args: argparse.Namespace) -> int:
                         + ", ".join(box))
         prop = next(p for p in model.properties if p.name == loaded.adhoc[0])
         res = solve(args, low, req, prop, box, say)
+        res.seconds = time.perf_counter() - t0
+        if args.plot:
+            from afsmc.commands.regions_plot import plot
+
+            write_atomic(args.plot, plot(res, axes, os.path.splitext(args.plot)[1].lstrip(".")),
+                         protect=(args.file,))
     except CompileError as exc:
         return fail(exc, args.json, wrapped=True)
-    res.seconds = time.perf_counter() - t0
-    if args.plot:
-        from afsmc.commands.regions_plot import plot
-
-        write_atomic(args.plot, plot(res, axes, os.path.splitext(args.plot)[1].lstrip(".")))
+    except OSError as exc:  # the Dask scheduler is unreachable, or no process could start
+        return fail(CompileError([Diagnostic(
+            codes.E413, Severity.ERROR, f"the region checks' workers: {exc}", None,
+            hint=f"is a Dask scheduler running at {args.dask}?" if args.dask else None)]),
+            args.json, wrapped=True)
     if args.json:
         print(json.dumps(res.to_json(), indent=2))
     else:
