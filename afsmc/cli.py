@@ -32,6 +32,7 @@ COMMANDS: dict[str, str] = {
     "compile": "compile an .afsm file to PRISM, JANI or Graphviz DOT",
     "verify": "check an .afsm file's properties with Storm (min/max/uniform for intervals)",
     "sweep": "evaluate a property over a range of a constant or a time bound; CSV, JSON, plots",
+    "regions": "split a parameter box into regions where a requirement holds, fails or is unknown",
     "fmt": "rewrite .afsm files in the canonical layout (--check: only list them)",
     "lsp": "run the language server (LSP over stdio) for editors",
     "diagram": "render a mission diagram (SVG, PNG or PDF) with Graphviz",

@@ -149,6 +149,10 @@ def _constants(low: Lowered) -> list[Json]:
     for c in model.constants:
         if c.is_interval:
             continue  # replaced by the generated bounds below
+        if c.name in low.parameters:  # left undefined: Storm's parametric engine
+            out.append({"name": c.name, "type": _jani_type(c.type),
+                        "comment": "parameter, " + _where(c.span)})
+            continue
         out.append({"name": c.name, "type": _jani_type(c.type), "value": _num(c.value, c.type),
                     "comment": ("param, " if c.is_param else "") + _where(c.span)})
     for gen, (src, value) in sorted(low.bounds.items(), key=lambda kv: (kv[1][0], kv[1][1])):

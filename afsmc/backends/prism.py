@@ -112,6 +112,12 @@ def emit(low: Lowered) -> PrismOutput:
     for c in consts:
         t = "int" if c.type is E.Type.INT else "double" if c.type is E.Type.DOUBLE else "bool"
         kind = "param, " if c.is_param else ""
+        if c.prob_interval is not None:
+            kind = f"in [{number(c.prob_interval[0])}, {number(c.prob_interval[1])}], "
+        if c.name in low.parameters:  # left undefined: Storm's parametric engine
+            w(f"const {t} {c.name}; // parameter, {kind}{where(c.span)}")
+            continue
+        kind += "its midpoint, " if c.prob_interval is not None else ""
         w(f"const {t} {c.name} = {pnum(c.value)}; // {kind}{where(c.span)}")
     for gen, (src, value) in sorted(low.bounds.items(), key=lambda kv: (kv[1][0], kv[1][1])):
         c = model.constant(src)

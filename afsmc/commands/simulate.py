@@ -50,6 +50,9 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    help="interval constants: uniform floor/ceil choice (default), or always "
                         "the floor (floor, lo) or the ceiling (ceil, hi): one fixed strategy; "
                         "`afsmc verify` gives the MDP's min and max")
+    p.add_argument("--at", choices=("mid", "min", "max"), default="mid",
+                   help="interval probabilities (const prob P = [lo, hi]): every run at "
+                        "their midpoint (default), their lower end or their upper end")
     p.add_argument("--confidence", type=float, default=0.999, metavar="C",
                    help="confidence level of the intervals (default 0.999)")
     p.add_argument("--max-steps", type=int, default=100_000, metavar="K",
@@ -107,7 +110,7 @@ def run(args: argparse.Namespace) -> int:
         if args.traces_out:  # said before the runs, not after them
             check_writable(args.traces_out, protect=(args.file,))
         text = read_source(args.file)
-        job = job_for(args.file, text, overrides(args), args.resolve, args.max_steps)
+        job = job_for(args.file, text, overrides(args), args.resolve, args.max_steps, args.at)
         # Without properties there is nothing to estimate; sample runs (--traces) are
         # the one use of such a file, as verify has none (E407 there too).
         if not args.traces and not program(job).monitors:
@@ -216,6 +219,7 @@ def _json(out: Outcome, args: argparse.Namespace, machine: str,
         "runs": out.runs,
         "seed": args.seed,
         "resolve": args.resolve,
+        "at": args.at,  # interval probabilities: mid, min or max
         "confidence": args.confidence,
         "properties": [{"name": e.name, "estimate": _num(e.estimate), "low": _num(e.low),
                         "high": _num(e.high), "undecided": e.undecided}

@@ -20,7 +20,7 @@ from afsmc.commands.common import (
 )
 from afsmc.diagnostics import CompileError
 from afsmc.text import literal, num
-from afsmc.verify import VerifyResult
+from afsmc.verify import VerifyResult, parametric
 from afsmc.verify.storm import ENGINES, SOLVERS, VIAS
 
 
@@ -163,12 +163,20 @@ def run(args: argparse.Namespace) -> int:
                   max_states=args.max_states, uniform=args.uniform,
                   progress=progress_printer(args), reductions=reductions(args),
                   bisimulation=args.bisim, split=args.split, solver=args.solver)
+        box, bounds = parametric.for_file(  # interval probabilities: min/max over them
+            args.file, overrides(args), args.property, args.formula, via=args.via,
+            reductions=reductions(args))
     except CompileError as exc:
         return fail(exc, args.json, wrapped=True)
     if args.json:
-        print(json.dumps(res.to_json(), indent=2))
+        out = res.to_json()
+        if bounds:
+            out["probability_intervals"] = parametric.to_json(box, bounds)
+        print(json.dumps(out, indent=2))
     else:
         report(res.warnings)
         print(render(res))
+        if bounds:
+            print("\n" + parametric.render(box, bounds))
     return 0
 

@@ -92,7 +92,7 @@ E190 = Code("E190", Severity.ERROR, "the formatter failed")
 E201 = Code("E201", Severity.ERROR, "a name is declared twice")
 E202 = Code("E202", Severity.ERROR, "a reserved name")
 E203 = Code("E203", Severity.ERROR, "a name is not declared")
-E204 = Code("E204", Severity.ERROR, "an interval constant must be an int")
+E204 = Code("E204", Severity.ERROR, "an interval constant must be an int or a prob")
 E205 = Code("E205", Severity.ERROR, "an interval constant is empty")
 E206 = Code("E206", Severity.ERROR, "an open constant has no value")
 E207 = Code("E207", Severity.ERROR, "a prob constant is not in [0, 1]")
@@ -137,6 +137,7 @@ E246 = Code("E246", Severity.ERROR, "a formula nests too deeply once inlined")
 E247 = Code("E247", Severity.ERROR, "an instantaneous reward of a structure without state rewards")
 E248 = Code("E248", Severity.ERROR, "a probabilistic hazard is not an action")
 E249 = Code("E249", Severity.ERROR, "a value beyond what Storm stores in a state")
+E250 = Code("E250", Severity.ERROR, "an interval probability is used outside probabilities")
 
 
 # E3xx: the checks of a well-formed model
@@ -179,6 +180,10 @@ E411 = Code("E411", Severity.ERROR, "the generated model cannot be read by Storm
 N412 = Code("N412", Severity.NOTE, "the values that were answered before a failure")
 E413 = Code("E413", Severity.ERROR, "the sweep's workers cannot be reached or started")
 E414 = Code("E414", Severity.ERROR, "a process of the sweep died")
+E440 = Code("E440", Severity.ERROR, "a parameter region makes the model ill-defined")
+E441 = Code("E441", Severity.ERROR, "--param names no probability or param constant")
+E442 = Code("E442", Severity.ERROR, "--require is not a bounded P or R property")
+E443 = Code("E443", Severity.ERROR, "a property the parametric engine cannot check")
 
 
 # E5xx: simulation and simulation-backed constants

@@ -65,6 +65,9 @@ class Lowered:
     weights: dict[str, E.Expr]  # action -> effective weight w(s, a) (0 where not enabled)
     bounds: dict[str, tuple[str, int]] = field(default_factory=dict)  # generated const -> (interval const, value)
     reductions: tuple[str, ...] = ()  # exact reductions applied (afsmc.lower.reduce)
+    # constants the backends leave undefined, for Storm's parametric engine
+    # (afsmc.verify.parametric): interval probabilities and params given as regions
+    parameters: tuple[str, ...] = ()
 
     @property
     def kind(self) -> Literal["dtmc", "mdp"]:

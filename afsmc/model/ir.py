@@ -37,10 +37,17 @@ class Constant:
     source: SimSource | None
     span: Span
     declared_type: str = "int"  # as written: int, double, prob, bool
+    # `const prob P = [lo, hi]`: one fixed, unknown p in [lo, hi] (value: the midpoint);
+    # afsmc.verify.parametric bounds every property over it
+    prob_interval: tuple[float, float] | None = None
 
     @property
     def is_interval(self) -> bool:
         return self.interval is not None and self.interval[0] != self.interval[1]
+
+    @property
+    def is_prob_interval(self) -> bool:
+        return self.prob_interval is not None
 
 
 @dataclass(frozen=True)
@@ -243,6 +250,10 @@ class Model:
     @property
     def interval_constants(self) -> tuple[Constant, ...]:
         return tuple(c for c in self.constants if c.is_interval)
+
+    @property
+    def prob_intervals(self) -> tuple[Constant, ...]:
+        return tuple(c for c in self.constants if c.prob_interval is not None)
 
     @property
     def is_nondeterministic(self) -> bool:

@@ -59,7 +59,7 @@ class ActionsMixin(ResolverBase):
 
     def _hazard(self, d: ast.HazardDecl) -> ir.Hazard:
         modes = self._mode_set(d.modes, f"hazard {d.name.text}")
-        prob = self._num(d.trigger, Ctx("a hazard's probability"))
+        prob = self._num(d.trigger, Ctx("a hazard's probability", probabilities=True))
         if d.weight is not None:
             self.rep.error(codes.E235, "a probabilistic hazard has no weight: it can happen "
                            "during any action", d.weight.span)
@@ -69,7 +69,7 @@ class ActionsMixin(ResolverBase):
     def _outcomes(self, body: ast.Body, owner: str) -> tuple[ir.Outcome, ...]:
         out = []
         for o in body.outcomes:
-            prob = _one() if o.prob is None else self._num(o.prob, Ctx("a probability"))
+            prob = _one() if o.prob is None else self._num(o.prob, Ctx("a probability", probabilities=True))
             out.append(ir.Outcome(prob, self._updates(o.updates), o.span))
         if not out:  # `{}`: stay where you are
             out.append(ir.Outcome(_one(), (), body.span))

@@ -28,6 +28,7 @@ class Ctx:
     what: str  # for messages: "a guard", "a weight", ...
     state: bool = True  # variables and `mode`
     intervals: bool = False  # interval constants (only in updates)
+    probabilities: bool = False  # interval probabilities (only in probabilities)
     weights: bool = False  # w(Action)
     labels: bool = False  # "label" (only in properties)
     constant_only: bool = False

@@ -1,5 +1,6 @@
 """Constants and intervals: each constant's value computed once, in declaration order;
-interval constants (`const int T = [2, 5]`, E204/E205); params set from the command line
+interval constants (`const int T = [2, 5]`, E204/E205), interval probabilities
+(`const prob P = [0.01, 0.02]`, E205/E207); params set from the command line
 (`--const NAME=VALUE`, E208/E209); a param with no value (E206).
 
 A constant whose value stands in for one that was reported is *poisoned*: what follows only
@@ -54,7 +55,11 @@ class ConstantsMixin(ResolverBase):
         errors = len(self.rep.diagnostics)
         self.tainted = False
         self.reading_open = set()
-        if isinstance(d, ast.ConstDecl) and isinstance(d.value, ast.Interval):
+        prob_interval = None
+        if isinstance(d, ast.ConstDecl) and isinstance(d.value, ast.Interval) and d.type == "prob":
+            prob_interval = self._prob_interval(d, d.value)
+            value = (prob_interval[0] + prob_interval[1]) / 2
+        elif isinstance(d, ast.ConstDecl) and isinstance(d.value, ast.Interval):
             interval = self._interval(d, d.value, t)
             value = interval[0]
         else:
@@ -69,7 +74,27 @@ class ConstantsMixin(ResolverBase):
             self.poisoned.add(name)
         elif d.type == "prob" and not (0.0 <= float(value) <= 1.0):
             self.rep.error(codes.E207, f"probability '{name}' = {value} is not in [0, 1]", d.span)
-        self.consts[name] = ir.Constant(name, t, value, interval, is_param, source, d.span, d.type)
+        self.consts[name] = ir.Constant(name, t, value, interval, is_param, source, d.span, d.type,
+                                        prob_interval)
+
+    def _prob_interval(self, d: ast.ConstDecl, iv: ast.Interval) -> tuple[float, float]:
+        """`const prob P = [lo, hi]`: one unknown p with 0 <= lo <= p <= hi <= 1."""
+        name = d.name.text
+        lo = self._const_value(iv.lo, Type.DOUBLE)
+        lo_tainted = self.tainted
+        hi = self._const_value(iv.hi, Type.DOUBLE)
+        self.tainted = self.tainted or lo_tainted
+        lo, hi = float(lo), float(hi)
+        if self.tainted:
+            return lo, hi
+        if lo > hi:
+            self.rep.error(codes.E205, f"interval [{lo:g}, {hi:g}] of '{name}' is empty",
+                           iv.span, hint="write [low, high] with low <= high")
+        elif not (lo >= 0.0 and hi <= 1.0):
+            self.rep.error(codes.E207, f"interval probability '{name}' = [{lo:g}, {hi:g}] is "
+                           "not within [0, 1]", iv.span,
+                           hint="both ends of a probability interval lie in [0, 1]")
+        return lo, hi
 
     def _interval(self, d: ast.ConstDecl, iv: ast.Interval, t: Type) -> tuple[int, int]:
         """`const int T = [lo, hi]`: the two ends, reported if they make no interval."""
@@ -79,9 +104,10 @@ class ConstantsMixin(ResolverBase):
         hi = self._const_value(iv.hi, Type.INT)
         self.tainted = self.tainted or lo_tainted
         if t is not Type.INT:
-            self.rep.error(codes.E204, f"interval constant '{name}' must be an int",
+            self.rep.error(codes.E204, f"interval constant '{name}' must be an int or a prob",
                            d.span, hint="timing and battery figures are whole numbers; "
-                           "write 'const int' (the paper's floor and ceiling)")
+                           "write 'const int' (the paper's floor and ceiling), or "
+                           "'const prob' for an uncertain probability")
         elif isinstance(lo, int) and isinstance(hi, int) and lo > hi and not self.tainted:
             self.rep.error(codes.E205, f"interval [{lo}, {hi}] of '{name}' is empty",
                            iv.span, hint="write [low, high] with low <= high")

@@ -136,6 +136,12 @@ class NamesMixin(ResolverBase):
             self.rep.error(
                 codes.E229, f"interval constant '{n}' can only be used in updates, not in {ctx.what}",
                 s, hint="the floor/ceil choice is made per action; use a plain constant here")
+        if c.is_prob_interval and not ctx.probabilities:
+            self.rep.error(
+                codes.E250, f"interval probability '{n}' can only be used in probabilities, "
+                f"not in {ctx.what}", s,
+                hint="its value is a parameter of the model; write it in an outcome's or a "
+                "hazard's probability (P, 1 - P)")
         return E.ConstRef(n, c.type, s)
 
     def _field_ref(self, e: ast.FieldRef, ctx: Ctx) -> E.Expr:

@@ -8,6 +8,7 @@ order, so an estimate never depends on how many workers computed it.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import os
 import sys
@@ -22,6 +23,7 @@ from afsmc.compiler import load
 from afsmc.interrupt import Stopped
 from afsmc.lifetime import die_with_parent, worker_died
 from afsmc.lower.lowering import lower
+from afsmc.model import ir
 from afsmc.sim import stats
 from afsmc.sim.compile import SimError
 from afsmc.sim.engine import BatchResult, Program, build, merge_moments, simulate_batch
@@ -48,6 +50,16 @@ class Job:
     overrides: tuple[tuple[str, str], ...]
     strategy: str
     max_steps: int
+    at: str = "mid"  # interval probabilities: their midpoint, lower ("min") or upper ("max") end
+
+
+def fix_prob_intervals(model: ir.Model, at: str) -> ir.Model:
+    """`model` with each interval probability at one end, or at its midpoint (its value)."""
+    if at == "mid" or not model.prob_intervals:
+        return model
+    consts = tuple(dataclasses.replace(c, value=c.prob_interval[0 if at == "min" else 1])
+                   if c.prob_interval is not None else c for c in model.constants)
+    return dataclasses.replace(model, constants=consts)
 
 
 @dataclass
@@ -81,7 +93,8 @@ def program(job: Job) -> Program:
     prog = _PROGRAMS.get(job)
     if prog is None:
         checked = load(job.path, dict(job.overrides), text=job.text)
-        prog = build(lower(checked.model, LOWERING[job.strategy]))  # type: ignore[arg-type]
+        prog = build(lower(fix_prob_intervals(checked.model, job.at),
+                           LOWERING[job.strategy]))  # type: ignore[arg-type]
         prog.diagnostics = checked.diagnostics
         _PROGRAMS.clear()
         _PROGRAMS[job] = prog
@@ -231,5 +244,5 @@ def combine(prog: Program, results: list[BatchResult], confidence: float) -> lis
 
 
 def job_for(path: str, text: str, overrides: Mapping[str, str], strategy: str,
-            max_steps: int) -> Job:
-    return Job(path, text, tuple(sorted(overrides.items())), strategy, max_steps)
+            max_steps: int, at: str = "mid") -> Job:
+    return Job(path, text, tuple(sorted(overrides.items())), strategy, max_steps, at)

@@ -1,0 +1,259 @@
+"""`afsmc regions FILE --param NAME=LO:HI ... --require 'P>=0.6 [ F "success" ]'`: the
+parameter box split into regions where the requirement holds for every value, fails for
+every value, or is undecided (afsmc.verify.regions)."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import re
+import sys
+import time
+
+from afsmc.commands.common import (
+    add_consts,
+    add_file,
+    dask_address,
+    fail,
+    overrides,
+    usage_error,
+)
+from afsmc.commands.verify import positive
+from afsmc.compiler import lowered
+from afsmc.diagnostics import CompileError, Diagnostic, Severity, codes
+from afsmc.files import check_writable, write_atomic
+from afsmc.lower.lowering import Lowered
+from afsmc.model import expr as E
+from afsmc.model import ir
+from afsmc.verify import regions as R
+from afsmc.verify.api import load_with_formulas
+from afsmc.verify.storm import VIAS
+
+
+def add_arguments(p: argparse.ArgumentParser) -> None:
+    add_file(p)
+    add_consts(p)
+    p.add_argument("--param", action="append", default=[], metavar="NAME=LO:HI",
+                   help="a parameter and its range; repeatable. A 'param double', a "
+                        "'const prob' or an interval probability, used only in probabilities. "
+                        "Interval probabilities not named here vary over their interval")
+    p.add_argument("--require", required=True, metavar="PROPERTY",
+                   help="a bounded property in .afsm syntax, e.g. 'P>=0.6 [ F \"success\" ]'")
+    p.add_argument("--coverage", type=float, default=0.95,
+                   help="refine until this fraction of the box's volume is decided "
+                        "(default 0.95)")
+    p.add_argument("--max-rounds", type=positive, default=12,
+                   help="stop refining after this many rounds of halving (default 12)")
+    p.add_argument("--jobs", "-j", type=positive, default=1,
+                   help="local processes checking the boxes of a round (default 1); each "
+                        "builds the parametric model once, which on the UAV costs more than "
+                        "the checks it shares out")
+    p.add_argument("--dask", metavar="ADDRESS", type=dask_address,
+                   help="check the boxes on a Dask cluster (scheduler address) instead")
+    p.add_argument("--via", choices=VIAS, default="prism",
+                   help="Storm's input language: PRISM text (default) or JANI JSON")
+    p.add_argument("--feasible", action="store_true",
+                   help="also find one valuation that meets the requirement "
+                        "(Storm's feasibility check) and print it as --const flags")
+    p.add_argument("--plot", metavar="FILE.png|.svg",
+                   help="draw the regions of two parameters (see --axes)")
+    p.add_argument("--axes", metavar="X,Y",
+                   help="the two parameters the plot shows (default: the first two)")
+    p.add_argument("--json", action="store_true", help="print the regions as JSON")
+
+
+def _error(code: object, message: str, span: object = None, hint: str | None = None
+           ) -> CompileError:
+    return CompileError([Diagnostic(code, Severity.ERROR, message, span,  # type: ignore[arg-type]
+                                    hint=hint)])
+
+
+def parse_params(items: list[str]) -> dict[str, tuple[float, float]]:
+    out: dict[str, tuple[float, float]] = {}
+    for item in items:
+        m = re.fullmatch(r"\s*([A-Za-z_][A-Za-z0-9_]*)\s*=\s*([^:]+):([^:]+)\s*", item)
+        try:
+            lo, hi = (float(m.group(2)), float(m.group(3))) if m else (None, None)
+        except ValueError:
+            lo = hi = None
+        if m is None or lo is None or hi is None:
+            raise _error(codes.E441, f"--param {item!r}: expected NAME=LO:HI",
+                         hint="e.g. --param ALPHA=0.05:0.2")
+        if not lo <= hi:
+            raise _error(codes.E441, f"--param {item}: the range is empty",
+                         hint="write NAME=LO:HI with LO <= HI")
+        out[m.group(1)] = (lo, hi)
+    return out
+
+
+def _reads(e: E.Expr, name: str, model: ir.Model) -> bool:
+    for n in E.walk(e):
+        if isinstance(n, E.ConstRef) and n.name == name:
+            return True
+        if isinstance(n, E.FormulaRef) and _reads(model.formula(n.name).value, name, model):
+            return True
+    return False
+
+
+def misuse(low: Lowered, name: str) -> str | None:
+    """Where `name` is read other than in a probability: Storm's parametric models allow
+    parameters in transition probabilities only."""
+    model = low.model
+    for cmd in low.commands:
+        if _reads(cmd.guard, name, model):
+            return f"the guard or weight of {cmd.action}"
+        for b in cmd.branches:
+            if any(_reads(v, name, model) for _, v in b.updates):
+                return f"an update of {cmd.action}"
+    for lb in model.labels:
+        if _reads(lb.value, name, model):
+            return f"label {lb.name}"
+    for r in model.rewards:
+        if any(_reads(it.guard, name, model) or _reads(it.value, name, model) for it in r.items):
+            return f"reward structure {r.name}"
+    for c in model.constants:
+        text = c.span.source.text[c.span.start:c.span.end]
+        if c.name != name and re.search(rf"\b{re.escape(name)}\b", text.split("=", 1)[-1]):
+            return f"the value of constant {c.name}"
+    return None
+
+
+def check_params(low: Lowered, box: dict[str, tuple[float, float]]) -> None:
+    model = low.model
+    names = {c.name: c for c in model.constants}
+    variables = {v.name for v in model.variables} | {v.display for v in model.variables}
+    for n, (lo, hi) in box.items():
+        c = names.get(n)
+        if c is None:
+            what = "a variable" if n in variables else "not declared"
+            raise _error(codes.E441, f"--param {n}: '{n}' is {what}, not a constant",
+                         hint="parameters are 'param double', 'const prob' or interval-"
+                              "probability constants: " + ", ".join(
+                                  k for k, v in names.items() if v.type is E.Type.DOUBLE))
+        if c.type is not E.Type.DOUBLE:
+            raise _error(codes.E441, f"--param {n}: '{n}' is {c.declared_type} constant; "
+                         "a parameter is a probability or a double", c.span,
+                         hint="an integer figure is an interval constant [lo, hi] "
+                              "(floor/ceil), or swept with `afsmc sweep`")
+        where = misuse(low, n)
+        if where is not None:
+            raise _error(codes.E441, f"--param {n}: '{n}' is read in {where}, not only in "
+                         "probabilities", c.span,
+                         hint="Storm's parametric engine takes parameters in transition "
+                              "probabilities only; sweep it with `afsmc sweep` instead")
+        if c.declared_type == "prob" and not (lo >= 0.0 and hi <= 1.0):
+            raise _error(codes.E441, f"--param {n}={lo:g}:{hi:g}: a probability's range lies "
+                         "within [0, 1]", c.span)
+
+
+def run(args: argparse.Namespace) -> int:
+    t0 = time.perf_counter()
+    if not 0.0 < args.coverage <= 1.0:
+        usage_error(f"--coverage {args.coverage}: a fraction in (0, 1]")
+    say = None if args.json else (lambda s: print(f"afsmc: {s}", file=sys.stderr, flush=True))
+    try:
+        if args.plot:  # said before the run, not after it
+            check_writable(args.plot, protect=(args.file,))
+        req = R.parse_requirement(args.require)
+        box = parse_params(args.param)
+        loaded = load_with_formulas(args.file, overrides(args), [req.query()])
+        model = loaded.model
+        for c in model.prob_intervals:
+            if c.prob_interval is not None and c.name not in box:
+                box[c.name] = c.prob_interval
+        if not box:
+            raise _error(codes.E441, "no parameters: pass --param NAME=LO:HI",
+                         hint="or declare an interval probability, const prob P = [lo, hi]")
+        low = lowered(model, "nondet")
+        check_params(low, box)
+        axes = args.axes.split(",") if args.axes else list(box)[:2]
+        if args.plot and (not 1 <= len(axes) <= 2 or any(a not in box for a in axes)):
+            usage_error(f"--axes {args.axes}: name one or two of the parameters "
+                        + ", ".join(box))
+        prop = next(p for p in model.properties if p.name == loaded.adhoc[0])
+        res = solve(args, low, req, prop, box, say)
+        res.seconds = time.perf_counter() - t0
+        if args.plot:
+            from afsmc.commands.regions_plot import plot
+
+            write_atomic(args.plot, plot(res, axes, os.path.splitext(args.plot)[1].lstrip(".")),
+                         protect=(args.file,))
+    except CompileError as exc:
+        return fail(exc, args.json, wrapped=True)
+    except OSError as exc:  # the Dask scheduler is unreachable, or no process could start
+        return fail(CompileError([Diagnostic(
+            codes.E413, Severity.ERROR, f"the region checks' workers: {exc}", None,
+            hint=f"is a Dask scheduler running at {args.dask}?" if args.dask else None)]),
+            args.json, wrapped=True)
+    if args.json:
+        print(json.dumps(res.to_json(), indent=2))
+    else:
+        print(render(res))
+    return 0
+
+
+def solve(args: argparse.Namespace, low: Lowered, req: R.Requirement, prop: ir.Property,
+          box: dict[str, tuple[float, float]], say: object) -> R.RegionResult:
+    from afsmc.backends.prism import PrismPrinter, formula_text
+
+    query = formula_text(prop, prop.opt, PrismPrinter({}, low))
+    src, formulas, built = R.prepare(low, list(box), req, query, args.via)
+    regions, rounds = R.refine(low, src, formulas, built, box, coverage=args.coverage,
+                               jobs=max(1, args.jobs), dask=args.dask,
+                               max_rounds=args.max_rounds, progress=say)
+    res = R.RegionResult(req.text, box, regions, 0.0, args.coverage, rounds,
+                         states=built.model.nr_states)
+    res.coverage = res.fraction("holds") + res.fraction("fails")
+    if args.feasible:
+        res.feasible, res.feasible_how = feasible(built, formulas[0], res)
+    return res
+
+
+def feasible(built: object, formula: str, res: R.RegionResult
+             ) -> tuple[dict[str, float], str]:
+    """One valuation meeting the requirement: Storm's feasibility check, or, where Storm
+    refuses the box (its graph-preservation test fails on several parameters), the
+    centre of the largest region proven to hold."""
+    from afsmc.verify.parametric import Parametric
+
+    assert isinstance(built, Parametric)
+    try:
+        found = built.feasible(formula, res.box)
+        return (found, "Storm's feasibility check (parameter lifting)") if found else ({}, "")
+    except CompileError:
+        pass
+    holds = [r for r in res.regions if r.verdict == "holds"]
+    if not holds:
+        return {}, ""
+    best = max(holds, key=lambda r: r.volume(res.box))
+    return ({n: (lo + hi) / 2 for n, (lo, hi) in best.bounds.items()},
+            "the centre of the largest region where it holds")
+
+
+def render(res: R.RegionResult) -> str:
+    names = list(res.box)
+    rows = [[*names, "verdict"]]
+    order = {"holds": 0, "fails": 1, "unknown": 2}
+    for r in sorted(res.regions, key=lambda r: (order[r.verdict],
+                                                [r.bounds[n] for n in names])):
+        rows.append([f"[{r.bounds[n][0]:.6g}, {r.bounds[n][1]:.6g}]" for n in names]
+                    + [r.verdict])
+    widths = [max(len(r[i]) for r in rows) for i in range(len(rows[0]))]
+    lines = [f"{res.requirement} over " + ", ".join(
+        f"{n} in [{lo:g}, {hi:g}]" for n, (lo, hi) in res.box.items()), ""]
+    lines += ["  ".join(c.ljust(w) for c, w in zip(r, widths, strict=True)).rstrip()
+              for r in rows]
+    lines.append("")
+    lines.append(f"holds on {res.fraction('holds'):.1%} of the volume, fails on "
+                 f"{res.fraction('fails'):.1%}, unknown {res.fraction('unknown'):.1%}: "
+                 f"coverage {res.coverage:.1%} (target {res.target:.0%}); "
+                 f"{len(res.regions)} regions, {res.rounds} rounds, {res.states:,} states, "
+                 f"{res.seconds:.1f} s")
+    if res.feasible == {}:
+        lines.append("feasible: Storm found no valuation that meets the requirement")
+    elif res.feasible is not None:
+        lines.append("feasible: " + " ".join(f"--const {n}={v:.6g}"
+                                             for n, v in sorted(res.feasible.items()))
+                     + f" ({res.feasible_how})")
+    return "\n".join(lines)

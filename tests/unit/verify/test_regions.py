@@ -1,0 +1,96 @@
+"""Parameter regions: every region called holds or fails is confirmed at its corners and
+its centre by an ordinary Storm model at those values; the coverage is the decided volume."""
+
+from __future__ import annotations
+
+import itertools
+
+import pytest
+
+from afsmc.compiler import load, lowered
+from afsmc.diagnostics import CompileError
+from afsmc.verify import regions as R
+from tests.conftest import EXAMPLES
+from tests.unit.verify.points import value
+
+pytestmark = pytest.mark.storm
+
+BOUND = 0.81
+
+
+@pytest.fixture(scope="module")
+def patrol(tmp_path_factory: pytest.TempPathFactory) -> object:
+    text = (EXAMPLES / "patrol.afsm").read_text(encoding="utf-8")
+    path = tmp_path_factory.mktemp("patrol") / "patrol.afsm"
+    path.write_text(text.replace("const prob P_SLIP   = 0.1;",
+                                 "const prob P_SLIP   = [0.05, 0.15];"), encoding="utf-8")
+    return load(str(path)).model
+
+
+@pytest.mark.slow
+def test_regions_are_confirmed_at_their_corners_and_centre(patrol: object) -> None:
+    model = patrol
+    low = lowered(model, "nondet")  # type: ignore[arg-type]
+    req = R.parse_requirement(f'P>={BOUND} [ F "done" ]')
+    box = {"P_FAULT": (0.005, 0.02), "P_SLIP": (0.05, 0.15)}
+    src, formulas, built = R.prepare(low, list(box), req, 'P=? [ F "done" ]', "prism")
+    assert formulas == (f'Pmin>={BOUND} [ F "done" ]', f'Pmin<{BOUND} [ F "done" ]')
+    regions, rounds = R.refine(low, src, formulas, built, box, coverage=0.8, max_rounds=8)
+    decided = [r for r in regions if r.verdict != "unknown"]
+    assert {r.verdict for r in decided} == {"holds", "fails"}
+    covered = sum(r.volume(box) for r in decided)
+    assert covered >= 0.8 or rounds == 8
+    assert sum(r.volume(box) for r in regions) == pytest.approx(1.0)
+    for r in decided:
+        names = sorted(r.bounds)
+        points = [dict(zip(names, c, strict=True))
+                  for c in itertools.product(*(r.bounds[n] for n in names))]
+        points.append({n: (lo + hi) / 2 for n, (lo, hi) in r.bounds.items()})
+        for pt in points:
+            v = value(model, pt, 'Pmin=? [ F "done" ]')  # type: ignore[arg-type]
+            assert (v >= BOUND) == (r.verdict == "holds"), (r, pt, v)
+
+
+@pytest.mark.parametrize("text", ['P=? [ F "done" ]', "P>=x [ F \"done\" ]", "F done"])
+def test_a_requirement_without_a_bound_is_e442(text: str) -> None:
+    with pytest.raises(CompileError) as info:
+        R.parse_requirement(text)
+    assert info.value.diagnostics[0].code == "E442"
+
+
+@pytest.mark.parametrize(("text", "mdp", "holds", "fails"), [
+    ("P>=0.6 [ F \"s\" ]", True, "Pmin>=0.6", "Pmin<0.6"),
+    ("P<0.1 [ F \"s\" ]", True, "Pmax<0.1", "Pmax>=0.1"),
+    ("Pmax>0.5 [ F \"s\" ]", True, "Pmax>0.5", "Pmax<=0.5"),
+    ("P>=0.6 [ F \"s\" ]", False, "P>=0.6", "P<0.6"),
+])
+def test_the_requirement_and_its_negation_for_storm(text: str, mdp: bool, holds: str,
+                                                     fails: str) -> None:
+    req = R.parse_requirement(text)
+    got = R.storm_formulas(req, f"P{req.opt}=? [ F \"s\" ]", mdp)
+    assert got == (f'{holds} [ F "s" ]', f'{fails} [ F "s" ]')
+
+
+def test_a_box_is_halved_along_its_widest_side_relative_to_the_whole() -> None:
+    whole = {"A": (0.0, 1.0), "B": (0.0, 0.01)}
+    halves = R.split({"A": (0.0, 0.5), "B": (0.0, 0.01)}, whole)
+    assert halves == [{"A": (0.0, 0.5), "B": (0.0, 0.005)}, {"A": (0.0, 0.5), "B": (0.005, 0.01)}]
+
+
+@pytest.mark.slow
+def test_local_processes_and_dask_give_the_regions_of_one_process(patrol: object) -> None:
+    distributed = pytest.importorskip("distributed")
+    low = lowered(patrol, "nondet")  # type: ignore[arg-type]
+    req = R.parse_requirement(f'P>={BOUND} [ F "done" ]')
+    box = {"P_FAULT": (0.005, 0.02), "P_SLIP": (0.05, 0.15)}
+    src, formulas, built = R.prepare(low, list(box), req, 'P=? [ F "done" ]', "prism")
+
+    def run(**kw: object) -> list[R.Region]:
+        return R.refine(low, src, formulas, built, box, coverage=0.7, max_rounds=5,
+                        **kw)[0]  # type: ignore[arg-type]
+
+    one = run(jobs=1)
+    assert run(jobs=2) == one
+    with distributed.LocalCluster(n_workers=1, threads_per_worker=1, processes=False,
+                                  dashboard_address=None) as cluster:
+        assert run(dask=cluster.scheduler_address) == one
