@@ -137,6 +137,8 @@ E246 = Code("E246", Severity.ERROR, "a formula nests too deeply once inlined")
 E247 = Code("E247", Severity.ERROR, "an instantaneous reward of a structure without state rewards")
 E248 = Code("E248", Severity.ERROR, "a probabilistic hazard is not an action")
 E249 = Code("E249", Severity.ERROR, "a value beyond what Storm stores in a state")
+E250 = Code("E250", Severity.ERROR, "a threshold on a min or max query")
+E251 = Code("E251", Severity.ERROR, "a threshold that is not a constant in range")
 
 
 # E3xx: the checks of a well-formed model
