@@ -62,8 +62,7 @@ def with_verdicts(rows: list[list[str]], results: Sequence[PropertyResult]) -> l
     if not any(p.threshold is not None for p in results):
         return rows
     return [rows[0] + ["verdict"]] + [
-        row + [p.verdict.kind if p.verdict is not None else ("-" if p.threshold is None
-                                                             else "no value")]
+        [*row, p.verdict.kind if p.verdict is not None else "-" if p.threshold is None else "no value"]
         for row, p in zip(rows[1:], results, strict=True)]
 
 
@@ -80,4 +79,4 @@ def verdict_lines(results: Sequence[PropertyResult]) -> list[str]:
     for p in results:
         if p.verdict is not None:
             lines.append(f"{p.name}: {p.verdict.kind}: {p.verdict.reason}")
-    return [""] + lines if lines else []
+    return ["", *lines] if lines else []

@@ -18,16 +18,16 @@ from afsmc.commands.common import (
     report,
     usage_error,
 )
-from afsmc.diagnostics import CompileError
-from afsmc.text import literal, num
-from afsmc.verify import VerifyResult
-from afsmc.verify.junit import write_junit
 from afsmc.commands.requirements import (
     add_requirement_options,
     refuse_requirement_options,
     verdict_lines,
     with_verdicts,
 )
+from afsmc.diagnostics import CompileError
+from afsmc.text import literal, num
+from afsmc.verify import VerifyResult
+from afsmc.verify.junit import write_junit
 from afsmc.verify.storm import ENGINES, SOLVERS, VIAS
 from afsmc.verify.verdicts import failing
 

@@ -25,9 +25,9 @@ from afsmc.stack import deep
 from afsmc.syntax.parser import parse, parse_property
 from afsmc.text import count, literal
 from afsmc.verify.guard import Progress, default_max_states, run_job, upper_bound
+from afsmc.verify.precision import DEFAULT_PRECISION, check_options, rational_text
 from afsmc.verify.results import Checks, VerifyResult
 from afsmc.verify.runner import CheckRun, ModelLoop, Options
-from afsmc.verify.precision import DEFAULT_PRECISION, check_options, rational_text
 from afsmc.verify.storm import Engine, Job, Solver, StormFailure, Via
 from afsmc.verify.verdicts import judge_all
 

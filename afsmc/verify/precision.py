@@ -92,3 +92,8 @@ def complement(text: str) -> str:
     """1 - an exact value (a bounded G from its dual), as `num/den`."""
     f = 1 - Fraction(text)
     return f"{f.numerator}/{f.denominator}"
+
+
+def nearest(text: str) -> float:
+    """The double nearest an exact value (Storm's own conversion can be one ulp off)."""
+    return float(Fraction(text))

@@ -398,6 +398,7 @@ def _check_each(stormpy: Any, built: _Built, check_env: Any, res: JobResult,
         res.values[name] = float(value)
         if not isinstance(value, float) and (text := precision.exact_text(value)) is not None:
             res.exact[name] = text
+            res.values[name] = precision.nearest(text)  # Storm's float() is off by an ulp
         del r  # before the next check: the result holds decision diagrams of this model
         _give_back()
         res.seconds[name] = time.perf_counter() - started

@@ -22,7 +22,7 @@ import operator
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from fractions import Fraction
-from typing import TYPE_CHECKING, Literal
+from typing import TYPE_CHECKING, Any, Literal
 
 from afsmc.model import ir
 from afsmc.text import num
@@ -33,7 +33,7 @@ if TYPE_CHECKING:
 Kind = Literal["holds", "fails", "depends", "undecided"]
 VERDICTS: tuple[Kind, ...] = ("holds", "fails", "depends", "undecided")
 
-_CMP: dict[str, Callable[[object, object], bool]] = {
+_CMP: dict[str, Callable[[Any, Any], bool]] = {
     ">=": operator.ge, ">": operator.gt, "<=": operator.le, "<": operator.lt}
 
 
