@@ -148,3 +148,26 @@ def test_bad_input_is_a_diagnostic(argv: list[str], code: int, text: str) -> Non
 def test_the_api_refuses_a_bad_precision() -> None:
     with pytest.raises(ValueError, match="strictly between 0 and 1"):
         verify.run(PATROL, properties=["finish"], precision=0.0)
+
+
+def test_sweep_reports_where_a_requirement_holds_fails_and_depends(tmp_path: Path) -> None:
+    out, plot = tmp_path / "s.json", tmp_path / "s.svg"
+    r = run_cli("sweep", PATROL, "-c", "CELLS=3:6:1", "-f", 'P>=0.8 [ F "done" ]',
+                "--jobs", "1", "--no-uniform", "-o", str(out), "--plot", str(plot))
+    assert r.code == 0, r.err
+    data = json.loads(out.read_text())
+    (req,) = data["requirements"]
+    # each point judged by the definition from its own min and max (margins >> 1e-6)
+    want = []
+    for pt in data["points"]:
+        (p,) = pt["properties"]
+        kind = ("holds" if p["min"] >= 0.8 else "fails" if p["max"] < 0.8 else "depends")
+        assert p["verdict"] == kind
+        if want and want[-1]["verdict"] == kind:
+            want[-1]["to"] = pt["x"]
+        else:
+            want.append({"verdict": kind, "from": pt["x"], "to": pt["x"]})
+    assert req == {"name": "adhoc", "ranges": want} and len(want) >= 2
+    line = next(s for s in r.err.splitlines() if s.startswith("afsmc: adhoc (CELLS):"))
+    assert all(f"{w['verdict']} for {w['from']}" in line for w in want)
+    assert "requirement &gt;= 0.8" in plot.read_text()
