@@ -15,7 +15,6 @@ from afsmc.verify.results import PropertyResult, find_property
 from afsmc.verify.storm import finite
 from afsmc.verify.sweep_values import Kind, Number
 
-
 _REQUIREMENT_KEYS = ("threshold", "verdict", "error")
 
 
