@@ -74,7 +74,7 @@ class SweepResult:
     def to_json(self) -> dict[str, object]:
         first = self.points[0].properties if self.points else []
         reqs = sweep_verdicts.ranges_json(self)
-        return {
+        out: dict[str, object] = {
             "file": self.path,
             "variable": self.variable,
             "kind": self.kind,
@@ -94,7 +94,10 @@ class SweepResult:
                                 and (v is not None or k not in _REQUIREMENT_KEYS)}
                                for r in pt.properties],
             } for pt in self.points],
-        } | ({"requirements": reqs} if reqs else {})
+        }
+        if reqs:
+            out["requirements"] = reqs
+        return out
 
     def plot(self, path: str, *, protect: tuple[str, ...] = ()) -> None:
         """Min, max and uniform curves (or the value) per property, as PNG or SVG."""
