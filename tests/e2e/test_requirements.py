@@ -150,6 +150,7 @@ def test_the_api_refuses_a_bad_precision() -> None:
         verify.run(PATROL, properties=["finish"], precision=0.0)
 
 
+@pytest.mark.slow
 def test_sweep_reports_where_a_requirement_holds_fails_and_depends(tmp_path: Path) -> None:
     out, plot = tmp_path / "s.json", tmp_path / "s.svg"
     r = run_cli("sweep", PATROL, "-c", "CELLS=3:6:1", "-f", 'P>=0.8 [ F "done" ]',
@@ -171,3 +172,16 @@ def test_sweep_reports_where_a_requirement_holds_fails_and_depends(tmp_path: Pat
     line = next(s for s in r.err.splitlines() if s.startswith("afsmc: adhoc (CELLS):"))
     assert all(f"{w['verdict']} for {w['from']}" in line for w in want)
     assert "requirement &gt;= 0.8" in plot.read_text()
+
+
+@pytest.mark.slow
+def test_the_hybrid_engine_is_sound_too() -> None:
+    """Every value of the hybrid engine's sound mode, the uniform DTMC's included, lies
+    within its bound of the exact one."""
+    exact = verify.run(PATROL, exact=True)
+    hybrid = verify.run(PATROL, precision=1e-9, engine="hybrid")
+    assert hybrid.model.engine == "hybrid" and hybrid.model.solver == "sound-value-iteration"
+    for e, h in zip(exact.properties, hybrid.properties, strict=True):
+        for key in ("min", "max", "uniform"):
+            assert abs(getattr(h, key) - Fraction(e.exact[key])) <= Fraction(1, 10**9), (
+                e.name, key)
