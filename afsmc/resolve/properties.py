@@ -95,8 +95,10 @@ class PropertiesMixin(ResolverBase):
             return None
         try:
             v = scalar(x, self._const_env())
-        except (EvalError, ArithmeticError):
-            return None  # reported where it is computed
+        except (EvalError, ArithmeticError) as exc:
+            self.rep.error(codes.E251, f"a threshold must be a finite number: {exc}",
+                           t.value.span)
+            return None
         if isinstance(v, bool) or not isinstance(v, int | float) or not math.isfinite(v):
             self.rep.error(codes.E251, f"a threshold must be a finite number, not {v}",
                            t.value.span)

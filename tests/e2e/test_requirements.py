@@ -128,6 +128,8 @@ def test_a_requirement_in_the_file_round_trips_through_fmt(tmp_path: Path) -> No
 
 @pytest.mark.parametrize(("argv", "code", "text"), [
     (["-f", 'P>=1.2 [ F "done" ]'], 1, "E251"),
+    (["-f", 'P>=(1/0) [ F "done" ]'], 1, "E251"),
+    (["-f", 'P>=(CELLS) [ F "done" ]'], 1, "not 4"),
     (["-f", 'P=>0.5 [ F "done" ]'], 1, "error[E1"),
     (["-f", 'P==0.5 [ F "done" ]'], 1, "E123"),
     (["-f", 'Pmax>=0.5 [ F "done" ]'], 1, "E250"),
