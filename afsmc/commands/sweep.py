@@ -23,6 +23,7 @@ from afsmc.commands.verify import (
 )
 from afsmc.diagnostics import CompileError, Diagnostic, Severity, codes
 from afsmc.files import check_writable, write_atomic
+from afsmc.verify import sweep_verdicts
 from afsmc.verify.sweep import without_kept_note
 from afsmc.verify.sweep_result import SweepResult
 from afsmc.verify.sweep_values import Number, parse_values
@@ -167,6 +168,9 @@ def run(args: argparse.Namespace) -> int:
         print(json.dumps(res.to_json(), indent=2))
     elif to_stdout or (not args.output and not args.plot):
         sys.stdout.write(res.to_csv())
+    if not args.json:
+        for line in sweep_verdicts.summary(res):
+            print(f"afsmc: {line}", file=sys.stderr)
     if progress:
         n = len(res.points)
         progress(f"{n} point{'' if n == 1 else 's'} in {res.seconds:.1f} s")

@@ -18,10 +18,18 @@ from afsmc.commands.common import (
     report,
     usage_error,
 )
+from afsmc.commands.requirements import (
+    add_requirement_options,
+    refuse_requirement_options,
+    verdict_lines,
+    with_verdicts,
+)
 from afsmc.diagnostics import CompileError
 from afsmc.text import literal, num
 from afsmc.verify import VerifyResult, parametric
+from afsmc.verify.junit import write_junit
 from afsmc.verify.storm import ENGINES, SOLVERS, VIAS
+from afsmc.verify.verdicts import failing
 
 
 def positive(text: str) -> int:
@@ -92,6 +100,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     add_storm_options(p)
     p.add_argument("--json", action="store_true",
                    help="print one JSON object: model, properties, timings")
+    add_requirement_options(p)
 
 
 def table(rows: list[list[str]], right: set[int]) -> list[str]:
@@ -118,8 +127,10 @@ def render(res: VerifyResult) -> str:
         lines.append(f"{res.path}: a DTMC")
         rows = [["property", "formula", "value"]] + [
             [p.name, p.formula, num(p.value)] for p in res.properties]
+    rows = with_verdicts(rows, res.properties)
     lines.append("")
-    lines += table(rows, set(range(2, len(rows[0]))))
+    lines += table(rows, set(range(2, len(rows[0]) - (rows[0][-1] == "verdict"))))
+    lines += verdict_lines(res.properties)
     lines.append("")
     models = [("floor/ceil MDP" if res.kind == "mdp" else "DTMC", res.model)]
     if u is not None:
@@ -157,17 +168,21 @@ def refuse_bisim_on_symbolic(args: argparse.Namespace) -> None:
 
 def run(args: argparse.Namespace) -> int:
     refuse_bisim_on_symbolic(args)
+    refuse_requirement_options(args)
     try:
         res = lib.run(args.file, consts=overrides(args), properties=args.property,
                   formulas=args.formula, via=args.via, engine=args.engine,
                   max_states=args.max_states, uniform=args.uniform,
                   progress=progress_printer(args), reductions=reductions(args),
-                  bisimulation=args.bisim, split=args.split, solver=args.solver)
+                  bisimulation=args.bisim, split=args.split, solver=args.solver,
+                  precision=args.precision, exact=args.exact)
         box, bounds = parametric.for_file(  # interval probabilities: min/max over them
             args.file, overrides(args), args.property, args.formula, via=args.via,
             reductions=reductions(args))
     except CompileError as exc:
         return fail(exc, args.json, wrapped=True)
+    if args.junit:
+        write_junit(args.junit, res)
     if args.json:
         out = res.to_json()
         if bounds:
@@ -178,5 +193,5 @@ def run(args: argparse.Namespace) -> int:
         print(render(res))
         if bounds:
             print("\n" + parametric.render(box, bounds))
-    return 0
+    return 1 if failing(res.properties) else 0
 

@@ -138,6 +138,8 @@ E247 = Code("E247", Severity.ERROR, "an instantaneous reward of a structure with
 E248 = Code("E248", Severity.ERROR, "a probabilistic hazard is not an action")
 E249 = Code("E249", Severity.ERROR, "a value beyond what Storm stores in a state")
 E250 = Code("E250", Severity.ERROR, "an interval probability is used outside probabilities")
+E251 = Code("E251", Severity.ERROR, "a threshold on a min or max query")
+E252 = Code("E252", Severity.ERROR, "a threshold that is not a constant in range")
 
 
 # E3xx: the checks of a well-formed model

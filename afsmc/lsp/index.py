@@ -122,6 +122,7 @@ def build(module: ast.Module, text: str) -> Index:
                 s = node.reward_span
                 use(REWARD, node.reward, s, s.start + 1, s.end - 1)
             walk(node.path)
+            walk(node.threshold)  # a requirement's constants: R{"r"}<=(LIMIT) [ ... ]
         elif isinstance(node, tuple):
             for x in node:
                 walk(x)

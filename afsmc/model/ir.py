@@ -167,6 +167,17 @@ class RewardPath:
 
 
 @dataclass(frozen=True)
+class Threshold:
+    """A requirement's comparison, `P>=0.65 [ ... ]`: `op` and `bound`; `exact` is the
+    bound as a decimal or fraction text (`"0.65"`), so that a verdict from exact values
+    compares with the number written, not its nearest double."""
+
+    op: Literal["<=", ">=", "<", ">"]
+    bound: float
+    exact: str
+
+
+@dataclass(frozen=True)
 class Property:
     name: str
     kind: Literal["P", "R"]
@@ -180,6 +191,9 @@ class Property:
     text: str = ""
     # Where in `text` the step bound (`<=k`, `=k`) stands, or would go after F/G/U/C.
     bound_site: tuple[int, int] | None = None
+    # A requirement (`P>=0.65 [ ... ]`): Storm is still asked for the values (min and max),
+    # and afsmc.verify.verdicts judges them. None: `=?`.
+    threshold: Threshold | None = None
 
 
 @dataclass

@@ -5,6 +5,8 @@ afsmc asks for them (E244).
 
 from __future__ import annotations
 
+import math
+
 from afsmc.diagnostics import Related, codes
 from afsmc.model import expr as E
 from afsmc.model import ir
@@ -70,8 +72,44 @@ class PropertiesMixin(ResolverBase):
                 path = ir.Path("X", self._bool(p.target, _PROPERTY))
             opt = {"P": "", "Pmin": "min", "Pmax": "max"}[q.op]
             return ir.Property(d.name.text, "P", opt, path, None, d.span,  # type: ignore[arg-type]
-                               *_written(q))
+                               *_written(q), threshold=self._threshold(q, opt))
         return self._reward_property(d, q)
+
+    def _threshold(self, q: ast.PQuery | ast.RQuery, opt: str) -> ir.Threshold | None:
+        """`P>=0.65 [ ... ]`: a constant number, within [0, 1] for a probability, on a
+        query without min or max (the verdict judges the min and the max itself)."""
+        t = q.threshold
+        if t is None:
+            return None
+        kind = "P" if isinstance(q, ast.PQuery) else "R"
+        if opt:
+            self.rep.error(codes.E251, f"a requirement cannot name {kind}{opt}: it is judged "
+                           "over every resolution of the interval constants, by the min and "
+                           "the max together", q.span,
+                           hint=f"write {kind}{t.op}... without '{opt}' (holds: the worst "
+                           f"case meets it), or {kind}{opt}=? [ ... ] for the value")
+            return None
+        x = self._expr(t.value, Ctx("a threshold", state=False))
+        if x.type not in (Type.INT, Type.DOUBLE):
+            self.rep.error(codes.E252, "a threshold must be a number", t.value.span)
+            return None
+        try:
+            v = scalar(x, self._const_env())
+        except (EvalError, ArithmeticError) as exc:
+            self.rep.error(codes.E252, f"a threshold must be a finite number: {exc}",
+                           t.value.span)
+            return None
+        if isinstance(v, bool) or not isinstance(v, int | float) or not math.isfinite(v):
+            self.rep.error(codes.E252, f"a threshold must be a finite number, not {v}",
+                           t.value.span)
+            return None
+        if kind == "P" and not 0 <= v <= 1:
+            self.rep.error(codes.E252, f"a probability threshold must lie in [0, 1], not {v}",
+                           t.value.span, hint="a probability is compared with a number "
+                           "from 0 to 1, e.g. P>=0.65 [ ... ]")
+            return None
+        exact = t.value.text if isinstance(t.value, ast.Num) else repr(float(v))
+        return ir.Threshold(t.op, float(v), exact)
 
     def _reward_property(self, d: ast.PropertyDecl, q: ast.RQuery) -> ir.Property:
         reward = self._reward_name(q)
@@ -94,7 +132,8 @@ class PropertiesMixin(ResolverBase):
                     f"\"{rs.name}\", or ask R{{\"{rs.name}\"}}=? [ C<=k ] for the action "
                     "rewards of the first k steps",
                     related=[Related(f"reward structure \"{rs.name}\"", rs.span)])
-        return ir.Property(d.name.text, "R", q.opt, path, reward, d.span, *_written(q))
+        return ir.Property(d.name.text, "R", q.opt, path, reward, d.span, *_written(q),
+                           threshold=self._threshold(q, q.opt))
 
     def _reward_name(self, q: ast.RQuery) -> str | None:
         """The reward structure `R{"name"}` names; without a name, the only one there is."""

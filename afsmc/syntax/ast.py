@@ -376,10 +376,20 @@ RewardPath = Union[ReachReward, CumulativeReward, InstantReward]
 
 
 @dataclass(frozen=True)
+class Threshold:
+    """A requirement's comparison: `>= 0.65` in `P>=0.65 [ ... ]`."""
+
+    op: Literal["<=", ">=", "<", ">"]
+    value: Expr
+    span: Span
+
+
+@dataclass(frozen=True)
 class PQuery:
     op: Literal["P", "Pmin", "Pmax"]
     path: PathFormula
     span: Span
+    threshold: Threshold | None = None  # None: `=?`, the value is asked
 
 
 @dataclass(frozen=True)
@@ -389,6 +399,7 @@ class RQuery:
     opt: Literal["", "min", "max"]
     path: RewardPath
     span: Span
+    threshold: Threshold | None = None  # None: `=?`, the value is asked
 
 
 @dataclass(frozen=True)

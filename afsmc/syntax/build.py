@@ -269,19 +269,29 @@ class Builder(Transformer[Token, Any]):
     def minmax(self, meta: Any, c: list[Token]) -> str:
         return str(c[0])
 
+    def threshold_op(self, meta: Any, c: list[Token]) -> str:
+        return str(c[0])
+
+    def threshold(self, meta: Any, c: list[Any]) -> ast.Threshold:
+        return ast.Threshold(cast(Any, c[0]), c[1], self._s(meta))
+
     def p_query(self, meta: Any, c: list[Any]) -> ast.PQuery:
-        return ast.PQuery(c[0], c[1], self._s(meta))
+        limit = next((x for x in c if isinstance(x, ast.Threshold)), None)
+        return ast.PQuery(c[0], c[-1], self._s(meta), limit)
 
     def r_query(self, meta: Any, c: list[Any]) -> ast.RQuery:
         reward = reward_span = None
         opt = ""
+        limit = None
         for item in c[:-1]:
             if isinstance(item, Token):
                 reward = str(item)[1:-1]
                 reward_span = span_of(self.source, item)
+            elif isinstance(item, ast.Threshold):
+                limit = item
             else:
                 opt = item
-        return ast.RQuery(reward, reward_span, cast(Any, opt), c[-1], self._s(meta))
+        return ast.RQuery(reward, reward_span, cast(Any, opt), c[-1], self._s(meta), limit)
 
     def time_bound(self, meta: Any, c: list[Any]) -> Any:
         return ("bound", c[0])

@@ -315,12 +315,13 @@ class _Formatter:
         return "(" + ", ".join(f"{f.name.text}: {self.var_type(f.type)}" for f in t.fields) + ")"
 
     def query(self, q: ast.PQuery | ast.RQuery) -> str:
+        asks = "=?" if q.threshold is None else q.threshold.op + self.bound(q.threshold.value)
         if isinstance(q, ast.PQuery):
-            return f"{q.op}=? [ {self.path(q.path)} ]"
+            return f"{q.op}{asks} [ {self.path(q.path)} ]"
         head = "R"
         if q.reward_span is not None:
             head += "{" + self._src(q.reward_span) + "}"
-        return f"{head}{q.opt}=? [ {self.path(q.path)} ]"
+        return f"{head}{q.opt}{asks} [ {self.path(q.path)} ]"
 
     def path(self, p: Any) -> str:
         def b(x: ast.Expr | None) -> str:

@@ -24,9 +24,17 @@ bisimulation=False, split=False, memory_budget=None, solver="auto") -> VerifyRes
     `isolate` forces (True) or forbids (False) the watched child process (default: only
     when the upper bound exceeds 200,000 states). `progress(text)` receives progress lines.
 
+    ``precision=EPS`` checks with Storm's sound value iteration (every value within EPS of
+    the true one); ``exact=True`` builds over rationals and solves exactly (sparse engine).
+    A property with a threshold (a requirement, ``P>=0.65 [ ... ]``) makes the check sound
+    at ``precision.DEFAULT_PRECISION`` (1e-6) unless one of them is given, and gets a
+    ``verdict`` (:mod:`afsmc.verify.verdicts`: holds, fails, depends, undecided).
+
 ``VerifyResult``: ``.model`` / ``.uniform_model`` (:class:`ModelStats`: type, states,
 transitions, choices, parse/build/check times), ``.properties`` (list of
-:class:`PropertyResult`: name, formula, kind, min, max, uniform, value), ``.property(name)``,
+:class:`PropertyResult`: name, formula, kind, min, max, uniform, value; for requirements
+``threshold`` and ``verdict``; ``error``, the bound on every value's error, 0 exact, None
+unguaranteed; ``exact``, the values as fractions under ``exact=True``), ``.property(name)``,
 ``.kind``, ``.upper_bound``, ``.to_json()`` (the ``afsmc verify --json`` object).
 
 ``check(model, props, *, via, engine, max_states, uniform, isolate, progress) -> Checks``

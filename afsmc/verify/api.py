@@ -25,9 +25,11 @@ from afsmc.stack import deep
 from afsmc.syntax.parser import parse, parse_property
 from afsmc.text import count, literal
 from afsmc.verify.guard import Progress, default_max_states, run_job, upper_bound
+from afsmc.verify.precision import DEFAULT_PRECISION, check_options, rational_text
 from afsmc.verify.results import Checks, VerifyResult
 from afsmc.verify.runner import CheckRun, ModelLoop, Options
 from afsmc.verify.storm import Engine, Job, Solver, StormFailure, Via
+from afsmc.verify.verdicts import judge_all
 
 
 def _fresh_name(text: str, base: str, taken: set[str]) -> str:
@@ -144,7 +146,8 @@ def check(model: ir.Model, props: Sequence[ir.Property], *, via: Via = "prism",
           reductions: Reductions | None = None, bisimulation: bool = False,
           split: bool = False, memory_budget: int | None = None,
           preserve: Sequence[ir.Property] = (), all_states: bool = False,
-          solver: Solver = "auto") -> Checks:
+          solver: Solver = "auto", precision: float | None = None,
+          exact: bool = False) -> Checks:
     """Check `props` (uniquely named) on a loaded model; raises CompileError on failure.
 
     `preserve`: further properties that the reductions keep exact but that are not checked
@@ -163,13 +166,43 @@ def check(model: ir.Model, props: Sequence[ir.Property], *, via: Via = "prism",
     per model: one for the expected rewards, one with larger decision-diagram tables for the
     probabilities (each Pmax as 1 - the complementary Pmin). If a process of several queries
     fills its tables, the queries it had not answered go on in a fresh process; if it runs
-    out of memory, they follow one per process."""
+    out of memory, they follow one per process.
+
+    `precision`: sound mode, every value within it of the true one (absolute); `exact`:
+    exact arithmetic (sparse engine). A property with a threshold (a requirement) makes the
+    check sound at `verdicts`' DEFAULT_PRECISION unless either is given; each requirement's
+    result then has its `verdict` (afsmc.verify.verdicts)."""
+    precision, engine = sound_mode(props, precision, exact, engine)
     checking = CheckRun(model, list(props), list(preserve), engine, uniform, progress,
                         reductions, Options(via, max_states, isolate, bisimulation, split,
-                                            memory_budget, solver, all_states))
+                                            memory_budget, solver, all_states,
+                                            None if precision is None
+                                            else rational_text(precision), exact))
     for resolution, low, what in checking.lows:
         ModelLoop(checking, resolution, low, what).check_all()
-    return checking.finish()
+    checks = checking.finish()
+    judge_all(checks.properties, 0.0 if exact else precision)
+    return checks
+
+
+def sound_mode(props: Sequence[ir.Property], precision: float | None, exact: bool,
+               engine: Engine) -> tuple[float | None, Engine]:
+    """The precision to check at (a requirement's default if none is given) and the engine
+    (exact: sparse); ValueError for a precision outside (0, 1), CompileError (E404) for an
+    engine that cannot give what is asked."""
+    requirement = next((p for p in props if p.threshold is not None), None)
+    if precision is None and not exact and requirement is not None:
+        precision = DEFAULT_PRECISION
+    if precision is not None and not 0 < precision < 1:
+        raise ValueError(f"precision must lie strictly between 0 and 1; got {precision!r}")
+    why = check_options(precision, exact, engine)
+    if why is not None:
+        at = requirement.span if requirement is not None and not exact else None
+        raise CompileError([Diagnostic(
+            codes.E404, Severity.ERROR, why, at,
+            hint="requirements and --precision need Storm's sound methods; --exact needs "
+                 "exact arithmetic (docs/verification.md, \"Requirements\")")])
+    return precision, "sparse" if exact else engine
 
 
 def check_choice(option: str, value: object, allowed: object) -> None:
@@ -188,7 +221,8 @@ def run(path: str, *, consts: Mapping[str, str | bool | int | float] | None = No
         progress: Progress | None = None, text: str | None = None,
         reductions: Reductions | None = None, bisimulation: bool = False,
         split: bool = False, memory_budget: int | None = None,
-        solver: Solver = "auto") -> VerifyResult:
+        solver: Solver = "auto", precision: float | None = None,
+        exact: bool = False) -> VerifyResult:
     """Verify one .afsm file; see the package docstring. Raises CompileError, or
     ValueError for an unknown `via`, `engine` or `solver`."""
     check_choice("via", via, Via)
@@ -210,7 +244,7 @@ def run(path: str, *, consts: Mapping[str, str | bool | int | float] | None = No
         checks = check(model, props, via=via, engine=engine, max_states=max_states,
                        uniform=uniform, isolate=isolate, progress=progress, reductions=reductions,
                        bisimulation=bisimulation, split=split, memory_budget=memory_budget,
-                       solver=solver)
+                       solver=solver, precision=precision, exact=exact)
     except CompileError as exc:
         raise loaded.remap_error(exc) from None
     consts_used: dict[str, object] = {c.name: c.value for c in model.constants if c.is_param}

@@ -16,6 +16,7 @@ from afsmc.diagnostics import Diagnostic
 from afsmc.model import ir
 from afsmc.model.pretty import show
 from afsmc.verify.storm import JobResult, finite
+from afsmc.verify.verdicts import Verdict, requirement_json
 
 
 @dataclass
@@ -68,6 +69,11 @@ class PropertyResult:
     # Storm's time for each of the above, s: its check, or that of the query asked instead
     # (a Pmax as 1 - Pmin, a bounded G as its dual). Builds are in the model's build time.
     seconds: dict[str, float] = field(default_factory=dict)
+    threshold: ir.Threshold | None = None  # a requirement's; None: `=?`
+    verdict: Verdict | None = None  # a requirement's (afsmc.verify.verdicts)
+    # Each value is within this of the true one (sound mode; 0: exact); None: no guarantee.
+    error: float | None = None
+    exact: dict[str, str] = field(default_factory=dict)  # --exact: the values as `num/den`
 
     def to_json(self) -> dict[str, object]:
         out: dict[str, object] = {"name": self.name, "formula": self.formula}
@@ -80,6 +86,7 @@ class PropertyResult:
         if infinite:
             out["infinite"] = infinite  # JSON has no infinity: these are null above
         out["seconds"] = {k: round(v, 3) for k, v in self.seconds.items()}
+        out.update(requirement_json(self.threshold, self.verdict, self.error, self.exact))
         return out
 
 

@@ -37,6 +37,7 @@ from afsmc.verify.guard import (
     upper_bound,
 )
 from afsmc.verify.jobs import choose_engine, make_job
+from afsmc.verify.precision import complement
 from afsmc.verify.queries import (
     REST,
     TERMINATES,
@@ -95,6 +96,8 @@ class Options:
     memory_budget: int | None
     solver: Solver
     all_states: bool
+    precision: str | None = None  # sound mode within this (Job.precision)
+    exact: bool = False
 
 
 def _put(r: PropertyResult, key: str, value: float) -> None:
@@ -153,6 +156,8 @@ class CheckRun:
         # Failures of one query (not of the model): the other queries go on, and these are
         # raised at the end with every answer.
         self.errors: list[Diagnostic] = []
+        # --exact: each model's (by resolution) values as `num/den`, by query
+        self.exact: dict[str, dict[str, str]] = {}
 
     def kept(self, what: str, vals: dict[str, float]) -> list[Diagnostic]:
         """The note of what the finished models and this one have answered."""
@@ -164,7 +169,7 @@ class CheckRun:
         first = self.lows[0][1]
         out = []
         for p in self.original:
-            r = PropertyResult(p.name, shown(p), p.kind)
+            r = PropertyResult(p.name, shown(p), p.kind, threshold=p.threshold)
             variants = ([(opt, 0, name) for name, opt in property_variants(first, p)]
                         + ([("uniform", 1, p.name)] if len(self.lows) > 1 else [])
                         if first.kind == "mdp" else [("value", 0, p.name)])
@@ -176,6 +181,9 @@ class CheckRun:
                 if v is None:
                     continue
                 _put(r, key, 1.0 - v if name in self.asked_as else v)
+                exact = self.exact.get(self.lows[which][0], {}).get(query)
+                if exact is not None:
+                    r.exact[key] = complement(exact) if name in self.asked_as else exact
                 secs = self.timings[which].get(query)
                 if secs is not None:
                     r.seconds[key] = secs
@@ -393,7 +401,8 @@ class ModelLoop:
         job = make_job(self.low, group, o.via, self.job_engine, limit, self.what, o.bisimulation,
                        o.memory_budget, only=tuple(mine),
                        hybrid_skip=tuple(n for n in mine if n not in first), hybrid_extra=extra)
-        job = dataclasses.replace(job, solver=o.solver, all_states=o.all_states)
+        job = dataclasses.replace(job, solver=o.solver, all_states=o.all_states,
+                                  precision=o.precision, exact=o.exact)
         if self.job_engine == "auto":
             job = dataclasses.replace(job, symbolic_refused=tuple(
                 n for p, n in unit if symbolic_gap(p, self.run.model, "auto") is not None))
@@ -426,7 +435,9 @@ class ModelLoop:
         """Run the job. An hour's answers are not lost to a Ctrl-C: the interrupt becomes
         a Stopped with the errors, a note of the values and the answers as data."""
         try:
-            return run_job(job, self.run.bound, isolate=fresh, progress=self.run.progress)
+            res = run_job(job, self.run.bound, isolate=fresh, progress=self.run.progress)
+            self.run.exact.setdefault(self.resolution, {}).update(res.exact)
+            return res
         except KeyboardInterrupt as exc:
             got = exc.values if isinstance(exc, Interrupted) else {}
             vals = self.vals | got

@@ -17,6 +17,8 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any, Literal
 
+from afsmc.verify import precision
+
 Engine = Literal["sparse", "dd", "hybrid", "auto"]
 ENGINES: tuple[Engine, ...] = ("auto", "sparse", "dd", "hybrid")
 # The sparse engine needs about this much per state (model plus one property's vectors):
@@ -80,6 +82,10 @@ class Job:
     # checks the others on the model it has built, and then fails at the first of them.
     symbolic_refused: tuple[str, ...] = ()
     solver: Solver = "auto"
+    # Sound mode: Storm's sound value iteration, every value within this (a rational text,
+    # absolute) of the true one (afsmc.verify.precision); None: Storm's unsound stopping.
+    precision: str | None = None
+    exact: bool = False  # build over rationals and solve exactly (sparse engine only)
 
     @property
     def wanted(self) -> tuple[str, ...]:
@@ -114,6 +120,7 @@ class JobResult:
     build_time: float = 0.0
     check_time: float = 0.0
     values: dict[str, float] = field(default_factory=dict)
+    exact: dict[str, str] = field(default_factory=dict)  # --exact: each value as `num/den`
     seconds: dict[str, float] = field(default_factory=dict)  # each query's check, wall time
     engine: str = ""  # the engine that checked ("auto" resolves to sparse or hybrid)
     engine_reason: str = ""  # why "auto" chose it
@@ -200,6 +207,11 @@ def _execute(job: Job, notify: Notify) -> JobResult:
     res.engine = built.engine
     res.solver = solver_for(job.solver, built.engine)
     check_env = _value_iteration(stormpy, job) if res.solver == "value-iteration" else None
+    if job.exact:
+        res.solver, check_env = "exact", precision.exact_environment(stormpy)
+    elif job.precision is not None:
+        res.solver = "sound-value-iteration"
+        check_env = precision.sound_environment(stormpy, job.precision, job.dd_memory_mb)
     notify("engine", built.engine)  # a process that dies later still says which engine ran
     res.build_time = time.perf_counter() - t0
     model = built.model
@@ -281,8 +293,9 @@ def _build(stormpy: Any, job: Job, program: Any, props: list[Any], res: JobResul
     names = list(job.wanted)  # the extras go once the engine is known
     if job.engine == "sparse":
         names, props = _keep(names, props, job.hybrid_extra)
-        return _Built(stormpy.build_model(program, _for_builder(props, job)), "sparse",
-                      names, props, symbolic=False)
+        sparse = (precision.build_exact(stormpy, program, _for_builder(props, job)) if job.exact
+                  else stormpy.build_model(program, _for_builder(props, job)))
+        return _Built(sparse, "sparse", names, props, symbolic=False)
     # Labels and guards that mention constants fail in the symbolic builder otherwise.
     sprog = program.substitute_constants()
     if hasattr(sprog, "substitute_formulas"):
@@ -383,6 +396,9 @@ def _check_each(stormpy: Any, built: _Built, check_env: Any, res: JobResult,
                                        "this property (Storm returned no result)", prop=name)
             return False
         res.values[name] = float(value)
+        if not isinstance(value, float) and (text := precision.exact_text(value)) is not None:
+            res.exact[name] = text
+            res.values[name] = precision.nearest(text)  # Storm's float() is off by an ulp
         del r  # before the next check: the result holds decision diagrams of this model
         _give_back()
         res.seconds[name] = time.perf_counter() - started

@@ -11,6 +11,7 @@ from typing import TYPE_CHECKING, Any
 from afsmc.diagnostics import CompileError, Diagnostic, Severity, codes
 from afsmc.files import write_atomic
 from afsmc.text import literal
+from afsmc.verify import sweep_verdicts
 from afsmc.verify.results import PropertyResult, find_property
 from afsmc.verify.storm import finite
 from afsmc.verify.sweep_values import Kind, Number
@@ -19,6 +20,8 @@ if TYPE_CHECKING:
     from matplotlib.figure import Figure
 
 RC: Any = {"svg.hashsalt": "afsmc", "font.size": 9}  # byte-identical SVGs; small print
+
+_REQUIREMENT_KEYS = ("threshold", "verdict", "error")
 
 
 @dataclass
@@ -57,8 +60,10 @@ class SweepResult:
     def to_csv(self) -> str:
         buf = io.StringIO()
         w = csv.writer(buf, lineterminator="\n")
+        verdicts = bool(sweep_verdicts.requirements(self))
         w.writerow([self.variable, "property", "min", "max", "uniform", "value", "states",
-                    "transitions", "uniform_states", "uniform_transitions"])
+                    "transitions", "uniform_states", "uniform_transitions"]
+                   + (["verdict"] if verdicts else []))
 
         def cell(v: float | int | None) -> str:
             return "" if v is None else str(v) if isinstance(v, int) else repr(float(v))
@@ -67,12 +72,15 @@ class SweepResult:
             for r in pt.properties:
                 w.writerow([literal(pt.x), r.name, cell(r.min), cell(r.max), cell(r.uniform),
                             cell(r.value), pt.states, pt.transitions, cell(pt.uniform_states),
-                            cell(pt.uniform_transitions)])
+                            cell(pt.uniform_transitions)]
+                           + ([r.verdict.kind if r.verdict is not None else ""]
+                              if verdicts else []))
         return buf.getvalue()
 
     def to_json(self) -> dict[str, object]:
         first = self.points[0].properties if self.points else []
-        return {
+        reqs = sweep_verdicts.ranges_json(self)
+        out: dict[str, object] = {
             "file": self.path,
             "variable": self.variable,
             "kind": self.kind,
@@ -86,11 +94,16 @@ class SweepResult:
                 "uniform_states": pt.uniform_states,
                 "uniform_transitions": pt.uniform_transitions,
                 # no check times: a sweep's output is the same however it was split
+                # a property that is not a requirement: no threshold/verdict/error keys
                 "properties": [{k: v for k, v in r.to_json().items()
-                                if k != "seconds" and (k != "formula" or self.kind == "bound")}
+                                if k != "seconds" and (k != "formula" or self.kind == "bound")
+                                and (v is not None or k not in _REQUIREMENT_KEYS)}
                                for r in pt.properties],
             } for pt in self.points],
         }
+        if reqs:
+            out["requirements"] = reqs
+        return out
 
     def plot(self, path: str, *, protect: tuple[str, ...] = ()) -> None:
         """Min, max and uniform curves (or the value) per property, as PNG or SVG."""
@@ -149,6 +162,7 @@ class SweepResult:
                     ax.set_xticks(xs, [literal(x) for x in self.xs])
                 elif all(isinstance(x, int) for x in self.xs):  # no tick at ROUNDS = 1.5
                     ax.xaxis.set_major_locator(MaxNLocator(integer=True))
+                sweep_verdicts.draw(ax, self, name, xs)
                 ax.grid(True, alpha=0.3)
                 ax.legend(loc="best")
         return fig

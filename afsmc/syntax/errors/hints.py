@@ -7,7 +7,7 @@ import re
 
 from afsmc.syntax.errors.messages import NOT_OPERATOR, OPERATORS
 
-# A property's query head right before a failing comparison: `P>=0.5 [ ... ]`
+# A property's query head right before a failing comparison: `P==0.5 [ ... ]`
 _QUERY_BEFORE = re.compile(r"\b(?:P|Pmin|Pmax|R|Rmin|Rmax)\s*(?:\{[^{}]*\})?\s*$")
 # An update's target right before a failing '=': at the start of an outcome or after ','
 _UPDATE_TARGET = re.compile(r"(?:[{;,]|:(?!=))\s*([A-Za-z_][\w.]*)\s*$")
@@ -17,7 +17,7 @@ def foreign(text: str, pos: int, tok: str, kind: str,
             body: bool = False) -> tuple[str, str, tuple[int, int] | None] | None:
     """(message, hint, the offending word's offsets if not the failing token) for a spelling
     from another language (Python's `and`, `not`, `if ... then`, `x = 1`; an infix `mod`;
-    PRISM's `P>=0.5` thresholds) where the parser fails on it or
+    a requirement's `P==0.5`) where the parser fails on it or
     right after it; None otherwise. `body`: the failing token is in an action's or hazard's
     outcomes."""
     word = re.search(r"\b(\w+)\s*$", text[:pos])
@@ -39,10 +39,9 @@ def foreign(text: str, pos: int, tok: str, kind: str,
         return ("afsm has no 'if ... then ... else': write a conditional as 'COND ? A : B'",
                 (_conditional_update(text, pos) if body and tok == "if" else None)
                 or "for example 'weight (b > 3 ? 1 : 0)'", at if before == "if" else None)
-    if tok in ("<", "<=", ">", ">=") and _QUERY_BEFORE.search(text, 0, pos):
-        return ("a property asks for a value, 'P=? [ ... ]', not a threshold",
-                "write 'P=? [ ... ]' (or Pmin=?, Pmax=?, R=?) and compare the value it gives; "
-                "afsm has no bounded P>=p or R<r queries", None)
+    if tok in ("==", "!=", "=") and _QUERY_BEFORE.search(text, 0, pos):
+        return (f"a requirement compares with <, <=, >= or >, not '{tok}'",
+                "write 'P>=0.65 [ ... ]' for a requirement, or 'P=? [ ... ]' for the value", None)
     return None
 
 

@@ -38,7 +38,8 @@ def test_an_infinite_value_is_null_and_named() -> None:
                        seconds={"min": 0.12345, "max": 1.0})
     assert r.to_json() == {"name": "steps", "formula": "R=? [ F \"done\" ]", "min": 2.5,
                            "max": None, "uniform": None, "value": None,
-                           "infinite": ["max"], "seconds": {"min": 0.123, "max": 1.0}}
+                           "infinite": ["max"], "seconds": {"min": 0.123, "max": 1.0},
+                           "threshold": None, "verdict": None, "error": None}
     json.dumps(r.to_json(), allow_nan=False)  # valid JSON
 
 
@@ -47,7 +48,8 @@ def test_partial_keeps_what_was_answered_and_is_a_json_result() -> None:
     assert isinstance(p, JsonResult)
     assert p.to_json() == {"model": None, "uniform_model": None, "properties": [
         {"name": "ok", "formula": "P=? [ F \"done\" ]", "min": None, "max": None,
-         "uniform": None, "value": 0.5, "seconds": {}}]}
+         "uniform": None, "value": 0.5, "seconds": {}, "threshold": None, "verdict": None,
+         "error": None}]}
 
 
 def test_verify_result_json_has_the_cli_keys_and_round_trips() -> None:
