@@ -27,7 +27,7 @@ from afsmc.model.limits import INT64
 from afsmc.stack import deep
 from afsmc.text import literal, plural
 from afsmc.verify.api import check_choice, load_with_formulas, select
-from afsmc.verify.guard import Progress
+from afsmc.verify.guard import Progress, without_main
 from afsmc.verify.storm import Engine, Solver, Via
 from afsmc.verify.sweep_result import SweepPoint, SweepResult
 from afsmc.verify.sweep_tasks import Task, evaluate, make_tasks, unbounded, user_words
@@ -268,6 +268,7 @@ def _run(tasks: list[Task], jobs: int, dask: Any, progress: Progress | None, tot
         ctx = multiprocessing.get_context("spawn")  # safe even if the caller has threads
         with ProcessPoolExecutor(max_workers=min(jobs, len(tasks)), mp_context=ctx,
                                  initializer=die_with_parent, initargs=(os.getpid(),)) as pool:
-            futs = {pool.submit(evaluate, t): i for i, t in enumerate(tasks)}
+            with without_main():  # the workers start here: not the caller's script again
+                futs = {pool.submit(evaluate, t): i for i, t in enumerate(tasks)}
             for f in as_completed(futs):
                 done(futs[f], f.result())
