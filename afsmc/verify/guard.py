@@ -175,7 +175,7 @@ def _child(conn: Any, job: Job, address_limit: int | None, parent: int) -> None:
     conn.send(("ready", _rss(os.getpid())))
     started = time.monotonic()
 
-    explored = []
+    explored: list[bool] = []
 
     def notify(event: str, data: Any) -> None:
         if captured is not None and (event in ("built", "engine")
@@ -196,15 +196,17 @@ def _child(conn: Any, job: Job, address_limit: int | None, parent: int) -> None:
 def run_isolated(job: Job, progress: Progress | None, *, every: float = 5.0,
                  first: float = 3.0) -> JobResult:
     """Run `job` in a watched child process; see the module docstring."""
-    rate: float | None = stopping.FIRST_TRIGGER_BYTES_PER_STATE
+    rate: float = stopping.FIRST_TRIGGER_BYTES_PER_STATE
+    measured: float | None = None
     for attempt in range(1, stopping.ATTEMPTS + 1):
         res, code, grown = _run_isolated(job, progress, every, first,
-                                         rate if attempt < stopping.ATTEMPTS else None)
+                                         rate if attempt < stopping.ATTEMPTS else None, measured)
         if res.failure is None or res.failure.stage != "stopped":
             break
         # Interrupted within the limit: the memory ran ahead of the states. Again, with
         # the trigger at the rate just measured (and some room).
-        rate = max(rate or 0, 1.25 * grown / max(1, res.states))
+        measured = grown / max(1, res.states)
+        rate = max(rate, 1.25 * measured)
         if progress is not None:
             progress(f"the {job.what} had {res.states:,} states when its memory reached "
                      f"what --max-states allows at {grown / max(1, res.states):.0f} bytes per "
@@ -260,7 +262,8 @@ class Interrupted(KeyboardInterrupt):
 
 
 def _run_isolated(job: Job, progress: Progress | None, every: float, first: float,
-                  rate: float | None) -> tuple[JobResult, int | None, int]:
+                  rate: float | None, measured: float | None = None
+                  ) -> tuple[JobResult, int | None, int]:
     """Run `job` once in a watched child: its result, the child's exit code (None when
     this process stopped the child for its memory), and how much its memory had grown
     when it was interrupted at `rate` bytes per state (see :mod:`afsmc.verify.stopping`)."""
@@ -271,7 +274,9 @@ def _run_isolated(job: Job, progress: Progress | None, every: float, first: floa
     cap = int(avail * 0.85) if avail is not None else None
     budget = None
     if job.max_states is not None and (job.engine == "sparse" or explores_first(job)):
-        budget = job.max_states * BUDGET_BYTES_PER_STATE + BUDGET_SLACK
+        # at the rate measured by an interrupted attempt, if higher (see stopping)
+        budget = int(job.max_states * max(BUDGET_BYTES_PER_STATE, 2 * (measured or 0))) \
+            + BUDGET_SLACK
     address_limit = None
     if job.engine == "sparse":
         # Symbolic engines reserve large address ranges up front (Sylvan), so only sparse.
@@ -283,7 +288,7 @@ def _run_isolated(job: Job, progress: Progress | None, every: float, first: floa
     child_end.close()
     start = time.monotonic()
     watch = _Watch(job, progress, every, budget, cap, start=start, phase_start=start,
-                   next_report=start + first, pid=proc.pid or 0,
+                   next_report=start + first, pid=proc.pid or 0, measured=measured,
                    trigger=stopping.trigger_bytes(job, rate) if budget is not None else None)
     try:
         stopped = _follow(watch, proc, conn)
@@ -349,6 +354,7 @@ class _Watch:
     pid: int = 0
     trigger: int | None = None  # growth at which to interrupt an explicit build (stopping)
     interrupted: int = 0  # the growth when it was interrupted
+    measured: float | None = None  # bytes per state an earlier attempt measured (stopping)
 
     @property
     def explicit(self) -> bool:
@@ -392,14 +398,16 @@ class _Watch:
         job, start = self.job, self.start
         self.peak = max(self.peak, rss)
         grown = max(0, rss - self.baseline)
-        explored = grown / BYTES_PER_STATE
+        explored = grown / (self.measured or BYTES_PER_STATE)
         now = time.monotonic()
         if self.explicit and self.trigger is not None and grown > self.trigger \
                 and not self.interrupted:
             # Storm's handler ends the exploration and reports the exact count (stopping)
             self.interrupted = grown
             os.kill(self.pid, signal.SIGTERM)
-        if self.explicit and self.budget is not None and grown > self.budget:
+        # With a trigger, the exact count decides; the budget stops a build without one.
+        if self.explicit and self.budget is not None and grown > self.budget \
+                and (self.trigger is None or self.interrupted):
             assert job.max_states is not None
             return JobResult(failure=StormFailure(
                 "too-big", f"stopped building the {job.what} after {now - start:.0f} s: about "
