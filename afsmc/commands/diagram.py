@@ -245,11 +245,11 @@ def mode_reachability(model: ir.Model, resolution: Resolution, *,
     return out, mdp
 
 
-def _reach_error(f: StormFailure, model: ir.Model) -> CompileError:
+def _reach_error(f: StormFailure, model: ir.Model | None = None) -> CompileError:
     """Storm's failure at --reach in the diagram's words: E405 too big, E406 out of
     memory, E612 anything else."""
     if f.stage == "too-big":
-        large = large_variables(model)
+        large = large_variables(model) if model is not None else ""
         return _error(codes.E405, " ".join(f.message.split())
                       + (f"; the largest ranges: {large}" if large else ""),
                       "raise --max-states if the machine has the memory (the sparse engine "
