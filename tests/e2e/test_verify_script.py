@@ -58,3 +58,17 @@ def test_a_script_without_a_main_guard_verifies_in_the_watched_process(
     assert "bootstrapping" not in r.stderr and "internal error" not in r.stderr, r.stderr
     assert r.stdout.count("states") == 1  # the script ran once, not again in the child
     assert r.stdout.split() == ["states", "4", "value", "1.0"], r.stdout
+
+
+@pytest.mark.slow
+@pytest.mark.storm
+def test_a_script_without_a_main_guard_sweeps_on_worker_processes(tmp_path: Path) -> None:
+    script = tmp_path / "plain_sweep.py"
+    script.write_text("from afsmc.verify import sweep\n"
+                      f"fig = sweep({str(ROOT / 'examples' / 'patrol.afsm')!r}, 'CELLS', [3, 4],"
+                      " properties=['finish'], jobs=2)\n"
+                      "print('points', len(fig.points))\n", encoding="utf-8")
+    r = subprocess.run([sys.executable, str(script)], capture_output=True, text=True,
+                       timeout=300, env=_env(), cwd=tmp_path)
+    assert r.returncode == 0, r.stderr
+    assert r.stdout.split() == ["points", "2"], r.stdout
