@@ -9,6 +9,10 @@ from __future__ import annotations
 
 import os
 import signal
+import sys
+import types
+from collections.abc import Iterator
+from contextlib import contextmanager
 
 PR_SET_PDEATHSIG = 1  # <linux/prctl.h>
 
@@ -37,3 +41,19 @@ def die_with_parent(parent: int) -> None:
         return
     if os.getppid() != parent:  # the parent died before prctl took effect
         os._exit(1)
+
+
+@contextmanager
+def without_main() -> Iterator[None]:
+    """Around starting a spawned child: a bare __main__, so that the child does not import
+    the caller's script again. The child runs afsmc's own code only; a script without an
+    `if __name__ == "__main__":` guard would otherwise verify again in the child, which
+    multiprocessing refuses ("before the current process has finished its bootstrapping
+    phase"), as it does a script read from stdin."""
+    main = sys.modules.get("__main__")
+    sys.modules["__main__"] = types.ModuleType("__main__")
+    try:
+        yield
+    finally:
+        if main is not None:
+            sys.modules["__main__"] = main

@@ -15,19 +15,20 @@ from typing import TYPE_CHECKING
 import graphviz
 
 from afsmc.api.errors import AfsmError
-from afsmc.api.processes import main_not_reimported
 from afsmc.backends.dot import Overlay
 from afsmc.backends.dot import diagram as dot_diagram
 from afsmc.check.modegraph import analyse
 from afsmc.compiler import lowered
 from afsmc.diagnostics import CompileError, Diagnostic, Severity, codes
 from afsmc.files import write_atomic
+from afsmc.lifetime import without_main
 from afsmc.lower.lowering import Resolution
 from afsmc.model import ir
 from afsmc.text import short
 from afsmc.verify import upper_bound
 from afsmc.verify.api import ask
 from afsmc.verify.guard import Progress
+from afsmc.verify.stopping import large_variables
 from afsmc.verify.storm import StormFailure
 
 if TYPE_CHECKING:
@@ -96,7 +97,7 @@ def diagram(mission: Mission, *, reach: bool = False, resolve: Resolution = "non
     overlay = Overlay()
     if reach:
         try:
-            with main_not_reimported():
+            with without_main():
                 overlay = reach_overlay(*mode_reachability(mission.model, resolve,
                                                            max_states=max_states,
                                                            progress=progress))
@@ -135,7 +136,7 @@ def mode_reachability(model: ir.Model, resolution: Resolution, *,
     got = ask(low, queries, bound=upper_bound(model), what=f"{low.kind.upper()} (--reach)",
               max_states=max_states, progress=relay)
     if got.failure is not None:
-        raise _reach_error(got.failure)
+        raise _reach_error(got.failure, model)
     say(f"reach: {got.states:,} states, {got.transitions:,} transitions, "
         f"{len(queries)} checks in {time.monotonic() - t0:.1f} s")
     out: dict[int, tuple[float, float]] = {n: (0.0, 0.0) for n in unreachable}
@@ -145,11 +146,13 @@ def mode_reachability(model: ir.Model, resolution: Resolution, *,
     return out, mdp
 
 
-def _reach_error(f: StormFailure) -> CompileError:
+def _reach_error(f: StormFailure, model: ir.Model | None = None) -> CompileError:
     """Storm's failure at --reach in the diagram's words: E405 too big, E406 out of
     memory, E612 anything else."""
     if f.stage == "too-big":
-        return _error(codes.E405, " ".join(f.message.split()),
+        large = large_variables(model) if model is not None else ""
+        return _error(codes.E405, " ".join(f.message.split())
+                      + (f"; the largest ranges: {large}" if large else ""),
                       "raise --max-states if the machine has the memory (the sparse engine "
                       "needs about 250 bytes per state), or draw a smaller instance with "
                       "--const")

@@ -15,8 +15,8 @@ from typing import TYPE_CHECKING, Any
 
 from afsmc import verify as lib
 from afsmc.api.errors import AfsmError
-from afsmc.api.processes import main_not_reimported
 from afsmc.diagnostics import CompileError, Diagnostic
+from afsmc.lifetime import without_main
 from afsmc.text import num
 from afsmc.verify.results import PropertyResult, VerifyResult
 
@@ -45,7 +45,7 @@ def verify(mission: Mission, properties: Sequence[str] | str | None = None,
     with the command's defaults; every option is passed on as given."""
     kwargs = {**VERIFY_DEFAULTS, **options}
     try:
-        with main_not_reimported():
+        with without_main():
             res = lib.run(mission.path, text=mission.text, consts=dict(mission.consts),
                           properties=names(properties), **kwargs)
     except CompileError as exc:

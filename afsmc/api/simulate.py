@@ -8,8 +8,8 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
 from afsmc.api.errors import AfsmError
-from afsmc.api.processes import main_not_reimported
 from afsmc.diagnostics import CompileError, Diagnostic, Severity, codes
+from afsmc.lifetime import without_main
 from afsmc.sim.compile import SimError
 from afsmc.sim.run import BATCH, Estimate, Outcome, Strategy, job_for
 from afsmc.sim.run import simulate as run_simulation
@@ -32,7 +32,7 @@ def simulate(mission: Mission, runs: int = 100_000, *, seed: int = 0,
         raise ValueError(f"confidence must be in (0, 1); got {confidence!r}")
     job = job_for(mission.path, mission.text, mission.consts, resolve, max_steps)
     try:
-        with main_not_reimported():
+        with without_main():
             out = run_simulation(job, runs, seed, confidence=confidence, jobs=jobs,
                                  dask=dask, trace=traces, batch_size=batch_size)
     except CompileError as exc:

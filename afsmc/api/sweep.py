@@ -10,9 +10,9 @@ from typing import TYPE_CHECKING, Any
 
 from afsmc import verify as lib
 from afsmc.api.errors import AfsmError
-from afsmc.api.processes import main_not_reimported
 from afsmc.api.results import VERIFY_DEFAULTS, names
 from afsmc.diagnostics import CompileError
+from afsmc.lifetime import without_main
 from afsmc.verify.sweep_result import SweepResult
 from afsmc.verify.sweep_values import Number, parse_values
 
@@ -38,7 +38,7 @@ def sweep(mission: Mission, variable: str, values: Sequence[Number] | str, *,
     if variable == "bound":
         kwargs.setdefault("kind", "bound")
     try:
-        with main_not_reimported():
+        with without_main():
             res = lib.sweep(mission.path, variable, list(values), text=mission.text,
                             consts=dict(mission.consts), properties=names(properties),
                             **kwargs)

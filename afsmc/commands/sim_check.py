@@ -6,9 +6,12 @@ from __future__ import annotations
 
 import argparse
 import datetime
+import math
 import os
 import sys
 import time
+
+import numpy as np
 
 from afsmc.commands.common import add_consts, add_seed, fail, overrides, print_json, report
 from afsmc.compiler import Checked, load
@@ -16,7 +19,7 @@ from afsmc.diagnostics import CompileError, Diagnostic, Severity, codes
 from afsmc.files import write_atomic
 from afsmc.model import ir
 from afsmc.sim.evidence import Evidence, judge, rewrite
-from afsmc.simlib import registry
+from afsmc.simlib import registry, sandbox
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
@@ -25,6 +28,10 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--runs", type=int, default=10_000, metavar="N",
                    help="simulation runs per simulator (default 10000)")
     add_seed(p)
+    p.add_argument("--timeout", type=_seconds, default=sandbox.DEFAULT_TIMEOUT,
+                   metavar="SECONDS",
+                   help="stop a simulator that runs longer than this, per constant; each runs "
+                        f"in its own process (default {sandbox.DEFAULT_TIMEOUT:g})")
     p.add_argument("--update", action="store_true",
                    help="rewrite drifted constants in FILE in place, with a provenance comment")
     p.add_argument("--json", action="store_true", help="print the evidence as JSON")
@@ -41,6 +48,15 @@ def run(args: argparse.Namespace) -> int:
     if args.runs < 2:
         print("afsmc sim-check: error: --runs must be at least 2", file=sys.stderr)
         return 2
+    budget = sandbox.memory_budget()
+    fit = sandbox.runs_that_fit(budget)
+    if fit is not None and budget is not None and args.runs > fit:
+        print(f"afsmc sim-check: error: --runs {args.runs:,} is more than the {fit:,} runs "
+              f"whose samples fit in the memory sim-check may use ({budget / 2**30:.1f} GB, "
+              f"{sandbox.MEMORY_SHARE:.0%} of the memory free now, at "
+              f"{sandbox.BYTES_PER_RUN} bytes per run): lower --runs, or free memory to "
+              "raise the limit", file=sys.stderr)
+        return 2
     try:
         with open(args.file, encoding="utf-8", newline="") as f:
             text = f.read()  # newline="": --update must keep every other byte
@@ -50,7 +66,7 @@ def run(args: argparse.Namespace) -> int:
     if isinstance(checked, int):
         return checked
     sourced = [c for c in checked.model.constants if c.source is not None]
-    results = _judge_all(args, sourced)
+    results = _judge_all(args, sourced, budget)
     if isinstance(results, int):
         return results
     by_name = {c.name: c for c in sourced}
@@ -67,7 +83,7 @@ def run(args: argparse.Namespace) -> int:
     updated = False
     if args.update and drifted:
         assert text is not None
-        failed = _update(args, text, drifted)
+        failed = _update(args, text, drifted, by_name)
         if failed is not None:
             return failed
         updated = True
@@ -99,6 +115,16 @@ def run(args: argparse.Namespace) -> int:
     if (diags or few) and not args.json:
         report(diags + few)
     return 1 if diags else 0
+
+
+def _seconds(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        value = math.nan
+    if not (math.isfinite(value) and value > 0):
+        raise argparse.ArgumentTypeError(f"expected a positive number of seconds, got {text!r}")
+    return value
 
 
 def _list(args: argparse.Namespace) -> int:
@@ -145,9 +171,11 @@ def _load(args: argparse.Namespace, text: str | None) -> Checked | int:
     return checked
 
 
-def _judge_all(args: argparse.Namespace, sourced: list[ir.Constant]) -> list[Evidence] | int:
-    """Each simulated constant judged against its simulation, with progress on stderr; the
-    exit code of E505 if a simulator fails."""
+def _judge_all(args: argparse.Namespace, sourced: list[ir.Constant],
+               budget: int | None) -> list[Evidence] | int:
+    """Each simulated constant judged against its simulation, run in a child process
+    (afsmc.simlib.sandbox), with progress on stderr; the exit code of E505 if a simulator
+    fails in any way: an exception, an exit, a hang past --timeout, too much memory."""
     results: list[Evidence] = []
     started = time.monotonic()
     for i, c in enumerate(sourced, 1):
@@ -155,7 +183,14 @@ def _judge_all(args: argparse.Namespace, sourced: list[ir.Constant]) -> list[Evi
         print(f"sim-check: [{i}/{len(sourced)}] {c.name} <- {c.source.ref} "
               f"({args.runs} runs, {time.monotonic() - started:.1f} s)", file=sys.stderr)
         try:
-            results.append(judge(c, args.runs, args.seed))
+            x = sandbox.sample(c.source.ref, args.runs, args.seed, timeout=args.timeout,
+                               budget=budget)
+            bad = int(x.size - np.count_nonzero(np.isfinite(x)))
+            if bad:
+                raise sandbox.SimulatorFailure(f"{bad:,} of its {x.size:,} samples are not "
+                                               "finite numbers (inf or nan)")
+            with np.errstate(all="ignore"):  # a sum past 1e308 is inf, and said so
+                results.append(judge(c, args.runs, args.seed, samples=x))
         except Exception as exc:  # a broken third-party simulator: report, don't crash
             return fail(CompileError([Diagnostic(
                 codes.E505, Severity.ERROR, f"simulator '{c.source.ref}' failed: {exc}",
@@ -163,17 +198,54 @@ def _judge_all(args: argparse.Namespace, sourced: list[ir.Constant]) -> list[Evi
     return results
 
 
-def _update(args: argparse.Namespace, text: str, drifted: list[Evidence]) -> int | None:
-    """--update: rewrite the drifted constants in FILE; the exit code if it cannot."""
+def _update(args: argparse.Namespace, text: str, drifted: list[Evidence],
+            by_name: dict[str, ir.Constant]) -> int | None:
+    """--update: rewrite the drifted constants in FILE, if the new text checks as
+    `afsmc check` would check it; the exit code if it cannot (the file unchanged)."""
     date = _today()
     changes = {e.name: (e.suggestion, f"{e.ref}, {e.runs} runs, seed {e.seed}, {date}")
                for e in drifted}
+    new = rewrite(text, args.file, changes)
+    refused = _refuse(args, text, new, drifted, by_name)
+    if refused is not None:
+        return fail(CompileError(refused), args.json, wrapped=True)
     # Rewriting the input is the point here: no `protect`; keep its line endings and mode.
     try:
-        write_atomic(args.file, rewrite(text, args.file, changes), newline=None)
+        write_atomic(args.file, new, newline=None)
     except CompileError as exc:  # E003: the file cannot be written (it is left as it was)
         return fail(exc, args.json, wrapped=True)
     return None
+
+
+def _refuse(args: argparse.Namespace, old: str, new: str, drifted: list[Evidence],
+            by_name: dict[str, ir.Constant]) -> list[Diagnostic] | None:
+    """E509 at each drifted constant if the rewritten file has an error the file as it is
+    does not have (checked as `afsmc check` checks it), else None."""
+    def errors(text: str) -> list[Diagnostic]:
+        try:
+            load(args.file, overrides(args), text=text)
+        except CompileError as exc:
+            return [d for d in exc.diagnostics if d.is_error]
+        return []
+    after = errors(new)
+    if not after:
+        return None
+    before = {(d.code, d.message) for d in errors(old)}
+    fresh = [d for d in after if (d.code, d.message) not in before]
+    if not fresh:
+        return None  # the file had these errors already (params without a value: E206)
+    first = fresh[0]
+    return [Diagnostic(
+        codes.E509, Severity.ERROR,
+        f"--update would write {e.name} = {short_text(e.suggestion)}, which does not check: "
+        f"{first.code} {short_text(first.message, 100)}; {args.file} is left unchanged",
+        by_name[e.name].span,
+        hint=f"the simulation's mean is {e.mean:.4g}: check simulator '{e.ref}', or set the "
+             "value by hand") for e in drifted]
+
+
+def short_text(value: str, most: int = 40) -> str:
+    return value if len(value) <= most else f"{value[:most]}... ({len(value):,} characters)"
 
 
 def _today() -> str:

@@ -199,6 +199,7 @@ E505 = Code("E505", Severity.ERROR, "a simulator failed")
 E506 = Code("E506", Severity.ERROR, "the machine cannot be simulated")
 E507 = Code("E507", Severity.ERROR, "the simulation's workers cannot be reached")
 E508 = Code("E508", Severity.ERROR, "a constant has drifted and no value of its type fits")
+E509 = Code("E509", Severity.ERROR, "the value sim-check --update would write does not check")
 
 
 # E6xx: diagrams

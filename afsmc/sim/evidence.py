@@ -10,8 +10,10 @@ from __future__ import annotations
 import math
 import re
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
+import numpy.typing as npt
 
 from afsmc.check.sim_sources import INTERVAL, NUMBER, PROBABILITY, policy_of
 from afsmc.model import ir
@@ -65,13 +67,16 @@ class Evidence:
         }
 
 
-def judge(const: ir.Constant, runs: int, seed: int) -> Evidence:
-    """Sample the constant's simulator output and apply the rule for its shape."""
+def judge(const: ir.Constant, runs: int, seed: int,
+          samples: npt.NDArray[Any] | None = None) -> Evidence:
+    """Apply the rule for the constant's shape to `samples` of its simulator output (by
+    default sampled here: `registry.sample(ref, runs, seed)`)."""
     assert const.source is not None
     ref = const.source.ref
     pol = policy_of(const)
     kind = registry.kind(ref)
-    x = np.asarray(registry.sample(ref, runs, seed), dtype=np.float64)
+    x = np.asarray(registry.sample(ref, runs, seed) if samples is None else samples,
+                   dtype=np.float64)
     n = len(x)
     mean = float(np.mean(x))
     conf = pol.confidence

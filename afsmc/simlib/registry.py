@@ -109,7 +109,7 @@ def _registry() -> Mapping[str, tuple[Simulator, str]]:
     for ep in eps:
         try:
             obj = ep.load()
-        except Exception as exc:  # a broken plugin must not take the compiler down
+        except (Exception, SystemExit) as exc:  # a broken plugin must not take the compiler down
             warnings.warn(
                 f"cannot load {ENTRY_POINT_GROUP} entry point {ep.name!r}: {exc}", stacklevel=2
             )

@@ -26,6 +26,7 @@ from afsmc.verify.queries import (
     readable,
     unanswered,
 )
+from afsmc.verify.stopping import large_variables
 from afsmc.verify.storm import Engine, Job, JobResult, StormFailure
 
 
@@ -94,8 +95,9 @@ def failure_diagnostic(f: StormFailure, model: ir.Model, low: Lowered,
         return diag(codes.E404, f"Storm failed to check '{prop.name if prop else f.prop}' on the "
                     f"{job.what}: {first}", prop.span if prop else None, engine_hint)
     if f.stage == "too-big":
-        return diag(codes.E405, first, None,
-                    "raise --max-states if the machine has the memory" + (
+        large = large_variables(model)
+        return diag(codes.E405, first + (f"; the largest ranges: {large}" if large else ""),
+                    None, "raise --max-states if the machine has the memory" + (
                         " (the sparse engine needs about 250 bytes per state)"
                         if job.engine in ("sparse", "auto") else "")
                     + ", or check a smaller instance with --const")

@@ -22,10 +22,18 @@ from multiprocessing.connection import Connection
 from multiprocessing.process import BaseProcess
 from typing import Any
 
-from afsmc.lifetime import die_with_parent
+from afsmc.lifetime import die_with_parent, without_main
 from afsmc.model import ir
 from afsmc.text import count
-from afsmc.verify.storm import DD_MEMORY_RETRY, Job, JobResult, StormFailure, execute
+from afsmc.verify import stopping
+from afsmc.verify.storm import (
+    DD_MEMORY_RETRY,
+    Job,
+    JobResult,
+    StormFailure,
+    execute,
+    explores_first,
+)
 
 # Below this upper bound a build takes well under a second: no child process needed.
 IN_PROCESS_STATES = 200_000
@@ -145,8 +153,25 @@ def _child(conn: Any, job: Job, address_limit: int | None, parent: int) -> None:
             if hard != resource.RLIM_INFINITY:
                 limit = min(limit, hard)  # a user's `ulimit -v` may not be raised
             resource.setrlimit(resource.RLIMIT_AS, (limit, limit))
+    captured = (stopping.prepare_child() if job.max_states is not None
+                and (job.engine == "sparse" or explores_first(job)) else None)
     conn.send(("ready", _rss(os.getpid())))
-    result = execute(job, lambda event, data: conn.send((event, data)))
+    started = time.monotonic()
+
+    explored: list[bool] = []
+
+    def notify(event: str, data: Any) -> None:
+        if captured is not None and (event in ("built", "engine")
+                                     or (data == "build" and explored)):
+            captured.release()  # the explicit build is over (a symbolic one may follow)
+        if data == "explore":
+            explored.append(True)
+        conn.send((event, data))
+
+    result = execute(job, notify)
+    if captured is not None:
+        captured.release()
+        result = stopping.after_abort(job, result, captured, time.monotonic() - started)
     conn.send(("result", result))
     conn.close()
 
@@ -154,7 +179,21 @@ def _child(conn: Any, job: Job, address_limit: int | None, parent: int) -> None:
 def run_isolated(job: Job, progress: Progress | None, *, every: float = 5.0,
                  first: float = 3.0) -> JobResult:
     """Run `job` in a watched child process; see the module docstring."""
-    res, code = _run_isolated(job, progress, every, first)
+    rate: float = stopping.FIRST_TRIGGER_BYTES_PER_STATE
+    measured: float | None = None
+    for attempt in range(1, stopping.ATTEMPTS + 1):
+        res, code, grown = _run_isolated(job, progress, every, first,
+                                         rate if attempt < stopping.ATTEMPTS else None, measured)
+        if res.failure is None or res.failure.stage != "stopped":
+            break
+        # Interrupted within the limit: the memory ran ahead of the states. Again, with
+        # the trigger at the rate just measured (and some room).
+        measured = grown / max(1, res.states)
+        rate = max(rate, 1.25 * measured)
+        if progress is not None:
+            progress(f"the {job.what} had {res.states:,} states when its memory reached "
+                     f"what --max-states allows at {grown / max(1, res.states):.0f} bytes per "
+                     "state: building it again")
     if _tables_full(code, job) and job.dd_memory_mb < DD_MEMORY_RETRY:
         # The tables are too small for the diagrams.
         # Full tables after the build: the symbolic engine checks (auto picked hybrid).
@@ -178,8 +217,9 @@ def run_isolated(job: Job, progress: Progress | None, *, every: float = 5.0,
         rest = tuple(n for n in job.names if n not in done)
         extra = tuple(n for n in job.hybrid_extra if n not in done)
         try:
-            res, code = _run_isolated(replace(job, dd_memory_mb=DD_MEMORY_RETRY, names=rest,
-                                              hybrid_extra=extra), progress, every, first)
+            res, code, _ = _run_isolated(replace(job, dd_memory_mb=DD_MEMORY_RETRY, names=rest,
+                                                 hybrid_extra=extra), progress, every, first,
+                                         None)
         except Interrupted as exc:
             exc.values = done | exc.values  # the first attempt's answers count too
             raise
@@ -204,30 +244,35 @@ class Interrupted(KeyboardInterrupt):
         self.values = values
 
 
-def _run_isolated(job: Job, progress: Progress | None, every: float,
-                  first: float) -> tuple[JobResult, int | None]:
-    """Run `job` once in a watched child: its result and the child's exit code (None when
-    this process stopped the child for its memory)."""
+def _run_isolated(job: Job, progress: Progress | None, every: float, first: float,
+                  rate: float | None, measured: float | None = None
+                  ) -> tuple[JobResult, int | None, int]:
+    """Run `job` once in a watched child: its result, the child's exit code (None when
+    this process stopped the child for its memory), and how much its memory had grown
+    when it was interrupted at `rate` bytes per state (see :mod:`afsmc.verify.stopping`)."""
     ctx = multiprocessing.get_context("spawn")
     conn, child_end = ctx.Pipe(duplex=False)
     avail = mem_available()
     # Never let the child take more than 85% of what is free now.
     cap = int(avail * 0.85) if avail is not None else None
     budget = None
-    if job.max_states is not None and job.engine == "sparse":
-        budget = job.max_states * BUDGET_BYTES_PER_STATE + BUDGET_SLACK
+    if job.max_states is not None and (job.engine == "sparse" or explores_first(job)):
+        # at the rate measured by an interrupted attempt, if higher (see stopping)
+        budget = int(job.max_states * max(BUDGET_BYTES_PER_STATE, 2 * (measured or 0))) \
+            + BUDGET_SLACK
     address_limit = None
     if job.engine == "sparse":
         # Symbolic engines reserve large address ranges up front (Sylvan), so only sparse.
         address_limit = max(2 << 30, 3 * (budget or 0), cap or 0)
     proc = ctx.Process(target=_child, args=(child_end, job, address_limit, os.getpid()),
                        daemon=True)
-    with child_environment():
+    with child_environment(), without_main():
         proc.start()
     child_end.close()
     start = time.monotonic()
     watch = _Watch(job, progress, every, budget, cap, start=start, phase_start=start,
-                   next_report=start + first)
+                   next_report=start + first, pid=proc.pid or 0, measured=measured,
+                   trigger=stopping.trigger_bytes(job, rate) if budget is not None else None)
     try:
         stopped = _follow(watch, proc, conn)
     except KeyboardInterrupt as exc:
@@ -238,10 +283,10 @@ def _run_isolated(job: Job, progress: Progress | None, every: float,
         proc.join()
         conn.close()
     if stopped is not None:
-        return stopped, None
+        return stopped, None, watch.interrupted
     if watch.result is not None:
-        return watch.result, proc.exitcode
-    return watch.died(proc.exitcode), proc.exitcode
+        return watch.result, proc.exitcode, watch.interrupted
+    return watch.died(proc.exitcode), proc.exitcode, watch.interrupted
 
 
 def _follow(watch: _Watch, proc: BaseProcess, conn: Connection) -> JobResult | None:
@@ -289,6 +334,16 @@ class _Watch:
     seconds: dict[str, float] = field(default_factory=dict)  # and how long each took
     built: int = 0  # states, once the child has built the model
     engine: str = ""  # the engine it checks with ("auto" decides after building)
+    pid: int = 0
+    trigger: int | None = None  # growth at which to interrupt an explicit build (stopping)
+    interrupted: int = 0  # the growth when it was interrupted
+    measured: float | None = None  # bytes per state an earlier attempt measured (stopping)
+
+    @property
+    def explicit(self) -> bool:
+        """Whether the child is building sparse matrices, whose memory counts the states:
+        the sparse engine's build, or the explicit count a symbolic job makes first."""
+        return self.phase == "explore" or (self.phase == "build" and self.job.engine == "sparse")
 
     def say(self, text: str) -> None:
         if self.progress is not None:
@@ -326,9 +381,16 @@ class _Watch:
         job, start = self.job, self.start
         self.peak = max(self.peak, rss)
         grown = max(0, rss - self.baseline)
-        explored = grown / BYTES_PER_STATE
+        explored = grown / (self.measured or BYTES_PER_STATE)
         now = time.monotonic()
-        if self.phase == "build" and self.budget is not None and grown > self.budget:
+        if self.explicit and self.trigger is not None and grown > self.trigger \
+                and not self.interrupted:
+            # Storm's handler ends the exploration and reports the exact count (stopping)
+            self.interrupted = grown
+            os.kill(self.pid, signal.SIGTERM)
+        # With a trigger, the exact count decides; the budget stops a build without one.
+        if self.explicit and self.budget is not None and grown > self.budget \
+                and (self.trigger is None or self.interrupted):
             assert job.max_states is not None
             return JobResult(failure=StormFailure(
                 "too-big", f"stopped building the {job.what} after {now - start:.0f} s: about "
@@ -342,9 +404,9 @@ class _Watch:
                 prop=_checking(self.phase)))
         if now >= self.next_report:
             self.next_report = now + report_interval(now - self.phase_start, self.every)
-            if self.phase == "build":
+            if self.phase in ("build", "explore"):
                 est = (f", about {count(explored)} states so far (estimated from memory use)"
-                       if job.engine == "sparse" else f", {rss / 2**30:.1f} GB")
+                       if self.explicit else f", {rss / 2**30:.1f} GB")
                 self.say(f"building the {job.what}: {now - start:.0f} s{est}")
             elif self.phase.startswith("check "):
                 self.say(f"checking {self.phase[6:]} on the {job.what}: {now - start:.0f} s, "

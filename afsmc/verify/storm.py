@@ -44,8 +44,9 @@ SOLVERS: tuple[Solver, ...] = ("auto", "topological", "value-iteration")
 VI_PRECISION = "1/10000000000"
 
 # Storm stages a failure can come from; the caller picks the diagnostic code from it.
+# "stopped": the guard interrupted an explicit build that proved within --max-states
 Stage = Literal["parse", "property", "build", "check", "too-big", "memory", "tables",
-                "internal"]
+                "internal", "stopped"]
 
 Notify = Callable[[str, Any], None]
 
@@ -99,6 +100,19 @@ class Job:
 
 
 DD_MEMORY_RETRY = 4096  # MB: Storm's own default
+
+
+def explores_first(job: Job) -> bool:
+    """Whether a symbolic job ("auto", "hybrid", "dd") builds explicitly first, so that the
+    guard can watch its states grow (see :mod:`afsmc.verify.guard`): when it has a
+    --max-states whose sparse matrices fit its memory budget. Storm's symbolic builder
+    reports nothing until it is done, and a model that is deep rather than wide (a counter
+    over [0..10^9]) takes it one BFS step per level: without this it runs for hours.
+    "auto" then simply builds sparse, as it would pick sparse for any model within the
+    limit; "hybrid" and "dd" count the states explicitly, then build symbolically."""
+    if job.engine == "sparse" or job.max_states is None:
+        return False
+    return job.memory_budget is None or job.max_states * SPARSE_BYTES_PER_STATE <= job.memory_budget
 
 
 @dataclass(frozen=True)
@@ -204,6 +218,10 @@ def _execute(job: Job, notify: Notify) -> JobResult:
     except RuntimeError as exc:
         res.failure = StormFailure("build", _message(exc))
         return res
+    except TooBig as exc:
+        res.states = exc.states
+        res.failure = too_big(job, exc.states)
+        return res
     res.engine = built.engine
     res.solver = solver_for(job.solver, built.engine)
     check_env = _value_iteration(stormpy, job) if res.solver == "value-iteration" else None
@@ -231,8 +249,7 @@ def _execute(job: Job, notify: Notify) -> JobResult:
                                    "decision diagrams do not represent)")
         return res
     if job.max_states is not None and res.states > job.max_states:
-        res.failure = StormFailure("too-big", f"the {job.what} has {res.states:,} states, more "
-                                   f"than --max-states {job.max_states:,}", states=res.states)
+        res.failure = too_big(job, res.states)
         return res
     if job.bisimulation and not built.symbolic and not _bisimulation(built, res, notify):
         return res
@@ -242,6 +259,11 @@ def _execute(job: Job, notify: Notify) -> JobResult:
     res.check_time = time.perf_counter() - t0
     res.failure = built.deferred
     return res
+
+
+def too_big(job: Job, states: int) -> StormFailure:
+    return StormFailure("too-big", f"the {job.what} has {states:,} states, more than "
+                        f"--max-states {job.max_states:,}", states=states)
 
 
 def _parse(stormpy: Any, job: Job) -> tuple[Any, list[Any]] | StormFailure:
@@ -271,6 +293,14 @@ def _parse(stormpy: Any, job: Job) -> tuple[Any, list[Any]] | StormFailure:
     return failure if failure is not None else (program, props)
 
 
+class TooBig(Exception):
+    """The explicit count before a symbolic build exceeds --max-states."""
+
+    def __init__(self, states: int):
+        super().__init__(states)
+        self.states = states
+
+
 @dataclass
 class _Built:
     """A built model and what this process checks on it."""
@@ -291,11 +321,25 @@ def _build(stormpy: Any, job: Job, program: Any, props: list[Any], res: JobResul
     the states exactly at little memory, then keeps that model for the hybrid engine or
     builds sparse matrices if they fit (see :func:`_choose`)."""
     names = list(job.wanted)  # the extras go once the engine is known
-    if job.engine == "sparse":
+    if job.engine == "sparse" or (job.engine == "auto" and explores_first(job)):
         names, props = _keep(names, props, job.hybrid_extra)
+        if job.engine == "auto":
+            assert job.max_states is not None
+            res.engine_reason = (f"--max-states {job.max_states:,} fits as sparse matrices "
+                                 f"(about {job.max_states * SPARSE_BYTES_PER_STATE / 1e9:.1f} "
+                                 "GB): built sparse, its states counted as it ran")
+            notify("phase", "explore")
         sparse = (precision.build_exact(stormpy, program, _for_builder(props, job)) if job.exact
                   else stormpy.build_model(program, _for_builder(props, job)))
         return _Built(sparse, "sparse", names, props, symbolic=False)
+    if explores_first(job):
+        # hybrid or dd: count the states explicitly, under the guard's watch, first
+        notify("phase", "explore")
+        explored = int(stormpy.build_model(program, _for_builder(props, job)).nr_states)
+        assert job.max_states is not None
+        if explored > job.max_states:
+            raise TooBig(explored)
+        notify("phase", "build")
     # Labels and guards that mention constants fail in the symbolic builder otherwise.
     sprog = program.substitute_constants()
     if hasattr(sprog, "substitute_formulas"):

@@ -20,7 +20,7 @@ from typing import Any
 from afsmc.diagnostics import CompileError, Diagnostic, Severity, codes
 from afsmc.files import read_source
 from afsmc.interrupt import Stopped
-from afsmc.lifetime import die_with_parent, worker_died
+from afsmc.lifetime import die_with_parent, without_main, worker_died
 from afsmc.lower.reduce import Reductions
 from afsmc.model import expr as E
 from afsmc.model.limits import INT64
@@ -268,6 +268,7 @@ def _run(tasks: list[Task], jobs: int, dask: Any, progress: Progress | None, tot
         ctx = multiprocessing.get_context("spawn")  # safe even if the caller has threads
         with ProcessPoolExecutor(max_workers=min(jobs, len(tasks)), mp_context=ctx,
                                  initializer=die_with_parent, initargs=(os.getpid(),)) as pool:
-            futs = {pool.submit(evaluate, t): i for i, t in enumerate(tasks)}
+            with without_main():  # the workers start here: not the caller's script again
+                futs = {pool.submit(evaluate, t): i for i, t in enumerate(tasks)}
             for f in as_completed(futs):
                 done(futs[f], f.result())
