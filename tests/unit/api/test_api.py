@@ -4,7 +4,6 @@ defaults are the CLI's."""
 from __future__ import annotations
 
 import argparse
-import dataclasses
 import inspect
 import json
 from pathlib import Path
@@ -16,7 +15,9 @@ from afsmc import verify as lib
 from afsmc.api.results import VERIFY_DEFAULTS, Results
 from afsmc.commands.simulate import add_arguments as simulate_arguments
 from afsmc.commands.verify import add_storm_options
+from afsmc.model import ir
 from afsmc.verify.results import ModelStats, PropertyResult, VerifyResult
+from afsmc.verify.verdicts import judge
 from tests.conftest import EXAMPLES, run_cli
 
 PATROL = str(EXAMPLES / "patrol.afsm")
@@ -134,30 +135,24 @@ def test_simulate_defaults_are_the_cli_defaults() -> None:
         assert api[arg] == cli[option], option
 
 
-@dataclasses.dataclass
-class _Judged(PropertyResult):
-    """A result with a verdict in its JSON, as requirements add one."""
-
-    verdict: str = ""
-
-    def to_json(self) -> dict[str, object]:
-        return super().to_json() | {"verdict": self.verdict}
-
-
 def _result(props: list[PropertyResult]) -> Results:
     stats = ModelStats("dtmc", "nondet", 3, 4, 0, 0.0, 0.0, 0.0, "sparse")
     return Results(VerifyResult("m.afsm", "m", {}, "prism", "auto", 3, 10, stats, None,
                                 props, 0.0, 0.0))
 
 
-def test_to_pandas_has_a_row_per_property_and_a_verdict_column_when_the_json_has_one() -> None:
+def test_to_pandas_has_a_row_per_property_and_a_verdict_column() -> None:
     plain = _result([PropertyResult("a", "P=? [ F \"x\" ]", "P", value=0.5),
                      PropertyResult("b", "R=? [ F \"x\" ]", "R", value=float("inf"))])
     df = plain.to_pandas()
     assert list(df.index) == ["a", "b"]
-    assert list(df.columns) == ["formula", "kind", "min", "max", "uniform", "value"]
+    assert list(df.columns) == ["formula", "kind", "min", "max", "uniform", "value", "verdict"]
     assert df.loc["a", "value"] == 0.5 and df.loc["b", "value"] == float("inf")
-    judged = _result([_Judged("a", "P>=0.9 [ F \"x\" ]", "P", value=0.5, verdict="violated")])
+    assert df["verdict"].isna().all()  # `=?` properties have none
+    threshold = ir.Threshold(">=", 0.9, "0.9")
+    judged = _result([PropertyResult("a", "P>=0.9 [ F \"x\" ]", "P", value=0.5,
+                                     threshold=threshold,
+                                     verdict=judge(threshold, 0.5, 0.5, 1e-6))])
     df = judged.to_pandas()
-    assert list(df.columns)[-1] == "verdict" and df.loc["a", "verdict"] == "violated"
-    assert "violated" in judged._repr_html_()
+    assert df.loc["a", "verdict"] == "fails"
+    assert "fails" in judged._repr_html_()
