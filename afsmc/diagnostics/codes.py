@@ -179,6 +179,8 @@ E411 = Code("E411", Severity.ERROR, "the generated model cannot be read by Storm
 N412 = Code("N412", Severity.NOTE, "the values that were answered before a failure")
 E413 = Code("E413", Severity.ERROR, "the sweep's workers cannot be reached or started")
 E414 = Code("E414", Severity.ERROR, "a process of the sweep died")
+E415 = Code("E415", Severity.ERROR, "no strategy or failure path for this request")
+E416 = Code("E416", Severity.ERROR, "a strategy needs the sparse engine, and the model does not fit")
 
 
 # E5xx: simulation and simulation-backed constants

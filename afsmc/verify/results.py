@@ -10,12 +10,17 @@ from __future__ import annotations
 import dataclasses
 from collections.abc import Sequence
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 from afsmc.backends.prism import formula_text
 from afsmc.diagnostics import Diagnostic
 from afsmc.model import ir
 from afsmc.model.pretty import show
 from afsmc.verify.storm import JobResult, finite
+
+if TYPE_CHECKING:
+    from afsmc.verify.strategy import StrategyEntry
+    from afsmc.verify.witness import Witness
 
 
 @dataclass
@@ -68,6 +73,13 @@ class PropertyResult:
     # Storm's time for each of the above, s: its check, or that of the query asked instead
     # (a Pmax as 1 - Pmin, a bounded G as its dual). Builds are in the model's build time.
     seconds: dict[str, float] = field(default_factory=dict)
+    # --strategy: the min and max schedulers in mission terms (afsmc.verify.strategy)
+    strategy: dict[str, list[StrategyEntry]] | None = None
+    # --witness: the most probable paths into the target ("min"/"max": following that
+    # scheduler; "value": a DTMC's), and why fewer than asked, if so
+    witnesses: list[Witness] | None = None
+    witness_of: str = ""
+    witness_note: str = ""
 
     def to_json(self) -> dict[str, object]:
         out: dict[str, object] = {"name": self.name, "formula": self.formula}
@@ -80,6 +92,13 @@ class PropertyResult:
         if infinite:
             out["infinite"] = infinite  # JSON has no infinity: these are null above
         out["seconds"] = {k: round(v, 3) for k, v in self.seconds.items()}
+        if self.strategy is not None:
+            out["strategy"] = {k: [e.to_json() for e in v] for k, v in self.strategy.items()}
+        if self.witnesses is not None:
+            out["witnesses"] = [w.to_json() for w in self.witnesses]
+            out["witness_strategy"] = self.witness_of
+            if self.witness_note:
+                out["witness_note"] = self.witness_note
         return out
 
 

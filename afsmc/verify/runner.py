@@ -62,6 +62,8 @@ from afsmc.verify.results import (
     shown,
     stats_of,
 )
+from afsmc.verify.strategy import attach, request
+from afsmc.verify.strategy_storm import Extracted, WitnessRequest
 from afsmc.verify.storm import (
     DD_MEMORY_RETRY,
     Engine,
@@ -95,6 +97,8 @@ class Options:
     memory_budget: int | None
     solver: Solver
     all_states: bool
+    strategy: bool = False  # extract each property's min and max scheduler
+    witness: WitnessRequest | None = None  # and a query's most probable paths
 
 
 def _put(r: PropertyResult, key: str, value: float) -> None:
@@ -153,6 +157,7 @@ class CheckRun:
         # Failures of one query (not of the model): the other queries go on, and these are
         # raised at the end with every answer.
         self.errors: list[Diagnostic] = []
+        self.extracted: list[Extracted] = []  # schedulers and paths (Options.strategy)
 
     def kept(self, what: str, vals: dict[str, float]) -> list[Diagnostic]:
         """The note of what the finished models and this one have answered."""
@@ -180,6 +185,8 @@ class CheckRun:
                 if secs is not None:
                     r.seconds[key] = secs
             out.append(r)
+        if self.extracted:
+            attach(out, self.original, first, self.extracted, self.asked_as)
         return out
 
     def partial(self, more: dict[str, float] | None = None,
@@ -394,6 +401,9 @@ class ModelLoop:
                        o.memory_budget, only=tuple(mine),
                        hybrid_skip=tuple(n for n in mine if n not in first), hybrid_extra=extra)
         job = dataclasses.replace(job, solver=o.solver, all_states=o.all_states)
+        if self.resolution == "nondet":
+            job = dataclasses.replace(job, extract=request(self.low, o.strategy, o.witness,
+                                                           mine, self.run.asked_as))
         if self.job_engine == "auto":
             job = dataclasses.replace(job, symbolic_refused=tuple(
                 n for p, n in unit if symbolic_gap(p, self.run.model, "auto") is not None))
@@ -426,7 +436,10 @@ class ModelLoop:
         """Run the job. An hour's answers are not lost to a Ctrl-C: the interrupt becomes
         a Stopped with the errors, a note of the values and the answers as data."""
         try:
-            return run_job(job, self.run.bound, isolate=fresh, progress=self.run.progress)
+            res = run_job(job, self.run.bound, isolate=fresh, progress=self.run.progress)
+            if res.extracted is not None:
+                self.run.extracted.append(res.extracted)
+            return res
         except KeyboardInterrupt as exc:
             got = exc.values if isinstance(exc, Interrupted) else {}
             vals = self.vals | got

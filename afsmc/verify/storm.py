@@ -17,6 +17,8 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any, Literal
 
+from afsmc.verify.strategy_storm import Extract, Extracted, analyse, builder_options
+
 Engine = Literal["sparse", "dd", "hybrid", "auto"]
 ENGINES: tuple[Engine, ...] = ("auto", "sparse", "dd", "hybrid")
 # The sparse engine needs about this much per state (model plus one property's vectors):
@@ -80,6 +82,8 @@ class Job:
     # checks the others on the model it has built, and then fails at the first of them.
     symbolic_refused: tuple[str, ...] = ()
     solver: Solver = "auto"
+    # schedulers and most probable paths to extract (sparse engine only; strategy_storm)
+    extract: Extract | None = None
 
     @property
     def wanted(self) -> tuple[str, ...]:
@@ -124,6 +128,7 @@ class JobResult:
     dd_retried: bool = False  # Sylvan's tables were full: the guard reran it with DD_MEMORY_RETRY
     elapsed: float = 0.0  # wall time of a process that failed (its answers may still count)
     failure: StormFailure | None = None
+    extracted: Extracted | None = None  # what Job.extract asked for
 
 
 def _quiet() -> None:
@@ -225,7 +230,7 @@ def _execute(job: Job, notify: Notify) -> JobResult:
     if job.bisimulation and not built.symbolic and not _bisimulation(built, res, notify):
         return res
     t0 = time.perf_counter()
-    if not _check_each(stormpy, built, check_env, res, notify):
+    if not _check_each(stormpy, built, check_env, res, notify, job, program):
         return res
     res.check_time = time.perf_counter() - t0
     res.failure = built.deferred
@@ -281,8 +286,8 @@ def _build(stormpy: Any, job: Job, program: Any, props: list[Any], res: JobResul
     names = list(job.wanted)  # the extras go once the engine is known
     if job.engine == "sparse":
         names, props = _keep(names, props, job.hybrid_extra)
-        return _Built(stormpy.build_model(program, _for_builder(props, job)), "sparse",
-                      names, props, symbolic=False)
+        return _Built(_sparse(stormpy, program, props, job), "sparse", names, props,
+                      symbolic=False)
     # Labels and guards that mention constants fail in the symbolic builder otherwise.
     sprog = program.substitute_constants()
     if hasattr(sprog, "substitute_formulas"):
@@ -301,8 +306,16 @@ def _build(stormpy: Any, job: Job, program: Any, props: list[Any], res: JobResul
         return built
     notify("phase", "build")
     del model  # before the sparse build: only one of the two models in memory at a time
-    built.model = stormpy.build_model(program, _for_builder(built.props, job))
+    built.model = _sparse(stormpy, program, built.props, job)
     return built
+
+
+def _sparse(stormpy: Any, program: Any, props: list[Any], job: Job) -> Any:
+    """The sparse model; with state valuations and choice origins if the job extracts."""
+    if job.extract is not None:
+        return stormpy.build_model(program, options=builder_options(
+            stormpy, _for_builder(props, job)))
+    return stormpy.build_model(program, _for_builder(props, job))
 
 
 def _choose(job: Job, states: int, names: list[str], props: list[Any],
@@ -356,7 +369,7 @@ def _bisimulation(built: _Built, res: JobResult, notify: Notify) -> bool:
 
 
 def _check_each(stormpy: Any, built: _Built, check_env: Any, res: JobResult,
-                notify: Notify) -> bool:
+                notify: Notify, job: Job, program: Any) -> bool:
     """Check the queries one at a time, each value sent as soon as it is known; False,
     with `res.failure` set, at the first that fails."""
     model = built.model
@@ -373,8 +386,14 @@ def _check_each(stormpy: Any, built: _Built, check_env: Any, res: JobResult,
                 # the filter (a negative expected reward would read 0).
                 value = None if r is None else stormpy.filter_initial_states(r, model).average()
             else:
-                r = stormpy.model_checking(model, prop, environment=check_env)
+                wanted = job.extract is not None and name in job.extract.queries
+                r = stormpy.model_checking(model, prop, environment=check_env,
+                                           extract_scheduler=wanted and res.kind == "mdp")
                 value = r.get_value(model.initial_states[0])
+                if wanted:
+                    assert job.extract is not None
+                    res.extracted = res.extracted or Extracted()
+                    analyse(stormpy, program, model, name, prop, r, job.extract, res.extracted)
         except RuntimeError as exc:
             res.failure = StormFailure("check", _message(exc), prop=name)
             return False

@@ -1,0 +1,251 @@
+"""Inside the Storm process: Storm's schedulers and most probable paths, as plain data.
+
+A :class:`Extract` on a :class:`afsmc.verify.storm.Job` asks for more than values: the
+scheduler of some queries (summarised per command and mode, over the states the scheduler
+reaches), the whole scheduler of one query (for `simulate --strategy`), and the K most
+probable paths of one query into its target states. The sparse model is then built with
+state valuations and choice origins (which PRISM command each choice comes from); the
+caller, who has the lowered model, maps command indices back to actions and interval
+constants (:mod:`afsmc.verify.strategy`, :mod:`afsmc.verify.witness`).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+
+@dataclass(frozen=True)
+class WitnessRequest:
+    """The `k` most probable paths of query `query` (e.g. ``success_max``: an MDP's paths
+    follow that query's scheduler; a DTMC's query is the property's name). `target`: a
+    PRISM state formula whose states the paths go into instead of the property's own
+    target (a failed requirement's violating states); None: the property's target."""
+
+    query: str
+    k: int
+    target: str | None = None
+
+
+@dataclass(frozen=True)
+class Extract:
+    strategies: tuple[str, ...] = ()  # queries whose scheduler is summarised
+    policy: str | None = None  # a query whose scheduler is returned whole
+    witness: WitnessRequest | None = None
+    # the commands that are floor/ceil variants: in their states the scheduler chooses
+    decisive: tuple[int, ...] = ()
+
+    @property
+    def queries(self) -> tuple[str, ...]:
+        extra = tuple(q for q in (self.policy, self.witness and self.witness.query) if q)
+        return tuple(dict.fromkeys(self.strategies + extra))
+
+
+@dataclass
+class Group:
+    """The states a scheduler reaches in which it takes `command` (a floor/ceil variant),
+    in mode number `mode`: how many, and each variable's smallest and largest value."""
+
+    command: int
+    mode: int
+    states: int
+    low: tuple[int, ...]
+    high: tuple[int, ...]
+
+
+@dataclass
+class RawPath:
+    probability: float
+    states: list[tuple[int, ...]]  # valuations, in `Extracted.variables` order
+    commands: list[int]  # the command of each state's choice (the last: none, -1)
+    steps: list[float]  # each step's probability
+
+
+@dataclass
+class Extracted:
+    """What one Storm process extracted: per query, its groups; the policy's decision
+    states and commands; the witness paths (or why there are none)."""
+
+    variables: tuple[str, ...] = ()  # the generated model's variables ("mode" among them)
+    groups: dict[str, list[Group]] = field(default_factory=dict)
+    reached: dict[str, int] = field(default_factory=dict)  # states the scheduler reaches
+    policy_states: list[tuple[int, ...]] = field(default_factory=list)
+    policy_commands: list[int] = field(default_factory=list)
+    paths: list[RawPath] = field(default_factory=list)
+    witness_note: str = ""  # why fewer paths than asked (none left, or the search limit)
+    witness_query: str | None = None  # the query the paths follow
+    seconds: float = 0.0
+
+
+def builder_options(stormpy: Any, props: list[Any]) -> Any:
+    """Storm's builder options for `props` with state valuations and choice origins."""
+    opts = stormpy.BuilderOptions([p.get_raw_formula() for p in props])
+    opts.set_build_state_valuations()
+    opts.set_build_choice_origins()
+    opts.set_build_all_labels()
+    return opts
+
+
+def _variables(stormpy: Any, program: Any) -> list[tuple[str, Any, bool]]:
+    out = []
+    for module in program.modules:
+        out += [(v.name, v.expression_variable, False) for v in module.integer_variables]
+        out += [(v.name, v.expression_variable, True) for v in module.boolean_variables]
+    return out
+
+
+def _valuations(model: Any, variables: list[tuple[str, Any, bool]]) -> list[list[int]]:
+    sv = model.state_valuations
+    cols = []
+    for _, var, boolean in variables:
+        vals = sv.get_boolean_values(var) if boolean else sv.get_int64_values(var)
+        cols.append([int(x) for x in vals])
+    return cols
+
+
+def _commands(model: Any) -> list[int]:
+    """The PRISM command of each state's first choice (-1: none, a state Storm fixed)."""
+    co = model.choice_origins
+    tm = model.transition_matrix
+    out = []
+    for s in range(model.nr_states):
+        cs = list(co.get_command_set(tm.get_row_group_start(s)))
+        out.append(int(cs[0]) if cs else -1)
+    return out
+
+
+def induced(stormpy: Any, model: Any, result: Any) -> Any:
+    """The DTMC a query's scheduler induces on the states it reaches (a DTMC: itself)."""
+    if not str(model.model_type).upper().endswith("MDP"):
+        return model
+    return model.apply_scheduler(result.get_scheduler(), True)
+
+
+def analyse(stormpy: Any, program: Any, model: Any, name: str, prop: Any, result: Any,
+            extract: Extract, out: Extracted) -> None:
+    """Add what `extract` asks of query `name` (checked: `result`) to `out`."""
+    import time
+
+    t0 = time.perf_counter()
+    variables = _variables(stormpy, program)
+    out.variables = tuple(n for n, _, _ in variables)
+    dtmc = induced(stormpy, model, result)
+    cols = _valuations(dtmc, variables)
+    commands = _commands(dtmc)
+    mode_i = out.variables.index("mode") if "mode" in out.variables else -1
+    decisive = frozenset(extract.decisive)
+    if name in extract.strategies or name == extract.policy:
+        out.reached[name] = int(dtmc.nr_states)
+        groups: dict[tuple[int, int], list[list[int]]] = {}
+        states: list[int] = []
+        for s, c in enumerate(commands):
+            if c not in decisive:
+                continue
+            states.append(s)
+            mode = cols[mode_i][s] if mode_i >= 0 else 0
+            g = groups.get((c, mode))
+            row = [col[s] for col in cols]
+            if g is None:
+                groups[(c, mode)] = [[1], row, list(row)]
+            else:
+                g[0][0] += 1
+                g[1] = [min(a, b) for a, b in zip(g[1], row, strict=True)]
+                g[2] = [max(a, b) for a, b in zip(g[2], row, strict=True)]
+        if name in extract.strategies:
+            out.groups[name] = [Group(c, m, g[0][0], tuple(g[1]), tuple(g[2]))
+                                for (c, m), g in sorted(groups.items())]
+        if name == extract.policy:
+            out.policy_states = [tuple(col[s] for col in cols) for s in states]
+            out.policy_commands = [commands[s] for s in states]
+    w = extract.witness
+    if w is not None and w.query == name:
+        out.witness_query = name
+        _paths(stormpy, program, dtmc, prop, w, cols, commands, out)
+    out.seconds += time.perf_counter() - t0
+
+
+# Paths the search may enumerate, per path asked, before it gives up on finding more that
+# respect a step bound or an until's left side (the others are skipped).
+SEARCH_FACTOR = 50
+
+
+def _paths(stormpy: Any, program: Any, dtmc: Any, prop: Any, w: WitnessRequest,
+           cols: list[list[int]], commands: list[int], out: Extracted) -> None:
+    """The `w.k` most probable paths of the induced DTMC into the target states, by
+    Storm's k-shortest-paths generator (recursive enumeration; paths stop at their first
+    target state and may loop)."""
+    from stormpy.analysis import _utility
+    from stormpy.datastructures import BitVector
+
+    target, left, bound = _target(stormpy, program, dtmc, prop, w)
+    if target is None:
+        out.witness_note = "the property has no target states to reach"
+        return
+    if not target:
+        out.witness_note = "no state the strategy reaches is a target state"
+        return
+    bits = BitVector(dtmc.nr_states, sorted(target))
+    gen = _utility.ShortestPathsGenerator(dtmc, bits)
+    tm = dtmc.transition_matrix
+    k = 0
+    found: list[RawPath] = []
+    while len(found) < w.k:
+        k += 1
+        if k > w.k * SEARCH_FACTOR:
+            out.witness_note = (f"stopped after {k - 1} paths: the others break the step bound "
+                                "or leave the until's left side")
+            break
+        try:
+            p = float(gen.get_distance(k))
+            states = list(gen.get_path_as_list(k))
+        except (RuntimeError, IndexError):
+            break
+        if p <= 0.0 or not states:
+            break
+        states.reverse()
+        if bound is not None and len(states) - 1 > bound:
+            continue
+        if left is not None and not all(s in left for s in states[:-1]):
+            continue
+        steps = []
+        for a, b in zip(states, states[1:], strict=False):
+            steps.append(sum(float(e.value) for e in tm.get_row(tm.get_row_group_start(a))
+                             if int(e.column) == b))
+        found.append(RawPath(p, [tuple(col[s] for col in cols) for s in states],
+                             [commands[s] for s in states[:-1]] + [-1], steps))
+    if len(found) < w.k and not out.witness_note:
+        out.witness_note = f"there are only {len(found)} paths into the target states"
+    out.paths = found
+
+
+def _target(stormpy: Any, program: Any, dtmc: Any, prop: Any,
+            w: WitnessRequest) -> tuple[set[int] | None, set[int] | None, int | None]:
+    """The target states, the states an until's left side allows (None: all), and a step
+    bound (None: none) of the query's path formula."""
+    formula = prop.get_raw_formula()
+    path = formula.subformula if hasattr(formula, "subformula") else None
+    bound: int | None = None
+    left: Any = None
+    if path is None:
+        return None, None, None
+    kind = type(path).__name__
+    if kind == "EventuallyFormula":
+        right = path.subformula
+    elif kind in ("UntilFormula", "BoundedUntilFormula"):
+        left, right = path.left_subformula, path.right_subformula
+        if kind == "BoundedUntilFormula":
+            bound = int(path.upper_bound_expression.evaluate_as_int())
+            if str(left) == "true":
+                left = None
+    else:
+        return None, None, None
+    if w.target is not None:
+        right = stormpy.parse_properties(f"P=? [ F ({w.target}) ]", program)[0] \
+            .get_raw_formula().subformula.subformula
+    return (_states(stormpy, dtmc, right),
+            None if left is None else _states(stormpy, dtmc, left), bound)
+
+
+def _states(stormpy: Any, dtmc: Any, formula: Any) -> set[int]:
+    """The states where a state formula holds (iterating a BitVector gives its set bits)."""
+    return {int(s) for s in stormpy.model_checking(dtmc, formula).get_truth_values_vector()}
