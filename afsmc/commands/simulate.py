@@ -23,6 +23,7 @@ from afsmc.commands.common import (
 from afsmc.diagnostics import CompileError, Diagnostic, Severity, codes
 from afsmc.files import check_writable, read_source, write_atomic
 from afsmc.interrupt import Stopped
+from afsmc.commands.simulate_strategy import follow, followed_json, followed_text
 from afsmc.sim.compile import SimError
 from afsmc.sim.run import (
     BATCH,
@@ -65,6 +66,10 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    help="print K sample runs in mission terms (modes, actions, variables)")
     p.add_argument("--traces-out", metavar="PATH", help="save the traces as JSON to PATH")
     p.add_argument("--json", action="store_true", help="print the estimates as JSON")
+    p.add_argument("--strategy", metavar="min:NAME|max:NAME",
+                   help="resolve the interval constants as Storm's min or max strategy of "
+                        "property NAME does, state by state (extracted by Storm first; "
+                        "instead of --resolve)")
 
 
 def run(args: argparse.Namespace) -> int:
@@ -95,6 +100,10 @@ def run(args: argparse.Namespace) -> int:
     if not 0.0 < args.confidence < 1.0:
         print("afsmc simulate: error: --confidence must be in (0, 1)", file=sys.stderr)
         return 2
+    if args.strategy and args.resolve != "uniform":
+        print("afsmc simulate: error: --strategy resolves the interval constants itself: "
+              "give it or --resolve, not both", file=sys.stderr)
+        return 2
     if args.traces > args.runs:
         print(f"afsmc simulate: error: --traces {args.traces} asks for more sample runs than "
               f"--runs {args.runs} makes", file=sys.stderr)
@@ -108,6 +117,9 @@ def run(args: argparse.Namespace) -> int:
             check_writable(args.traces_out, protect=(args.file,))
         text = read_source(args.file)
         job = job_for(args.file, text, overrides(args), args.resolve, args.max_steps)
+        strategy = None
+        if args.strategy:
+            job, strategy = follow(job, args)
         # Without properties there is nothing to estimate; sample runs (--traces) are
         # the one use of such a file, as verify has none (E407 there too).
         if not args.traces and not program(job).monitors:
@@ -163,9 +175,12 @@ def run(args: argparse.Namespace) -> int:
                     args.json, wrapped=True)
     if args.json:
         print_json(_json(out, args, model.name,
-                         {c.name: c.value for c in model.constants if c.is_param}, warnings))
+                         {c.name: c.value for c in model.constants if c.is_param}, warnings)
+                   | followed_json(strategy))
     else:
         _print(out, args, intervals, endless=any(d.code == codes.W602 for d in warnings))
+        if strategy is not None:
+            print(followed_text(strategy))
     return 0
 
 
@@ -233,6 +248,8 @@ def _print(out: Outcome, args: argparse.Namespace, intervals: bool, endless: boo
     how = {"lo": "at their floor", "hi": "at their ceiling"}.get(LOWERING[args.resolve],
                                                                   args.resolve)
     resolved = f"interval constants {how}" if intervals else "no interval constants"
+    if args.strategy:
+        resolved = f"interval constants by the {args.strategy} strategy"
     print(f"{name}: {out.runs} runs, {resolved}, seed {args.seed}, "
           f"{args.confidence:g} confidence")
     width = max([len(e.name) for e in out.estimates] + [8])

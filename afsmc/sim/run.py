@@ -24,6 +24,7 @@ from afsmc.lifetime import die_with_parent, worker_died
 from afsmc.lower.lowering import lower
 from afsmc.sim import stats
 from afsmc.sim.compile import SimError
+from afsmc.sim.policy import Lookup, Table
 from afsmc.sim.engine import BatchResult, Program, build, merge_moments, simulate_batch
 
 Strategy = Literal["uniform", "floor", "ceil", "lo", "hi"]
@@ -48,6 +49,7 @@ class Job:
     overrides: tuple[tuple[str, str], ...]
     strategy: str
     max_steps: int
+    policy: Table | None = None  # a scheduler to follow (strategy is then ignored)
 
 
 @dataclass
@@ -81,7 +83,11 @@ def program(job: Job) -> Program:
     prog = _PROGRAMS.get(job)
     if prog is None:
         checked = load(job.path, dict(job.overrides), text=job.text)
-        prog = build(lower(checked.model, LOWERING[job.strategy]))  # type: ignore[arg-type]
+        if job.policy is not None:
+            prog = build(lower(checked.model, "nondet"))
+            prog.policy = Lookup(job.policy, checked.model)
+        else:
+            prog = build(lower(checked.model, LOWERING[job.strategy]))  # type: ignore[arg-type]
         prog.diagnostics = checked.diagnostics
         _PROGRAMS.clear()
         _PROGRAMS[job] = prog

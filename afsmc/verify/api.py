@@ -193,7 +193,7 @@ def run(path: str, *, consts: Mapping[str, str | bool | int | float] | None = No
         reductions: Reductions | None = None, bisimulation: bool = False,
         split: bool = False, memory_budget: int | None = None,
         solver: Solver = "auto", strategy: bool = False,
-        witness: tuple[str, int] | None = None, witness_dir: str | None = None,
+        witness: tuple[str | None, int] | None = None, witness_dir: str | None = None,
         witness_target: str | None = None) -> VerifyResult:
     """Verify one .afsm file; see the package docstring. Raises CompileError, or
     ValueError for an unknown `via`, `engine` or `solver`."""

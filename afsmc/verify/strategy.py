@@ -155,7 +155,7 @@ def refuse(message: str, hint: str | None = None) -> CompileError:
 
 
 def check_request(model: ir.Model, props: Sequence[ir.Property], strategy: bool,
-                  witness: tuple[str, int] | None) -> None:
+                  witness: tuple[str | None, int] | None) -> None:
     """Refuse what has no strategy or no witness (E415), before Storm is started."""
     if strategy and not model.is_nondeterministic:
         raise refuse(f"--strategy: {model.source.path} has no interval constants: its model "
@@ -167,10 +167,14 @@ def check_request(model: ir.Model, props: Sequence[ir.Property], strategy: bool,
     name, k = witness
     if k <= 0:
         raise refuse(f"--witness {k}: the number of paths must be at least 1")
-    prop = next((p for p in props if p.name == name), None)
+    if name is None and len(props) != 1:
+        raise refuse(f"--witness {k}: the paths are of one property, and {len(props)} are "
+                     "checked", hint="name the property with -p NAME (or give one --formula)")
+    prop = next((p for p in props if p.name == name or name is None), None)
     if prop is None:
         raise refuse(f"--witness: no property named '{name}' is checked",
                      hint="name the property with -p NAME")
+    name = prop.name
     if prop.kind != "P" or not isinstance(prop.path, ir.Path) or prop.path.kind not in (
             "F", "U"):
         raise refuse(f"--witness: property '{name}' ({prop.text}) has no target states for "
@@ -182,7 +186,7 @@ DIRECTIONS = ("min", "max")
 
 
 def witness_request(model: ir.Model, props: Sequence[ir.Property], strategy: bool,
-                    witness: tuple[str, int] | None, direction: str | None,
+                    witness: tuple[str | None, int] | None, direction: str | None,
                     target: str | None = None) -> WitnessRequest | None:
     """The witness query: `witness` = (property, K); an MDP's paths follow the scheduler
     of `direction` ("min" or "max"; default: the property's own, else "max"). `target`: a
@@ -193,8 +197,8 @@ def witness_request(model: ir.Model, props: Sequence[ir.Property], strategy: boo
         if direction is not None:
             raise refuse("--witness-dir: give --witness K as well")
         return None
-    name, k = witness
-    prop = next(p for p in props if p.name == name)
+    prop = next(p for p in props if p.name == witness[0] or witness[0] is None)
+    name, k = prop.name, witness[1]
     if not model.is_nondeterministic:
         if direction is not None:
             raise refuse(f"--witness-dir {direction}: {model.source.path} has no interval "
