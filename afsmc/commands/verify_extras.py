@@ -53,16 +53,17 @@ def strategy_lines(p: PropertyResult) -> list[str]:
 
     assert p.strategy is not None
     out = [f"strategies of {p.name} ({p.formula}): the end each interval constant takes, "
-           "in the states the strategy reaches"]
-    rows = [["strategy", "constant", "end", "action", "mode", "states", "when"]]
+           "in the states the strategy reaches where the end matters (either: further "
+           "states where both ends give the same value)"]
+    rows = [["strategy", "constant", "end", "action", "mode", "states", "either", "when"]]
     for opt in ("min", "max"):
         for e in p.strategy.get(opt, []):
             rows.append([opt, e.constant, f"{e.value} ({e.end})", e.action, e.mode,
-                         f"{e.states:,}", e.when or "-"])
+                         f"{e.states:,}", f"{e.indifferent:,}", e.when or "-"])
     if len(rows) == 1:
         out.append("  (no choice: no state the strategies reach resolves an interval constant)")
         return out
-    out += ["  " + line for line in table(rows, {5})]
+    out += ["  " + line for line in table(rows, {5, 6})]
     return out
 
 

@@ -39,11 +39,14 @@ class StrategyEntry:
     mode: str
     states: int
     when: str | None = None
+    # further states of this action and mode that the strategy reaches, where both ends
+    # give the same value (Storm's choice there is arbitrary and not counted in `states`)
+    indifferent: int = 0
 
     def to_json(self) -> dict[str, object]:
         return {"constant": self.constant, "end": self.end, "value": self.value,
                 "action": self.action, "mode": self.mode, "states": self.states,
-                "when": self.when}
+                "when": self.when, "indifferent": self.indifferent}
 
     def text(self) -> str:
         return f"{self.constant} = {self.value} ({self.end}) in {self.action}, mode {self.mode}" \
@@ -68,9 +71,14 @@ def summarise(groups: Sequence[Group], variables: Sequence[str],
     model = low.model
     mode_i = list(variables).index("mode") if "mode" in variables else -1
     ranges: dict[tuple[str, str, int], dict[str, _Range]] = {}
+    same: dict[tuple[str, str, int], int] = {}
     for g in groups:
         cmd = low.commands[g.command]
         for const, end in cmd.choice:
+            if not g.matters:
+                same[(const, cmd.action, g.mode)] = same.get((const, cmd.action, g.mode),
+                                                             0) + g.states
+                continue
             by_end = ranges.setdefault((const, cmd.action, g.mode), {})
             r = by_end.get(end)
             if r is None:
@@ -92,7 +100,8 @@ def summarise(groups: Sequence[Group], variables: Sequence[str],
                 continue
             value = int(c.interval[0] if end == "lo" else c.interval[1])
             out.append(StrategyEntry(const, END[end], value, action,
-                                     model.mode_by_number(mode).name, r.states, conds.get(end)))
+                                     model.mode_by_number(mode).name, r.states, conds.get(end),
+                                     same.get((const, action, mode), 0)))
     return out
 
 

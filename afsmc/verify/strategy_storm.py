@@ -11,6 +11,7 @@ constants (:mod:`afsmc.verify.strategy`, :mod:`afsmc.verify.witness`).
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -51,6 +52,7 @@ class Group:
     states: int
     low: tuple[int, ...]
     high: tuple[int, ...]
+    matters: bool = True  # False: every choice of these states has the same value
 
 
 @dataclass
@@ -68,7 +70,7 @@ class Extracted:
 
     variables: tuple[str, ...] = ()  # the generated model's variables ("mode" among them)
     groups: dict[str, list[Group]] = field(default_factory=dict)
-    reached: dict[str, int] = field(default_factory=dict)  # states the scheduler reaches
+    reached: dict[str, int] = field(default_factory=dict)  # its decisions, per query
     policy_states: list[tuple[int, ...]] = field(default_factory=list)
     policy_commands: list[int] = field(default_factory=list)
     paths: list[RawPath] = field(default_factory=list)
@@ -97,9 +99,15 @@ def _variables(stormpy: Any, program: Any) -> list[tuple[str, Any, bool]]:
 def _valuations(model: Any, variables: list[tuple[str, Any, bool]]) -> list[list[int]]:
     sv = model.state_valuations
     cols = []
+    n = int(model.nr_states)
     for _, var, boolean in variables:
-        vals = sv.get_boolean_values(var) if boolean else sv.get_int64_values(var)
-        cols.append([int(x) for x in vals])
+        if boolean:  # a BitVector: iterating it gives the states where the variable is true
+            col = [0] * n
+            for s in sv.get_boolean_values(var):
+                col[int(s)] = 1
+            cols.append(col)
+        else:
+            cols.append([int(x) for x in sv.get_int64_values(var)])
     return cols
 
 
@@ -129,39 +137,96 @@ def analyse(stormpy: Any, program: Any, model: Any, name: str, prop: Any, result
     t0 = time.perf_counter()
     variables = _variables(stormpy, program)
     out.variables = tuple(n for n, _, _ in variables)
-    dtmc = induced(stormpy, model, result)
-    cols = _valuations(dtmc, variables)
-    commands = _commands(dtmc)
-    mode_i = out.variables.index("mode") if "mode" in out.variables else -1
-    decisive = frozenset(extract.decisive)
-    if name in extract.strategies or name == extract.policy:
-        out.reached[name] = int(dtmc.nr_states)
-        groups: dict[tuple[int, int], list[list[int]]] = {}
-        states: list[int] = []
-        for s, c in enumerate(commands):
-            if c not in decisive:
-                continue
-            states.append(s)
-            mode = cols[mode_i][s] if mode_i >= 0 else 0
-            g = groups.get((c, mode))
-            row = [col[s] for col in cols]
-            if g is None:
-                groups[(c, mode)] = [[1], row, list(row)]
-            else:
-                g[0][0] += 1
-                g[1] = [min(a, b) for a, b in zip(g[1], row, strict=True)]
-                g[2] = [max(a, b) for a, b in zip(g[2], row, strict=True)]
+    mdp = str(model.model_type).upper().endswith("MDP")
+    if mdp and (name in extract.strategies or name == extract.policy):
+        decisions = _decisions(model, prop, result, frozenset(extract.decisive))
+        out.reached[name] = len(decisions)
+        cols = _valuations(model, variables)
         if name in extract.strategies:
-            out.groups[name] = [Group(c, m, g[0][0], tuple(g[1]), tuple(g[2]))
-                                for (c, m), g in sorted(groups.items())]
+            out.groups[name] = _groups(decisions, cols, out.variables)
         if name == extract.policy:
-            out.policy_states = [tuple(col[s] for col in cols) for s in states]
-            out.policy_commands = [commands[s] for s in states]
+            out.policy_states = [tuple(col[s] for col in cols) for s, _, _ in decisions]
+            out.policy_commands = [c for _, c, _ in decisions]
     w = extract.witness
     if w is not None and w.query == name:
         out.witness_query = name
-        _paths(stormpy, program, dtmc, prop, w, cols, commands, out)
+        dtmc = induced(stormpy, model, result)
+        _paths(stormpy, program, dtmc, prop, w, _valuations(dtmc, variables), _commands(dtmc),
+               out)
     out.seconds += time.perf_counter() - t0
+
+
+def _groups(decisions: list[tuple[int, int, bool]], cols: list[list[int]],
+            variables: tuple[str, ...]) -> list[Group]:
+    """The decisions per command, mode and whether the end matters there."""
+    mode_i = variables.index("mode") if "mode" in variables else -1
+    groups: dict[tuple[int, int, bool], list[list[int]]] = {}
+    for s, c, matters in decisions:
+        row = [col[s] for col in cols]
+        key = (c, row[mode_i] if mode_i >= 0 else 0, matters)
+        g = groups.get(key)
+        if g is None:
+            groups[key] = [[1], row, list(row)]
+        else:
+            g[0][0] += 1
+            g[1] = [min(a, b) for a, b in zip(g[1], row, strict=True)]
+            g[2] = [max(a, b) for a, b in zip(g[2], row, strict=True)]
+    return [Group(c, m, g[0][0], tuple(g[1]), tuple(g[2]), matters)
+            for (c, m, matters), g in sorted(groups.items())]
+
+
+# Two choices whose values differ by at most this (relative to the larger) are equal: the
+# scheduler's choice between them is arbitrary.
+SAME = 1e-9
+
+
+def _decisions(model: Any, prop: Any, result: Any,
+               decisive: frozenset[int]) -> list[tuple[int, int, bool]]:
+    """(state, command, whether the end matters) for each state the scheduler reaches in
+    which it resolves an interval constant. The end matters where another choice of the
+    state has a different value (sum of probability x successor's value, plus the choice's
+    reward for an expected reward)."""
+    sched = result.get_scheduler()
+    tm = model.transition_matrix
+    co = model.choice_origins
+    values = list(result.get_value_vector())
+    action_rewards = _action_rewards(model, prop)
+    seen = bytearray(int(model.nr_states))
+    stack = [int(s) for s in model.initial_states]
+    for s in stack:
+        seen[s] = 1
+    out = []
+    while stack:
+        s = stack.pop()
+        first, last = tm.get_row_group_start(s), tm.get_row_group_end(s)
+        row = first + sched.get_choice(s).get_deterministic_choice()
+        for e in tm.get_row(row):
+            t = int(e.column)
+            if not seen[t]:
+                seen[t] = 1
+                stack.append(t)
+        if last - first < 2:
+            continue
+        cs = list(co.get_command_set(row))
+        if not cs or int(cs[0]) not in decisive:
+            continue
+        qs = [math.fsum(float(e.value) * values[int(e.column)] for e in tm.get_row(r))
+              + (action_rewards[r] if action_rewards else 0.0) for r in range(first, last)]
+        hi, lo = max(qs), min(qs)
+        matters = not (hi == lo or abs(hi - lo) <= SAME * max(1.0, abs(hi), abs(lo)))
+        out.append((s, int(cs[0]), matters))
+    out.sort()
+    return out
+
+
+def _action_rewards(model: Any, prop: Any) -> list[float] | None:
+    """The per-choice rewards of an expected-reward query's structure, if it has any."""
+    formula = prop.get_raw_formula()
+    if not formula.is_reward_operator_formula or not model.reward_models:
+        return None
+    name = formula.reward_name if formula.has_reward_model_name() else None
+    rm = model.reward_models[name] if name else next(iter(model.reward_models.values()))
+    return [float(x) for x in rm.state_action_rewards] if rm.has_state_action_rewards else None
 
 
 # Paths the search may enumerate, per path asked, before it gives up on finding more that
