@@ -20,10 +20,10 @@ from afsmc.commands.common import (
     print_json,
     report,
 )
+from afsmc.commands.simulate_strategy import follow, followed_json, followed_text
 from afsmc.diagnostics import CompileError, Diagnostic, Severity, codes
 from afsmc.files import check_writable, read_source, write_atomic
 from afsmc.interrupt import Stopped
-from afsmc.commands.simulate_strategy import follow, followed_json, followed_text
 from afsmc.sim.compile import SimError
 from afsmc.sim.run import (
     BATCH,
@@ -38,6 +38,7 @@ from afsmc.sim.run import (
     simulate,
 )
 from afsmc.text import literal, num
+from afsmc.verify.policy import Policy
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
@@ -100,10 +101,6 @@ def run(args: argparse.Namespace) -> int:
     if not 0.0 < args.confidence < 1.0:
         print("afsmc simulate: error: --confidence must be in (0, 1)", file=sys.stderr)
         return 2
-    if args.strategy and args.resolve != "uniform":
-        print("afsmc simulate: error: --strategy resolves the interval constants itself: "
-              "give it or --resolve, not both", file=sys.stderr)
-        return 2
     if args.traces > args.runs:
         print(f"afsmc simulate: error: --traces {args.traces} asks for more sample runs than "
               f"--runs {args.runs} makes", file=sys.stderr)
@@ -117,9 +114,7 @@ def run(args: argparse.Namespace) -> int:
             check_writable(args.traces_out, protect=(args.file,))
         text = read_source(args.file)
         job = job_for(args.file, text, overrides(args), args.resolve, args.max_steps)
-        strategy = None
-        if args.strategy:
-            job, strategy = follow(job, args)
+        job, strategy = follow(job, args)  # --strategy: the runs follow Storm's scheduler
         # Without properties there is nothing to estimate; sample runs (--traces) are
         # the one use of such a file, as verify has none (E407 there too).
         if not args.traces and not program(job).monitors:
@@ -137,7 +132,6 @@ def run(args: argparse.Namespace) -> int:
 
         prog = program(job)
         model = prog.model
-        intervals = model.is_nondeterministic
         # the check's warnings, as verify shows them: W602 (a mode the mission cannot end
         # from) is why runs stay undecided whatever --max-steps
         warnings = [d for d in prog.diagnostics if d.severity is Severity.WARNING]
@@ -173,15 +167,21 @@ def run(args: argparse.Namespace) -> int:
                                              hint=f"is a Dask scheduler running at {args.dask}?"
                                              if args.dask else None)]),
                     args.json, wrapped=True)
-    if args.json:
-        print_json(_json(out, args, model.name,
-                         {c.name: c.value for c in model.constants if c.is_param}, warnings)
-                   | followed_json(strategy))
-    else:
-        _print(out, args, intervals, endless=any(d.code == codes.W602 for d in warnings))
-        if strategy is not None:
-            print(followed_text(strategy))
+    _finish(out, args, model, warnings, strategy)
     return 0
+
+
+def _finish(out: Outcome, args: argparse.Namespace, model: Any, warnings: list[Diagnostic],
+            strategy: Policy | None) -> None:
+    """Print the estimates (and the strategy the runs followed, if any)."""
+    if args.json:
+        print_json(followed_json(strategy) | _json(
+            out, args, model.name, {c.name: c.value for c in model.constants if c.is_param},
+            warnings))
+    else:
+        _print(out, args, model.is_nondeterministic,
+               endless=any(d.code == codes.W602 for d in warnings))
+        followed_text(strategy)
 
 
 class _Partial:

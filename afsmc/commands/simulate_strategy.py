@@ -7,14 +7,21 @@ import dataclasses
 import sys
 from typing import Any
 
+from afsmc.commands.common import usage_error
 from afsmc.sim.policy import Table
 from afsmc.sim.run import Job, program
 from afsmc.text import num
 from afsmc.verify.policy import Policy, extract
 
 
-def follow(job: Job, args: argparse.Namespace) -> tuple[Job, Policy]:
-    """The job whose runs follow the strategy `args.strategy`, extracted by Storm."""
+def follow(job: Job, args: argparse.Namespace) -> tuple[Job, Policy | None]:
+    """The job whose runs follow the strategy `args.strategy`, extracted by Storm (no
+    --strategy: the job as it is)."""
+    if not args.strategy:
+        return job, None
+    if args.resolve != "uniform":
+        usage_error("--strategy resolves the interval constants itself: give it or "
+                    "--resolve, not both")
     model = program(job).model
 
     def say(text: str) -> None:
@@ -34,7 +41,8 @@ def followed_json(policy: Policy | None) -> dict[str, Any]:
                          "value": policy.value, "states": len(policy.states)}}
 
 
-def followed_text(policy: Policy) -> str:
-    return (f"the runs followed Storm's {policy.direction} strategy of {policy.property} "
-            f"(its choice in {len(policy.states):,} states); Storm's {policy.direction}: "
-            f"{num(policy.value)}")
+def followed_text(policy: Policy | None) -> None:
+    if policy is not None:
+        print(f"the runs followed Storm's {policy.direction} strategy of {policy.property} "
+              f"(its choice in {len(policy.states):,} states); Storm's {policy.direction}: "
+              f"{num(policy.value)}")

@@ -21,8 +21,8 @@ from afsmc.model import expr as E
 from afsmc.model import ir
 from afsmc.model.bounds import bounds
 from afsmc.model.evaluate import scalar
-from afsmc.sim.policy import Lookup
 from afsmc.sim.compile import Fn, Frame, Scope, SimError, compile_expr, fold, reads, static
+from afsmc.sim.policy import Lookup
 
 UNDECIDED, TRUE, FALSE = 0, 1, 2
 

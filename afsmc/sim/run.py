@@ -24,8 +24,8 @@ from afsmc.lifetime import die_with_parent, worker_died
 from afsmc.lower.lowering import lower
 from afsmc.sim import stats
 from afsmc.sim.compile import SimError
-from afsmc.sim.policy import Lookup, Table
 from afsmc.sim.engine import BatchResult, Program, build, merge_moments, simulate_batch
+from afsmc.sim.policy import Lookup, Table
 
 Strategy = Literal["uniform", "floor", "ceil", "lo", "hi"]
 STRATEGIES: tuple[Strategy, ...] = ("uniform", "floor", "ceil", "lo", "hi")

@@ -62,8 +62,6 @@ from afsmc.verify.results import (
     shown,
     stats_of,
 )
-from afsmc.verify.strategy import attach, request
-from afsmc.verify.strategy_storm import Extracted, WitnessRequest
 from afsmc.verify.storm import (
     DD_MEMORY_RETRY,
     Engine,
@@ -73,6 +71,8 @@ from afsmc.verify.storm import (
     StormFailure,
     Via,
 )
+from afsmc.verify.strategy import attach, request
+from afsmc.verify.strategy_storm import Extracted, WitnessRequest
 
 # Above this many state-steps (states x step bound), a check runs in a child process.
 IN_PROCESS_WORK = 500_000_000

@@ -13,14 +13,14 @@ import dataclasses
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 
+from afsmc.backends.prism import property_variants
 from afsmc.diagnostics import CompileError, Diagnostic, Severity, codes
 from afsmc.lower.lowering import Lowered
 from afsmc.lower.reduce import Reductions
 from afsmc.model import ir
-from afsmc.backends.prism import property_variants
 from afsmc.verify.results import Checks, PropertyResult
-from afsmc.verify.strategy_storm import Extract, Extracted, Group, RawPath, WitnessRequest
 from afsmc.verify.storm import Via
+from afsmc.verify.strategy_storm import Extract, Extracted, Group, RawPath, WitnessRequest
 from afsmc.verify.witness import describe
 
 END = {"lo": "floor", "hi": "ceil"}

@@ -11,6 +11,7 @@ constants (:mod:`afsmc.verify.strategy`, :mod:`afsmc.verify.witness`).
 
 from __future__ import annotations
 
+import itertools
 import math
 from dataclasses import dataclass, field
 from typing import Any
@@ -273,7 +274,7 @@ def _paths(stormpy: Any, program: Any, dtmc: Any, prop: Any, w: WitnessRequest,
         if left is not None and not all(s in left for s in states[:-1]):
             continue
         steps = []
-        for a, b in zip(states, states[1:], strict=False):
+        for a, b in itertools.pairwise(states):
             steps.append(sum(float(e.value) for e in tm.get_row(tm.get_row_group_start(a))
                              if int(e.column) == b))
         found.append(RawPath(p, [tuple(col[s] for col in cols) for s in states],

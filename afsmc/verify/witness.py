@@ -10,6 +10,7 @@ add up to Storm's, or the path is reported as not confirmed.
 
 from __future__ import annotations
 
+import itertools
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field
@@ -57,7 +58,8 @@ class Witness:
     def trace(self, start_mode: str) -> list[dict[str, Any]]:
         """The path as `afsmc simulate --traces-out` writes a run: one entry per state
         (step number, mode, the action and hazard that led to it, every variable)."""
-        mode, vars_ = start_mode, dict(self.start)
+        mode = start_mode
+        vars_: dict[str, int | bool | str] = dict(self.start)
         out: list[dict[str, Any]] = [{"step": 0, "mode": mode, "vars": dict(vars_)}]
         for i, s in enumerate(self.steps, 1):
             mode = str(s.changes.get("mode", mode))
@@ -95,7 +97,7 @@ def _replay(low: Lowered, cmd: Command, here: dict[str, int],
         new = dict(here)
         for var, expr in b.updates:
             v = evaluate(expr, env)
-            new[var] = int(v) if not isinstance(v, bool) else int(v)
+            new[var] = int(v)
         if new == there:
             total += float(evaluate(b.prob, env))
             hazards.add(b.hazard)
@@ -113,7 +115,7 @@ def describe(paths: Sequence[RawPath], variables: Sequence[str], low: Lowered) -
     for p in paths:
         vals = [dict(zip(names, s, strict=True)) for s in p.states]
         steps, ok = [], True
-        for i, (here, there) in enumerate(zip(vals, vals[1:], strict=False)):
+        for i, (here, there) in enumerate(itertools.pairwise(vals)):
             cmd = low.commands[p.commands[i]] if p.commands[i] >= 0 else None
             hazard = None
             if cmd is not None:
