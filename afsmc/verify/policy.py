@@ -11,7 +11,7 @@ from __future__ import annotations
 import dataclasses
 from dataclasses import dataclass
 
-from afsmc.backends.prism import property_variants
+from afsmc.backends.prism import emit, property_variants
 from afsmc.diagnostics import CompileError, Diagnostic, Severity, codes
 from afsmc.lower.lowering import lower
 from afsmc.model import ir
@@ -20,8 +20,7 @@ from afsmc.model.semantics import bounded_globally
 from afsmc.verify.guard import Progress, default_max_states, run_job, upper_bound
 from afsmc.verify.jobs import make_job
 from afsmc.verify.queries import dual
-from afsmc.verify.strategy import DIRECTIONS, decisive, refuse
-from afsmc.verify.strategy_storm import Extract
+from afsmc.verify.strategy import DIRECTIONS, extract_for, refuse
 
 
 @dataclass(frozen=True)
@@ -72,7 +71,8 @@ def extract(model: ir.Model, text: str, *, max_states: int | None = None,
     query = next(n for n, o in property_variants(low, asked) if o == opt)
     limit = default_max_states() if max_states is None else max_states
     job = make_job(low, [asked], "prism", "sparse", limit, "MDP", only=(query,))
-    job = dataclasses.replace(job, extract=Extract((), query, None, decisive(low)))
+    job = dataclasses.replace(job, extract=extract_for(low, (), query, None),
+                              model_text=emit(low, variant_labels=True).model)
     res = run_job(job, upper_bound(model), isolate=None, progress=progress)
     if res.failure is not None or res.extracted is None or query not in res.values:
         why = res.failure.message if res.failure is not None else "Storm returned no scheduler"

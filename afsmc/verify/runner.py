@@ -14,6 +14,7 @@ import functools
 import time
 from dataclasses import dataclass
 
+from afsmc.backends.prism import emit as prism_emit
 from afsmc.backends.prism import property_variants
 from afsmc.compiler import lowered
 from afsmc.diagnostics import CompileError, Diagnostic, Severity, codes
@@ -401,9 +402,9 @@ class ModelLoop:
                        o.memory_budget, only=tuple(mine),
                        hybrid_skip=tuple(n for n in mine if n not in first), hybrid_extra=extra)
         job = dataclasses.replace(job, solver=o.solver, all_states=o.all_states)
-        if self.resolution == "nondet":
-            job = dataclasses.replace(job, extract=request(self.low, o.strategy, o.witness,
-                                                           mine, self.run.asked_as))
+        ex = request(self.low, o.strategy, o.witness, mine, self.run.asked_as)
+        if self.resolution == "nondet" and o.via == "prism" and ex is not None:
+            job = dataclasses.replace(job, extract=ex, model_text=prism_emit(self.low, True).model)
         if self.job_engine == "auto":
             job = dataclasses.replace(job, symbolic_refused=tuple(
                 n for p, n in unit if symbolic_gap(p, self.run.model, "auto") is not None))

@@ -13,7 +13,7 @@ import dataclasses
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 
-from afsmc.backends.prism import property_variants
+from afsmc.backends.prism import property_variants, variant_label
 from afsmc.diagnostics import CompileError, Diagnostic, Severity, codes
 from afsmc.lower.lowering import Lowered
 from afsmc.lower.reduce import Reductions
@@ -132,7 +132,17 @@ def request(low: Lowered, strategy: bool, witness: WitnessRequest | None,
     kept = mine if strategy and low.kind == "mdp" else ()
     if not kept and w is None:
         return None
-    return Extract(kept, None, w, decisive(low))
+    return extract_for(low, kept, None, w)
+
+
+def extract_for(low: Lowered, strategies: tuple[str, ...], policy: str | None,
+                witness: WitnessRequest | None) -> Extract:
+    """The Extract of a job on `low`'s PRISM model emitted with variant labels."""
+    cmds = decisive(low)
+    labels = {i: variant_label(low, i) for i in cmds}
+    return Extract(strategies, policy, witness, cmds, tuple(labels[i] for i in cmds),
+                   tuple((labels.get(i, "" if c.silent else c.action), c.modes)
+                         for i, c in enumerate(low.commands)))
 
 
 def attach(results: Sequence[PropertyResult], props: Sequence[ir.Property], low: Lowered,
@@ -236,10 +246,11 @@ def extras(checks: Checks, check: Callable[..., Checks], model: ir.Model,
     if not missing:
         return
     if progress is not None:
-        progress(f"the {checks.model.engine} engine gives no scheduler: the MDP is checked "
-                 "again with the sparse engine for the strategies and paths")
+        progress(f"the {checks.model.engine} engine (via {via}) gives no scheduler: the MDP "
+                 "is checked again with the sparse engine, via PRISM, for the strategies "
+                 "and paths")
     try:
-        again = check(model, missing, via=via, engine="sparse", max_states=max_states,
+        again = check(model, missing, via="prism", engine="sparse", max_states=max_states,
                       uniform=False, progress=progress, reductions=reductions,
                       strategy=strategy, witness=witness)
     except CompileError as exc:

@@ -34,8 +34,12 @@ class Extract:
     strategies: tuple[str, ...] = ()  # queries whose scheduler is summarised
     policy: str | None = None  # a query whose scheduler is returned whole
     witness: WitnessRequest | None = None
-    # the commands that are floor/ceil variants: in their states the scheduler chooses
+    # the commands that are floor/ceil variants: in their states the scheduler chooses;
+    # their action labels in the generated model (backends.prism.variant_label)
     decisive: tuple[int, ...] = ()
+    labels: tuple[str, ...] = ()
+    # every command's action label ("": unlabelled) and modes
+    commands: tuple[tuple[str, tuple[int, ...]], ...] = ()
 
     @property
     def queries(self) -> tuple[str, ...]:
@@ -84,7 +88,7 @@ def builder_options(stormpy: Any, props: list[Any]) -> Any:
     """Storm's builder options for `props` with state valuations and choice origins."""
     opts = stormpy.BuilderOptions([p.get_raw_formula() for p in props])
     opts.set_build_state_valuations()
-    opts.set_build_choice_origins()
+    opts.set_build_choice_labels()
     opts.set_build_all_labels()
     return opts
 
@@ -97,29 +101,48 @@ def _variables(stormpy: Any, program: Any) -> list[tuple[str, Any, bool]]:
     return out
 
 
-def _valuations(model: Any, variables: list[tuple[str, Any, bool]]) -> list[list[int]]:
+def _valuations(model: Any, variables: list[tuple[str, Any, bool]]) -> Any:
+    """Every state's values, as a numpy array (states x variables)."""
+    import numpy as np
+
     sv = model.state_valuations
-    cols = []
     n = int(model.nr_states)
-    for _, var, boolean in variables:
+    out = np.zeros((n, len(variables)), dtype=np.int64)
+    for j, (_, var, boolean) in enumerate(variables):
         if boolean:  # a BitVector: iterating it gives the states where the variable is true
-            col = [0] * n
-            for s in sv.get_boolean_values(var):
-                col[int(s)] = 1
-            cols.append(col)
+            out[np.fromiter((int(s) for s in sv.get_boolean_values(var)), dtype=np.int64), j] = 1
         else:
-            cols.append([int(x) for x in sv.get_int64_values(var)])
-    return cols
+            out[:, j] = np.asarray(sv.get_int64_values(var), dtype=np.int64)
+    return out
 
 
-def _commands(model: Any) -> list[int]:
-    """The PRISM command of each state's first choice (-1: none, a state Storm fixed)."""
-    co = model.choice_origins
-    tm = model.transition_matrix
-    out = []
-    for s in range(model.nr_states):
-        cs = list(co.get_command_set(tm.get_row_group_start(s)))
-        out.append(int(cs[0]) if cs else -1)
+def _keys(vals: Any) -> Any:
+    """Each row of values as one integer (mixed radix over the columns' ranges)."""
+    import numpy as np
+
+    key = np.zeros(len(vals), dtype=np.int64)
+    if len(vals) == 0:
+        return key
+    lo, hi = vals.min(axis=0), vals.max(axis=0)
+    for j in range(vals.shape[1]):
+        key = key * int(hi[j] - lo[j] + 1) + (vals[:, j] - lo[j])
+    return key
+
+
+def _chosen(model: Any, extract: Extract) -> Any:
+    """The floor/ceil variant each state's (first) choice takes, by its action label
+    (-1: none), as a numpy array."""
+    import numpy as np
+
+    out = np.full(int(model.nr_states), -1, dtype=np.int64)
+    if not model.has_choice_labeling():
+        return out
+    labeling = model.choice_labeling
+    present = labeling.get_labels()
+    for c, label in zip(extract.decisive, extract.labels, strict=True):
+        if label in present:
+            rows = np.fromiter((int(r) for r in labeling.get_choices(label)), dtype=np.int64)
+            out[rows] = c  # a DTMC's choice r is its state r
     return out
 
 
@@ -138,42 +161,43 @@ def analyse(stormpy: Any, program: Any, model: Any, name: str, prop: Any, result
     t0 = time.perf_counter()
     variables = _variables(stormpy, program)
     out.variables = tuple(n for n, _, _ in variables)
+    dtmc = induced(stormpy, model, result)
+    vals = _valuations(dtmc, variables)
     mdp = str(model.model_type).upper().endswith("MDP")
     if mdp and (name in extract.strategies or name == extract.policy):
-        decisions = _decisions(model, prop, result, frozenset(extract.decisive))
-        out.reached[name] = len(decisions)
-        cols = _valuations(model, variables)
+        chosen = _chosen(dtmc, extract)
+        states = (chosen >= 0).nonzero()[0]
+        out.reached[name] = len(states)
         if name in extract.strategies:
-            out.groups[name] = _groups(decisions, cols, out.variables)
+            matters = _matters(stormpy, model, prop, result, variables, vals[states])
+            out.groups[name] = _groups(chosen[states], vals[states], matters, out.variables)
         if name == extract.policy:
-            out.policy_states = [tuple(col[s] for col in cols) for s, _, _ in decisions]
-            out.policy_commands = [c for _, c, _ in decisions]
+            out.policy_states = [tuple(int(x) for x in row) for row in vals[states]]
+            out.policy_commands = [int(c) for c in chosen[states]]
     w = extract.witness
     if w is not None and w.query == name:
         out.witness_query = name
-        dtmc = induced(stormpy, model, result)
-        _paths(stormpy, program, dtmc, prop, w, _valuations(dtmc, variables), _commands(dtmc),
-               out)
+        _paths(stormpy, program, dtmc, prop, w, vals, extract, out)
     out.seconds += time.perf_counter() - t0
 
 
-def _groups(decisions: list[tuple[int, int, bool]], cols: list[list[int]],
-            variables: tuple[str, ...]) -> list[Group]:
-    """The decisions per command, mode and whether the end matters there."""
+def _groups(commands: Any, vals: Any, matters: Any, variables: tuple[str, ...]) -> list[Group]:
+    """The decisions per command, mode and whether the end matters there: how many, and
+    each variable's range."""
+    import numpy as np
+
     mode_i = variables.index("mode") if "mode" in variables else -1
-    groups: dict[tuple[int, int, bool], list[list[int]]] = {}
-    for s, c, matters in decisions:
-        row = [col[s] for col in cols]
-        key = (c, row[mode_i] if mode_i >= 0 else 0, matters)
-        g = groups.get(key)
-        if g is None:
-            groups[key] = [[1], row, list(row)]
-        else:
-            g[0][0] += 1
-            g[1] = [min(a, b) for a, b in zip(g[1], row, strict=True)]
-            g[2] = [max(a, b) for a, b in zip(g[2], row, strict=True)]
-    return [Group(c, m, g[0][0], tuple(g[1]), tuple(g[2]), matters)
-            for (c, m, matters), g in sorted(groups.items())]
+    modes = vals[:, mode_i] if mode_i >= 0 else np.zeros(len(vals), dtype=np.int64)
+    out = []
+    for c in sorted({int(x) for x in commands}):
+        for m in sorted({int(x) for x in modes[commands == c]}):
+            for flag in (False, True):
+                sel = (commands == c) & (modes == m) & (matters == flag)
+                if sel.any():
+                    part = vals[sel]
+                    out.append(Group(c, m, int(sel.sum()), tuple(int(x) for x in part.min(0)),
+                                     tuple(int(x) for x in part.max(0)), flag))
+    return out
 
 
 # Two choices whose values differ by at most this (relative to the larger) are equal: the
@@ -181,53 +205,42 @@ def _groups(decisions: list[tuple[int, int, bool]], cols: list[list[int]],
 SAME = 1e-9
 
 
-def _decisions(model: Any, prop: Any, result: Any,
-               decisive: frozenset[int]) -> list[tuple[int, int, bool]]:
-    """(state, command, whether the end matters) for each state the scheduler reaches in
-    which it resolves an interval constant. The end matters where another choice of the
-    state has a different value (sum of probability x successor's value, plus the choice's
-    reward for an expected reward)."""
-    sched = result.get_scheduler()
-    tm = model.transition_matrix
-    co = model.choice_origins
-    values = list(result.get_value_vector())
-    action_rewards = _action_rewards(model, prop)
-    seen = bytearray(int(model.nr_states))
-    stack = [int(s) for s in model.initial_states]
-    for s in stack:
-        seen[s] = 1
-    out = []
-    while stack:
-        s = stack.pop()
-        first, last = tm.get_row_group_start(s), tm.get_row_group_end(s)
-        row = first + sched.get_choice(s).get_deterministic_choice()
-        for e in tm.get_row(row):
-            t = int(e.column)
-            if not seen[t]:
-                seen[t] = 1
-                stack.append(t)
-        if last - first < 2:
-            continue
-        cs = list(co.get_command_set(row))
-        if not cs or int(cs[0]) not in decisive:
-            continue
-        qs = [math.fsum(float(e.value) * values[int(e.column)] for e in tm.get_row(r))
-              + (action_rewards[r] if action_rewards else 0.0) for r in range(first, last)]
-        hi, lo = max(qs), min(qs)
-        matters = not (hi == lo or abs(hi - lo) <= SAME * max(1.0, abs(hi), abs(lo)))
-        out.append((s, int(cs[0]), matters))
-    out.sort()
-    return out
+def _matters(stormpy: Any, model: Any, prop: Any, result: Any,
+             variables: list[tuple[str, Any, bool]], reached: Any) -> Any:
+    """For each of the `reached` states (values): whether its choices differ in value,
+    i.e. min and max over the choices of (sum of probability x successor's value) differ,
+    computed by Storm as the instantaneous reward after one step with the values as state
+    rewards. An expected reward with action rewards: True (not compared)."""
+    import numpy as np
+    import stormpy.models as models
+
+    if _action_rewards(model, prop):
+        return np.ones(len(reached), dtype=bool)
+    values = [float(v) if math.isfinite(v) else 1e300 for v in result.get_value_vector()]
+    rm = models.SparseRewardModel(optional_state_reward_vector=values)
+    comp = models.SparseModelComponents(transition_matrix=model.transition_matrix,
+                                        state_labeling=model.labeling, reward_models={"v": rm})
+    one = models.SparseMdp(comp)
+    lo_q, hi_q = (np.asarray(stormpy.model_checking(one, q).get_value_vector())
+                  for q in stormpy.parse_properties("Rmin=? [I=1]; Rmax=? [I=1]"))
+    del one, comp, rm
+    gap = np.abs(hi_q - lo_q) > SAME * np.maximum(1.0, np.maximum(np.abs(hi_q), np.abs(lo_q)))
+    # the reached states among the MDP's, by their values
+    keys_all = _keys(np.vstack([_valuations(model, variables), reached]))
+    n = int(model.nr_states)
+    order = np.argsort(keys_all[:n], kind="stable")
+    pos = np.searchsorted(keys_all[:n][order], keys_all[n:])
+    return gap[order[pos]]
 
 
-def _action_rewards(model: Any, prop: Any) -> list[float] | None:
-    """The per-choice rewards of an expected-reward query's structure, if it has any."""
+def _action_rewards(model: Any, prop: Any) -> bool:
+    """Whether an expected-reward query's structure has per-choice rewards."""
     formula = prop.get_raw_formula()
     if not formula.is_reward_operator_formula or not model.reward_models:
-        return None
+        return False
     name = formula.reward_name if formula.has_reward_model_name() else None
     rm = model.reward_models[name] if name else next(iter(model.reward_models.values()))
-    return [float(x) for x in rm.state_action_rewards] if rm.has_state_action_rewards else None
+    return bool(rm.has_state_action_rewards)
 
 
 # Paths the search may enumerate, per path asked, before it gives up on finding more that
@@ -236,7 +249,7 @@ SEARCH_FACTOR = 50
 
 
 def _paths(stormpy: Any, program: Any, dtmc: Any, prop: Any, w: WitnessRequest,
-           cols: list[list[int]], commands: list[int], out: Extracted) -> None:
+           vals: Any, extract: Extract, out: Extracted) -> None:
     """The `w.k` most probable paths of the induced DTMC into the target states, by
     Storm's k-shortest-paths generator (recursive enumeration; paths stop at their first
     target state and may loop)."""
@@ -277,11 +290,23 @@ def _paths(stormpy: Any, program: Any, dtmc: Any, prop: Any, w: WitnessRequest,
         for a, b in itertools.pairwise(states):
             steps.append(sum(float(e.value) for e in tm.get_row(tm.get_row_group_start(a))
                              if int(e.column) == b))
-        found.append(RawPath(p, [tuple(col[s] for col in cols) for s in states],
-                             [commands[s] for s in states[:-1]] + [-1], steps))
+        found.append(RawPath(p, [tuple(int(x) for x in vals[s]) for s in states],
+                             [_command(dtmc, s, vals[s], extract, out.variables)
+                              for s in states[:-1]] + [-1], steps))
     if len(found) < w.k and not out.witness_note:
         out.witness_note = f"there are only {len(found)} paths into the target states"
     out.paths = found
+
+
+def _command(dtmc: Any, s: int, row: Any, extract: Extract, variables: tuple[str, ...]) -> int:
+    """The lowered command of state `s`'s choice: by its action label, and the mode."""
+    labels = dtmc.choice_labeling.get_labels_of_choice(s) if dtmc.has_choice_labeling() \
+        else set()
+    mode = int(row[variables.index("mode")]) if "mode" in variables else 0
+    for i, (label, modes) in enumerate(extract.commands):
+        if mode in modes and (label in labels if label else not labels):
+            return i
+    return -1
 
 
 def _target(stormpy: Any, program: Any, dtmc: Any, prop: Any,
