@@ -184,3 +184,61 @@ def test_uav_default_strategy_names_interval_constants_and_ends() -> None:
     assert p.witnesses is not None and p.max is not None
     probs = np.array([w.probability for w in p.witnesses])
     assert (np.diff(probs) <= 0).all() and probs.sum() <= p.max
+
+
+REWARDED = """
+machine m;
+
+const int DUR = [2, 3];
+var t : [0..12] init 0 clamp;
+
+mode A = 0 initial;
+mode Done = 1 final;
+
+action Work in A when t < 12 {
+    0.5: t += DUR, goto Done;
+    0.5: t += DUR;
+}
+action Stop in A when t >= 12 { goto Done; }
+
+label late = t > 4;
+rewards work { [Work] true : 1; }
+rewards time { [Work] true : t; }
+property late = P=? [ F mode == Done && t > 4 ];
+property works = R{"work"}=? [ F mode == Done ];
+property time = R{"time"}=? [ F mode == Done ];
+"""
+
+
+def test_the_variant_labels_keep_every_value(tmp_path: Any) -> None:
+    """With --strategy each floor/ceil command gets its own action label in the PRISM
+    text, and its action rewards are repeated for it: no value changes."""
+    path = tmp_path / "m.afsm"
+    path.write_text(REWARDED)
+    plain = run(str(path), uniform=False)
+    labelled = run(str(path), strategy=True, uniform=False)
+    for a, b in zip(plain.properties, labelled.properties, strict=True):
+        assert (a.min, a.max) == pytest.approx((b.min, b.max), rel=1e-12), a.name
+    time = labelled.property("time")
+    assert time.strategy is not None and time.min is not None and time.max is not None
+    assert time.max > time.min  # t grows by DUR: [2, 3]
+
+
+def test_a_threshold_on_one_variable_separates_the_ends() -> None:
+    from afsmc.compiler import load, lowered
+    from afsmc.verify.strategy import summarise
+    from afsmc.verify.strategy_storm import Group
+
+    low = lowered(load(PATROL).model, "nondet", None)
+    lo = next(i for i, c in enumerate(low.commands) if c.choice == (("MOVE_COST", "lo"),))
+    hi = next(i for i, c in enumerate(low.commands) if c.choice == (("MOVE_COST", "hi"),))
+    variables = ("mode", "cell", "rounds", "battery")
+    groups = [Group(lo, 0, 7, (0, 0, 0, 10), (0, 4, 2, 20)),
+              Group(hi, 0, 3, (0, 0, 1, 4), (0, 4, 2, 9)),
+              Group(hi, 0, 2, (0, 0, 0, 4), (0, 1, 0, 5), matters=False)]
+    entries = {e.end: e for e in summarise(groups, variables, low)}
+    assert entries["floor"].when == "battery >= 10" and entries["floor"].states == 7
+    assert entries["ceil"].when == "battery <= 9" and entries["ceil"].states == 3
+    assert entries["ceil"].indifferent == 2 and entries["ceil"].value == 2
+    assert entries["ceil"].text() == \
+        "MOVE_COST = 2 (ceil) in Move, mode Patrol when battery <= 9"
