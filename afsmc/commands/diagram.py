@@ -19,6 +19,7 @@ from typing import Any
 import graphviz
 
 from afsmc.backends.dot import Overlay, diagram
+from afsmc.commands import diagram_strategy
 from afsmc.check.modegraph import analyse
 from afsmc.commands.common import (
     add_consts,
@@ -60,6 +61,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--results", metavar="JSON",
                    help="overlay the results of `afsmc verify --json` (a box of property values; "
                         "per-mode numbers from its \"modes\" list, if any)")
+    diagram_strategy.add_arguments(p)
 
 
 def _error(code: str, message: str, hint: str | None = None) -> CompileError:
@@ -320,7 +322,9 @@ def run(args: argparse.Namespace) -> int:
                                                   max_states=args.max_states, progress=_say))
             modes.update(ov.modes)
             caption = ov.caption
-        data = render(diagram(model, Overlay(modes, notes, caption)), fmt)
+        drawn, more = diagram_strategy.overlay(args, model)
+        data = render(diagram(model, Overlay(modes, notes + more, caption, drawn.ends,
+                                             drawn.path)), fmt)
         write_atomic(path, data, protect=(args.file,))
         print(f"wrote {path}", file=sys.stderr)
     except CompileError as exc:

@@ -145,3 +145,15 @@ def test_uav_default_replay_contains_storm_s_min_and_max() -> None:
     for direction in ("min", "max"):
         value, low, high = _replay(UAV, f"{direction}:success_by", 20_000)
         assert low <= value <= high, (direction, value, low, high)
+
+
+def test_diagram_draws_the_strategy_s_ends_and_the_path(tmp_path: Path) -> None:
+    out = tmp_path / "p.svg"
+    r = run_cli("diagram", PATROL, "--strategy", "min:finish", "--witness", "finish",
+                "-o", str(out))
+    assert r.code == 0, r.err
+    svg = out.read_text()
+    assert "[ceil]" in svg or "[floor+ceil]" in svg  # Move, where the end matters
+    assert "step 1" in svg and "most probable path of finish" in svg
+    r = run_cli("diagram", PATROL, "--strategy", "mid:finish", "-o", str(out))
+    assert r.code == 1 and "E415" in r.err
