@@ -19,8 +19,8 @@ from typing import Any
 import graphviz
 
 from afsmc.backends.dot import Overlay, diagram
-from afsmc.commands import diagram_strategy
 from afsmc.check.modegraph import analyse
+from afsmc.commands import diagram_strategy
 from afsmc.commands.common import (
     add_consts,
     add_file,

@@ -41,7 +41,10 @@ def overlay(args: argparse.Namespace, model: ir.Model) -> tuple[Overlay, list[st
                 ends[e.action] = e.end if ends.get(e.action, e.end) == e.end else "floor+ceil"
         notes.append(f"{direction} strategy of {name}: {num(getattr(p, direction))}")
     if args.witness:
-        direction, name = parse(args.witness) if ":" in args.witness else (None, args.witness)
+        direction: str | None = None
+        name = args.witness
+        if ":" in args.witness:
+            direction, name = parse(args.witness)
         res = lib.run(args.file, consts=overrides(args), properties=[name],
                       witness=(name, 1), uniform=False,
                       witness_dir=direction if model.is_nondeterministic else None)
