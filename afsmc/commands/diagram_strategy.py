@@ -41,13 +41,13 @@ def overlay(args: argparse.Namespace, model: ir.Model) -> tuple[Overlay, list[st
                 ends[e.action] = e.end if ends.get(e.action, e.end) == e.end else "floor+ceil"
         notes.append(f"{direction} strategy of {name}: {num(getattr(p, direction))}")
     if args.witness:
-        direction: str | None = None
+        way: str | None = None
         name = args.witness
         if ":" in args.witness:
-            direction, name = parse(args.witness)
+            way, name = parse(args.witness)
         res = lib.run(args.file, consts=overrides(args), properties=[name],
                       witness=(name, 1), uniform=False,
-                      witness_dir=direction if model.is_nondeterministic else None)
+                      witness_dir=way if model.is_nondeterministic else None)
         p = res.property(name)
         if not p.witnesses:
             raise refuse(f"--witness {args.witness}: no path into the target of {name}"
