@@ -40,9 +40,13 @@ def witness(args: argparse.Namespace) -> tuple[str | None, int] | None:
 def render(res: VerifyResult) -> str:
     """The strategies' table and the witness paths, after verify's own table ("" if none)."""
     lines: list[str] = []
+    asked = any(p.strategy is not None for p in res.properties)
     for p in res.properties:
         if p.strategy is not None:
             lines += ["", *strategy_lines(p)]
+        elif asked:
+            lines += ["", f"strategies of {p.name} ({p.formula}): none, as it is step-bounded "
+                      "(its strategies count the steps; Storm gives no scheduler for them)"]
         if p.witnesses is not None:
             lines += ["", *witness_lines(p)]
     return "\n".join(lines)

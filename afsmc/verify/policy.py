@@ -20,7 +20,7 @@ from afsmc.model.semantics import bounded_globally
 from afsmc.verify.guard import Progress, default_max_states, run_job, upper_bound
 from afsmc.verify.jobs import make_job
 from afsmc.verify.queries import dual
-from afsmc.verify.strategy import DIRECTIONS, extract_for, refuse
+from afsmc.verify.strategy import DIRECTIONS, extract_for, refuse, stepped
 
 
 @dataclass(frozen=True)
@@ -64,6 +64,10 @@ def extract(model: ir.Model, text: str, *, max_states: int | None = None,
     if prop.opt and prop.opt != direction:
         raise refuse(f"--strategy {text}: property '{name}' asks for P{prop.opt} only",
                      hint=f"use {prop.opt}:{name}")
+    if stepped(prop):
+        raise refuse(f"--strategy {text}: property '{name}' is step-bounded: its strategies "
+                     "count the steps, and Storm gives no scheduler for them",
+                     hint="choose a property without a step bound")
     asked, opt = prop, direction
     if bounded_globally(prop):  # asked as 1 - its dual, whose min is the property's max
         asked, opt = dual(prop), {"min": "max", "max": "min"}[direction]

@@ -72,7 +72,7 @@ from afsmc.verify.storm import (
     StormFailure,
     Via,
 )
-from afsmc.verify.strategy import attach, request
+from afsmc.verify.strategy import attach, request, stepped
 from afsmc.verify.strategy_storm import Extracted, WitnessRequest
 
 # Above this many state-steps (states x step bound), a check runs in a child process.
@@ -402,7 +402,8 @@ class ModelLoop:
                        o.memory_budget, only=tuple(mine),
                        hybrid_skip=tuple(n for n in mine if n not in first), hybrid_extra=extra)
         job = dataclasses.replace(job, solver=o.solver, all_states=o.all_states)
-        ex = request(self.low, o.strategy, o.witness, mine, self.run.asked_as)
+        ex = request(self.low, o.strategy, o.witness, mine, self.run.asked_as,
+                     skip={n for p, n in unit if stepped(p)})
         if self.resolution == "nondet" and o.via == "prism" and ex is not None:
             job = dataclasses.replace(job, extract=ex, model_text=prism_emit(self.low, True).model)
         if self.job_engine == "auto":

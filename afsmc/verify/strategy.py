@@ -10,7 +10,7 @@ the interval constants it fixes (`Command.choice`).
 from __future__ import annotations
 
 import dataclasses
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence, Set
 from dataclasses import dataclass
 
 from afsmc.backends.prism import property_variants, variant_label
@@ -119,17 +119,24 @@ def _separate(by_end: dict[str, _Range], columns: list[int],
     return {}
 
 
+def stepped(p: ir.Property) -> bool:
+    """A step-bounded property: its optimal strategy counts the steps (it needs memory),
+    and Storm extracts no scheduler for it."""
+    return getattr(p.path, "bound", None) is not None
+
+
 def request(low: Lowered, strategy: bool, witness: WitnessRequest | None,
-            queries: Sequence[str], asked_as: Mapping[str, str]) -> Extract | None:
+            queries: Sequence[str], asked_as: Mapping[str, str],
+            skip: Set[str] = frozenset()) -> Extract | None:
     """What the Storm job of `queries` (as asked: a bounded G's dual) on the lowered MDP,
     or only DTMC, extracts: every query's scheduler, and the witness paths of the one
-    the witness follows."""
+    the witness follows. `skip`: queries without a scheduler (step-bounded ones)."""
     mine = tuple(queries)
     w = None
     if witness is not None:
         asked = asked_as.get(witness.query, witness.query)
         w = dataclasses.replace(witness, query=asked) if asked in mine else None
-    kept = mine if strategy and low.kind == "mdp" else ()
+    kept = tuple(q for q in mine if q not in skip) if strategy and low.kind == "mdp" else ()
     if not kept and w is None:
         return None
     return extract_for(low, kept, None, w)
@@ -223,6 +230,10 @@ def witness_request(model: ir.Model, props: Sequence[ir.Property], strategy: boo
             raise refuse(f"--witness-dir {direction}: {model.source.path} has no interval "
                          "constants: its model is a DTMC, whose paths follow no strategy")
         return WitnessRequest(name, k, target)
+    if stepped(prop):
+        raise refuse(f"--witness: property '{name}' ({prop.text}) is step-bounded: its min "
+                     "and max strategies count the steps, and Storm gives no scheduler for "
+                     "them", hint="choose a property without a step bound")
     if direction is not None and direction not in DIRECTIONS:
         raise refuse(f"--witness-dir {direction!r}: expected min or max")
     if prop.opt:
@@ -241,7 +252,7 @@ def extras(checks: Checks, check: Callable[..., Checks], model: ir.Model,
     (chosen, or picked by "auto") gave none: check the MDP again with the sparse engine
     if it fits (E416 if not), and put what it extracts into `checks`."""
     missing = [p for p, r in zip(props, checks.properties, strict=True)
-               if (strategy and r.strategy is None)
+               if (strategy and r.strategy is None and not stepped(p))
                or (witness is not None and r.witnesses is None and _owns(p, witness))]
     if not missing:
         return

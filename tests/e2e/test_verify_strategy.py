@@ -157,3 +157,23 @@ def test_diagram_draws_the_strategy_s_ends_and_the_path(tmp_path: Path) -> None:
     assert "step 1" in svg and "most probable path of finish" in svg
     r = run_cli("diagram", PATROL, "--strategy", "mid:finish", "-o", str(out))
     assert r.code == 1 and "E415" in r.err
+
+
+def test_step_bounded_properties(tmp_path: Path) -> None:
+    """A DTMC's bounded paths stop at the bound; an MDP's step-bounded property has no
+    (memoryless) scheduler: no strategy row, and a witness or replay of it is E415."""
+    geo = tmp_path / "geo.afsm"
+    geo.write_text(GEO.replace('F "done"', 'F<=2 "done"'))
+    r = run_cli("verify", str(geo), "--witness", "5", "--json")
+    assert r.code == 0, r.err
+    p = json.loads(r.out)["properties"][0]
+    assert [w["probability"] for w in p["witnesses"]] == pytest.approx([0.3, 0.21])
+    assert sum(w["probability"] for w in p["witnesses"]) == pytest.approx(p["value"])
+    r = run_cli("verify", PATROL, "-p", "finish_soon", "-p", "finish", "--strategy", "--json")
+    assert r.code == 0, r.err
+    soon, finish = json.loads(r.out)["properties"]
+    assert "strategy" not in soon and finish["strategy"]["max"]
+    for argv in (["verify", PATROL, "-p", "finish_soon", "--witness", "2"],
+                 ["simulate", PATROL, "--strategy", "max:finish_soon", "--runs", "10"]):
+        r = run_cli(*argv)
+        assert r.code == 1 and "error[E415]" in r.err and "step-bounded" in r.err, r.err
