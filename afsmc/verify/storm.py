@@ -314,7 +314,7 @@ def _sparse(stormpy: Any, program: Any, props: list[Any], job: Job) -> Any:
     """The sparse model; with state valuations and choice origins if the job extracts."""
     if job.extract is not None:
         return stormpy.build_model(program, options=builder_options(
-            stormpy, _for_builder(props, job)))
+            stormpy, _for_builder(props, job), program, job.extract))
     return stormpy.build_model(program, _for_builder(props, job))
 
 

@@ -84,9 +84,14 @@ class Extracted:
     seconds: float = 0.0
 
 
-def builder_options(stormpy: Any, props: list[Any]) -> Any:
-    """Storm's builder options for `props` with state valuations and choice origins."""
-    opts = stormpy.BuilderOptions([p.get_raw_formula() for p in props])
+def builder_options(stormpy: Any, props: list[Any], program: Any, extract: Extract) -> Any:
+    """Storm's builder options for `props` (and a witness's own target) with state
+    valuations and choice labels."""
+    formulas = [p.get_raw_formula() for p in props]
+    if extract.witness is not None and extract.witness.target is not None:
+        formulas += [p.get_raw_formula() for p in stormpy.parse_properties(
+            f"P=? [ F ({extract.witness.target}) ]", program)]
+    opts = stormpy.BuilderOptions(formulas)
     opts.set_build_state_valuations()
     opts.set_build_choice_labels()
     opts.set_build_all_labels()

@@ -242,3 +242,22 @@ def test_a_threshold_on_one_variable_separates_the_ends() -> None:
     assert entries["ceil"].indifferent == 2 and entries["ceil"].value == 2
     assert entries["ceil"].text() == \
         "MOVE_COST = 2 (ceil) in Move, mode Patrol when battery <= 9"
+
+
+def test_a_witness_goes_into_other_target_states_following_a_named_strategy() -> None:
+    """The hook for a failed requirement: the paths go into given states (a PRISM state
+    formula, e.g. the violating ones) following the strategy named, not the property's."""
+    from afsmc.compiler import load
+    from afsmc.verify import check
+    from afsmc.verify.strategy import witness_request
+
+    model = load(PATROL).model
+    props = [p for p in model.properties if p.name == "finish"]
+    for target in ("mode=3", '"halted"'):
+        w = witness_request(model, props, False, ("finish", 3), "min", target)
+        assert w is not None and w.query == "finish_min" and w.target == target
+        p = check(model, props, witness=w, uniform=False).properties[0]
+        assert p.witnesses is not None and p.witness_of == "min"
+        assert [x.end_mode for x in p.witnesses] == ["Halted"] * 3
+        assert p.witnesses[0].steps[-1].hazard == "Fault"
+        assert all(x.confirmed for x in p.witnesses)
