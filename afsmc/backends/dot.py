@@ -42,6 +42,8 @@ PREEMPT = "#b9770e"  # preemptive hazards
 DEAD = "#a0a0a0"  # what the mode graph says never happens
 COLORS = {"action": INK, "preemptive": PREEMPT, "hazard": HAZARD}
 GROUP_FILL = {"action": "#f4f6f8", "preemptive": "#fcf3e3", "hazard": "#fbeae8"}
+ENDS = {"floor": "#1f6fb2", "ceil": "#c0392b", "floor+ceil": "#7d3c98"}  # --strategy
+PATH = "#1e8449"  # --witness
 
 
 @dataclass(frozen=True)
@@ -51,6 +53,12 @@ class Overlay:
     modes: Mapping[int, str] = field(default_factory=dict)
     notes: Sequence[str] = ()
     caption: str = ""
+    # a strategy (`diagram --strategy`): action -> the end its interval constants take
+    # where it matters ("floor", "ceil" or "floor+ceil"), drawn in the edge's colour
+    ends: Mapping[str, str] = field(default_factory=dict)
+    # a path (`diagram --witness`): its steps as (source mode, target mode, action or
+    # hazard), drawn bold with their step numbers
+    path: Sequence[tuple[int, int, str]] = ()
 
 
 @dataclass(frozen=True)
@@ -117,7 +125,7 @@ def diagram(model: ir.Model, overlay: Overlay | None = None) -> graphviz.Digraph
     arcs = _arcs(mg)
     groups, group_edges, grouped = _groups(arcs)
     _group_nodes(g, model, groups)
-    _edges(g, model, arcs, group_edges, grouped, unreachable)
+    _edges(g, model, arcs, group_edges, grouped, unreachable, overlay)
     if overlay.notes:
         g.node("results", "".join(line + "\\l" for line in overlay.notes), shape="note",
                style="filled", fillcolor="#fffdf0", color="#b7a96b", fontsize="10",
@@ -215,7 +223,7 @@ def _node_key(nid: str) -> tuple[int, str]:
 
 
 def _edges(g: graphviz.Digraph, model: ir.Model, arcs: list[_Arc], group_edges: _GroupEdges,
-           grouped: _Grouped, unreachable: set[int]) -> None:
+           grouped: _Grouped, unreachable: set[int], overlay: Overlay) -> None:
     """One edge per (source node, target node, live), labelled with every arc it carries."""
     plain: dict[tuple[str, str, bool], list[_Arc]] = {}
     for arc in arcs:
@@ -240,7 +248,25 @@ def _edges(g: graphviz.Digraph, model: ir.Model, arcs: list[_Arc], group_edges: 
             attrs.update(color=DEAD, fontcolor="#808080")
         elif kind != "action":
             attrs.update(color=COLORS[kind], fontcolor=COLORS[kind])
+        _overlaid(attrs, items, overlay)
         g.edge(src, dst, **attrs)
+
+
+def _overlaid(attrs: dict[str, str], items: list[_Arc], overlay: Overlay) -> None:
+    """A strategy's ends (colour, and the end in the label) and a path's steps (bold, with
+    their numbers) on one edge."""
+    ends = sorted({overlay.ends[a.via] for a in items if a.via in overlay.ends})
+    if ends:
+        end = ends[0] if len(ends) == 1 else "floor+ceil"
+        attrs.update(color=ENDS[end], fontcolor=ENDS[end], penwidth="2.0",
+                     label=attrs["label"] + f"\\n[{end}]")
+    steps = [str(i) for i, (a, b, via) in enumerate(overlay.path, 1)
+             if any((x.source, x.target, x.via) == (a, b, via) for x in items)]
+    if steps:
+        shown = ", ".join(steps) if len(steps) <= 4 else (
+            f"{steps[0]}, {steps[1]} … {steps[-1]} ({len(steps)} times)")
+        attrs.update(color=PATH, fontcolor=PATH, penwidth="3.0",
+                     label=attrs["label"] + "\\nstep " + shown)
 
 
 def _tooltip(arc: _Arc, model: ir.Model) -> str:

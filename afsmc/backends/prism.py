@@ -88,8 +88,19 @@ def where(span: object) -> str:
     return f"{os.path.basename(span.source.path)}:{span.line}"
 
 
-def emit(low: Lowered) -> PrismOutput:
+def variant_label(low: Lowered, index: int) -> str:
+    """The action label of command `index` when each floor/ceil variant is labelled apart
+    (`emit(..., variant_labels=True)`): Storm's choice labels then name the variant."""
+    return f"{low.commands[index].action}__c{index}"
+
+
+def emit(low: Lowered, variant_labels: bool = False) -> PrismOutput:
+    """The PRISM model. `variant_labels`: each command that resolves an interval constant
+    gets its own action label (`variant_label`), and the action rewards of its action are
+    repeated for each such label, so that the values stay the same."""
     model = low.model
+    labels = {i: variant_label(low, i) if variant_labels and c.choice else
+              "" if c.silent else c.action for i, c in enumerate(low.commands)}
     wnames = weight_formula_names(low)
     p = PrismPrinter(wnames, low)
     out: list[str] = []
@@ -149,7 +160,7 @@ def emit(low: Lowered) -> PrismOutput:
         else:
             w(f"  {v.name} : [{pnum(v.lo)}..{pnum(v.hi)}] init {pnum(v.init)};{note}")
     last = None
-    for cmd in low.commands:
+    for ci, cmd in enumerate(low.commands):
         if cmd.span != last:
             w("")
             modes_txt = ", ".join(f"{model.mode_by_number(n).name}" for n in cmd.modes)
@@ -157,8 +168,7 @@ def emit(low: Lowered) -> PrismOutput:
             last = cmd.span
         if cmd.choice:
             w("  // " + ", ".join(f"{c}={end}" for c, end in cmd.choice))
-        label = "" if cmd.silent else cmd.action
-        w(f"  [{label}] {p(cmd.guard)} ->")
+        w(f"  [{labels[ci]}] {p(cmd.guard)} ->")
         branches = []
         for b in cmd.branches:
             ups = " & ".join(f"({var}'={p(val)})" for var, val in b.updates) or "true"
@@ -174,8 +184,11 @@ def emit(low: Lowered) -> PrismOutput:
         w("")
         w(f'rewards "{r.name}" // {where(r.span)}')
         for it in r.items:
-            act = f"[{it.action}] " if it.action else ""
-            w(f"  {act}{p(it.guard)} : {p(it.value)};")
+            acts = sorted({lb for i, lb in labels.items() if low.commands[i].action == it.action
+                           and not low.commands[i].silent}) if it.action else [""]
+            for a in acts or [it.action or ""]:
+                act = f"[{a}] " if a else ""
+                w(f"  {act}{p(it.guard)} : {p(it.value)};")
         if not r.items:
             w("  true : 0; // an empty structure: Storm's PRISM parser needs an item")
         w("endrewards")

@@ -23,6 +23,7 @@ from afsmc.api.diagram import (  # noqa: F401  (mode_reachability, _reach_error:
     render,
 )
 from afsmc.backends.dot import Overlay, diagram
+from afsmc.commands import diagram_strategy
 from afsmc.commands.common import (
     add_consts,
     add_file,
@@ -56,6 +57,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--results", metavar="JSON",
                    help="overlay the results of `afsmc verify --json` (a box of property values; "
                         "per-mode numbers from its \"modes\" list, if any)")
+    diagram_strategy.add_arguments(p)
 
 
 def _error(code: str, message: str, hint: str | None = None) -> CompileError:
@@ -239,7 +241,9 @@ def run(args: argparse.Namespace) -> int:
                                                   max_states=args.max_states, progress=_say))
             modes.update(ov.modes)
             caption = ov.caption
-        data = render(diagram(model, Overlay(modes, notes, caption)), fmt)
+        drawn, more = diagram_strategy.overlay(args, model)
+        data = render(diagram(model, Overlay(modes, notes + more, caption, drawn.ends,
+                                             drawn.path)), fmt)
         write_atomic(path, data, protect=(args.file,))
         print(f"wrote {path}", file=sys.stderr)
     except CompileError as exc:

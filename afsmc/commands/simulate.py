@@ -20,6 +20,7 @@ from afsmc.commands.common import (
     print_json,
     report,
 )
+from afsmc.commands.simulate_strategy import follow, followed_json, followed_text
 from afsmc.diagnostics import CompileError, Diagnostic, Severity, codes
 from afsmc.files import check_writable, read_source, write_atomic
 from afsmc.interrupt import Stopped
@@ -37,6 +38,7 @@ from afsmc.sim.run import (
     simulate,
 )
 from afsmc.text import literal, num
+from afsmc.verify.policy import Policy
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
@@ -68,6 +70,10 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    help="print K sample runs in mission terms (modes, actions, variables)")
     p.add_argument("--traces-out", metavar="PATH", help="save the traces as JSON to PATH")
     p.add_argument("--json", action="store_true", help="print the estimates as JSON")
+    p.add_argument("--strategy", metavar="min:NAME|max:NAME",
+                   help="resolve the interval constants as Storm's min or max strategy of "
+                        "property NAME does, state by state (extracted by Storm first; "
+                        "instead of --resolve)")
 
 
 def run(args: argparse.Namespace) -> int:
@@ -111,6 +117,7 @@ def run(args: argparse.Namespace) -> int:
             check_writable(args.traces_out, protect=(args.file,))
         text = read_source(args.file)
         job = job_for(args.file, text, overrides(args), args.resolve, args.max_steps, args.at)
+        job, strategy = follow(job, args)  # --strategy: the runs follow Storm's scheduler
         # Without properties there is nothing to estimate; sample runs (--traces) are
         # the one use of such a file, as verify has none (E407 there too).
         if not args.traces and not program(job).monitors:
@@ -128,7 +135,6 @@ def run(args: argparse.Namespace) -> int:
 
         prog = program(job)
         model = prog.model
-        intervals = model.is_nondeterministic
         # the check's warnings, as verify shows them: W602 (a mode the mission cannot end
         # from) is why runs stay undecided whatever --max-steps
         warnings = [d for d in prog.diagnostics if d.severity is Severity.WARNING]
@@ -164,12 +170,21 @@ def run(args: argparse.Namespace) -> int:
                                              hint=f"is a Dask scheduler running at {args.dask}?"
                                              if args.dask else None)]),
                     args.json, wrapped=True)
-    if args.json:
-        print_json(_json(out, args, model.name,
-                         {c.name: c.value for c in model.constants if c.is_param}, warnings))
-    else:
-        _print(out, args, intervals, endless=any(d.code == codes.W602 for d in warnings))
+    _finish(out, args, model, warnings, strategy)
     return 0
+
+
+def _finish(out: Outcome, args: argparse.Namespace, model: Any, warnings: list[Diagnostic],
+            strategy: Policy | None) -> None:
+    """Print the estimates (and the strategy the runs followed, if any)."""
+    if args.json:
+        print_json(followed_json(strategy) | _json(
+            out, args, model.name, {c.name: c.value for c in model.constants if c.is_param},
+            warnings))
+    else:
+        _print(out, args, model.is_nondeterministic,
+               endless=any(d.code == codes.W602 for d in warnings))
+        followed_text(strategy)
 
 
 class _Partial:
@@ -237,6 +252,8 @@ def _print(out: Outcome, args: argparse.Namespace, intervals: bool, endless: boo
     how = {"lo": "at their floor", "hi": "at their ceiling"}.get(LOWERING[args.resolve],
                                                                   args.resolve)
     resolved = f"interval constants {how}" if intervals else "no interval constants"
+    if args.strategy:
+        resolved = f"interval constants by the {args.strategy} strategy"
     print(f"{name}: {out.runs} runs, {resolved}, seed {args.seed}, "
           f"{args.confidence:g} confidence")
     width = max([len(e.name) for e in out.estimates] + [8])

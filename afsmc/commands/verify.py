@@ -8,6 +8,7 @@ import sys
 from collections.abc import Callable
 
 from afsmc import verify as lib
+from afsmc.commands import verify_extras as extras
 from afsmc.commands.common import (
     add_consts,
     add_file,
@@ -101,6 +102,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--json", action="store_true",
                    help="print one JSON object: model, properties, timings")
     add_requirement_options(p)
+    extras.add_arguments(p)
 
 
 def table(rows: list[list[str]], right: set[int]) -> list[str]:
@@ -169,13 +171,21 @@ def refuse_bisim_on_symbolic(args: argparse.Namespace) -> None:
 def run(args: argparse.Namespace) -> int:
     refuse_bisim_on_symbolic(args)
     refuse_requirement_options(args)
+    if (args.strategy or args.witness is not None) and args.bisim:
+        usage_error("--strategy and --witness need the built model's states: not with --bisim")
+    if args.traces_out and args.witness is None:
+        usage_error("--traces-out writes the --witness paths: give --witness K as well")
     try:
         res = lib.run(args.file, consts=overrides(args), properties=args.property,
                   formulas=args.formula, via=args.via, engine=args.engine,
                   max_states=args.max_states, uniform=args.uniform,
                   progress=progress_printer(args), reductions=reductions(args),
                   bisimulation=args.bisim, split=args.split, solver=args.solver,
-                  precision=args.precision, exact=args.exact)
+                  precision=args.precision, exact=args.exact,
+                  strategy=args.strategy, witness=extras.witness(args),
+                  witness_dir=args.witness_dir)
+        if args.traces_out:
+            extras.write_traces(args.traces_out, res, args.file)
         box, bounds = parametric.for_file(  # interval probabilities: min/max over them
             args.file, overrides(args), args.property, args.formula, via=args.via,
             reductions=reductions(args))
@@ -190,7 +200,8 @@ def run(args: argparse.Namespace) -> int:
         print(json.dumps(out, indent=2))
     else:
         report(res.warnings)
-        print(render(res))
+        more = extras.render(res)
+        print(render(res) + ("\n" + more if more else ""))
         if bounds:
             print("\n" + parametric.render(box, bounds))
     return 1 if failing(res.properties) else 0

@@ -186,6 +186,8 @@ E440 = Code("E440", Severity.ERROR, "a parameter region makes the model ill-defi
 E441 = Code("E441", Severity.ERROR, "--param names no probability or param constant")
 E442 = Code("E442", Severity.ERROR, "--require is not a bounded P or R property")
 E443 = Code("E443", Severity.ERROR, "a property the parametric engine cannot check")
+E415 = Code("E415", Severity.ERROR, "no strategy or failure path for this request")
+E416 = Code("E416", Severity.ERROR, "a strategy needs the sparse engine, and the model does not fit")
 
 
 # E5xx: simulation and simulation-backed constants

@@ -22,6 +22,7 @@ from afsmc.model import ir
 from afsmc.model.bounds import bounds
 from afsmc.model.evaluate import scalar
 from afsmc.sim.compile import Fn, Frame, Scope, SimError, compile_expr, fold, reads, static
+from afsmc.sim.policy import Lookup
 
 UNDECIDED, TRUE, FALSE = 0, 1, 2
 
@@ -77,6 +78,8 @@ class Program:
     commands: list[Any]  # Lowered.commands
     # the check's warnings and notes on the model (sim.run.program sets them), for the CLI
     diagnostics: list[Diagnostic] = field(default_factory=list)
+    # a strategy's command per state (simulate --strategy), else the first enabled command
+    policy: Lookup | None = None
 
 
 def build(low: Lowered) -> Program:
@@ -446,6 +449,10 @@ class _Batch:
                     which[:] = ci
             else:
                 which[g] = ci
+        if self.prog.policy is not None:
+            chosen = self.prog.policy.command(self.state, m, idx, size)
+            for ci, c in enumerate(cmds):
+                which[chosen == c.index] = ci
         stuck = which < 0
         if stuck.any():  # no enabled action: the run stays put (absorbed)
             where_stuck = np.flatnonzero(stuck) if idx is None else idx[stuck]

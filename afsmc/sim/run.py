@@ -27,6 +27,7 @@ from afsmc.model import ir
 from afsmc.sim import stats
 from afsmc.sim.compile import SimError
 from afsmc.sim.engine import BatchResult, Program, build, merge_moments, simulate_batch
+from afsmc.sim.policy import Lookup, Table
 
 Strategy = Literal["uniform", "floor", "ceil", "lo", "hi"]
 STRATEGIES: tuple[Strategy, ...] = ("uniform", "floor", "ceil", "lo", "hi")
@@ -51,6 +52,7 @@ class Job:
     strategy: str
     max_steps: int
     at: str = "mid"  # interval probabilities: their midpoint, lower ("min") or upper ("max") end
+    policy: Table | None = None  # a scheduler to follow (strategy is then ignored)
 
 
 def fix_prob_intervals(model: ir.Model, at: str) -> ir.Model:
@@ -93,8 +95,12 @@ def program(job: Job) -> Program:
     prog = _PROGRAMS.get(job)
     if prog is None:
         checked = load(job.path, dict(job.overrides), text=job.text)
-        prog = build(lower(fix_prob_intervals(checked.model, job.at),
-                           LOWERING[job.strategy]))  # type: ignore[arg-type]
+        model = fix_prob_intervals(checked.model, job.at)
+        if job.policy is not None:
+            prog = build(lower(model, "nondet"))
+            prog.policy = Lookup(job.policy, model)
+        else:
+            prog = build(lower(model, LOWERING[job.strategy]))  # type: ignore[arg-type]
         prog.diagnostics = checked.diagnostics
         _PROGRAMS.clear()
         _PROGRAMS[job] = prog

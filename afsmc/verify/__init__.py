@@ -23,6 +23,13 @@ bisimulation=False, split=False, memory_budget=None, solver="auto") -> VerifyRes
     `max_states` (default: derived from free memory) stops larger models with E405;
     `isolate` forces (True) or forbids (False) the watched child process (default: only
     when the upper bound exceeds 200,000 states). `progress(text)` receives progress lines.
+    ``strategy=True``: each MDP property's ``.strategy`` is ``{"min": [...], "max": [...]}``
+    of :class:`afsmc.verify.strategy.StrategyEntry` (constant, end, value, action, mode,
+    states, when); ``witness=(name, K)`` (name None: the only property) with
+    ``witness_dir="min"|"max"`` (default max) sets that property's ``.witnesses``, the K
+    most probable paths into its target (:class:`afsmc.verify.witness.Witness`: probability,
+    steps of mode, action, probability, changes). Both from Storm's sparse engine; E415 for
+    a request without an answer (docs/verification.md, "Strategies and failure paths").
 
     ``precision=EPS`` checks with Storm's sound value iteration (every value within EPS of
     the true one); ``exact=True`` builds over rationals and solves exactly (sparse engine).

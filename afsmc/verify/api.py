@@ -29,6 +29,8 @@ from afsmc.verify.precision import DEFAULT_PRECISION, check_options, rational_te
 from afsmc.verify.results import Checks, VerifyResult
 from afsmc.verify.runner import CheckRun, ModelLoop, Options
 from afsmc.verify.storm import Engine, Job, Solver, StormFailure, Via
+from afsmc.verify.strategy import extras, witness_request
+from afsmc.verify.strategy_storm import WitnessRequest
 from afsmc.verify.verdicts import judge_all
 
 
@@ -147,7 +149,8 @@ def check(model: ir.Model, props: Sequence[ir.Property], *, via: Via = "prism",
           split: bool = False, memory_budget: int | None = None,
           preserve: Sequence[ir.Property] = (), all_states: bool = False,
           solver: Solver = "auto", precision: float | None = None,
-          exact: bool = False) -> Checks:
+          exact: bool = False, strategy: bool = False,
+          witness: WitnessRequest | None = None) -> Checks:
     """Check `props` (uniquely named) on a loaded model; raises CompileError on failure.
 
     `preserve`: further properties that the reductions keep exact but that are not checked
@@ -177,7 +180,8 @@ def check(model: ir.Model, props: Sequence[ir.Property], *, via: Via = "prism",
                         reductions, Options(via, max_states, isolate, bisimulation, split,
                                             memory_budget, solver, all_states,
                                             None if precision is None
-                                            else rational_text(precision), exact))
+                                            else rational_text(precision), exact, strategy,
+                                            witness))
     for resolution, low, what in checking.lows:
         ModelLoop(checking, resolution, low, what).check_all()
     checks = checking.finish()
@@ -222,7 +226,9 @@ def run(path: str, *, consts: Mapping[str, str | bool | int | float] | None = No
         reductions: Reductions | None = None, bisimulation: bool = False,
         split: bool = False, memory_budget: int | None = None,
         solver: Solver = "auto", precision: float | None = None,
-        exact: bool = False) -> VerifyResult:
+        exact: bool = False, strategy: bool = False,
+        witness: tuple[str | None, int] | None = None, witness_dir: str | None = None,
+        witness_target: str | None = None) -> VerifyResult:
     """Verify one .afsm file; see the package docstring. Raises CompileError, or
     ValueError for an unknown `via`, `engine` or `solver`."""
     check_choice("via", via, Via)
@@ -233,6 +239,7 @@ def run(path: str, *, consts: Mapping[str, str | bool | int | float] | None = No
     loaded = load_with_formulas(path, texts, formulas, text=text)
     model = loaded.model
     props = select(model, properties, loaded.adhoc)
+    wanted = witness_request(model, props, strategy, witness, witness_dir, witness_target)
     load_time = time.perf_counter() - t0
     limit = default_max_states() if max_states is None else max_states
     bound = upper_bound(model)
@@ -244,7 +251,11 @@ def run(path: str, *, consts: Mapping[str, str | bool | int | float] | None = No
         checks = check(model, props, via=via, engine=engine, max_states=max_states,
                        uniform=uniform, isolate=isolate, progress=progress, reductions=reductions,
                        bisimulation=bisimulation, split=split, memory_budget=memory_budget,
-                       solver=solver, precision=precision, exact=exact)
+                       solver=solver, precision=precision, exact=exact, strategy=strategy,
+                       witness=wanted)
+        if strategy or wanted is not None:
+            extras(checks, check, model, props, strategy, wanted, max_states=max_states,
+                   progress=progress, reductions=reductions, via=via)
     except CompileError as exc:
         raise loaded.remap_error(exc) from None
     consts_used: dict[str, object] = {c.name: c.value for c in model.constants if c.is_param}

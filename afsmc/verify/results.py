@@ -10,6 +10,7 @@ from __future__ import annotations
 import dataclasses
 from collections.abc import Sequence
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 from afsmc.backends.prism import formula_text
 from afsmc.diagnostics import Diagnostic
@@ -17,6 +18,10 @@ from afsmc.model import ir
 from afsmc.model.pretty import show
 from afsmc.verify.storm import JobResult, finite
 from afsmc.verify.verdicts import Verdict, requirement_json
+
+if TYPE_CHECKING:
+    from afsmc.verify.strategy import StrategyEntry
+    from afsmc.verify.witness import Witness
 
 
 @dataclass
@@ -74,6 +79,13 @@ class PropertyResult:
     # Each value is within this of the true one (sound mode; 0: exact); None: no guarantee.
     error: float | None = None
     exact: dict[str, str] = field(default_factory=dict)  # --exact: the values as `num/den`
+    # --strategy: the min and max schedulers in mission terms (afsmc.verify.strategy)
+    strategy: dict[str, list[StrategyEntry]] | None = None
+    # --witness: the most probable paths into the target ("min"/"max": following that
+    # scheduler; "value": a DTMC's), and why fewer than asked, if so
+    witnesses: list[Witness] | None = None
+    witness_of: str = ""
+    witness_note: str = ""
 
     def to_json(self) -> dict[str, object]:
         out: dict[str, object] = {"name": self.name, "formula": self.formula}
@@ -87,6 +99,13 @@ class PropertyResult:
             out["infinite"] = infinite  # JSON has no infinity: these are null above
         out["seconds"] = {k: round(v, 3) for k, v in self.seconds.items()}
         out.update(requirement_json(self.threshold, self.verdict, self.error, self.exact))
+        if self.strategy is not None:
+            out["strategy"] = {k: [e.to_json() for e in v] for k, v in self.strategy.items()}
+        if self.witnesses is not None:
+            out["witnesses"] = [w.to_json() for w in self.witnesses]
+            out["witness_strategy"] = self.witness_of
+            if self.witness_note:
+                out["witness_note"] = self.witness_note
         return out
 
 

@@ -14,6 +14,7 @@ import functools
 import time
 from dataclasses import dataclass
 
+from afsmc.backends.prism import emit as prism_emit
 from afsmc.backends.prism import property_variants
 from afsmc.compiler import lowered
 from afsmc.diagnostics import CompileError, Diagnostic, Severity, codes
@@ -72,6 +73,8 @@ from afsmc.verify.storm import (
     StormFailure,
     Via,
 )
+from afsmc.verify.strategy import attach, request, stepped
+from afsmc.verify.strategy_storm import Extracted, WitnessRequest
 
 # Above this many state-steps (states x step bound), a check runs in a child process.
 IN_PROCESS_WORK = 500_000_000
@@ -98,6 +101,8 @@ class Options:
     all_states: bool
     precision: str | None = None  # sound mode within this (Job.precision)
     exact: bool = False
+    strategy: bool = False  # extract each property's min and max scheduler
+    witness: WitnessRequest | None = None  # and a query's most probable paths
 
 
 def _put(r: PropertyResult, key: str, value: float) -> None:
@@ -158,6 +163,7 @@ class CheckRun:
         self.errors: list[Diagnostic] = []
         # --exact: each model's (by resolution) values as `num/den`, by query
         self.exact: dict[str, dict[str, str]] = {}
+        self.extracted: list[Extracted] = []  # schedulers and paths (Options.strategy)
 
     def kept(self, what: str, vals: dict[str, float]) -> list[Diagnostic]:
         """The note of what the finished models and this one have answered."""
@@ -188,6 +194,8 @@ class CheckRun:
                 if secs is not None:
                     r.seconds[key] = secs
             out.append(r)
+        if self.extracted:
+            attach(out, self.original, first, self.extracted, self.asked_as)
         return out
 
     def partial(self, more: dict[str, float] | None = None,
@@ -403,6 +411,10 @@ class ModelLoop:
                        hybrid_skip=tuple(n for n in mine if n not in first), hybrid_extra=extra)
         job = dataclasses.replace(job, solver=o.solver, all_states=o.all_states,
                                   precision=o.precision, exact=o.exact)
+        ex = request(self.low, o.strategy, o.witness, mine, self.run.asked_as,
+                     skip={n for p, n in unit if stepped(p)})
+        if self.resolution == "nondet" and o.via == "prism" and ex is not None:
+            job = dataclasses.replace(job, extract=ex, model_text=prism_emit(self.low, True).model)
         if self.job_engine == "auto":
             job = dataclasses.replace(job, symbolic_refused=tuple(
                 n for p, n in unit if symbolic_gap(p, self.run.model, "auto") is not None))
@@ -437,6 +449,8 @@ class ModelLoop:
         try:
             res = run_job(job, self.run.bound, isolate=fresh, progress=self.run.progress)
             self.run.exact.setdefault(self.resolution, {}).update(res.exact)
+            if res.extracted is not None:
+                self.run.extracted.append(res.extracted)
             return res
         except KeyboardInterrupt as exc:
             got = exc.values if isinstance(exc, Interrupted) else {}

@@ -18,6 +18,7 @@ from dataclasses import dataclass, field
 from typing import Any, Literal
 
 from afsmc.verify import precision
+from afsmc.verify.strategy_storm import Extract, Extracted, analyse, builder_options
 
 Engine = Literal["sparse", "dd", "hybrid", "auto"]
 ENGINES: tuple[Engine, ...] = ("auto", "sparse", "dd", "hybrid")
@@ -87,6 +88,8 @@ class Job:
     # absolute) of the true one (afsmc.verify.precision); None: Storm's unsound stopping.
     precision: str | None = None
     exact: bool = False  # build over rationals and solve exactly (sparse engine only)
+    # schedulers and most probable paths to extract (sparse engine only; strategy_storm)
+    extract: Extract | None = None
 
     @property
     def wanted(self) -> tuple[str, ...]:
@@ -145,6 +148,7 @@ class JobResult:
     dd_retried: bool = False  # Sylvan's tables were full: the guard reran it with DD_MEMORY_RETRY
     elapsed: float = 0.0  # wall time of a process that failed (its answers may still count)
     failure: StormFailure | None = None
+    extracted: Extracted | None = None  # what Job.extract asked for
 
 
 def _quiet() -> None:
@@ -254,7 +258,7 @@ def _execute(job: Job, notify: Notify) -> JobResult:
     if job.bisimulation and not built.symbolic and not _bisimulation(built, res, notify):
         return res
     t0 = time.perf_counter()
-    if not _check_each(stormpy, built, check_env, res, notify):
+    if not _check_each(stormpy, built, check_env, res, notify, job, program):
         return res
     res.check_time = time.perf_counter() - t0
     res.failure = built.deferred
@@ -329,9 +333,8 @@ def _build(stormpy: Any, job: Job, program: Any, props: list[Any], res: JobResul
                                  f"(about {job.max_states * SPARSE_BYTES_PER_STATE / 1e9:.1f} "
                                  "GB): built sparse, its states counted as it ran")
             notify("phase", "explore")
-        sparse = (precision.build_exact(stormpy, program, _for_builder(props, job)) if job.exact
-                  else stormpy.build_model(program, _for_builder(props, job)))
-        return _Built(sparse, "sparse", names, props, symbolic=False)
+        return _Built(_sparse(stormpy, program, props, job), "sparse", names, props,
+                      symbolic=False)
     if explores_first(job):
         # hybrid or dd: count the states explicitly, under the guard's watch, first
         notify("phase", "explore")
@@ -358,8 +361,19 @@ def _build(stormpy: Any, job: Job, program: Any, props: list[Any], res: JobResul
         return built
     notify("phase", "build")
     del model  # before the sparse build: only one of the two models in memory at a time
-    built.model = stormpy.build_model(program, _for_builder(built.props, job))
+    built.model = _sparse(stormpy, program, built.props, job)
     return built
+
+
+def _sparse(stormpy: Any, program: Any, props: list[Any], job: Job) -> Any:
+    """The sparse model: over rationals for an exact job; with state valuations and choice
+    origins if the job extracts."""
+    if job.exact:
+        return precision.build_exact(stormpy, program, _for_builder(props, job))
+    if job.extract is not None:
+        return stormpy.build_model(program, options=builder_options(
+            stormpy, _for_builder(props, job), program, job.extract))
+    return stormpy.build_model(program, _for_builder(props, job))
 
 
 def _choose(job: Job, states: int, names: list[str], props: list[Any],
@@ -413,7 +427,7 @@ def _bisimulation(built: _Built, res: JobResult, notify: Notify) -> bool:
 
 
 def _check_each(stormpy: Any, built: _Built, check_env: Any, res: JobResult,
-                notify: Notify) -> bool:
+                notify: Notify, job: Job, program: Any) -> bool:
     """Check the queries one at a time, each value sent as soon as it is known; False,
     with `res.failure` set, at the first that fails."""
     model = built.model
@@ -430,8 +444,14 @@ def _check_each(stormpy: Any, built: _Built, check_env: Any, res: JobResult,
                 # the filter (a negative expected reward would read 0).
                 value = None if r is None else stormpy.filter_initial_states(r, model).average()
             else:
-                r = stormpy.model_checking(model, prop, environment=check_env)
+                wanted = job.extract is not None and name in job.extract.queries
+                r = stormpy.model_checking(model, prop, environment=check_env,
+                                           extract_scheduler=wanted and res.kind == "mdp")
                 value = r.get_value(model.initial_states[0])
+                if wanted:
+                    assert job.extract is not None
+                    res.extracted = res.extracted or Extracted()
+                    analyse(stormpy, program, model, name, prop, r, job.extract, res.extracted)
         except RuntimeError as exc:
             res.failure = StormFailure("check", _message(exc), prop=name)
             return False

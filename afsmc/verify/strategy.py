@@ -1,0 +1,286 @@
+"""Storm's schedulers in mission terms: which interval constant takes its floor or its
+ceiling, in which action and mode, in how many of the states the scheduler reaches, and a
+threshold on one variable that separates the two ends where there is one.
+
+The Storm process summarises a scheduler per PRISM command and mode
+(:mod:`afsmc.verify.strategy_storm`); the lowered model names each command's action and
+the interval constants it fixes (`Command.choice`).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Callable, Mapping, Sequence, Set
+from dataclasses import dataclass
+
+from afsmc.backends.prism import property_variants, variant_label
+from afsmc.diagnostics import CompileError, Diagnostic, Severity, codes
+from afsmc.lower.lowering import Lowered
+from afsmc.lower.reduce import Reductions
+from afsmc.model import ir
+from afsmc.verify.results import Checks, PropertyResult
+from afsmc.verify.storm import Via
+from afsmc.verify.strategy_storm import Extract, Extracted, Group, RawPath, WitnessRequest
+from afsmc.verify.witness import describe
+
+END = {"lo": "floor", "hi": "ceil"}
+
+
+@dataclass(frozen=True)
+class StrategyEntry:
+    """One interval constant at one end, in one action and mode: in `states` of the
+    states the scheduler reaches; `when` a condition on one variable that holds in exactly
+    those of them (against the other end), or None."""
+
+    constant: str
+    end: str  # "floor" | "ceil"
+    value: int
+    action: str
+    mode: str
+    states: int
+    when: str | None = None
+    # further states of this action and mode that the strategy reaches, where both ends
+    # give the same value (Storm's choice there is arbitrary and not counted in `states`)
+    indifferent: int = 0
+
+    def to_json(self) -> dict[str, object]:
+        return {"constant": self.constant, "end": self.end, "value": self.value,
+                "action": self.action, "mode": self.mode, "states": self.states,
+                "when": self.when, "indifferent": self.indifferent}
+
+    def text(self) -> str:
+        return f"{self.constant} = {self.value} ({self.end}) in {self.action}, mode {self.mode}" \
+            + (f" when {self.when}" if self.when else "")
+
+
+def decisive(low: Lowered) -> tuple[int, ...]:
+    """The commands where the scheduler chooses: a floor/ceil variant of an action."""
+    return tuple(i for i, c in enumerate(low.commands) if c.choice)
+
+
+@dataclass
+class _Range:
+    states: int
+    low: list[int]
+    high: list[int]
+
+
+def summarise(groups: Sequence[Group], variables: Sequence[str],
+              low: Lowered) -> list[StrategyEntry]:
+    """The entries of a scheduler from its groups (`variables`: the Storm model's)."""
+    model = low.model
+    mode_i = list(variables).index("mode") if "mode" in variables else -1
+    ranges: dict[tuple[str, str, int], dict[str, _Range]] = {}
+    same: dict[tuple[str, str, int], int] = {}
+    for g in groups:
+        cmd = low.commands[g.command]
+        for const, end in cmd.choice:
+            if not g.matters:
+                same[(const, cmd.action, g.mode)] = same.get((const, cmd.action, g.mode),
+                                                             0) + g.states
+                continue
+            by_end = ranges.setdefault((const, cmd.action, g.mode), {})
+            r = by_end.get(end)
+            if r is None:
+                by_end[end] = _Range(g.states, list(g.low), list(g.high))
+            else:
+                r.states += g.states
+                r.low = [min(a, b) for a, b in zip(r.low, g.low, strict=True)]
+                r.high = [max(a, b) for a, b in zip(r.high, g.high, strict=True)]
+    display = {v.name: v.display for v in model.variables}
+    out = []
+    for (const, action, mode), by_end in sorted(ranges.items()):
+        c = model.constant(const)
+        assert c.interval is not None
+        conds = _separate(by_end, [i for i in range(len(variables)) if i != mode_i],
+                          [display.get(v, v) for v in variables])
+        for end in ("lo", "hi"):
+            r = by_end.get(end)
+            if r is None:
+                continue
+            value = int(c.interval[0] if end == "lo" else c.interval[1])
+            out.append(StrategyEntry(const, END[end], value, action,
+                                     model.mode_by_number(mode).name, r.states, conds.get(end),
+                                     same.get((const, action, mode), 0)))
+    return out
+
+
+def _separate(by_end: dict[str, _Range], columns: list[int],
+              names: list[str]) -> dict[str, str]:
+    """A threshold on one variable between the two ends' states, if one separates them."""
+    lo, hi = by_end.get("lo"), by_end.get("hi")
+    if lo is None or hi is None:
+        return {}
+    for i in columns:
+        if lo.high[i] < hi.low[i]:
+            return {"lo": f"{names[i]} <= {lo.high[i]}", "hi": f"{names[i]} >= {hi.low[i]}"}
+        if hi.high[i] < lo.low[i]:
+            return {"hi": f"{names[i]} <= {hi.high[i]}", "lo": f"{names[i]} >= {lo.low[i]}"}
+    return {}
+
+
+def stepped(p: ir.Property) -> bool:
+    """A step-bounded property: its optimal strategy counts the steps (it needs memory),
+    and Storm extracts no scheduler for it."""
+    return getattr(p.path, "bound", None) is not None
+
+
+def request(low: Lowered, strategy: bool, witness: WitnessRequest | None,
+            queries: Sequence[str], asked_as: Mapping[str, str],
+            skip: Set[str] = frozenset()) -> Extract | None:
+    """What the Storm job of `queries` (as asked: a bounded G's dual) on the lowered MDP,
+    or only DTMC, extracts: every query's scheduler, and the witness paths of the one
+    the witness follows. `skip`: queries without a scheduler (step-bounded ones)."""
+    mine = tuple(queries)
+    w = None
+    if witness is not None:
+        asked = asked_as.get(witness.query, witness.query)
+        w = dataclasses.replace(witness, query=asked) if asked in mine else None
+    kept = tuple(q for q in mine if q not in skip) if strategy and low.kind == "mdp" else ()
+    if not kept and w is None:
+        return None
+    return extract_for(low, kept, None, w)
+
+
+def extract_for(low: Lowered, strategies: tuple[str, ...], policy: str | None,
+                witness: WitnessRequest | None) -> Extract:
+    """The Extract of a job on `low`'s PRISM model emitted with variant labels."""
+    cmds = decisive(low)
+    labels = {i: variant_label(low, i) for i in cmds}
+    return Extract(strategies, policy, witness, cmds, tuple(labels[i] for i in cmds),
+                   tuple((labels.get(i, "" if c.silent else c.action), c.modes)
+                         for i, c in enumerate(low.commands)))
+
+
+def attach(results: Sequence[PropertyResult], props: Sequence[ir.Property], low: Lowered,
+           extracted: Sequence[Extracted], asked_as: Mapping[str, str]) -> None:
+    """Put the schedulers and paths extracted into the results of `props` (as `results`)."""
+    groups: dict[str, list[Group]] = {}
+    variables: tuple[str, ...] = ()
+    paths: list[RawPath] = []
+    note = ""
+    for x in extracted:
+        groups |= x.groups
+        variables = x.variables or variables
+        if x.paths or x.witness_note:
+            paths, note = x.paths, x.witness_note
+    for r, p in zip(results, props, strict=True):
+        for name, opt in property_variants(low, p):
+            query = asked_as.get(name, name)
+            if query in groups and opt in ("min", "max"):
+                r.strategy = r.strategy or {}
+                r.strategy[opt] = summarise(groups[query], variables, low)
+            if any(query == x.witness_query for x in extracted if x.witness_query):
+                r.witnesses = describe(paths, variables, low)
+                r.witness_note = note
+                r.witness_of = opt or "value"
+
+
+def refuse(message: str, hint: str | None = None) -> CompileError:
+    return CompileError([Diagnostic(codes.E415, Severity.ERROR, message, None, hint=hint)])
+
+
+def check_request(model: ir.Model, props: Sequence[ir.Property], strategy: bool,
+                  witness: tuple[str | None, int] | None) -> None:
+    """Refuse what has no strategy or no witness (E415), before Storm is started."""
+    if strategy and not model.is_nondeterministic:
+        raise refuse(f"--strategy: {model.source.path} has no interval constants: its model "
+                     "is a DTMC, which has no choices for a strategy to make",
+                     hint="a strategy resolves interval constants such as "
+                          "'const int T = [10, 12];'")
+    if witness is None:
+        return
+    name, k = witness
+    if k <= 0:
+        raise refuse(f"--witness {k}: the number of paths must be at least 1")
+    if name is None and len(props) != 1:
+        raise refuse(f"--witness {k}: the paths are of one property, and {len(props)} are "
+                     "checked", hint="name the property with -p NAME (or give one --formula)")
+    prop = next((p for p in props if p.name == name or name is None), None)
+    if prop is None:
+        raise refuse(f"--witness: no property named '{name}' is checked",
+                     hint="name the property with -p NAME")
+    name = prop.name
+    if prop.kind != "P" or not isinstance(prop.path, ir.Path) or prop.path.kind not in (
+            "F", "U"):
+        raise refuse(f"--witness: property '{name}' ({prop.text}) has no target states for "
+                     "paths to reach", hint="witnesses are paths of P [ F target ] and P [ left U target ], "
+                     "possibly step-bounded")
+
+
+DIRECTIONS = ("min", "max")
+
+
+def witness_request(model: ir.Model, props: Sequence[ir.Property], strategy: bool,
+                    witness: tuple[str | None, int] | None, direction: str | None,
+                    target: str | None = None) -> WitnessRequest | None:
+    """The witness query: `witness` = (property, K); an MDP's paths follow the scheduler
+    of `direction` ("min" or "max"; default: the property's own, else "max"). `target`: a
+    PRISM state formula the paths go into instead of the property's target. Refuses a
+    request that has no answer (E415)."""
+    check_request(model, props, strategy, witness)
+    if witness is None:
+        if direction is not None:
+            raise refuse("--witness-dir: give --witness K as well")
+        return None
+    prop = next(p for p in props if p.name == witness[0] or witness[0] is None)
+    name, k = prop.name, witness[1]
+    if not model.is_nondeterministic:
+        if direction is not None:
+            raise refuse(f"--witness-dir {direction}: {model.source.path} has no interval "
+                         "constants: its model is a DTMC, whose paths follow no strategy")
+        return WitnessRequest(name, k, target)
+    if stepped(prop):
+        raise refuse(f"--witness: property '{name}' ({prop.text}) is step-bounded: its min "
+                     "and max strategies count the steps, and Storm gives no scheduler for "
+                     "them", hint="choose a property without a step bound")
+    if direction is not None and direction not in DIRECTIONS:
+        raise refuse(f"--witness-dir {direction!r}: expected min or max")
+    if prop.opt:
+        if direction is not None and direction != prop.opt:
+            raise refuse(f"--witness-dir {direction}: property '{name}' asks for P{prop.opt} "
+                         "only", hint=f"use --witness-dir {prop.opt}, or none")
+        return WitnessRequest(name, k, target)
+    return WitnessRequest(f"{name}_{direction or 'max'}", k, target)
+
+
+def extras(checks: Checks, check: Callable[..., Checks], model: ir.Model,
+           props: Sequence[ir.Property], strategy: bool, witness: WitnessRequest | None, *,
+           max_states: int | None, progress: Callable[[str], None] | None,
+           reductions: Reductions | None, via: Via) -> None:
+    """Schedulers and paths come from the sparse engine. A check on a symbolic engine
+    (chosen, or picked by "auto") gave none: check the MDP again with the sparse engine
+    if it fits (E416 if not), and put what it extracts into `checks`."""
+    missing = [p for p, r in zip(props, checks.properties, strict=True)
+               if (strategy and r.strategy is None and not stepped(p))
+               or (witness is not None and r.witnesses is None and _owns(p, witness))]
+    if not missing:
+        return
+    if progress is not None:
+        progress(f"the {checks.model.engine} engine (via {via}) gives no scheduler: the MDP "
+                 "is checked again with the sparse engine, via PRISM, for the strategies "
+                 "and paths")
+    try:
+        again = check(model, missing, via="prism", engine="sparse", max_states=max_states,
+                      uniform=False, progress=progress, reductions=reductions,
+                      strategy=strategy, witness=witness)
+    except CompileError as exc:
+        raise CompileError([Diagnostic(
+            codes.E416, Severity.ERROR, f"--strategy/--witness: the {checks.model.engine} "
+            "engine checked the model, but schedulers and paths come from the sparse engine, "
+            "and the sparse check failed: " + "; ".join(d.message for d in exc.diagnostics
+                                                        if d.severity is Severity.ERROR),
+            None, hint="a smaller instance (--const), or raise --max-states if the memory "
+                       "allows")]) from None
+    by_name = {r.name: r for r in again.properties}
+    for r in checks.properties:
+        got = by_name.get(r.name)
+        if got is not None:
+            r.strategy = r.strategy or got.strategy
+            if got.witnesses is not None:
+                r.witnesses, r.witness_of, r.witness_note = (got.witnesses, got.witness_of,
+                                                             got.witness_note)
+
+
+def _owns(p: ir.Property, w: WitnessRequest) -> bool:
+    return w.query == p.name or w.query in (f"{p.name}_min", f"{p.name}_max")

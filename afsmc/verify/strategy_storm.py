@@ -1,0 +1,347 @@
+"""Inside the Storm process: Storm's schedulers and most probable paths, as plain data.
+
+A :class:`Extract` on a :class:`afsmc.verify.storm.Job` asks for more than values: the
+scheduler of some queries (summarised per command and mode, over the states the scheduler
+reaches), the whole scheduler of one query (for `simulate --strategy`), and the K most
+probable paths of one query into its target states. The sparse model is then built with
+state valuations and choice origins (which PRISM command each choice comes from); the
+caller, who has the lowered model, maps command indices back to actions and interval
+constants (:mod:`afsmc.verify.strategy`, :mod:`afsmc.verify.witness`).
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+from dataclasses import dataclass, field
+from typing import Any
+
+
+@dataclass(frozen=True)
+class WitnessRequest:
+    """The `k` most probable paths of query `query` (e.g. ``success_max``: an MDP's paths
+    follow that query's scheduler; a DTMC's query is the property's name). `target`: a
+    PRISM state formula whose states the paths go into instead of the property's own
+    target (a failed requirement's violating states); None: the property's target."""
+
+    query: str
+    k: int
+    target: str | None = None
+
+
+@dataclass(frozen=True)
+class Extract:
+    strategies: tuple[str, ...] = ()  # queries whose scheduler is summarised
+    policy: str | None = None  # a query whose scheduler is returned whole
+    witness: WitnessRequest | None = None
+    # the commands that are floor/ceil variants: in their states the scheduler chooses;
+    # their action labels in the generated model (backends.prism.variant_label)
+    decisive: tuple[int, ...] = ()
+    labels: tuple[str, ...] = ()
+    # every command's action label ("": unlabelled) and modes
+    commands: tuple[tuple[str, tuple[int, ...]], ...] = ()
+
+    @property
+    def queries(self) -> tuple[str, ...]:
+        extra = tuple(q for q in (self.policy, self.witness and self.witness.query) if q)
+        return tuple(dict.fromkeys(self.strategies + extra))
+
+
+@dataclass
+class Group:
+    """The states a scheduler reaches in which it takes `command` (a floor/ceil variant),
+    in mode number `mode`: how many, and each variable's smallest and largest value."""
+
+    command: int
+    mode: int
+    states: int
+    low: tuple[int, ...]
+    high: tuple[int, ...]
+    matters: bool = True  # False: every choice of these states has the same value
+
+
+@dataclass
+class RawPath:
+    probability: float
+    states: list[tuple[int, ...]]  # valuations, in `Extracted.variables` order
+    commands: list[int]  # the command of each state's choice (the last: none, -1)
+    steps: list[float]  # each step's probability
+
+
+@dataclass
+class Extracted:
+    """What one Storm process extracted: per query, its groups; the policy's decision
+    states and commands; the witness paths (or why there are none)."""
+
+    variables: tuple[str, ...] = ()  # the generated model's variables ("mode" among them)
+    groups: dict[str, list[Group]] = field(default_factory=dict)
+    reached: dict[str, int] = field(default_factory=dict)  # its decisions, per query
+    policy_states: list[tuple[int, ...]] = field(default_factory=list)
+    policy_commands: list[int] = field(default_factory=list)
+    paths: list[RawPath] = field(default_factory=list)
+    witness_note: str = ""  # why fewer paths than asked (none left, or the search limit)
+    witness_query: str | None = None  # the query the paths follow
+    seconds: float = 0.0
+
+
+def builder_options(stormpy: Any, props: list[Any], program: Any, extract: Extract) -> Any:
+    """Storm's builder options for `props` (and a witness's own target) with state
+    valuations and choice labels."""
+    formulas = [p.get_raw_formula() for p in props]
+    if extract.witness is not None and extract.witness.target is not None:
+        formulas += [p.get_raw_formula() for p in stormpy.parse_properties(
+            f"P=? [ F ({extract.witness.target}) ]", program)]
+    opts = stormpy.BuilderOptions(formulas)
+    opts.set_build_state_valuations()
+    opts.set_build_choice_labels()
+    opts.set_build_all_labels()
+    return opts
+
+
+def _variables(stormpy: Any, program: Any) -> list[tuple[str, Any, bool]]:
+    out = []
+    for module in program.modules:
+        out += [(v.name, v.expression_variable, False) for v in module.integer_variables]
+        out += [(v.name, v.expression_variable, True) for v in module.boolean_variables]
+    return out
+
+
+def _valuations(model: Any, variables: list[tuple[str, Any, bool]]) -> Any:
+    """Every state's values, as a numpy array (states x variables)."""
+    import numpy as np
+
+    sv = model.state_valuations
+    n = int(model.nr_states)
+    out = np.zeros((n, len(variables)), dtype=np.int64)
+    for j, (_, var, boolean) in enumerate(variables):
+        if boolean:  # a BitVector: iterating it gives the states where the variable is true
+            out[np.fromiter((int(s) for s in sv.get_boolean_values(var)), dtype=np.int64), j] = 1
+        else:
+            out[:, j] = np.asarray(sv.get_int64_values(var), dtype=np.int64)
+    return out
+
+
+def _keys(vals: Any) -> Any:
+    """Each row of values as one integer (mixed radix over the columns' ranges)."""
+    import numpy as np
+
+    key = np.zeros(len(vals), dtype=np.int64)
+    if len(vals) == 0:
+        return key
+    lo, hi = vals.min(axis=0), vals.max(axis=0)
+    for j in range(vals.shape[1]):
+        key = key * int(hi[j] - lo[j] + 1) + (vals[:, j] - lo[j])
+    return key
+
+
+def _chosen(model: Any, extract: Extract) -> Any:
+    """The floor/ceil variant each state's (first) choice takes, by its action label
+    (-1: none), as a numpy array."""
+    import numpy as np
+
+    out = np.full(int(model.nr_states), -1, dtype=np.int64)
+    if not model.has_choice_labeling():
+        return out
+    labeling = model.choice_labeling
+    present = labeling.get_labels()
+    for c, label in zip(extract.decisive, extract.labels, strict=True):
+        if label in present:
+            rows = np.fromiter((int(r) for r in labeling.get_choices(label)), dtype=np.int64)
+            out[rows] = c  # a DTMC's choice r is its state r
+    return out
+
+
+def induced(stormpy: Any, model: Any, result: Any) -> Any:
+    """The DTMC a query's scheduler induces on the states it reaches (a DTMC: itself)."""
+    if not str(model.model_type).upper().endswith("MDP"):
+        return model
+    return model.apply_scheduler(result.get_scheduler(), True)
+
+
+def analyse(stormpy: Any, program: Any, model: Any, name: str, prop: Any, result: Any,
+            extract: Extract, out: Extracted) -> None:
+    """Add what `extract` asks of query `name` (checked: `result`) to `out`."""
+    import time
+
+    t0 = time.perf_counter()
+    variables = _variables(stormpy, program)
+    out.variables = tuple(n for n, _, _ in variables)
+    dtmc = induced(stormpy, model, result)
+    vals = _valuations(dtmc, variables)
+    mdp = str(model.model_type).upper().endswith("MDP")
+    if mdp and (name in extract.strategies or name == extract.policy):
+        chosen = _chosen(dtmc, extract)
+        states = (chosen >= 0).nonzero()[0]
+        out.reached[name] = len(states)
+        if name in extract.strategies:
+            matters = _matters(stormpy, model, prop, result, variables, vals[states])
+            out.groups[name] = _groups(chosen[states], vals[states], matters, out.variables)
+        if name == extract.policy:
+            out.policy_states = [tuple(int(x) for x in row) for row in vals[states]]
+            out.policy_commands = [int(c) for c in chosen[states]]
+    w = extract.witness
+    if w is not None and w.query == name:
+        out.witness_query = name
+        _paths(stormpy, program, dtmc, prop, w, vals, extract, out)
+    out.seconds += time.perf_counter() - t0
+
+
+def _groups(commands: Any, vals: Any, matters: Any, variables: tuple[str, ...]) -> list[Group]:
+    """The decisions per command, mode and whether the end matters there: how many, and
+    each variable's range."""
+    import numpy as np
+
+    mode_i = variables.index("mode") if "mode" in variables else -1
+    modes = vals[:, mode_i] if mode_i >= 0 else np.zeros(len(vals), dtype=np.int64)
+    out = []
+    for c in sorted({int(x) for x in commands}):
+        for m in sorted({int(x) for x in modes[commands == c]}):
+            for flag in (False, True):
+                sel = (commands == c) & (modes == m) & (matters == flag)
+                if sel.any():
+                    part = vals[sel]
+                    out.append(Group(c, m, int(sel.sum()), tuple(int(x) for x in part.min(0)),
+                                     tuple(int(x) for x in part.max(0)), flag))
+    return out
+
+
+# Two choices whose values differ by at most this (relative to the larger) are equal: the
+# scheduler's choice between them is arbitrary.
+SAME = 1e-9
+
+
+def _matters(stormpy: Any, model: Any, prop: Any, result: Any,
+             variables: list[tuple[str, Any, bool]], reached: Any) -> Any:
+    """For each of the `reached` states (values): whether its choices differ in value,
+    i.e. min and max over the choices of (sum of probability x successor's value) differ,
+    computed by Storm as the instantaneous reward after one step with the values as state
+    rewards. An expected reward with action rewards: True (not compared)."""
+    import numpy as np
+    import stormpy.models as models
+
+    if _action_rewards(model, prop):
+        return np.ones(len(reached), dtype=bool)
+    values = [float(v) if math.isfinite(v) else 1e300 for v in result.get_value_vector()]
+    rm = models.SparseRewardModel(optional_state_reward_vector=values)
+    comp = models.SparseModelComponents(transition_matrix=model.transition_matrix,
+                                        state_labeling=model.labeling, reward_models={"v": rm})
+    one = models.SparseMdp(comp)
+    lo_q, hi_q = (np.asarray(stormpy.model_checking(one, q).get_value_vector())
+                  for q in stormpy.parse_properties("Rmin=? [I=1]; Rmax=? [I=1]"))
+    del one, comp, rm
+    gap = np.abs(hi_q - lo_q) > SAME * np.maximum(1.0, np.maximum(np.abs(hi_q), np.abs(lo_q)))
+    # the reached states among the MDP's, by their values
+    keys_all = _keys(np.vstack([_valuations(model, variables), reached]))
+    n = int(model.nr_states)
+    order = np.argsort(keys_all[:n], kind="stable")
+    pos = np.searchsorted(keys_all[:n][order], keys_all[n:])
+    return gap[order[pos]]
+
+
+def _action_rewards(model: Any, prop: Any) -> bool:
+    """Whether an expected-reward query's structure has per-choice rewards."""
+    formula = prop.get_raw_formula()
+    if not formula.is_reward_operator_formula or not model.reward_models:
+        return False
+    name = formula.reward_name if formula.has_reward_model_name() else None
+    rm = model.reward_models[name] if name else next(iter(model.reward_models.values()))
+    return bool(rm.has_state_action_rewards)
+
+
+# Paths the search may enumerate, per path asked, before it gives up on finding more that
+# respect a step bound or an until's left side (the others are skipped).
+SEARCH_FACTOR = 50
+
+
+def _paths(stormpy: Any, program: Any, dtmc: Any, prop: Any, w: WitnessRequest,
+           vals: Any, extract: Extract, out: Extracted) -> None:
+    """The `w.k` most probable paths of the induced DTMC into the target states, by
+    Storm's k-shortest-paths generator (recursive enumeration; paths stop at their first
+    target state and may loop)."""
+    from stormpy.analysis import _utility
+    from stormpy.datastructures import BitVector
+
+    target, left, bound = _target(stormpy, program, dtmc, prop, w)
+    if target is None:
+        out.witness_note = "the property has no target states to reach"
+        return
+    if not target:
+        out.witness_note = "no state the strategy reaches is a target state"
+        return
+    bits = BitVector(dtmc.nr_states, sorted(target))
+    gen = _utility.ShortestPathsGenerator(dtmc, bits)
+    tm = dtmc.transition_matrix
+    k = 0
+    found: list[RawPath] = []
+    while len(found) < w.k:
+        k += 1
+        if k > w.k * SEARCH_FACTOR:
+            out.witness_note = (f"stopped after {k - 1} paths: the others break the step bound "
+                                "or leave the until's left side")
+            break
+        try:
+            p = float(gen.get_distance(k))
+            states = list(gen.get_path_as_list(k))
+        except (RuntimeError, IndexError):
+            break
+        if p <= 0.0 or not states:
+            break
+        states.reverse()
+        if bound is not None and len(states) - 1 > bound:
+            continue
+        if left is not None and not all(s in left for s in states[:-1]):
+            continue
+        steps = []
+        for a, b in itertools.pairwise(states):
+            steps.append(sum(float(e.value) for e in tm.get_row(tm.get_row_group_start(a))
+                             if int(e.column) == b))
+        found.append(RawPath(p, [tuple(int(x) for x in vals[s]) for s in states],
+                             [_command(dtmc, s, vals[s], extract, out.variables)
+                              for s in states[:-1]] + [-1], steps))
+    if len(found) < w.k and not out.witness_note:
+        out.witness_note = f"there are only {len(found)} paths into the target states"
+    out.paths = found
+
+
+def _command(dtmc: Any, s: int, row: Any, extract: Extract, variables: tuple[str, ...]) -> int:
+    """The lowered command of state `s`'s choice: by its action label, and the mode."""
+    labels = dtmc.choice_labeling.get_labels_of_choice(s) if dtmc.has_choice_labeling() \
+        else set()
+    mode = int(row[variables.index("mode")]) if "mode" in variables else 0
+    for i, (label, modes) in enumerate(extract.commands):
+        if mode in modes and (label in labels if label else not labels):
+            return i
+    return -1
+
+
+def _target(stormpy: Any, program: Any, dtmc: Any, prop: Any,
+            w: WitnessRequest) -> tuple[set[int] | None, set[int] | None, int | None]:
+    """The target states, the states an until's left side allows (None: all), and a step
+    bound (None: none) of the query's path formula."""
+    formula = prop.get_raw_formula()
+    path = formula.subformula if hasattr(formula, "subformula") else None
+    bound: int | None = None
+    left: Any = None
+    if path is None:
+        return None, None, None
+    kind = type(path).__name__
+    if kind == "EventuallyFormula":
+        right = path.subformula
+    elif kind in ("UntilFormula", "BoundedUntilFormula"):
+        left, right = path.left_subformula, path.right_subformula
+        if kind == "BoundedUntilFormula":
+            bound = int(path.upper_bound_expression.evaluate_as_int())
+            if str(left) == "true":
+                left = None
+    else:
+        return None, None, None
+    if w.target is not None:
+        right = stormpy.parse_properties(f"P=? [ F ({w.target}) ]", program)[0] \
+            .get_raw_formula().subformula.subformula
+    return (_states(stormpy, dtmc, right),
+            None if left is None else _states(stormpy, dtmc, left), bound)
+
+
+def _states(stormpy: Any, dtmc: Any, formula: Any) -> set[int]:
+    """The states where a state formula holds (iterating a BitVector gives its set bits)."""
+    return {int(s) for s in stormpy.model_checking(dtmc, formula).get_truth_values_vector()}
