@@ -94,6 +94,33 @@ def variant_label(low: Lowered, index: int) -> str:
     return f"{low.commands[index].action}__c{index}"
 
 
+def _constants(low: Lowered) -> list[str]:
+    """The constants section: point-valued constants (interval probabilities at their
+    midpoint, or undefined as parameters) and the generated floor/ceil bounds."""
+    model = low.model
+    out: list[str] = []
+    w = out.append
+    consts = [c for c in model.constants if not c.is_interval]
+    if consts or low.bounds:
+        w("// ---- constants")
+    for c in consts:
+        t = "int" if c.type is E.Type.INT else "double" if c.type is E.Type.DOUBLE else "bool"
+        kind = "param, " if c.is_param else ""
+        if c.prob_interval is not None:
+            kind = f"in [{number(c.prob_interval[0])}, {number(c.prob_interval[1])}], "
+        if c.name in low.parameters:  # left undefined: Storm's parametric engine
+            w(f"const {t} {c.name}; // parameter, {kind}{where(c.span)}")
+            continue
+        kind += "its midpoint, " if c.prob_interval is not None else ""
+        w(f"const {t} {c.name} = {pnum(c.value)}; // {kind}{where(c.span)}")
+    for gen, (src, value) in sorted(low.bounds.items(), key=lambda kv: (kv[1][0], kv[1][1])):
+        c = model.constant(src)
+        assert c.interval is not None
+        w(f"const int {gen} = {pnum(value)}; // {src} in [{c.interval[0]}, {c.interval[1]}], "
+          f"{where(c.span)}")
+    return out
+
+
 def emit(low: Lowered, variant_labels: bool = False) -> PrismOutput:
     """The PRISM model. `variant_labels`: each command that resolves an interval constant
     gets its own action label (`variant_label`), and the action rewards of its action are
@@ -117,24 +144,7 @@ def emit(low: Lowered, variant_labels: bool = False) -> PrismOutput:
     w(low.kind)
     w("")
 
-    consts = [c for c in model.constants if not c.is_interval]
-    if consts or low.bounds:
-        w("// ---- constants")
-    for c in consts:
-        t = "int" if c.type is E.Type.INT else "double" if c.type is E.Type.DOUBLE else "bool"
-        kind = "param, " if c.is_param else ""
-        if c.prob_interval is not None:
-            kind = f"in [{number(c.prob_interval[0])}, {number(c.prob_interval[1])}], "
-        if c.name in low.parameters:  # left undefined: Storm's parametric engine
-            w(f"const {t} {c.name}; // parameter, {kind}{where(c.span)}")
-            continue
-        kind += "its midpoint, " if c.prob_interval is not None else ""
-        w(f"const {t} {c.name} = {pnum(c.value)}; // {kind}{where(c.span)}")
-    for gen, (src, value) in sorted(low.bounds.items(), key=lambda kv: (kv[1][0], kv[1][1])):
-        c = model.constant(src)
-        assert c.interval is not None
-        w(f"const int {gen} = {pnum(value)}; // {src} in [{c.interval[0]}, {c.interval[1]}], "
-          f"{where(c.span)}")
+    out.extend(_constants(low))
     if model.formulas:
         w("")
         w("// ---- formulas")
