@@ -77,8 +77,12 @@ def witness_lines(p: PropertyResult) -> list[str]:
     ws = p.witnesses
     mass = math.fsum(w.probability for w in ws)
     follow = f" following the {p.witness_of} strategy" if p.witness_of in DIRECTIONS else ""
-    share = f", {100 * mass / value:.1f}% of {p.witness_of} {num(value)}" if value else ""
-    out = [f"the {len(ws)} most probable paths of {p.name} ({p.formula}){follow}: "
+    of = f"{p.witness_of} {num(value)}" if value is not None else ""
+    if p.witness_avoids and value is not None:  # the paths that miss it: 1 - value in all
+        value, of = 1.0 - value, f"1 - {of} = {num(1.0 - value)}"
+    share = f", {100 * mass / value:.1f}% of {of}" if value else ""
+    what = "ways to miss" if p.witness_avoids else "paths of"
+    out = [f"the {len(ws)} most probable {what} {p.name} ({p.formula}){follow}: "
            f"total {num(mass)}{share}"]
     if p.witness_note:
         out.append(f"  ({p.witness_note})")

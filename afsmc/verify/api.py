@@ -256,6 +256,8 @@ def run(path: str, *, consts: Mapping[str, str | bool | int | float] | None = No
         if strategy or wanted is not None:
             extras(checks, check, model, props, strategy, wanted, max_states=max_states,
                    progress=progress, reductions=reductions, via=via)
+        for r in checks.properties:
+            r.witness_avoids = r.witnesses is not None and wanted is not None and wanted.avoid
     except CompileError as exc:
         raise loaded.remap_error(exc) from None
     consts_used: dict[str, object] = {c.name: c.value for c in model.constants if c.is_param}

@@ -85,6 +85,8 @@ class PropertyResult:
     # scheduler; "value": a DTMC's), and why fewer than asked, if so
     witnesses: list[Witness] | None = None
     witness_of: str = ""
+    # the paths go where the property can no longer hold (a `P>=` requirement's violations)
+    witness_avoids: bool = False
     witness_note: str = ""
 
     def to_json(self) -> dict[str, object]:
@@ -104,6 +106,7 @@ class PropertyResult:
         if self.witnesses is not None:
             out["witnesses"] = [w.to_json() for w in self.witnesses]
             out["witness_strategy"] = self.witness_of
+            out["witness_violates"] = self.witness_avoids
             if self.witness_note:
                 out["witness_note"] = self.witness_note
         return out

@@ -225,11 +225,24 @@ def witness_request(model: ir.Model, props: Sequence[ir.Property], strategy: boo
         return None
     prop = next(p for p in props if p.name == witness[0] or witness[0] is None)
     name, k = prop.name, witness[1]
+    avoid = False
+    if prop.threshold is not None and target is None and direction is None:
+        # A requirement's paths show how it is violated, under the strategy that decides
+        # its verdict: for `>=`/`>` the min's paths into states where the property can no
+        # longer hold; for `<=`/`<` the max's paths into its target.
+        lower = prop.threshold.op in (">=", ">")
+        avoid = lower and not stepped(prop)
+        direction = ("min" if lower else "max") if model.is_nondeterministic else None
+    return _request(model, prop, name, k, direction, target, avoid)
+
+
+def _request(model: ir.Model, prop: ir.Property, name: str, k: int, direction: str | None,
+             target: str | None, avoid: bool) -> WitnessRequest:
     if not model.is_nondeterministic:
         if direction is not None:
             raise refuse(f"--witness-dir {direction}: {model.source.path} has no interval "
                          "constants: its model is a DTMC, whose paths follow no strategy")
-        return WitnessRequest(name, k, target)
+        return WitnessRequest(name, k, target, avoid)
     if stepped(prop):
         raise refuse(f"--witness: property '{name}' ({prop.text}) is step-bounded: its min "
                      "and max strategies count the steps, and Storm gives no scheduler for "
@@ -240,8 +253,8 @@ def witness_request(model: ir.Model, props: Sequence[ir.Property], strategy: boo
         if direction is not None and direction != prop.opt:
             raise refuse(f"--witness-dir {direction}: property '{name}' asks for P{prop.opt} "
                          "only", hint=f"use --witness-dir {prop.opt}, or none")
-        return WitnessRequest(name, k, target)
-    return WitnessRequest(f"{name}_{direction or 'max'}", k, target)
+        return WitnessRequest(name, k, target, avoid)
+    return WitnessRequest(f"{name}_{direction or 'max'}", k, target, avoid)
 
 
 def extras(checks: Checks, check: Callable[..., Checks], model: ir.Model,

@@ -22,11 +22,15 @@ class WitnessRequest:
     """The `k` most probable paths of query `query` (e.g. ``success_max``: an MDP's paths
     follow that query's scheduler; a DTMC's query is the property's name). `target`: a
     PRISM state formula whose states the paths go into instead of the property's own
-    target (a failed requirement's violating states); None: the property's target."""
+    target (a failed requirement's violating states); None: the property's target.
+    `avoid`: the paths go into the states from which the property's (unbounded) path
+    formula can no longer hold, its probability 0 there: how a `P>=` requirement is missed.
+    """
 
     query: str
     k: int
     target: str | None = None
+    avoid: bool = False
 
 
 @dataclass(frozen=True)
@@ -335,6 +339,11 @@ def _target(stormpy: Any, program: Any, dtmc: Any, prop: Any,
                 left = None
     else:
         return None, None, None
+    if w.avoid and bound is None:
+        # prob0 states come out of Storm's graph analysis as exact zeros
+        whole = stormpy.parse_properties(f"P=? [ {path} ]", program)[0]
+        values = stormpy.model_checking(dtmc, whole).get_value_vector()
+        return {s for s in range(dtmc.nr_states) if values[s] == 0.0}, None, None
     if w.target is not None:
         right = stormpy.parse_properties(f"P=? [ F ({w.target}) ]", program)[0] \
             .get_raw_formula().subformula.subformula

@@ -261,3 +261,25 @@ def test_a_witness_goes_into_other_target_states_following_a_named_strategy() ->
         assert [x.end_mode for x in p.witnesses] == ["Halted"] * 3
         assert p.witnesses[0].steps[-1].hazard == "Fault"
         assert all(x.confirmed for x in p.witnesses)
+
+
+def test_a_requirements_witnesses_show_how_it_is_violated_under_its_deciding_strategy() -> None:
+    """`P>=` is decided by the min: its paths follow the min strategy into the states where
+    "done" can no longer be reached; `P<=` by the max: its paths go into its target."""
+    from afsmc.compiler import load
+
+    model = load(PATROL).model
+    res = run(PATROL, formulas=['P>=0.82 [ F "done" ]'], witness=(None, 5),
+              reductions=Reductions.none(), uniform=False)
+    p = res.properties[0]
+    assert p.witnesses is not None and p.witness_of == "min" and p.witness_avoids
+    assert p.min is not None
+    check_witnesses(p.witnesses, 1.0 - p.min, model, "Halted")  # patrol misses only by a fault
+    assert res.to_json()["properties"][0]["witness_violates"] is True
+
+    res = run(PATROL, formulas=['P<=0.15 [ F "halted" ]'], witness=(None, 3),
+              reductions=Reductions.none(), uniform=False)
+    p = res.properties[0]
+    assert p.witnesses is not None and p.witness_of == "max" and not p.witness_avoids
+    assert p.max is not None
+    check_witnesses(p.witnesses, p.max, model, "Halted")
