@@ -30,7 +30,7 @@ from afsmc.text import literal, num
 from afsmc.verify import VerifyResult, parametric
 from afsmc.verify.junit import write_junit
 from afsmc.verify.storm import ENGINES, SOLVERS, VIAS
-from afsmc.verify.verdicts import failing
+from afsmc.verify.verdicts import failing, judge_over
 
 
 def positive(text: str) -> int:
@@ -191,6 +191,10 @@ def run(args: argparse.Namespace) -> int:
             reductions=reductions(args))
     except CompileError as exc:
         return fail(exc, args.json, wrapped=True)
+    if bounds:  # a requirement holds only if it holds at every fixed interval probability
+        judge_over(res.properties, {e.name: (e.min_attained, e.max_attained) for e in bounds},
+                   parametric.DEFAULT_PRECISION + 1e-6,
+                   "over every fixed value of the interval probabilities")
     if args.junit:
         write_junit(args.junit, res)
     if args.json:

@@ -19,7 +19,7 @@ from __future__ import annotations
 
 import math
 import operator
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from fractions import Fraction
 from typing import TYPE_CHECKING, Any, Literal
@@ -116,6 +116,19 @@ def judge_all(results: Sequence[PropertyResult], error: float | None) -> None:
                               r.exact.get("value"))
         elif r.min is not None and r.max is not None:
             r.verdict = judge(t, r.min, r.max, error, r.exact.get("min"), r.exact.get("max"))
+
+
+def judge_over(results: Sequence[PropertyResult], bounds: Mapping[str, tuple[float, float]],
+               error: float, what: str) -> None:
+    """Judge the requirements again over wider bounds, a property's (lo, hi) by name, each
+    within `error`: the min and max over every fixed interval probability, which contain
+    the floor/ceil MDP's at the midpoint. `what` says over what, in the reason."""
+    for r in results:
+        if r.threshold is None or r.name not in bounds:
+            continue
+        lo, hi = bounds[r.name]
+        v = judge(r.threshold, lo, hi, error)
+        r.verdict = Verdict(v.kind, f"{v.reason} ({what})", v.broken_by)
 
 
 def failing(results: Sequence[PropertyResult]) -> list[PropertyResult]:

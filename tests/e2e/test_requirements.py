@@ -187,3 +187,19 @@ def test_the_hybrid_engine_is_sound_too() -> None:
         for key in ("min", "max", "uniform"):
             assert abs(getattr(h, key) - Fraction(e.exact[key])) <= Fraction(1, 10**9), (
                 e.name, key)
+
+
+def test_a_requirement_is_judged_over_every_fixed_interval_probability(tmp_path: Path) -> None:
+    """At P_FAULT's midpoint the min meets 0.6; over P_FAULT in [0.005, 0.03] it does not
+    (a higher fault rate lowers it), so the verdict is `depends`, not `holds`."""
+    spec = tmp_path / "patrol.afsm"
+    spec.write_text((EXAMPLES / "patrol.afsm").read_text(encoding="utf-8").replace(
+        "const prob P_FAULT  = 0.01;", "const prob P_FAULT  = [0.005, 0.03];"), encoding="utf-8")
+    r = run_cli("verify", str(spec), "-f", 'P>=0.6 [ F "done" ]', "--json")
+    assert r.code == 1, r.err
+    out = json.loads(r.out)
+    prop = out["properties"][0]
+    assert prop["min"] >= 0.6  # the floor/ceil MDP at the midpoint alone would hold
+    low = out["probability_intervals"]
+    assert prop["verdict"] == "depends" and prop["broken_by"] == "min", (prop, low)
+    assert "interval probabilities" in prop["reason"]
