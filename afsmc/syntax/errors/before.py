@@ -77,15 +77,17 @@ def hazard_header(text: str, pos: int) -> int | None:
     without braces inside (mode sets); None if there is none."""
     # Back from pos over that text, noting the groups: a `hazard` inside one is no start.
     groups: list[tuple[int, int]] = []
-    semicolon = text.rfind(";", 0, pos)
+    semicolon = text.rfind(";", 0, pos)  # (a ';' inside a group does not stop it)
     k = pos
     while True:
+        if semicolon >= k:
+            semicolon = text.rfind(";", 0, k)
         b = max(text.rfind("{", 0, k), text.rfind("}", 0, k), semicolon)
-        if b < 0 or text[b] != "}":
+        if b < 0 or text[b] != "}":  # (b < 0: nothing stops it before pos)
             k = b + 1
             break
         opening = max(text.rfind("{", 0, b), text.rfind("}", 0, b))
-        if opening < semicolon or text[opening] != "{":
+        if opening < 0 or text[opening] != "{":
             k = b + 1
             break
         groups.append((opening, b + 1))
