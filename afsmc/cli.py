@@ -270,8 +270,11 @@ def _internal_error(exc: Exception, as_json: bool) -> int:
     with os.fdopen(fd, "w", encoding="utf-8") as f:
         f.write(f"afsmc {__version__}, argv {sys.argv!r}\n")
         traceback.print_exception(exc, file=f)
+    # One line, however many lines or characters the exception's text has (the file has it all).
+    what = " ".join(str(exc).split())
+    what = what if len(what) <= 200 else what[:200] + "..."
     message = (f"internal error (a bug in afsmc, not in your input): {type(exc).__name__}: "
-               f"{exc}; the traceback is in {path}; please report it with that file")
+               f"{what}; the traceback is in {path}; please report it with that file")
     print(f"afsmc: {message}", file=sys.stderr)
     if as_json:
         print(json.dumps({"diagnostics": [

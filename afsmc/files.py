@@ -1,6 +1,7 @@
 """Reading inputs and writing outputs, the only place that opens a user's files.
 
-`read_source` reads an .afsm file as UTF-8 (E001 with the offending byte otherwise);
+`read_source` reads an .afsm file as UTF-8 (E001 with the offending byte otherwise), and
+no more of it than afsmc reads (E004 past MAX_SOURCE_CHARS);
 `write_atomic` writes an output whole or not at all, never over an input (E002, E003).
 """
 
@@ -11,13 +12,14 @@ import os
 import tempfile
 
 from afsmc.diagnostics import CompileError, Diagnostic, Severity, Source, Span, codes
+from afsmc.syntax.limits import MAX_SOURCE_CHARS
 
 
 def read_source(path: str, *, newline: str | None = None) -> str:
     """The file's text; line endings read as '\n' (`newline=""`: as they are)."""
     try:
         with open(path, encoding="utf-8", newline=newline) as f:
-            return f.read()
+            text = f.read(MAX_SOURCE_CHARS + 1)  # a larger file is refused unread
     except FileNotFoundError:
         if path == "-":  # the commands that read standard input handle '-' before this
             raise CompileError([Diagnostic(
@@ -31,6 +33,13 @@ def read_source(path: str, *, newline: str | None = None) -> str:
         raise CompileError([_not_utf8(path, exc)]) from None
     except OSError as exc:
         raise CompileError([_io_error(path, exc.strerror or str(exc))]) from None
+    if len(text) > MAX_SOURCE_CHARS:
+        raise CompileError([Diagnostic(
+            codes.E004, Severity.ERROR, f"{path} has more than {MAX_SOURCE_CHARS:,} characters; "
+            f"afsmc reads files of up to {MAX_SOURCE_CHARS:,}", None,
+            hint="split the model, or generate it with fewer declarations (a specification "
+            "of this size is not checked in reasonable time)")])
+    return text
 
 
 def decode_source(raw: bytes, path: str) -> str:

@@ -55,6 +55,7 @@ class Code(str):
 E001 = Code("E001", Severity.ERROR, "cannot read the input file")
 E002 = Code("E002", Severity.ERROR, "refusing to overwrite the input")
 E003 = Code("E003", Severity.ERROR, "cannot write an output")
+E004 = Code("E004", Severity.ERROR, "the input is larger than afsmc reads")
 E009 = Code("E009", Severity.ERROR, "internal error")
 
 
@@ -84,6 +85,7 @@ E121 = Code("E121", Severity.ERROR, "a step bound that is an expression is writt
 E122 = Code("E122", Severity.ERROR, "a keyword is run into a name")
 E123 = Code("E123", Severity.ERROR, "another language's spelling")
 E124 = Code("E124", Severity.ERROR, "a hazard has one trigger")
+E125 = Code("E125", Severity.ERROR, "a name, number or label name is longer than afsmc reads")
 E190 = Code("E190", Severity.ERROR, "the formatter failed")
 
 

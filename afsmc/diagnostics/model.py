@@ -54,13 +54,29 @@ class Source:
     def _starts(self) -> list[int]:
         return line_starts(self.text)
 
-    def line(self, lineno: int) -> str:
+    def line(self, lineno: int, lo: int = 0, hi: int | None = None) -> str:
+        """The text of line `lineno` (1-based), without its ending (and the byte-order mark
+        on line 1); only its columns lo..hi-1 (0-based) if given, so that quoting a place
+        in a long line does not copy the whole line."""
+        base, end = self._line_bounds(lineno)
+        return self.text[base + lo:end if hi is None else min(end, base + hi)]
+
+    def line_length(self, lineno: int) -> int:
+        """The length of `line(lineno)`."""
+        base, end = self._line_bounds(lineno)
+        return end - base
+
+    def _line_bounds(self, lineno: int) -> tuple[int, int]:
         starts = self._starts
         if not 1 <= lineno <= len(starts):
-            return ""
+            return 0, 0
+        base = starts[lineno - 1]
         end = starts[lineno] - 1 if lineno < len(starts) else len(self.text)
-        text = self.text[starts[lineno - 1]:end].removesuffix("\r")
-        return text.removeprefix(BOM) if lineno == 1 else text
+        if end > base and self.text[end - 1] == "\r":
+            end -= 1
+        if lineno == 1 and end > base and self.text.startswith(BOM):
+            base += 1
+        return base, end
 
     def position(self, offset: int) -> tuple[int, int]:
         """1-based (line, column) of a 0-based character offset."""

@@ -9,6 +9,8 @@ from collections.abc import Callable, Iterable
 from afsmc.diagnostics.model import Diagnostic, Severity, Span
 
 TAB = "    "
+# A source line longer than this is shown in part, around the place (LONG_LINE characters).
+LONG_LINE = 400
 
 
 def render(diag: Diagnostic, color: bool = False) -> str:
@@ -43,6 +45,9 @@ def _cells(text: str) -> int:
 
 
 def _excerpt(span: Span, paint: Callable[[str, str], str]) -> list[str]:
+    length = span.source.line_length(span.line)
+    if length > LONG_LINE:
+        return _long_excerpt(span, length)
     text = span.source.line(span.line)
     if not text and span.start == span.end == 0:
         return []
@@ -55,6 +60,23 @@ def _excerpt(span: Span, paint: Callable[[str, str], str]) -> list[str]:
     caret = " " * _cells(text[:start]) + "^" * max(1, _cells(text[start:end]))
     pad = " " * len(gutter)
     return [f" {pad} |", f" {gutter} | {_shown(text)}", f" {pad} | {caret}"]
+
+
+def _long_excerpt(span: Span, length: int) -> list[str]:
+    """The part of a line longer than LONG_LINE around the span's start, '...' where the
+    line goes on: each diagnostic's cost is then bounded, however long the line (a file
+    of 50,000 declarations on one line would otherwise print that line 50,000 times)."""
+    start = min(span.column - 1, length)
+    lo = max(0, start - LONG_LINE // 4)
+    hi = min(length, lo + LONG_LINE)
+    text = span.source.line(span.line, lo, hi)
+    end = span.end_column - 1 if span.end_line == span.line else hi
+    end = min(max(end, start + 1), max(hi, start + 1))
+    before, after = ("..." if lo > 0 else ""), ("..." if hi < length else "")
+    caret = " " * (len(before) + _cells(text[:start - lo])) + "^" * max(
+        1, _cells(text[start - lo:end - lo]))
+    pad = " " * len(str(span.line))
+    return [f" {pad} |", f" {span.line} | {before}{_shown(text)}{after}", f" {pad} | {caret}"]
 
 
 def render_all(diags: Iterable[Diagnostic], color: bool = False) -> str:

@@ -7,8 +7,9 @@ is a pair of integers and every later stage can enumerate states.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Literal, Union
+from typing import TYPE_CHECKING, Any, Literal, Union, cast
 
 from afsmc.diagnostics import Source, Span
 from afsmc.model.expr import Expr, Type
@@ -210,6 +211,9 @@ class Memo:
     deadlocks: dict[int, Witness | None] = field(default_factory=dict)
     # afsmc.check.modegraph.analyse's ModeGraph; a later stage's type, so not named here
     modegraph: object | None = None
+    # Model's lookups by name or mode: key -> (the tuple indexed, the index). An index is
+    # used only while the model's tuple is that very object (`replace` may change it).
+    lookups: dict[str, tuple[object, Any]] = field(default_factory=dict)
 
 
 @dataclass(frozen=True)
@@ -227,31 +231,62 @@ class Model:
     properties: tuple[Property, ...]
     memo: Memo = field(default_factory=Memo, compare=False, repr=False)
 
-    # Lookups; models are small, so linear scans keep the IR plain data.
+    # Lookups, by indexes built on first use (a scan per lookup would make a model of N
+    # declarations cost N^2 to check).
+    def _index(self, key: str, of: tuple[Any, ...], build: Callable[[], Any]) -> Any:
+        hit = self.memo.lookups.get(key)
+        if hit is not None and hit[0] is of:
+            return hit[1]
+        index = build()
+        self.memo.lookups[key] = (of, index)
+        return index
+
+    def _by_name(self, key: str, items: tuple[Any, ...]) -> dict[Any, Any]:
+        def build() -> dict[Any, Any]:
+            out: dict[Any, Any] = {}
+            for x in items:
+                out.setdefault(x.name, x)  # the first, as a scan finds it
+            return out
+        return cast("dict[Any, Any]", self._index(key, items, build))
+
     def constant(self, name: str) -> Constant:
-        return next(c for c in self.constants if c.name == name)
+        return cast(Constant, self._lookup("constant", self.constants, name))
 
     def variable(self, name: str) -> Variable:
-        return next(v for v in self.variables if v.name == name)
+        return cast(Variable, self._lookup("variable", self.variables, name))
 
     def display_names(self) -> dict[str, str]:
         """Flat variable name (`pos_x`) -> as written (`pos.x`), for messages."""
         return {v.name: v.display for v in self.variables}
 
     def mode(self, name: str) -> Mode:
-        return next(m for m in self.modes if m.name == name)
+        return cast(Mode, self._lookup("mode", self.modes, name))
 
     def mode_by_number(self, number: int) -> Mode:
-        return next(m for m in self.modes if m.number == number)
+        def build() -> dict[int, Mode]:
+            out: dict[int, Mode] = {}
+            for m in self.modes:
+                out.setdefault(m.number, m)
+            return out
+        try:
+            return cast(Mode, self._index("mode_number", self.modes, build)[number])
+        except KeyError:
+            raise StopIteration from None  # as the scan it replaces
 
     def action(self, name: str) -> Action:
-        return next(a for a in self.actions if a.name == name)
+        return cast(Action, self._lookup("action", self.actions, name))
 
     def formula(self, name: str) -> Formula:
-        return next(f for f in self.formulas if f.name == name)
+        return cast(Formula, self._lookup("formula", self.formulas, name))
 
     def label(self, name: str) -> Label:
-        return next(lb for lb in self.labels if lb.name == name)
+        return cast(Label, self._lookup("label", self.labels, name))
+
+    def _lookup(self, key: str, items: tuple[Any, ...], name: str) -> Any:
+        try:
+            return self._by_name(key, items)[name]
+        except KeyError:
+            raise StopIteration from None  # as the scan it replaces
 
     @property
     def initial_mode(self) -> Mode:
@@ -274,11 +309,22 @@ class Model:
         return bool(self.interval_constants)
 
     def actions_in(self, mode: int) -> tuple[Action, ...]:
-        return tuple(a for a in self.actions if mode in a.modes)
+        return cast("tuple[Action, ...]", self._in_mode("actions_in", self.actions).get(mode, ()))
 
     def hazards_in(self, mode: int) -> tuple[Hazard, ...]:
-        return tuple(h for h in self.hazards if mode in h.modes)
+        return cast("tuple[Hazard, ...]", self._in_mode("hazards_in", self.hazards).get(mode, ()))
+
+    def _in_mode(self, key: str, items: tuple[Any, ...]) -> dict[int, tuple[Any, ...]]:
+        def build() -> dict[int, tuple[Any, ...]]:
+            out: dict[int, list[Any]] = {}
+            for x in items:
+                for m in dict.fromkeys(x.modes):
+                    out.setdefault(m, []).append(x)
+            return {m: tuple(xs) for m, xs in out.items()}
+        return cast("dict[int, tuple[Any, ...]]", self._index(key, items, build))
 
     @property
     def const_values(self) -> dict[str, Value]:
-        return {c.name: c.value for c in self.constants}
+        """Each constant's value (one dict per model: read it, do not change it)."""
+        return cast("dict[str, Value]", self._index(
+            "const_values", self.constants, lambda: {c.name: c.value for c in self.constants}))

@@ -76,8 +76,11 @@ def _prepare(model: ir.Model, pred: E.Expr, consts: Mapping[str, Any] | None
              ) -> tuple[E.Expr, list[ir.Variable], dict[str, Any]]:
     """The predicate inlined, the variables it reads (in declaration order), the constants."""
     inlined = inline(pred, model)
-    values = dict(model.const_values) | dict(consts or {})
-    names = sorted(E.vars_read(inlined), key=[v.name for v in model.variables].index)
+    # (the model's own dict unless some values are given: a copy per question would make
+    # a model of N constants and N actions cost N^2)
+    values = model.const_values | dict(consts) if consts else model.const_values
+    order = {v.name: i for i, v in enumerate(model.variables)}
+    names = sorted(E.vars_read(inlined), key=order.__getitem__)
     return inlined, [model.variable(n) for n in names], values
 
 

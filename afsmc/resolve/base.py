@@ -10,6 +10,7 @@ expression, and so on. Each abstract method below is defined by the concern name
 from __future__ import annotations
 
 from abc import ABC, abstractmethod
+from collections.abc import Iterator, Mapping
 from dataclasses import dataclass
 from typing import Any
 
@@ -19,6 +20,23 @@ from afsmc.model import ir
 from afsmc.model.expr import Type
 from afsmc.syntax import ast
 from afsmc.text import article
+
+
+class _Values(Mapping[str, Any]):
+    """The values of the constants declared so far, read through: a copy per constant
+    would make a file of N constants cost N^2."""
+
+    def __init__(self, consts: Mapping[str, ir.Constant]) -> None:
+        self._consts = consts
+
+    def __getitem__(self, name: str) -> Any:
+        return self._consts[name].value
+
+    def __iter__(self) -> Iterator[str]:
+        return iter(self._consts)
+
+    def __len__(self) -> int:
+        return len(self._consts)
 
 
 @dataclass(frozen=True)
@@ -65,6 +83,7 @@ class ResolverBase(ABC):
         self.open_reads: dict[str, frozenset[str]] = {}  # constant -> open params it reads
         self.reading_open: set[str] = set()  # those of the declaration being resolved
         self.modes: dict[str, ir.Mode] = {}
+        self._by_number: tuple[int, dict[int, ir.Mode]] = (0, {})  # (len(modes), by number)
         self.formulas: dict[str, ir.Formula] = {}
         self.formula_decls: dict[str, ast.FormulaDecl] = {}
         self.formula_stack: list[str] = []
@@ -88,8 +107,8 @@ class ResolverBase(ABC):
         self.placeholders[id(x)] = x
         return x
 
-    def _const_env(self) -> dict[str, Any]:
-        return {n: c.value for n, c in self.consts.items()}
+    def _const_env(self) -> Mapping[str, Any]:
+        return _Values(self.consts)
 
     # ---- names (afsmc.resolve.names) -------------------------------------------------
     @abstractmethod

@@ -17,15 +17,18 @@ from afsmc.model import expr as E
 from afsmc.model import ir
 from afsmc.model.evaluate import EvalError, scalar
 from afsmc.model.expr import Type
-from afsmc.model.limits import NUMBERS_HINT, unrepresentable
+from afsmc.model.limits import INT64, NUMBERS_HINT, unrepresentable
 from afsmc.model.names import did_you_mean
 from afsmc.resolve.base import CONST_CTX, ResolverBase, a
 from afsmc.syntax import ast
+from afsmc.syntax.limits import clip
 
 # A number as the language writes it (ASCII digits, no separators). Python's int() and
 # float() also read 1_0, ١٢ and " 3 ", which the command line does not take.
 _NUMBER = re.compile(r"[+-]?(?:[0-9]+(?:\.[0-9]*)?|\.[0-9]+)(?:[eE][+-]?[0-9]+)?")
 
+# The digits of the largest 64-bit integer: a longer integer does not fit.
+_INT64_DIGITS = len(str(INT64[1]))
 _TYPES = {"int": Type.INT, "double": Type.DOUBLE, "prob": Type.DOUBLE, "bool": Type.BOOL}
 _STAND_IN: dict[Type, Any] = {Type.INT: 0, Type.DOUBLE: 0.0, Type.BOOL: False}
 
@@ -144,13 +147,19 @@ class ConstantsMixin(ResolverBase):
             if not _NUMBER.fullmatch(text) and text.lower().lstrip("+-") not in ("inf", "nan",
                                                                                  "infinity"):
                 raise ValueError
+            if t is Type.INT and text.isascii() and text.lstrip("+-").isdigit() and len(
+                    text.lstrip("+-").lstrip("0")) > _INT64_DIGITS:
+                # beyond 64 bits, and perhaps beyond what int() converts (4,300 digits)
+                self.rep.error(codes.E208, f"--const {name}={clip(text)}: "
+                               f"{unrepresentable(INT64[1] + 1)}", span, hint=NUMBERS_HINT)
+                return placeholder
             value: int | float = int(text) if t is Type.INT else float(text)
         except ValueError:
-            self.rep.error(codes.E208, f"--const {name}={text}: not {a(t.value)}", span)
+            self.rep.error(codes.E208, f"--const {name}={clip(text)}: not {a(t.value)}", span)
             return placeholder
         why = unrepresentable(value)
         if why is not None:
-            self.rep.error(codes.E208, f"--const {name}={text}: "
+            self.rep.error(codes.E208, f"--const {name}={clip(text)}: "
                            + (why if t is Type.INT else "not a finite double"), span,
                            hint=NUMBERS_HINT)
             return placeholder

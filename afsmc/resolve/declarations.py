@@ -18,7 +18,7 @@ from afsmc.model.limits import (
 from afsmc.model.names import did_you_mean
 from afsmc.resolve.base import Ctx, ResolverBase
 from afsmc.syntax import ast
-from afsmc.syntax.parser import MAX_DEPTH
+from afsmc.syntax.limits import MAX_DEPTH, clip
 
 # How deeply a formula may nest once the formulas it uses are inlined (E246): the checks
 # and the JANI backend inline them, recursively (see afsmc.stack).
@@ -63,7 +63,7 @@ class DeclarationsMixin(ResolverBase):
             why = unrepresentable(d.number)
             if why is not None or not STATE_INT[0] <= d.number <= STATE_INT[1]:
                 self.rep.error(
-                    codes.E245 if why is not None else codes.E249, f"mode number {d.number} " + (
+                    codes.E245 if why is not None else codes.E249, f"mode number {clip(str(d.number))} " + (
                         why or BEYOND_STATE_INT), d.number_span or d.span,
                     hint=NUMBERS_HINT if why is not None else "number the modes with "
                     "smaller numbers")
@@ -79,7 +79,9 @@ class DeclarationsMixin(ResolverBase):
 
     def _mode_set(self, ms: ast.ModeSet, for_what: str) -> tuple[int, ...]:
         """The modes an action or hazard acts in: final modes cannot act (E216)."""
-        by_number = {m.number: m for m in self.modes.values()}
+        if self._by_number[0] != len(self.modes):  # built again only when modes were added
+            self._by_number = (len(self.modes), {m.number: m for m in self.modes.values()})
+        by_number = self._by_number[1]
         chosen: set[int] = set()
         for item in ms.items:
             if isinstance(item, ast.ModeName):

@@ -19,6 +19,7 @@ from afsmc.model.names import did_you_mean
 from afsmc.resolve.base import Ctx, ResolverBase, a
 from afsmc.syntax import ast
 from afsmc.syntax.errors.messages import NESTED_TEMPORAL, NOT_OPERATOR, OPERATORS
+from afsmc.syntax.limits import clip
 
 _ARITY = {"floor": 1, "ceil": 1, "pow": 2, "mod": 2}  # min and max take 2 or more
 
@@ -123,7 +124,7 @@ class ExpressionsMixin(ResolverBase):
         t = Type.INT if isinstance(e.value, int) else Type.DOUBLE
         why = unrepresentable(e.value)
         if why is not None:
-            self.rep.error(codes.E245, f"{e.text} " + (why if t is Type.INT else "is too large for a "
+            self.rep.error(codes.E245, f"{clip(e.text)} " + (why if t is Type.INT else "is too large for a "
                                                    "double: it would be infinite"),
                            e.span, hint=NUMBERS_HINT)
             return E.Lit(0 if t is Type.INT else 0.0, t, e.span)

@@ -1,7 +1,8 @@
 """Parse tree -> AST: the lark Transformer that builds :mod:`afsmc.syntax.ast` nodes.
 
 It also reports the few mistakes only visible once a rule is complete (E110 mode numbers,
-E111 mixed bodies, E118 repeated mode attributes, E119 empty bodies).
+E111 mixed bodies, E118 repeated mode attributes, E119 empty bodies), and a name, number or
+label name longer than MAX_TOKEN_CHARS (E125) before any of them is converted.
 """
 
 from __future__ import annotations
@@ -12,6 +13,10 @@ from lark import Token, Transformer, v_args
 
 from afsmc.diagnostics import Reporter, Source, Span, codes
 from afsmc.syntax import ast
+from afsmc.syntax.limits import MAX_TOKEN_CHARS, clip
+
+# The tokens whose length the author chooses, and how E125 names them.
+_SIZED = {"NAME": "name", "NUMBER": "number", "ESCAPED_STRING": "label name"}
 
 
 def span_of(source: Source, meta_or_tok: Any) -> Span:
@@ -31,6 +36,18 @@ class Builder(Transformer[Token, Any]):
         super().__init__()
         self.source = source
         self.reporter = reporter
+
+    def __default_token__(self, tok: Token) -> Token:
+        """Each token, before the rule it is in is built: E125 for one too long to read
+        (a number beyond it stands in as 0, so that nothing converts its digits)."""
+        what = _SIZED.get(tok.type)
+        if what is None or len(tok) <= MAX_TOKEN_CHARS:
+            return tok
+        self.reporter.error(codes.E125, f"this {what} has {len(tok):,} characters; afsmc reads "
+                            f"{what}s of up to {MAX_TOKEN_CHARS:,}", span_of(self.source, tok),
+                            hint=f"shorten '{clip(str(tok))}'" if what != "number" else
+                            "no 64-bit integer or double needs as many digits")
+        return Token.new_borrow_pos(tok.type, "0", tok) if tok.type == "NUMBER" else tok
 
     def _s(self, meta: Any) -> Span:
         return span_of(self.source, meta)

@@ -139,9 +139,10 @@ class _Formatter:
         return bisect.bisect_left(self.code_starts, offset)
 
     def _next(self, offset: int, kind: str) -> lark.Token:
-        for t in self.code[self._index_at(offset):]:
-            if t.type == kind:
-                return t
+        # (by index: a slice would copy the rest of the tokens at every call, N^2 in all)
+        for k in range(self._index_at(offset), len(self.code)):
+            if self.code[k].type == kind:
+                return self.code[k]
         raise CompileError([_internal(self.module.span.source.path, f"found no {kind}")])
 
     def _wraps(self, span: Span) -> int:
@@ -301,7 +302,8 @@ class _Formatter:
     def _signed_after(self, offset: int) -> str:
         i = self._index_at(offset)
         out = ""
-        for t in self.code[i + 1:]:  # skip '='
+        for k in range(i + 1, len(self.code)):  # skip '='
+            t = self.code[k]
             out += str(t)
             if t.type == "NUMBER":
                 break

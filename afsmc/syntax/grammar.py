@@ -8,14 +8,22 @@ from __future__ import annotations
 
 import contextvars
 import re
+from collections.abc import Callable
 from functools import cache
 from importlib import resources
+from typing import Any
 
 import lark
 from lark import Token
 
+from afsmc.syntax.limits import MAX_DEPTH
+
 # The grammar's start rules: a whole file, and one property (`verify --formula`).
 STARTS = ["start", "prop"]
+# The grammar's expression rules (the ones that build an operator node): each is one level
+# of nesting (E113).
+EXPR_RULES = frozenset({"arith", "compare", "and_", "or_", "implies", "ite", "neg", "not_",
+                        "call", "mode_in"})
 
 
 def grammar_text() -> str:
@@ -31,8 +39,40 @@ def lalr() -> lark.Lark:
     # hash, which saves ~0.15 s at every start of afsmc (lark rebuilds if the file is bad).
     keywords = re.findall(r'"([A-Za-z]+)"', text)
     callbacks = {kw.upper(): _glued for kw in keywords}
-    return lark.Lark(text, parser="lalr", propagate_positions=True, maybe_placeholders=False,
-                     cache=True, start=STARTS, lexer_callbacks=callbacks)
+    parser = lark.Lark(text, parser="lalr", propagate_positions=True, maybe_placeholders=False,
+                       cache=True, start=STARTS, lexer_callbacks=callbacks)
+    _count_depth(parser)
+    return parser
+
+
+class TooDeep(Exception):
+    """An expression nested deeper than MAX_DEPTH; `start` is where it starts."""
+
+    def __init__(self, start: int) -> None:
+        super().__init__(start)
+        self.start = start
+
+
+def _count_depth(parser: lark.Lark) -> None:
+    """Make the parser count each expression node's nesting as it builds it, and stop the
+    parse (TooDeep) at the first node nested deeper than MAX_DEPTH: a chain of a million
+    operators is refused after 5,000 of them, in bounded time and memory, and no later
+    (recursive) stage sees a deeper one."""
+    callbacks: dict[Any, Callable[[list[Any]], Any]] = parser._callbacks
+    for rule, build in list(callbacks.items()):
+        if (rule.alias or rule.origin.name) in EXPR_RULES:
+            callbacks[rule] = _counting(build)
+
+
+def _counting(build: Callable[[list[Any]], Any]) -> Callable[[list[Any]], Any]:
+    def node(children: list[Any]) -> Any:
+        tree = build(children)
+        depth = 1 + max((getattr(c, "afsmc_depth", 0) for c in children), default=0)
+        if depth > MAX_DEPTH:
+            raise TooDeep(tree.meta.start_pos)
+        setattr(tree, "afsmc_depth", depth)  # noqa: B010 (lark's Tree declares no such field)
+        return tree
+    return node
 
 
 # The text being lexed, for _glued.

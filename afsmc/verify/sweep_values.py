@@ -64,7 +64,9 @@ def _range(text: str) -> list[Number]:
         raise ValueError(f"{text!r} is empty: stop is below start")
     count = int((stop - start) / step) + 1
     if count > MAX_POINTS:
-        raise ValueError(f"{text!r} has {count:,} points; at most {MAX_POINTS:,}")
+        many = f"{count:,}" if count < 10**18 else "more than 10^18"  # (a count of 4,300
+        raise ValueError(f"{text!r} has {many} points; at most {MAX_POINTS:,}")  # digits or
+        # more cannot even be printed)
     whole = all(_INT.fullmatch(x.strip()) for x in parts)
     return [_number(start + i * step, whole) for i in range(count)]
 
@@ -90,4 +92,6 @@ def _list(text: str) -> list[Number]:
 
 
 def _number(d: Decimal, whole: bool) -> Number:
+    if whole and d.adjusted() >= 19:  # beyond 64 bits, and perhaps beyond what str() prints
+        raise ValueError(f"{d:.3e} does not fit in a 64-bit integer")
     return int(d) if whole and d == d.to_integral_value() else float(d)

@@ -16,9 +16,11 @@ from lark import Token
 from lark.exceptions import UnexpectedCharacters, UnexpectedInput, UnexpectedToken
 
 from afsmc.diagnostics import Related, Reporter, Source, Span, codes
+from afsmc.syntax.errors.before import hazard_header, operand_before, weight_before_guard
 from afsmc.syntax.errors.examples import E115, E120, MISSING_SEMICOLON, Mistake, match_example
 from afsmc.syntax.errors.hints import foreign, hazard_hint, mod_hint
 from afsmc.syntax.errors.messages import expected_hint, found
+from afsmc.syntax.limits import clip
 from afsmc.syntax.scan import CLOSERS, Scan, scan, string_end
 
 _DECL_KEYWORDS = frozenset({"machine", "const", "param", "var", "mode", "action", "hazard",
@@ -32,29 +34,24 @@ _NESTED_TEMPORAL = re.compile(r"\b[FGXU](?:\s*<=\s*[\w.]+)?\s+[FGX](?:\s*<=\s*[\
 # ... in brackets at the start of a path formula: `[ (F` (`F (F` is a nested one)
 _BRACKETED_TEMPORAL = re.compile(r"\[\s*(?:\(\s*)+[FGX](?:\s*<=\s*[\w.]+)?\s*$")
 
-# Operands (a name, a number, a quoted label), and one that ends right before a position.
+# Operands (a name, a number, a quoted label).
 _OPERANDS = ("NAME", "NUMBER", "ESCAPED_STRING")
-_OPERAND_BEFORE = re.compile(r'([A-Za-z_][\w.]*|\d[\w.]*|"[^"]*"|\))\s*\Z')
-
-# An action's or hazard's header with its weight, right before a failing `when`
-_WEIGHT_BEFORE_GUARD = re.compile(
-    r"\b(?:action|hazard)\b(?:(?!\bwhen\b)[^{};])*\bweight\b[^{};]*$")
-# A hazard's header up to the failing token, with one trigger already
-_HAZARD_BOTH = re.compile(r"\bhazard\b(?:[^{};]|\{[^{}]*\})*$")
 # A step bound (`F<=`, `G<=`, `U<=`, `C<=`, `I=`) of one number or name right before the
 # failing token, and (group 3) an operator with its operand that the parser took as the
 # start of the target: `F<=K -1` parses `-1` as the target and fails at the label after it.
 _BOUND_EXPRESSION = re.compile(
     r"(\b(?:[FGUC]\s*<=|I\s*=))\s*([\w.]+)\s*((?:[-+*/]\s*[\w.]+\s*)+)?$")
 _BODY_OWNER = re.compile(r"\b(action|hazard|rewards)\b")
+_TRIGGER = re.compile(r"\b(?:when|with)\b")
+_WORD = re.compile(r"\w*")
 
 
 def report_glued_keyword(tok: Token, source: Source, reporter: Reporter) -> None:
     """E122 for a keyword run into a name (`modeA`), which lexed as the keyword."""
     text = source.text
     end = tok.end_pos or 0
-    word = re.match(r"\w*", text[end:])
-    rest = word.group() if word else ""
+    word = _WORD.match(text, end)
+    rest = clip(word.group()) if word else ""
     reporter.error(codes.E122, f"'{tok}{rest}' is not a keyword, and no name may stand here",
                    Span.at_offset(source, tok.start_pos or 0, end + len(rest)),
                    hint=f"if the keyword '{tok}' is meant, put a space after it: "
@@ -238,12 +235,12 @@ def _next_declaration(f: _Failure, matched: Mistake | None, reporter: Reporter) 
 
 def _hazard_with_both(f: _Failure, reporter: Reporter) -> bool:
     """E124 for a hazard header with both a 'when' and a 'with probability' trigger."""
-    header = _HAZARD_BOTH.search(f.text, 0, f.pos) if f.word in ("when", "with") else None
-    if header is None or not re.search(r"\b(?:when|with)\b", header.group(0)):
+    start = hazard_header(f.text, f.pos) if f.word in ("when", "with") else None
+    if start is None or not _TRIGGER.search(f.text, start, f.pos):
         return False
     reporter.error(codes.E124, "a hazard is either preemptive ('when GUARD') or probabilistic "
                    "('with probability P'), not both", f.span,
-                   hint=hazard_hint(f.text, header.start(), f.pos))
+                   hint=hazard_hint(f.text, start, f.pos))
     return True
 
 
@@ -280,7 +277,7 @@ def _refine(f: _Failure, matched: Mistake | None, owner: str | None) -> Mistake 
         # Whatever expression the weight is (`weight (b > 3 ? 1 : 0) when ...`): the parser
         # state after it is the one every expression ends in, which the examples cannot tell;
         # a header that has its guard already has a second one here, not a swapped one.
-        matched = E120 if _WEIGHT_BEFORE_GUARD.search(text, 0, pos) else \
+        matched = E120 if weight_before_guard(text, pos) else \
             None if matched == E120 else matched
     if f.scan.open and f.scan.open[-1][0] == "[" and _NESTED_TEMPORAL.search(text, 0, pos):
         matched = E115
@@ -317,21 +314,21 @@ def _report_mistake(f: _Failure, mistake: Mistake, reporter: Reporter) -> None:
     if f.at_end:
         hint = "add ';' here; the file ends after this declaration"
     elif f.text.count("\n", f.scan.last_end, f.pos):
-        hint = f"add ';' here; the next line starts with {f.word!r}"
+        hint = f"add ';' here; the next line starts with {clip(f.word)!r}"
     else:
-        hint = f"add ';' here, before {f.word!r}"
+        hint = f"add ';' here, before {clip(f.word)!r}"
     reporter.error(code, message, f.after_last, hint=hint)
 
 
 def _missing_operator(f: _Failure, reporter: Reporter) -> bool:
     """E101 for two operands side by side (`x 2`), where an operator could follow the
     first. lark's list of what it expects there starts with '(' (a call), which is no help."""
-    before = _OPERAND_BEFORE.search(f.text, 0, f.pos)
+    before = operand_before(f.text, f.pos)
     if "PLUS" not in f.accepts or f.tok.type not in _OPERANDS or before is None:
         return False
     end = " or end the declaration with ';'" if "SEMICOLON" in f.accepts else ""
-    reporter.error(codes.E101, f"missing operator between {before.group(1)!r} and "
-                   f"{f.word!r}", f.span,
+    reporter.error(codes.E101, f"missing operator between {clip(before.group(1))!r} and "
+                   f"{clip(f.word)!r}", f.span,
                    hint=f"join them with an operator ('+', '==', '&&', ...){end}")
     return True
 

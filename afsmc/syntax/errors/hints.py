@@ -5,12 +5,19 @@ from __future__ import annotations
 
 import re
 
+from afsmc.syntax.errors.before import word_before
 from afsmc.syntax.errors.messages import NOT_OPERATOR, OPERATORS
+from afsmc.syntax.limits import clip
 
 # A property's query head right before a failing comparison: `P==0.5 [ ... ]`
 _QUERY_BEFORE = re.compile(r"\b(?:P|Pmin|Pmax|R|Rmin|Rmax)\s*(?:\{[^{}]*\})?\s*$")
 # An update's target right before a failing '=': at the start of an outcome or after ','
 _UPDATE_TARGET = re.compile(r"(?:[{;,]|:(?!=))\s*([A-Za-z_][\w.]*)\s*$")
+# An update right before an `if`, and the condition after it: `x := e if c`
+_UPDATE_BEFORE = re.compile(r"(?<![\w.])([A-Za-z_][\w.]*)\s*(:=|\+=|-=)\s*([^;{},:=]+?)\s*$")
+_IF_AFTER = re.compile(r"if\s+([^;{},]+?)\s*(?:[;},]|$)")
+# A word with dots after a position, blanks before it
+_WORD_AFTER = re.compile(r"\s*([\w.]+)")
 
 
 def foreign(text: str, pos: int, tok: str, kind: str,
@@ -30,7 +37,7 @@ def foreign(text: str, pos: int, tok: str, kind: str,
         return ("afsm has no infix 'mod': write 'mod(a, b)'",
                 mod_hint(text, pos, pos + 3), None)
     if body and tok == "=" and (target := _UPDATE_TARGET.search(text, 0, pos)):
-        name = target.group(1)
+        name = clip(target.group(1))
         return ("'=' does not assign in afsm: an update is written 'x := value'",
                 f"write '{name} := ...' (or '{name} += ...', '{name} -= ...')", None)
     if before == "not" and kind != "LPAR":
@@ -61,8 +68,10 @@ def hazard_hint(text: str, start: int, pos: int) -> str:
 
 def _conditional_update(text: str, pos: int) -> str | None:
     """The hint for Python's `x := e if c` at `if` (pos): `x := (c ? e : x)`."""
-    upd = re.search(r"([A-Za-z_][\w.]*)\s*(:=|\+=|-=)\s*([^;{},:=]+?)\s*$", text[:pos])
-    cond = re.match(r"if\s+([^;{},]+?)\s*(?:[;},]|$)", text[pos:])
+    # (the update is after the last ';', '{', '}' or ',', and its name starts a word)
+    segment = max(text.rfind(c, 0, pos) for c in ";{},") + 1
+    upd = _UPDATE_BEFORE.search(text, segment, pos)
+    cond = _IF_AFTER.match(text, pos)
     if upd is None or cond is None:
         return None
     x, op, e = upd.groups()
@@ -73,8 +82,8 @@ def _conditional_update(text: str, pos: int) -> str | None:
 def mod_hint(text: str, start: int, end: int) -> str:
     """'write mod(a, b)' with the operands around an infix `mod` or '%' where they are
     single names or numbers."""
-    a = re.search(r"([\w.]+)\s*$", text[:start])
-    b = re.match(r"\s*([\w.]+)", text[end:])
+    a = word_before(text, start)
+    b = _WORD_AFTER.match(text, end)
     if a and b:
         return f"write 'mod({a.group(1)}, {b.group(1)})'"
     return "mod(a, b) is the remainder of a divided by b"

@@ -7,6 +7,7 @@ import lark
 from lark import Token
 
 from afsmc.syntax.grammar import lalr
+from afsmc.syntax.limits import clip
 
 # Also said by the resolver, where `F F (x == 1)` and `not (x == 1)` parse as calls.
 NESTED_TEMPORAL = ("temporal operators (F, G, X, U) do not nest: one applies to state formulas "
@@ -45,4 +46,4 @@ def _literal_name(terminal: str) -> str:
 
 def found(tok: Token, the_end: str) -> str:
     """The failing token as quoted in a message: its text, or `the_end` at the end."""
-    return the_end if tok.type == "$END" else repr(str(tok))
+    return the_end if tok.type == "$END" else repr(clip(str(tok)))

@@ -69,3 +69,16 @@ def test_a_range_has_at_most_max_points() -> None:
     with pytest.raises(ValueError) as info:
         parse_values(f"0:{MAX_POINTS}")
     assert str(info.value) == f"'0:{MAX_POINTS}' has 10,001 points; at most 10,000"
+
+
+def test_a_value_of_thousands_of_digits_is_refused_not_a_crash() -> None:
+    """Python's int-string limit (4,300 digits) is never reached: a whole number beyond 64
+    bits is refused before it is converted or printed."""
+    import pytest as _pytest
+
+    from afsmc.verify import sweep_values
+
+    with _pytest.raises(ValueError, match="does not fit in a 64-bit integer"):
+        sweep_values._list("1" * 5000)
+    with _pytest.raises(ValueError, match="more than 10\\^18 points"):
+        sweep_values._range("0:" + "1" * 5000)

@@ -1,0 +1,163 @@
+"""How the time to parse, check and format a specification grows with its size.
+
+    .venv/bin/python benchmarks/input_scaling.py [--repeat N] [--scale K] [--only SHAPE]
+
+Three shapes of input, each generated at a base size (x1) and ten times it (x10):
+
+- **declarations**: a mission of n modes in a chain, each with a constant, a formula, a
+  label and an action (the many-declarations file);
+- **long names**: 60 such blocks with every name padded to L characters (L = 100, 1000:
+  names are limited to 1,000 characters, E125);
+- **long expression**: one guard that sums n terms, in groups of 100 in brackets (an
+  expression nests at most 5,000 levels, E113, so a longer one is a sum of sums).
+
+And the refusals, which must stay fast however large the input: a syntax error after a
+name of n characters, a chain `1+1+...` of n terms (E113 after 5,000), a number of n
+digits (E125), a file beyond the size limit (E004).
+
+Each time is the CPU time of this process (`time.process_time`, the median of N runs after
+a warm-up), so that other work on the machine inflates it less than the wall clock; the
+ratio is x10's time over x1's. "check" is `afsmc check`'s work in process (parse, resolve,
+the checks); "fmt" is `afsmc fmt`'s (parse, lay out, parse the result again to verify
+it). docs/benchmarks.md ("Input size scaling") records the figures.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import statistics
+import sys
+import time
+from collections.abc import Callable
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+sys.path.insert(0, ROOT)
+sys.setrecursionlimit(100_000)  # as afsmc.cli gives its commands (afsmc.stack)
+
+from afsmc.compiler import load  # noqa: E402
+from afsmc.diagnostics import CompileError  # noqa: E402
+from afsmc.syntax import parser  # noqa: E402
+from afsmc.syntax.fmt import format_text  # noqa: E402
+from afsmc.syntax.limits import MAX_SOURCE_CHARS  # noqa: E402
+
+
+def declarations(n: int, pad: int = 0) -> str:
+    """A chain of n modes, each with a constant, a formula, a label and an action; every
+    name padded to `pad` characters."""
+    def name(kind: str, i: int) -> str:
+        base = f"{kind}{i}"
+        return base + "_" * max(0, pad - len(base))
+    lines = ["machine big;", "var x : [0..10] init 0;"]
+    for i in range(n + 1):
+        attrs = " initial" if i == 0 else " final" if i == n else ""
+        lines.append(f"mode {name('M', i)} = {i}{attrs};")
+    for i in range(n):
+        c, f, m, nxt = name("C", i), name("F", i), name("M", i), name("M", i + 1)
+        lines += [f"const int {c} = {i % 7} + 1;",
+                  f"formula {f} = x + {c};",
+                  f"label {name('l', i)} = x == {i % 10} && mode == {m};",
+                  f"action {name('A', i)} in {m} when {f} >= 0 {{ goto {nxt}; x := {i % 10}; }}"]
+    lines.append(f"property done = P=? [ F mode == {name('M', n)} ];")
+    return "\n".join(lines) + "\n"
+
+
+def long_names(length: int) -> str:
+    return declarations(60, pad=length)
+
+
+def long_expression(n: int) -> str:
+    """A guard that sums n terms, 100 to a bracket."""
+    groups = []
+    for g in range(0, n, 100):
+        groups.append("(" + " + ".join("x" if k % 2 else str(k % 3)
+                                       for k in range(g, min(n, g + 100))) + ")")
+    return ("machine long;\nvar x : [0..3] init 0;\nmode S = 0 initial;\nmode D = 1 final;\n"
+            f"formula big = {' + '.join(groups)};\n"
+            "action Go in S when big >= 0 { goto D; }\n"
+            "property done = P=? [ F mode == D ];\n")
+
+
+def syntax_error_after_name(n: int) -> str:
+    return "machine m;\nconst int " + "a" * n + " = 1; }\n"
+
+
+def chain(n: int) -> str:
+    return "machine m;\nconst int N = " + "+".join(["1"] * n) + ";\n"
+
+
+def long_number(n: int) -> str:
+    return "machine m;\nconst int N = " + "1" * n + ";\n"
+
+
+def too_large(n: int) -> str:
+    return "machine m;\n" + "// padding\n" * (n // 11 + 1)
+
+
+def _parse(text: str) -> None:
+    parser._parse_module.cache_clear()
+    parser.parse(text, "bench.afsm")
+
+
+def _check(text: str) -> None:
+    parser._parse_module.cache_clear()
+    load("bench.afsm", {}, text=text)
+
+
+def _fmt(text: str) -> None:
+    parser._parse_module.cache_clear()
+    format_text(text, "bench.afsm")
+
+
+STAGES: dict[str, Callable[[str], None]] = {"parse": _parse, "check": _check, "fmt": _fmt}
+# shape -> (generator, x1 size, stages, what the size counts)
+SHAPES: dict[str, tuple[Callable[[int], str], int, tuple[str, ...], str]] = {
+    "declarations": (declarations, 300, ("parse", "check", "fmt"), "modes"),
+    "long names": (long_names, 100, ("parse", "check", "fmt"), "characters a name"),
+    "long expression": (long_expression, 3000, ("parse", "check", "fmt"), "terms"),
+    "syntax error after a long name": (syntax_error_after_name, 40_000, ("check",), "characters"),
+    "chain 1+1+... (E113)": (chain, 100_000, ("check",), "terms"),
+    "number of n digits (E125)": (long_number, 4301, ("check",), "digits"),
+    "file beyond the limit (E004)": (too_large, MAX_SOURCE_CHARS + 1, ("check",), "characters"),
+}
+
+
+def measure(stage: Callable[[str], None], text: str, repeat: int) -> tuple[float, str]:
+    """The median CPU time of `stage` on `text`, and what it answered."""
+    answer = "ok"
+    times = []
+    for i in range(repeat + 1):
+        t0 = time.process_time()
+        try:
+            stage(text)
+        except CompileError as exc:
+            answer = exc.diagnostics[0].code
+        if i:  # the first run is a warm-up
+            times.append(time.process_time() - t0)
+    return statistics.median(times), answer
+
+
+def main() -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--repeat", type=int, default=3)
+    ap.add_argument("--scale", type=float, default=1.0, help="multiply the x1 sizes")
+    ap.add_argument("--only", help="measure only the shapes whose name contains this")
+    args = ap.parse_args()
+    print("| input | x1 size | x1 chars | x10 chars | stage | x1 s | x10 s | ratio | answer |")
+    print("|---|---:|---:|---:|---|---:|---:|---:|---|")
+    for shape, (make, size, stages, unit) in SHAPES.items():
+        if args.only and args.only not in shape:
+            continue
+        n = max(1, int(size * args.scale)) if "E004" not in shape else size
+        small, large = make(n), make(10 * n)
+        for stage in stages:
+            t1, a1 = measure(STAGES[stage], small, args.repeat)
+            t10, a10 = measure(STAGES[stage], large, args.repeat)
+            answer = a1 if a1 == a10 else f"{a1} / {a10}"
+            print(f"| {shape} | {n:,} {unit} | {len(small):,} | {len(large):,} | {stage} | "
+                  f"{t1:.3f} | {t10:.3f} | {t10 / max(t1, 1e-3):.1f} | {answer} |", flush=True)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
