@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import html
 import json
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
@@ -41,12 +41,21 @@ def names(properties: Sequence[str] | str | None) -> list[str]:
 
 def verify(mission: Mission, properties: Sequence[str] | str | None = None,
            **options: Any) -> Results:
-    """:meth:`Mission.verify`: :func:`afsmc.verify.run`, the function `afsmc verify` calls,
-    with the command's defaults; every option is passed on as given."""
+    """:meth:`Mission.verify`: :func:`verify_file` on the mission's text and constants."""
+    return verify_file(mission.path, properties, text=mission.text,
+                       consts=dict(mission.consts), **options)
+
+
+def verify_file(path: str, properties: Sequence[str] | str | None = None, *,
+                text: str | None = None, consts: Mapping[str, str] | None = None,
+                **options: Any) -> Results:
+    """The one way afsmc verifies, for `afsmc verify` and :meth:`Mission.verify`:
+    :func:`afsmc.verify.run` with the command's defaults (every option passed on as
+    given), its worker processes started without re-running a user's script."""
     kwargs = {**VERIFY_DEFAULTS, **options}
     try:
         with without_main():
-            res = lib.run(mission.path, text=mission.text, consts=dict(mission.consts),
+            res = lib.run(path, text=text, consts=dict(consts or {}),
                           properties=names(properties), **kwargs)
     except CompileError as exc:
         raise AfsmError.of(exc) from None

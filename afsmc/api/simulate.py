@@ -23,14 +23,17 @@ if TYPE_CHECKING:
 def simulate(mission: Mission, runs: int = 100_000, *, seed: int = 0,
              resolve: Strategy = "uniform", confidence: float = 0.999,
              max_steps: int = 100_000, jobs: int = 1, batch_size: int = BATCH,
-             dask: Any = None, traces: int = 0) -> Estimates:
+             dask: Any = None, traces: int = 0, at: str = "mid") -> Estimates:
     """:meth:`Mission.simulate`, with `afsmc simulate`'s defaults: the job `afsmc simulate`
-    makes (:func:`afsmc.sim.run.job_for`) run by :func:`afsmc.sim.run.simulate`."""
+    makes (:func:`afsmc.sim.run.job_for`) run by :func:`afsmc.sim.run.simulate`. `at`:
+    interval probabilities at their midpoint ("mid"), lower ("min") or upper ("max") end."""
     if runs < 1 or max_steps < 1 or jobs < 1 or batch_size < 1:
         raise ValueError("runs, max_steps, jobs and batch_size must be positive")
     if not 0.0 < confidence < 1.0:
         raise ValueError(f"confidence must be in (0, 1); got {confidence!r}")
-    job = job_for(mission.path, mission.text, mission.consts, resolve, max_steps)
+    if at not in ("mid", "min", "max"):
+        raise ValueError(f"at must be mid, min or max; got {at!r}")
+    job = job_for(mission.path, mission.text, mission.consts, resolve, max_steps, at)
     try:
         with without_main():
             out = run_simulation(job, runs, seed, confidence=confidence, jobs=jobs,

@@ -4,7 +4,7 @@ constant (or of the step bound): ``to_pandas()`` (the rows of `afsmc sweep`'s CS
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
@@ -34,14 +34,23 @@ def sweep(mission: Mission, variable: str, values: Sequence[Number] | str, *,
             values = parse_values(values)
         except ValueError as exc:
             raise ValueError(f"values {values!r}: {exc}") from None
-    kwargs: dict[str, Any] = {**VERIFY_DEFAULTS, **options}
     if variable == "bound":
-        kwargs.setdefault("kind", "bound")
+        options.setdefault("kind", "bound")
+    return sweep_file(mission.path, variable, values, properties=properties,
+                      text=mission.text, consts=dict(mission.consts), **options)
+
+
+def sweep_file(path: str, variable: str, values: Sequence[Number], *,
+               properties: Sequence[str] | str | None = None, text: str | None = None,
+               consts: Mapping[str, str] | None = None, **options: Any) -> Sweep:
+    """The one way afsmc sweeps, for `afsmc sweep` and :meth:`Mission.sweep`:
+    :func:`afsmc.verify.sweep` with the command's defaults (every option passed on as
+    given), its worker processes started without re-running a user's script."""
+    kwargs: dict[str, Any] = {**VERIFY_DEFAULTS, **options}
     try:
         with without_main():
-            res = lib.sweep(mission.path, variable, list(values), text=mission.text,
-                            consts=dict(mission.consts), properties=names(properties),
-                            **kwargs)
+            res = lib.sweep(path, variable, list(values), text=text, consts=dict(consts or {}),
+                            properties=names(properties), **kwargs)
     except CompileError as exc:
         raise AfsmError.of(exc) from None
     return Sweep(res)

@@ -13,7 +13,7 @@ import os
 import sys
 from collections.abc import Callable
 
-from afsmc import verify as lib
+from afsmc.api.sweep import sweep_file
 from afsmc.commands.common import add_file, dask_address, fail, reductions, usage_error
 from afsmc.commands.verify import (
     add_storm_options,
@@ -147,12 +147,12 @@ def run(args: argparse.Namespace) -> int:
         for out in (args.output, args.plot):
             if out:
                 check_writable(out, protect=(args.file,))
-        res = lib.sweep(args.file, variable, values, kind=kind,  # type: ignore[arg-type]
-                        consts=fixed, properties=args.property, formulas=args.formula,
-                        via=args.via, engine=args.engine, max_states=args.max_states,
-                        jobs=args.jobs, dask=args.dask, uniform=args.uniform,
-                        progress=progress, reductions=reductions(args),
-                        bisimulation=args.bisim, split=args.split, solver=args.solver)
+        res = sweep_file(args.file, variable, values, kind=kind,
+                         consts=fixed, properties=args.property, formulas=args.formula,
+                         via=args.via, engine=args.engine, max_states=args.max_states,
+                         jobs=args.jobs, dask=args.dask, uniform=args.uniform,
+                         progress=progress, reductions=reductions(args),
+                         bisimulation=args.bisim, split=args.split, solver=args.solver).raw
         write(res)
     except CompileError as exc:
         if not isinstance(exc.partial, SweepResult) or not exc.partial.points:

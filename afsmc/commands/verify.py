@@ -7,7 +7,7 @@ import json
 import sys
 from collections.abc import Callable
 
-from afsmc import verify as lib
+from afsmc.api.results import verify_file
 from afsmc.commands import verify_extras as extras
 from afsmc.commands.common import (
     add_consts,
@@ -176,14 +176,14 @@ def run(args: argparse.Namespace) -> int:
     if args.traces_out and args.witness is None:
         usage_error("--traces-out writes the --witness paths: give --witness K as well")
     try:
-        res = lib.run(args.file, consts=overrides(args), properties=args.property,
-                  formulas=args.formula, via=args.via, engine=args.engine,
-                  max_states=args.max_states, uniform=args.uniform,
-                  progress=progress_printer(args), reductions=reductions(args),
-                  bisimulation=args.bisim, split=args.split, solver=args.solver,
-                  precision=args.precision, exact=args.exact,
-                  strategy=args.strategy, witness=extras.witness(args),
-                  witness_dir=args.witness_dir)
+        res = verify_file(args.file, args.property, consts=overrides(args),
+                          formulas=args.formula, via=args.via, engine=args.engine,
+                          max_states=args.max_states, uniform=args.uniform,
+                          progress=progress_printer(args), reductions=reductions(args),
+                          bisimulation=args.bisim, split=args.split, solver=args.solver,
+                          precision=args.precision, exact=args.exact,
+                          strategy=args.strategy, witness=extras.witness(args),
+                          witness_dir=args.witness_dir).raw
         if args.traces_out:
             extras.write_traces(args.traces_out, res, args.file)
         box, bounds = parametric.for_file(  # interval probabilities: min/max over them
