@@ -1,0 +1,161 @@
+"""Continuous fuzzing of the command line (issue 36): whatever the file, `check`,
+`compile` (PRISM, JANI, DOT) and `fmt` answer with an exit code of their own (0, 1 or 2,
+never 3, an internal error), never print a traceback, and answer within a CPU limit per
+command (tests/fuzz/harness.py).
+
+The inputs: every file of tests/fuzz/corpus/ (inputs that once found a bug, and seeds),
+then files drawn by hypothesis from three generators (tests/fuzz/generate.py): walks of the
+grammar, whole machines whose names agree, and mutations of the examples, the golden
+cases and the corpus; a few go through a real `python -m afsmc` process as well.
+
+Each generated test is bounded (AFSMC_FUZZ_EXAMPLES examples, default 40, and BUDGET
+seconds of wall time) and derandomized, so CI runs the same inputs every time; the long
+run with fresh inputs is benchmarks/fuzz.py. A failure prints the input and writes it to
+a file to add to the corpus.
+"""
+
+from __future__ import annotations
+
+import os
+import random
+import subprocess
+import sys
+import tempfile
+import time
+from collections.abc import Callable, Iterator
+from pathlib import Path
+
+import pytest
+from hypothesis import HealthCheck, assume, given, settings
+from hypothesis import strategies as st
+
+from tests.fuzz import generate, harness
+
+EXAMPLES = int(os.environ.get("AFSMC_FUZZ_EXAMPLES", "40"))
+BUDGET = 20.0  # seconds of wall time per generated test; the examples left are skipped
+FUZZ = settings(max_examples=EXAMPLES, deadline=None, derandomize=True, database=None,
+                suppress_health_check=list(HealthCheck))
+CORPUS = sorted(generate.CORPUS.glob("*.afsm"))
+
+
+@pytest.fixture(scope="module")
+def workdir() -> Iterator[str]:
+    with harness.workdir() as d:
+        yield d
+
+
+def _assert_sound(data: bytes, workdir: str, rng: random.Random | None = None) -> None:
+    verdict = harness.judge(data, workdir, rng, compile_share=1.0 if rng is None else 0.3)
+    if verdict.failures:
+        fd, kept = tempfile.mkstemp(prefix="afsmc-fuzz-failure-", suffix=".afsm")
+        with os.fdopen(fd, "wb") as f:
+            f.write(data)
+        first = verdict.failures[0]
+        pytest.fail(f"{first.kind} in `afsmc {' '.join(first.argv[:1] + first.argv[2:])}` "
+                    f"on this input (kept in {kept}; add it to tests/fuzz/corpus/):\n"
+                    f"{data!r}\n{first.detail}", pytrace=False)
+
+
+def test_corpus_is_not_empty_and_not_excluded() -> None:
+    assert len(CORPUS) >= 5
+    for path in CORPUS:
+        assert generate.excluded(path.read_bytes()) is None, path.name
+
+
+@pytest.mark.parametrize("path", CORPUS, ids=[p.stem for p in CORPUS])
+def test_corpus(path: Path, workdir: str) -> None:
+    """Each kept input still gets an answer (every command, compile too)."""
+    _assert_sound(path.read_bytes(), workdir)
+
+
+def _budgeted(make: Callable[[random.Random], bytes]) -> Callable[[random.Random, str], None]:
+    started: list[float] = []
+
+    def body(rng: random.Random, workdir: str) -> None:
+        if not started:
+            started.append(time.monotonic())
+        if time.monotonic() - started[0] > BUDGET:
+            return  # the test's time is used up: the remaining examples pass unrun
+        data = make(rng)
+        assume(generate.excluded(data) is None)
+        _assert_sound(data, workdir, rng)
+    return body
+
+
+_grammar = _budgeted(lambda rng: generate.from_grammar(rng).encode())
+_spec = _budgeted(lambda rng: generate.spec(rng).encode())
+SEEDS = generate.seeds()
+_mutated = _budgeted(lambda rng: generate.mutate(rng, rng.choice(SEEDS)))
+_spliced = _budgeted(lambda rng: generate.mutate(
+    rng, generate.splice(rng, rng.choice(SEEDS), rng.choice(SEEDS))))
+
+
+@pytest.mark.slow
+@FUZZ
+@given(st.randoms(use_true_random=False))
+def test_grammar_walks(workdir: str, rng: random.Random) -> None:
+    _grammar(rng, workdir)
+
+
+@pytest.mark.slow
+@FUZZ
+@given(st.randoms(use_true_random=False))
+def test_generated_machines(workdir: str, rng: random.Random) -> None:
+    _spec(rng, workdir)
+
+
+@pytest.mark.slow
+@FUZZ
+@given(st.randoms(use_true_random=False))
+def test_mutated_seeds(workdir: str, rng: random.Random) -> None:
+    _mutated(rng, workdir)
+
+
+@pytest.mark.slow
+@FUZZ
+@given(st.randoms(use_true_random=False))
+def test_spliced_seeds(workdir: str, rng: random.Random) -> None:
+    _spliced(rng, workdir)
+
+
+@pytest.mark.slow
+def test_generators_reach_every_stage(workdir: str) -> None:
+    """The generators are worth their time: files that fail to parse, files that fail a
+    check, and files that check and compile, within the first 200 generated machines."""
+    rng = random.Random(36)
+    codes: set[tuple[str, int]] = set()
+    syntax_errors = 0
+    for _ in range(10):
+        verdict = harness.judge(generate.from_grammar(rng).encode(), workdir, rng)
+        codes |= set(verdict.codes.items())
+        syntax_errors += verdict.syntax_error
+        verdict = harness.judge(generate.mutate(rng, rng.choice(SEEDS)), workdir, rng)
+        syntax_errors += verdict.syntax_error
+    assert syntax_errors and ("check", 1) in codes
+    path = os.path.join(workdir, "machine.afsm")
+    for _ in range(200):
+        text = generate.spec(rng)
+        Path(path).write_text(text)
+        if harness.run_main(["check", path])[0] == 0:
+            codes |= set(harness.judge(text.encode(), workdir, rng).codes.items())
+            break
+    assert {("check", 0), ("prism", 0), ("jani", 0), ("dot", 0)} <= codes
+
+
+@pytest.mark.slow
+def test_through_a_real_process(tmp_path: Path) -> None:
+    """The same properties through `python -m afsmc`, where the traceback would really be
+    printed (no AFSMC_TRACEBACK) and the exit code is the process's."""
+    rng = random.Random(2026)
+    inputs = [CORPUS[0].read_bytes(), generate.spec(rng).encode(),
+              generate.mutate(rng, SEEDS[0]), generate.from_grammar(rng).encode()]
+    env = {k: v for k, v in os.environ.items() if k != "AFSMC_TRACEBACK"}
+    for i, data in enumerate(inputs):
+        path = tmp_path / f"in{i}.afsm"
+        path.write_bytes(data)
+        for argv in (["check", str(path)], ["fmt", "--diff", str(path)],
+                     ["compile", str(path), "-t", "jani", "-o", "-"]):
+            proc = subprocess.run([sys.executable, "-m", "afsmc", *argv], capture_output=True,
+                                  text=True, env=env, timeout=120)
+            assert proc.returncode in (0, 1), (argv, data, proc.stderr)
+            assert "Traceback" not in proc.stderr, (argv, data, proc.stderr)
