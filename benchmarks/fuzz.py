@@ -97,42 +97,54 @@ def main() -> int:
         os.replace(tmp, args.summary)
         return s
 
+    def one(i: int, wd: str) -> None:
+        nonlocal cpu, slowest
+        kind = rng.choices(kinds, weights)[0]
+        data = draw(kind, rng, seeds)
+        by_kind[kind] += 1
+        if generate.excluded(data):
+            counts["excluded"] += 1
+            return
+        verdict = harness.judge(data, wd, rng, cpu_limit=args.cpu_limit, compile_share=0.1,
+                                fmt_share=0.1)
+        cpu += verdict.cpu
+        counts["commands"] += len(verdict.codes)
+        counts["syntax"] += verdict.syntax_error
+        codes.update(f"{c} {v}" for c, v in verdict.codes.items())
+        if verdict.cpu > slowest[0]:
+            slowest = (verdict.cpu, f"input {i} ({kind})")
+        for f in verdict.failures:
+            failures[f.kind] += 1
+            os.makedirs(args.keep, exist_ok=True)
+            name = f"{f.kind.replace(' ', '')}-{i}.afsm"
+            Path(args.keep, name).write_bytes(data)
+            last = f.detail.strip().splitlines()[-1:] or [""]
+            examples[name] = f"{' '.join(f.argv[:1] + f.argv[2:])}: {last[0][:300]}"
+
+    done, interrupted = 0, False
     with harness.workdir() as wd:
-        for i in range(1, args.inputs + 1):
-            kind = rng.choices(kinds, weights)[0]
-            data = draw(kind, rng, seeds)
-            by_kind[kind] += 1
-            if generate.excluded(data):
-                counts["excluded"] += 1
-            else:
-                verdict = harness.judge(data, wd, rng, cpu_limit=args.cpu_limit,
-                                        compile_share=0.1, fmt_share=0.1)
-                cpu += verdict.cpu
-                counts["commands"] += len(verdict.codes)
-                counts["syntax"] += verdict.syntax_error
-                codes.update(f"{c} {v}" for c, v in verdict.codes.items())
-                if verdict.cpu > slowest[0]:
-                    slowest = (verdict.cpu, f"input {i} ({kind})")
-                for f in verdict.failures:
-                    failures[f.kind] += 1
-                    os.makedirs(args.keep, exist_ok=True)
-                    name = f"{f.kind.replace(' ', '')}-{i}.afsm"
-                    Path(args.keep, name).write_bytes(data)
-                    last = f.detail.strip().splitlines()[-1:] or [""]
-                    examples[name] = f"{' '.join(f.argv[:1] + f.argv[2:])}: {last[0][:300]}"
-            if i % 1000 == 0:
-                s = write(i)
-                print(f"{i} inputs, {s['exit3']} exit-3, {s['tracebacks']} tracebacks, "
-                      f"{s['timeouts']} time-outs, {s['inputs_per_s']}/s", file=sys.stderr,
-                      flush=True)
-    s = write(args.inputs)
+        try:
+            for i in range(1, args.inputs + 1):
+                one(i, wd)
+                done = i
+                if i % 1000 == 0:
+                    s = write(i)
+                    print(f"{i} inputs, {s['exit3']} exit-3, {s['tracebacks']} tracebacks, "
+                          f"{s['timeouts']} time-outs, {s['inputs_per_s']}/s",
+                          file=sys.stderr, flush=True)
+        except KeyboardInterrupt:  # Ctrl-C: the summary of the inputs run so far
+            print(f"interrupted after {done} inputs", file=sys.stderr)
+            interrupted = True
+    s = write(done)
     print(f"| inputs | run | excluded | exit 3 | tracebacks | time-outs | commands | "
           f"syntax errors | checked | compiled | CPU s | wall s |\n"
           f"|---|---|---|---|---|---|---|---|---|---|---|---|\n"
           f"| {s['inputs']} | {s['run']} | {s['excluded']} | {s['exit3']} | {s['tracebacks']} "
           f"| {s['timeouts']} | {s['commands']} | {s['syntax_errors']} | {s['checked_ok']} | "
           f"{s['compiled_ok']} | {s['cpu_s']} | {s['wall_s']} |")
-    return 1 if s["exit3"] or s["tracebacks"] or s["timeouts"] else 0
+    if s["exit3"] or s["tracebacks"] or s["timeouts"] or s["formatter_e190"]:
+        return 1
+    return 130 if interrupted else 0
 
 
 if __name__ == "__main__":
