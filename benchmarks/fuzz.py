@@ -8,9 +8,11 @@ counting internal errors (exit 3), tracebacks and time-outs.
 The inputs come from tests/fuzz/generate.py, as in the CI test (tests/fuzz/test_fuzz.py),
 but fresh ones (a seeded Random, not hypothesis's derandomized draws): walks of the
 grammar, generated machines, mutations and splices of the seed files (the examples, the
-golden cases and tests/fuzz/corpus/). `compile` runs on every file that checks and on a
-tenth of the others (a file that fails its check fails `compile` the same way); `fmt` on
-every file without a syntax error and on a tenth of the others (its parse is `check`'s).
+golden cases and tests/fuzz/corpus/), and seeds with a declaration drawn from the grammar.
+`compile` runs on every file that checks and on a tenth of the others (a file that fails
+its check fails `compile` the same way); `fmt` on every file without a syntax error and
+on a tenth of the others (its parse is `check`'s). E190 from `fmt` (its safety net) counts
+as a failure too.
 Inputs in the classes fixed elsewhere (huge literals, superlinear sizes and depths:
 tests/fuzz/generate.excluded) are counted and not run.
 
@@ -36,7 +38,7 @@ sys.path.insert(0, str(ROOT))
 
 from tests.fuzz import generate, harness  # noqa: E402
 
-MIX = {"grammar": 0.2, "machine": 0.25, "mutation": 0.4, "splice": 0.15}
+MIX = {"grammar": 0.2, "machine": 0.25, "mutation": 0.3, "splice": 0.1, "declaration": 0.15}
 
 
 def draw(kind: str, rng: random.Random, seeds: list[bytes]) -> bytes:
@@ -44,6 +46,8 @@ def draw(kind: str, rng: random.Random, seeds: list[bytes]) -> bytes:
         return generate.from_grammar(rng).encode()
     if kind == "machine":
         return generate.spec(rng).encode()
+    if kind == "declaration":
+        return generate.with_declaration(rng, rng.choice(seeds))
     if kind == "mutation":
         return generate.mutate(rng, rng.choice(seeds))
     return generate.mutate(rng, generate.splice(rng, rng.choice(seeds), rng.choice(seeds)))

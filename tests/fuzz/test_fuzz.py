@@ -4,9 +4,10 @@ never 3, an internal error), never print a traceback, and answer within a CPU li
 command (tests/fuzz/harness.py).
 
 The inputs: every file of tests/fuzz/corpus/ (inputs that once found a bug, and seeds),
-then files drawn by hypothesis from three generators (tests/fuzz/generate.py): walks of the
-grammar, whole machines whose names agree, and mutations of the examples, the golden
-cases and the corpus; a few go through a real `python -m afsmc` process as well.
+then files drawn by hypothesis from the generators of tests/fuzz/generate.py: walks of the
+grammar, whole machines whose names agree, mutations and splices of the examples, the
+golden cases and the corpus, and seeds with a declaration drawn from the grammar; a few go
+through a real `python -m afsmc` process as well.
 
 Each generated test is bounded (AFSMC_FUZZ_EXAMPLES examples, default 40, and BUDGET
 seconds of wall time) and derandomized, so CI runs the same inputs every time; the long
@@ -32,7 +33,7 @@ from hypothesis import strategies as st
 from tests.fuzz import generate, harness
 
 EXAMPLES = int(os.environ.get("AFSMC_FUZZ_EXAMPLES", "40"))
-BUDGET = 12.0  # seconds of wall time per generated test; the examples left are skipped
+BUDGET = 10.0  # seconds of wall time per generated test; the examples left are skipped
 FUZZ = settings(max_examples=EXAMPLES, deadline=None, derandomize=True, database=None,
                 suppress_health_check=list(HealthCheck))
 CORPUS = sorted(generate.CORPUS.glob("*.afsm"))
@@ -86,6 +87,7 @@ _grammar = _budgeted(lambda rng: generate.from_grammar(rng).encode())
 _spec = _budgeted(lambda rng: generate.spec(rng).encode())
 SEEDS = generate.seeds()
 _mutated = _budgeted(lambda rng: generate.mutate(rng, rng.choice(SEEDS)))
+_declared = _budgeted(lambda rng: generate.with_declaration(rng, rng.choice(SEEDS)))
 _spliced = _budgeted(lambda rng: generate.mutate(
     rng, generate.splice(rng, rng.choice(SEEDS), rng.choice(SEEDS))))
 
@@ -109,6 +111,13 @@ def test_generated_machines(workdir: str, rng: random.Random) -> None:
 @given(st.integers(0, 2**64 - 1).map(random.Random))
 def test_mutated_seeds(workdir: str, rng: random.Random) -> None:
     _mutated(rng, workdir)
+
+
+@pytest.mark.slow
+@FUZZ
+@given(st.integers(0, 2**64 - 1).map(random.Random))
+def test_seeds_with_a_declaration(workdir: str, rng: random.Random) -> None:
+    _declared(rng, workdir)
 
 
 @pytest.mark.slow
