@@ -59,7 +59,8 @@ def main() -> int:
     p.add_argument("--seed", type=int, default=36)
     p.add_argument("--cpu-limit", type=float, default=harness.CPU_LIMIT,
                    help="seconds of CPU per command and input (default: %(default)s)")
-    p.add_argument("--summary", default=str(ROOT / "benchmarks" / "fuzz-summary.json"))
+    p.add_argument("--summary", default=str(ROOT / "benchmarks" / "fuzz-summary.json"),
+                   help="the JSON summary (default: %(default)s, the recorded run)")
     p.add_argument("--keep", default=str(ROOT / "benchmarks" / "fuzz-failures"))
     args = p.parse_args()
 
