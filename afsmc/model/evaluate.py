@@ -51,9 +51,37 @@ class Env:
     labels: Mapping[str, Expr] = field(default_factory=dict)
     weight: Callable[[str], Array] | None = None
     memo: dict[int, Array] = field(default_factory=dict)
+    # Values of compound nodes already evaluated in this same state-free environment, by
+    # id (with the node, so that a reused id is not mistaken): a caller that evaluates
+    # every level of a long chain (the resolver's folding check) then pays for each node once.
+    nodes: dict[int, tuple[Expr, Any]] | None = None
 
 
 def evaluate(e: Expr, env: Env) -> Array:
+    if env.nodes is not None and isinstance(e, (Unary, Binary, Call)):
+        hit = env.nodes.get(id(e))
+        if hit is not None and hit[0] is e:
+            if isinstance(hit[1], _Raised):
+                raise hit[1].exc
+            return hit[1]
+        try:
+            v = _evaluate(e, env)
+        except (EvalError, ArithmeticError) as exc:
+            env.nodes[id(e)] = (e, _Raised(exc))
+            raise
+        env.nodes[id(e)] = (e, v)
+        return v
+    return _evaluate(e, env)
+
+
+@dataclass(frozen=True)
+class _Raised:
+    """What a node's evaluation raised, remembered like a value in Env.nodes."""
+
+    exc: Exception
+
+
+def _evaluate(e: Expr, env: Env) -> Array:
     if isinstance(e, Lit):
         return e.value
     if isinstance(e, VarRef):
@@ -237,10 +265,13 @@ def _to_int(v: Array) -> Array:
     return arr.astype(np.int64)
 
 
-def scalar(e: Expr, consts: Mapping[str, Any], formulas: Mapping[str, Expr] | None = None) -> Any:
-    """The value of a state-free expression, as a Python scalar."""
+def scalar(e: Expr, consts: Mapping[str, Any], formulas: Mapping[str, Expr] | None = None,
+           nodes: dict[int, tuple[Expr, Any]] | None = None) -> Any:
+    """The value of a state-free expression, as a Python scalar. `nodes`: the values of
+    subexpressions evaluated before with the same constants (see Env.nodes), kept across
+    calls."""
     with np.errstate(all="ignore"):  # inf and NaN are the caller's to judge, not warnings
-        v = evaluate(e, Env(consts=consts, formulas=formulas or {}))
+        v = evaluate(e, Env(consts=consts, formulas=formulas or {}, nodes=nodes))
     if isinstance(v, np.generic):
         return v.item()
     if isinstance(v, np.ndarray):

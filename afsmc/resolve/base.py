@@ -99,6 +99,7 @@ class ResolverBase(ABC):
         self.value_names: dict[str, tuple[str, Span]] = {}
         self.used: set[str] = set()  # constants and formulas referenced anywhere
         self._free: dict[int, tuple[E.Expr, bool]] = {}  # id -> (node, state-free)
+        self._values: dict[int, tuple[E.Expr, Any]] = {}  # id -> (node, its value): folding
 
     def _placeholder(self, s: Span) -> E.Expr:
         """What an expression that was just reported stands for: no type error follows

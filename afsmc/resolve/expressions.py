@@ -56,7 +56,7 @@ class ExpressionsMixin(ResolverBase):
             # Storm folds such parts itself, and fails on an infinite or too large result.
             why: str | None
             try:
-                v = scalar(x, self._const_env())
+                v = scalar(x, self._const_env(), nodes=self._values)
                 why = unrepresentable(v)
                 if why is not None:
                     why = f"its value {_shown(v) + ' ' if isinstance(v, int) else ''}{why}"
