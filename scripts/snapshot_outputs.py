@@ -60,4 +60,8 @@ def main(dest: str) -> int:
 
 
 if __name__ == "__main__":
+    if len(sys.argv) != 2 or sys.argv[1].startswith("-"):
+        print(__doc__.strip().splitlines()[0] + "\n\nusage: python scripts/snapshot_outputs.py DIR",
+              file=sys.stderr)
+        sys.exit(2)
     sys.exit(main(sys.argv[1]))
