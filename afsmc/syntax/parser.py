@@ -16,6 +16,7 @@ import lark
 from lark.exceptions import UnexpectedInput
 
 from afsmc.diagnostics import BOM, CompileError, Diagnostic, Reporter, Severity, Source, Span, codes
+from afsmc.heap import collector_paused
 from afsmc.syntax import ast
 from afsmc.syntax.build import Builder
 from afsmc.syntax.errors.diagnose import report_glued_keyword, report_syntax_error
@@ -34,7 +35,8 @@ def parse(text: str, path: str = "<input>") -> ast.Module:
 # the UAV's 0.25 s load is parsing): the last few parses are kept.
 @lru_cache(maxsize=4)
 def _parse_module(text: str, path: str) -> ast.Module:
-    return cast(ast.Module, _parse(text, path, "start"))
+    with collector_paused():
+        return cast(ast.Module, _parse(text, path, "start"))
 
 
 def parse_property(text: str, path: str = "--formula") -> ast.PQuery | ast.RQuery:
