@@ -59,7 +59,7 @@ class Builder(Transformer[Token, Any]):
         children = tree.children if new_children is None else new_children
         method = _rule_methods(type(self)).get(tree.data)
         if method is None:
-            return self.__default__(tree.data, children, tree.meta)
+            return Tree(tree.data, children, tree.meta)  # as lark's __default__
         return method(self, tree.meta, children)
 
     def __default_token__(self, tok: Token) -> Token:
