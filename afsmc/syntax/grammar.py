@@ -64,7 +64,8 @@ def _positions(build: Callable[[list[Any]], Any]) -> Callable[[list[Any]], Any]:
     keeps its own start and end but takes the new container's."""
     def node(children: list[Any]) -> Any:
         res = build(children)
-        if not isinstance(res, Tree):
+        if not isinstance(res, Tree) or (len(children) == 1 and children[0] is res):
+            # (a `?rule` passing its one child on: its container is the child itself)
             return res
         meta: Any = res.meta
         for c in children:
