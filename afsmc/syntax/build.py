@@ -53,14 +53,21 @@ class Builder(Transformer[Token, Any]):
         self.source = source
         self.reporter = reporter
 
-    def _call_userfunc(self, tree: Tree[Token], new_children: list[Any] | None = None) -> Any:
-        """A rule's method on its node: as lark's, but without making a v_args wrapper at
-        every call (which costs more than most of the methods)."""
-        children = tree.children if new_children is None else new_children
-        method = _rule_methods(type(self)).get(tree.data)
-        if method is None:
-            return Tree(tree.data, children, tree.meta)  # as lark's __default__
-        return method(self, tree.meta, children)
+    def build(self, tree: Tree[Token]) -> Any:
+        """What transform(tree) gives, children first and in order, in one frame per level
+        rather than lark's three (a generator among them)."""
+        methods = _rule_methods(type(self))
+        default_token = self.__default_token__
+
+        def node(tree: Tree[Token]) -> Any:
+            children = [node(c) if isinstance(c, Tree) else default_token(c)
+                        if isinstance(c, Token) else c for c in tree.children]
+            method = methods.get(tree.data)
+            if method is None:
+                return Tree(tree.data, children, tree.meta)  # as lark's __default__
+            return method(self, tree.meta, children)
+
+        return node(tree)
 
     def __default_token__(self, tok: Token) -> Token:
         """Each token, before the rule it is in is built: E125 for one too long to read

@@ -12,7 +12,6 @@ from __future__ import annotations
 from functools import lru_cache
 from typing import Any, cast
 
-import lark
 from lark.exceptions import UnexpectedInput
 
 from afsmc.diagnostics import BOM, CompileError, Diagnostic, Reporter, Severity, Source, Span, codes
@@ -67,12 +66,7 @@ def _parse(text: str, path: str, start: str) -> Any:
             "chain like 'a + b + c' or '- - x' is one; shorten it (e.g. 'x * 0.1 + x * 0.1' "
             "is 'x * 0.2')")
         raise CompileError(reporter.diagnostics) from None
-    try:
-        node = Builder(source, reporter).transform(tree)
-    except lark.exceptions.VisitError as exc:
-        if isinstance(exc.orig_exc, CompileError):
-            raise exc.orig_exc from None
-        raise
+    node = Builder(source, reporter).build(tree)
     if reporter.has_errors:
         raise CompileError(reporter.diagnostics)
     return node
