@@ -12,6 +12,7 @@ from dataclasses import dataclass
 from afsmc import check
 from afsmc.diagnostics import CompileError, Diagnostic, Reporter
 from afsmc.files import read_source
+from afsmc.heap import collector_paused
 from afsmc.lower.lowering import Lowered, Resolution, lower
 from afsmc.lower.reduce import Reductions, reduce
 from afsmc.model import ir
@@ -43,15 +44,16 @@ def load(path: str, overrides: Mapping[str, str] | None = None, *, text: str | N
     """Parse, resolve and check one file. Raises CompileError if anything is an error.
     (`open_params`: see resolve; only without the checks, which need every value.)"""
     assert not (open_params and run_checks)
-    module = parse(read_source(path) if text is None else text, path)
-    resolved = resolve(module, overrides, open_params=open_params)
-    warnings = list(resolved.warnings)
-    if run_checks:
-        rep = Reporter(warnings)
-        rep.extend(check.run(resolved.model, used_names=resolved.used_names))
-        if rep.has_errors:
-            raise CompileError(rep.sorted())
-        warnings = rep.sorted()
+    with collector_paused():
+        module = parse(read_source(path) if text is None else text, path)
+        resolved = resolve(module, overrides, open_params=open_params)
+        warnings = list(resolved.warnings)
+        if run_checks:
+            rep = Reporter(warnings)
+            rep.extend(check.run(resolved.model, used_names=resolved.used_names))
+            if rep.has_errors:
+                raise CompileError(rep.sorted())
+            warnings = rep.sorted()
     return Checked(resolved.model, warnings, resolved.used_names, resolved.open_params,
                    resolved.open_reads)
 

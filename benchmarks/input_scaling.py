@@ -11,6 +11,9 @@ Three shapes of input, each generated at a base size (x1) and ten times it (x10)
 - **long expression**: one guard that sums n terms, in groups of 100 in brackets (an
   expression nests at most 5,000 levels, E113, so a longer one is a sum of sums).
 
+With `--mb`, only the issue's goal: `check`'s work on a declarations file of 1 MB
+(MB_MODES modes, 1,019,904 characters), to be answered in under 10 s.
+
 And the refusals, which must stay fast however large the input: a syntax error after a
 name of n characters, a chain `1+1+...` of n terms (E113 after 5,000), a number of n
 digits (E125), a file beyond the size limit (E004).
@@ -122,6 +125,21 @@ SHAPES: dict[str, tuple[Callable[[int], str], int, tuple[str, ...], str]] = {
 }
 
 
+# The declarations file of 1 MB (1,019,904 characters): the issue's "a spec of 1 MB is
+# answered in under 10 s".
+MB_MODES = 6000
+
+
+def one_megabyte(repeat: int) -> None:
+    text = declarations(MB_MODES)
+    print("| input | chars | stage | CPU s | answer |")
+    print("|---|---:|---|---:|---|")
+    for stage in ("parse", "check"):
+        t, answer = measure(STAGES[stage], text, repeat)
+        print(f"| declarations, {MB_MODES:,} modes | {len(text):,} | {stage} | {t:.2f} | "
+              f"{answer} |", flush=True)
+
+
 def measure(stage: Callable[[str], None], text: str, repeat: int) -> tuple[float, str]:
     """The median CPU time of `stage` on `text`, and what it answered."""
     answer = "ok"
@@ -142,7 +160,11 @@ def main() -> int:
     ap.add_argument("--repeat", type=int, default=3)
     ap.add_argument("--scale", type=float, default=1.0, help="multiply the x1 sizes")
     ap.add_argument("--only", help="measure only the shapes whose name contains this")
+    ap.add_argument("--mb", action="store_true", help="only check a 1 MB declarations file")
     args = ap.parse_args()
+    if args.mb:
+        one_megabyte(args.repeat)
+        return 0
     print("| input | x1 size | x1 chars | x10 chars | stage | x1 s | x10 s | ratio | answer |")
     print("|---|---:|---:|---:|---|---:|---:|---:|---|")
     for shape, (make, size, stages, unit) in SHAPES.items():

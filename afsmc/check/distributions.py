@@ -18,6 +18,8 @@ EPSILON = 1e-9
 def _check(model: ir.Model, rep: Reporter, owner: str, when: dict[int, E.Expr],
            outcomes: tuple[ir.Outcome, ...], span: Span) -> None:
     for o in outcomes:
+        if isinstance(o.prob, E.Lit) and 0 <= o.prob.value <= 1:
+            continue  # a number in [0, 1] (a plain outcome's 1): no state to look for
         bad = E.disj(E.Binary("<", o.prob, E.lit(0), Type.BOOL),
                      E.Binary(">", o.prob, E.lit(1), Type.BOOL))
         for mode, cond in when.items():

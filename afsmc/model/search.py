@@ -125,7 +125,8 @@ def _enumerate(model: ir.Model, mode: int, pred: E.Expr, variables: list[ir.Vari
             # never "no witness" by accident: let the solver decide instead
             return _smt(model, mode, pred, variables, consts)
     shape = tuple(len(a) for a in axes)
-    hit = np.broadcast_to(hit, shape)
+    if hit.shape != shape:  # (a predicate that reads no variable, or not all of them)
+        hit = np.broadcast_to(hit, shape)
     if not hit.any():
         return None
     index = np.unravel_index(int(np.argmax(hit)), shape) if shape else ()

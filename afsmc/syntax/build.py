@@ -7,9 +7,13 @@ label name longer than MAX_TOKEN_CHARS (E125) before any of them is converted.
 
 from __future__ import annotations
 
+import inspect
+from collections.abc import Callable
+from functools import cache
 from typing import Any, cast
 
-from lark import Token, Transformer, v_args
+from lark import Token, Transformer, Tree, v_args
+from lark.visitors import _VArgsWrapper
 
 from afsmc.diagnostics import Reporter, Source, Span, codes
 from afsmc.syntax import ast
@@ -28,6 +32,18 @@ def span_of(source: Source, meta_or_tok: Any) -> Span:
     return Span.at_offset(source, meta_or_tok.start_pos, meta_or_tok.end_pos)
 
 
+@cache
+def _rule_methods(cls: type) -> dict[str, Callable[..., Any]]:
+    """The rule methods of a Builder class by rule name, as plain functions of (self,
+    meta, children)."""
+    methods = {}
+    for name in dir(cls):
+        attr = inspect.getattr_static(cls, name)
+        if isinstance(attr, _VArgsWrapper):
+            methods[name] = attr.base_func
+    return methods
+
+
 @v_args(meta=True)
 class Builder(Transformer[Token, Any]):
     """Builds AST nodes; children arrive already transformed."""
@@ -36,6 +52,22 @@ class Builder(Transformer[Token, Any]):
         super().__init__()
         self.source = source
         self.reporter = reporter
+
+    def build(self, tree: Tree[Token]) -> Any:
+        """What transform(tree) gives, children first and in order, in one frame per level
+        rather than lark's three (a generator among them)."""
+        methods = _rule_methods(type(self))
+        default_token = self.__default_token__
+
+        def node(tree: Tree[Token]) -> Any:
+            children = [node(c) if isinstance(c, Tree) else default_token(c)
+                        if isinstance(c, Token) else c for c in tree.children]
+            method = methods.get(tree.data)
+            if method is None:
+                return Tree(tree.data, children, tree.meta)  # as lark's __default__
+            return method(self, tree.meta, children)
+
+        return node(tree)
 
     def __default_token__(self, tok: Token) -> Token:
         """Each token, before the rule it is in is built: E125 for one too long to read

@@ -12,10 +12,10 @@ from __future__ import annotations
 from functools import lru_cache
 from typing import Any, cast
 
-import lark
 from lark.exceptions import UnexpectedInput
 
 from afsmc.diagnostics import BOM, CompileError, Diagnostic, Reporter, Severity, Source, Span, codes
+from afsmc.heap import collector_paused
 from afsmc.syntax import ast
 from afsmc.syntax.build import Builder
 from afsmc.syntax.errors.diagnose import report_glued_keyword, report_syntax_error
@@ -34,7 +34,8 @@ def parse(text: str, path: str = "<input>") -> ast.Module:
 # the UAV's 0.25 s load is parsing): the last few parses are kept.
 @lru_cache(maxsize=4)
 def _parse_module(text: str, path: str) -> ast.Module:
-    return cast(ast.Module, _parse(text, path, "start"))
+    with collector_paused():
+        return cast(ast.Module, _parse(text, path, "start"))
 
 
 def parse_property(text: str, path: str = "--formula") -> ast.PQuery | ast.RQuery:
@@ -65,12 +66,7 @@ def _parse(text: str, path: str, start: str) -> Any:
             "chain like 'a + b + c' or '- - x' is one; shorten it (e.g. 'x * 0.1 + x * 0.1' "
             "is 'x * 0.2')")
         raise CompileError(reporter.diagnostics) from None
-    try:
-        node = Builder(source, reporter).transform(tree)
-    except lark.exceptions.VisitError as exc:
-        if isinstance(exc.orig_exc, CompileError):
-            raise exc.orig_exc from None
-        raise
+    node = Builder(source, reporter).build(tree)
     if reporter.has_errors:
         raise CompileError(reporter.diagnostics)
     return node
