@@ -72,7 +72,7 @@ def test_the_snippet_works_as_a_plain_script_and_from_stdin(tmp_path: Path, how:
     assert proc.returncode == 0, proc.stderr
     got = json.loads(proc.stdout)
     assert got["rows"] == afsmc.load(PATROL).properties  # one row per declared property
-    assert got["columns"] == ["formula", "kind", "min", "max", "uniform", "value"]
+    assert got["columns"] == ["formula", "kind", "min", "max", "uniform", "value", "verdict"]
     assert got["svg"] == "<?xml" and got["has_svg"]
     assert got["isolated"] == got["direct"]
     monkeypatch.chdir(ROOT)  # the file named as the snippet names it
