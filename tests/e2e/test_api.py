@@ -113,6 +113,7 @@ def test_a_failed_verify_raises_afsm_error() -> None:
     assert "did you mean" in str(info.value) or "properties:" in str(info.value)
 
 
+@pytest.mark.slow
 def test_sweep_is_the_csv_of_afsmc_sweep() -> None:
     sw = afsmc.load(PATROL).sweep("ROUNDS", "1:3:1", properties=["finish", "fault"], jobs=1)
     cli = run_cli("sweep", PATROL, "--const", "ROUNDS=1:3:1", "-p", "finish", "-p", "fault",
@@ -139,6 +140,7 @@ def test_sweep_of_the_step_bound() -> None:
     assert df["uniform"].iloc[1] == pytest.approx(at20.uniform, rel=1e-9)
 
 
+@pytest.mark.slow
 def test_simulate_is_afsmc_simulate() -> None:
     est = afsmc.load(PATROL).simulate(runs=1000, seed=7)
     cli = run_cli("simulate", PATROL, "--runs", "1000", "--seed", "7", "--json")

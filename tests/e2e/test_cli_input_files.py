@@ -25,6 +25,7 @@ def test_standard_input_where_a_command_needs_a_file() -> None:
     assert "'afsmc check -'" in r.err, r.err
 
 
+@pytest.mark.slow
 def test_check_takes_several_files_and_standard_input(tmp_path: Path) -> None:
     """`check a.afsm b.afsm` and `check -` work, as `fmt` takes both. One report for all
     of them; exit 1 if any has an error."""

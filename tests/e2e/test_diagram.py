@@ -275,6 +275,7 @@ def test_reach_overlay_mdp_gives_min_and_max(tmp_path: Path) -> None:
     assert _reach(tmp_path / "u.svg")["E"] == f"P(reach) {1 / 2:.4g}"
 
 
+@pytest.mark.slow
 @pytest.mark.storm
 def test_reach_on_the_reduced_model_equals_storm_on_the_unreduced_one(tmp_path: Path) -> None:
     # --reach checks the reduced model in verify's guard; the oracle is Storm itself on
@@ -305,6 +306,7 @@ def test_reach_on_the_reduced_model_equals_storm_on_the_unreduced_one(tmp_path: 
     assert any(lo < hi for lo, hi in got.values())  # the intervals matter here
 
 
+@pytest.mark.slow
 @pytest.mark.storm
 def test_reach_stops_at_max_states_with_e405(tmp_path: Path) -> None:
     out = tmp_path / "u.svg"

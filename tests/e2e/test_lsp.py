@@ -476,6 +476,7 @@ def test_exit_code_follows_shutdown() -> None:
     assert _session(shutdown, exit_)[0] == 0
 
 
+@pytest.mark.slow
 def test_a_request_with_bad_params_gets_an_error_reply() -> None:
     """pygls only logged it, so a client waiting for the reply hung."""
     code, replies = _session(

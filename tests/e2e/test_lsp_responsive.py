@@ -22,6 +22,8 @@ from pytest_lsp import ClientServerConfig, LanguageClient
 
 from afsmc.syntax.fmt import format_text
 
+pytestmark = pytest.mark.slow  # real servers with megabyte documents: seconds each
+
 ROOT = Path(__file__).resolve().parents[2]
 UAV = ROOT / "examples" / "uav.afsm"
 CONFIG = ClientServerConfig(server_command=[sys.executable, "-m", "afsmc.cli", "lsp"])

@@ -26,6 +26,7 @@ def sourced_constants(text: str) -> list[str]:
     return re.findall(r"^const \w+ (\w+) .* from sim ", text, flags=re.M)
 
 
+@pytest.mark.slow
 def test_mission_constants_are_consistent() -> None:
     r = run_cli("sim-check", str(MISSION), "--json")
     assert r.code == 0, r.out + r.err
@@ -43,6 +44,7 @@ def test_mission_constants_are_consistent() -> None:
             assert c["cdf_hi"] == pytest.approx(float((x <= hi).mean()))
 
 
+@pytest.mark.slow
 @pytest.mark.skipif(not UAV.exists(), reason="examples/uav.afsm is not written yet (lead engineer)")
 def test_uav_constants_pass() -> None:
     r = run_cli("sim-check", str(UAV))
@@ -70,6 +72,7 @@ def test_a_wrong_constant_fails_at_its_line(tmp_path: Path) -> None:
     assert r.err.count("E502") == 1  # only that constant
 
 
+@pytest.mark.slow
 def test_too_few_runs_are_not_called_consistent(tmp_path: Path) -> None:
     """--runs 2 called [7, 9] "consistent" with a simulation whose samples were both below
     7: at that many runs the rule's quantiles are unbounded, so nothing can be
@@ -114,6 +117,7 @@ def test_a_wrong_probability_fails(tmp_path: Path) -> None:
     assert not lo <= 0.2 <= hi
 
 
+@pytest.mark.slow
 def test_update_rewrites_only_the_drifted_value(tmp_path: Path, monkeypatch: Any) -> None:
     monkeypatch.setenv("SOURCE_DATE_EPOCH", "86400")
     path, original, wrong = _drifted(tmp_path)
@@ -230,6 +234,7 @@ def test_update_that_cannot_write_is_e003_not_an_internal_error(tmp_path: Path) 
     assert path.read_text() == TWO_ON_A_LINE
 
 
+@pytest.mark.slow
 def test_too_few_runs_cannot_report_a_drift() -> None:
     """The order-statistic ranks fall outside a small sample: that end of the interval is
     unbounded. They were clamped to the sample's extremes, and `--runs 10` reported T_GRAB
@@ -279,6 +284,7 @@ def test_update_writes_no_value_its_own_rule_rejects(tmp_path: Path) -> None:
     assert by_name["B_AP"]["suggestion"] is None and by_name["T_DE"]["verdict"] == "consistent"
 
 
+@pytest.mark.slow
 def test_a_param_no_simulated_constant_reads_needs_no_value(tmp_path: Path) -> None:
     # sim-check judges the simulated constants: a param they do not read may stay open
     # (the model's other checks need it, and are skipped, as stderr says) ...

@@ -212,6 +212,7 @@ def test_resolve_min_and_max_are_refused_with_the_reason() -> None:
         sim_json(PATROL, "--runs", "200", "--resolve", "floor")["properties"]
 
 
+@pytest.mark.slow
 def test_a_worker_that_dies_is_a_diagnostic_not_an_internal_error() -> None:
     """A killed worker process (the OOM killer) surfaced as BrokenProcessPool: exit 3."""
     import signal

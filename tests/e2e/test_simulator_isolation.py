@@ -113,6 +113,7 @@ def test_a_simulator_that_exits_gives_a_json_verdict(plugin: dict[str, str],
     assert [(d["code"], d["line"], d["column"]) for d in diags] == [("E505", 3, 27)]
 
 
+@pytest.mark.slow
 def test_a_hanging_simulator_is_stopped_at_the_timeout(plugin: dict[str, str],
                                                        tmp_path: Path) -> None:
     spec, before = _spec(tmp_path, "hang")

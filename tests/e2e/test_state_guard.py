@@ -57,6 +57,7 @@ def test_a_counter_over_a_billion_stops_at_max_states(engine: str, tmp_path: Pat
     assert cpu < 60 and elapsed < 300, (cpu, elapsed)
 
 
+@pytest.mark.slow
 @pytest.mark.storm
 @pytest.mark.parametrize("engine", ["auto", "hybrid", "dd"])
 def test_symbolic_engines_with_max_states_give_the_sparse_values(engine: str) -> None:

@@ -34,6 +34,7 @@ def test_ctrl_c_prints_the_values_verify_had(monkeypatch: pytest.MonkeyPatch,
     assert f"success_min = {sparse.property('success').min!r} on the MDP" in err, err
 
 
+@pytest.mark.slow
 def test_ctrl_c_with_json_still_prints_one_json_object(monkeypatch: pytest.MonkeyPatch,
                                                        capsys: pytest.CaptureFixture[str]) -> None:
     from afsmc.cli import main

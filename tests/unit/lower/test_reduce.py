@@ -32,6 +32,7 @@ def _cases(tmp: Path) -> list[tuple[str, object]]:
     return out
 
 
+@pytest.mark.slow
 @pytest.mark.storm
 @pytest.mark.parametrize("resolution", ["nondet", "uniform"])
 def test_reductions_are_exact_and_never_grow_the_state_space(resolution: str, tmp_path: Path) -> None:

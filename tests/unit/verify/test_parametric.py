@@ -34,6 +34,7 @@ def patrol(tmp_path_factory: pytest.TempPathFactory) -> object:
     return load(str(path)).model
 
 
+@pytest.mark.slow
 def test_min_and_max_bound_every_sampled_value_within_the_precision(patrol: object) -> None:
     model = patrol
     props = [p for p in model.properties if p.name in ASKED]  # type: ignore[attr-defined]
