@@ -140,6 +140,7 @@ POW_HAND = {"p0": 1 / 7, "p1": 0.0, "p2": 1 / 7, "q3": 1 / 7, "q4": 1 / 7, "q6":
             "pos": 4 / 7}
 
 
+@pytest.mark.slow
 @pytest.mark.storm
 @pytest.mark.parametrize("base", ["0 - 2", "B", "-2", "k - 4"])
 def test_pow_of_a_negative_base_is_right_in_storm_via_prism_and_jani(tmp_path: Path, base: str) -> None:

@@ -122,6 +122,7 @@ async def hover_at(client: LanguageClient, doc: T.TextDocumentIdentifier,
 # ---- the tests ----------------------------------------------------------------------
 
 
+@pytest.mark.slow
 @MODULE
 async def test_weight_tie_diagnostic_with_witness(client: LanguageClient) -> None:
     text = UAV.read_text()
@@ -173,6 +174,7 @@ async def test_half_typed_file_gives_a_syntax_diagnostic_and_keeps_navigation(
     assert hover is not None and "uav.search.duration" in str(hover.contents)
 
 
+@pytest.mark.slow
 @MODULE
 async def test_completion_in_a_file_that_has_never_parsed(client: LanguageClient) -> None:
     """No last good parse to take the names from: they come from the text with the line
@@ -283,6 +285,7 @@ async def test_hover_definition_references(client: LanguageClient) -> None:
     assert {i.label for i in items.items} == modes
 
 
+@pytest.mark.slow
 @MODULE
 async def test_formatting_and_rename_round_trip(client: LanguageClient) -> None:
     text = UAV.read_text()

@@ -123,6 +123,7 @@ def _decode(data: list[int], legend: list[str]) -> list[tuple[int, int, int, str
     return out
 
 
+@pytest.mark.slow
 @MODULE
 async def test_semantic_tokens_cover_every_identifier_of_uav(client: LanguageClient) -> None:
     text = UAV.read_text()
@@ -197,6 +198,7 @@ async def test_folding_workspace_symbols_inlay_hints(client: LanguageClient) -> 
     assert at[w] == " = " + carry.group(1).removeprefix("(").removesuffix(")")
 
 
+@pytest.mark.slow
 @MODULE
 async def test_signature_help_and_range_formatting(client: LanguageClient) -> None:
     text = "machine s;\nconst int A = 1;\nformula f = max(A, floor(2.5), "

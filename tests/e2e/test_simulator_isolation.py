@@ -90,6 +90,7 @@ def _spec(tmp_path: Path, name: str) -> tuple[Path, bytes]:
     ("osexit", "it ended the process (exit code 0) without returning samples"),
     ("nan", "200 of its 200 samples are not finite numbers"),
 ])
+@pytest.mark.slow
 def test_a_simulator_that_exits_or_lies_fails_at_the_constant(
         name: str, says: str, plugin: dict[str, str], tmp_path: Path) -> None:
     spec, before = _spec(tmp_path, name)
@@ -101,6 +102,7 @@ def test_a_simulator_that_exits_or_lies_fails_at_the_constant(
     assert spec.read_bytes() == before
 
 
+@pytest.mark.slow
 def test_a_simulator_that_exits_gives_a_json_verdict(plugin: dict[str, str],
                                                      tmp_path: Path) -> None:
     # SystemExit(0) made sim-check exit 0 with no verdict and no JSON
@@ -148,6 +150,7 @@ def test_timeout_must_be_a_positive_number(bad: str) -> None:
     assert r.code == 2 and "--timeout" in r.err, r.err
 
 
+@pytest.mark.slow
 def test_runs_that_memory_cannot_hold_are_refused(plugin: dict[str, str],
                                                   tmp_path: Path) -> None:
     # 10^9 runs reached 12.8 GB in 60 s

@@ -72,6 +72,7 @@ def test_symbolic_engines_with_max_states_give_the_sparse_values(engine: str) ->
                 assert mine[key] == pytest.approx(ref[key], rel=1e-6, abs=1e-9), (mine, ref)
 
 
+@pytest.mark.slow
 @pytest.mark.storm
 def test_auto_with_max_states_builds_sparse_where_the_symbolic_build_would_count(
         tmp_path: Path) -> None:
@@ -87,6 +88,7 @@ def test_auto_with_max_states_builds_sparse_where_the_symbolic_build_would_count
     assert "--max-states 1,000 fits as sparse matrices" in got["model"]["engine_reason"]
 
 
+@pytest.mark.slow
 @pytest.mark.storm
 @pytest.mark.parametrize("engine", ["auto", "hybrid", "sparse"])
 def test_e405_counts_exactly_and_names_the_large_variables(engine: str) -> None:

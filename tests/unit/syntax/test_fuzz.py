@@ -97,6 +97,7 @@ def mutated(draw: st.DrawFn) -> str:
     return text
 
 
+@pytest.mark.slow
 @SETTINGS
 @given(mutated())
 def test_mutated_examples_never_crash(text: str) -> None:

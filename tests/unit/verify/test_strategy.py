@@ -159,6 +159,7 @@ def test_reductions_keep_the_path_probabilities() -> None:
     assert all(w.confirmed for w in reduced)
 
 
+@pytest.mark.slow
 def test_a_symbolic_engine_rechecks_with_the_sparse_one() -> None:
     res = run(PATROL, properties=["finish"], engine="dd", strategy=True, uniform=False)
     p = res.property("finish")
