@@ -167,6 +167,11 @@ def build(root: Path = ROOT) -> dict[str, bytes]:
         "(docs/verification.md, \"Requirements\"); one written `=?` gets \"–\". Values are "
         f"rounded to {DIGITS} significant digits; figures marked [assumed] in a file are the "
         "author's, others cite their source in the file.", "",
+        "To add a mission, put it in `examples/` and run `python scripts/gen_gallery.py` "
+        "(`tests/e2e/test_gallery.py` fails while this page is stale). One whose default "
+        "instance takes too long to verify here gets `examples/<name>.gallery.args`: "
+        "`--const NAME=VALUE` lines, after `#` lines that say why; its section states "
+        "the instance.", "",
         *[f"- [{ex.stem}](#{ex.stem}): {summary(ex)}" for ex in exs], ""]
     out: dict[str, bytes] = {}
     body: list[str] = []
