@@ -140,7 +140,8 @@ def section(ex: Example) -> tuple[list[str], bytes]:
     text = ex.path.read_text(encoding="utf-8")
     lines = [f"## {ex.stem}", "", f"[`examples/{ex.path.name}`](../examples/{ex.path.name})", ""]
     for paragraph in leading_comment(text):
-        lines += [paragraph, ""]
+        # "[Gold 2013]: C. Gold, ..." would start a Markdown link reference definition
+        lines += [("\\" if paragraph.startswith("[") else "") + paragraph, ""]
     lines += [instance_line(ex, mission), "",
               f"![The mission diagram of {ex.stem}](gallery/{ex.stem}.svg)", "",
               model_line(ex, res), "", *results_table(res), ""]
