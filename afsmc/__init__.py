@@ -13,7 +13,7 @@ from typing import TYPE_CHECKING, Any
 __version__ = "0.1.0"
 
 if TYPE_CHECKING:
-    from afsmc.api import AfsmError, Diagram, Estimates, Mission, Results, Sweep, load
+    from afsmc.api import AfsmError, Diagram, Estimates, Mission, Results, SimCheck, Sweep, load
 
 __all__ = [
     "AfsmError",
@@ -21,6 +21,7 @@ __all__ = [
     "Estimates",
     "Mission",
     "Results",
+    "SimCheck",
     "Sweep",
     "__version__",
     "load",

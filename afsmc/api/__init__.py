@@ -7,11 +7,12 @@ draw it, with tables (pandas) and pictures that show inline in Jupyter.
 >>> m.with_consts(CELLS=6).verify(["finish"])              # afsmc verify --const CELLS=6
 >>> m.sweep("ROUNDS", "1:5:1").plot()                      # a matplotlib Figure
 >>> m.simulate(runs=10_000).to_pandas()
+>>> m.sim_check().to_pandas()                              # `from sim` constants judged
 >>> m.diagram()                                            # SVG in a notebook
 
 One module per concept: ``mission`` (:class:`Mission`, :func:`load`, compiling), ``results``
 (:class:`Results` of verify), ``sweep`` (:class:`Sweep`), ``simulate``
-(:class:`Estimates`), ``diagram`` (:class:`Diagram`), ``errors`` (:class:`AfsmError`).
+(:class:`Estimates`), ``sim_check`` (:class:`SimCheck`), ``diagram`` (:class:`Diagram`), ``errors`` (:class:`AfsmError`).
 The API is a top layer like the CLI: the commands call into it, never the reverse.
 """
 
@@ -25,14 +26,17 @@ if TYPE_CHECKING:
     from afsmc.api.errors import AfsmError
     from afsmc.api.mission import Mission, load
     from afsmc.api.results import Results
+    from afsmc.api.sim_check import SimCheck
     from afsmc.api.simulate import Estimates
     from afsmc.api.sweep import Sweep
 
 # Each name's module, imported on first use: `afsmc check` loads through afsmc.api.mission
 # and need not import Graphviz, Storm's wrappers or the simulator.
 _HOME = {"AfsmError": "errors", "Diagram": "diagram", "Estimates": "simulate",
-         "Mission": "mission", "Results": "results", "Sweep": "sweep", "load": "mission"}
-__all__ = ["AfsmError", "Diagram", "Estimates", "Mission", "Results", "Sweep", "load"]
+         "Mission": "mission", "Results": "results", "SimCheck": "sim_check", "Sweep": "sweep",
+         "load": "mission"}
+__all__ = ["AfsmError", "Diagram", "Estimates", "Mission", "Results", "SimCheck", "Sweep",
+           "load"]
 
 
 def __getattr__(name: str) -> Any:

@@ -28,6 +28,7 @@ from afsmc.text import literal
 if TYPE_CHECKING:
     from afsmc.api.diagram import Diagram
     from afsmc.api.results import Results
+    from afsmc.api.sim_check import SimCheck
     from afsmc.api.simulate import Estimates
     from afsmc.api.sweep import Sweep
 
@@ -189,10 +190,24 @@ class Mission:
         """Monte Carlo estimates of every declared property with confidence intervals, as
         `afsmc simulate` gives them: options ``seed`` (0), ``resolve`` ("uniform"),
         ``confidence`` (0.999), ``max_steps`` (100000), ``jobs`` (1), ``batch_size``,
-        ``dask``, ``traces``. Raises AfsmError."""
+        ``dask``, ``traces``, ``at`` ("mid", "min", "max": interval probabilities),
+        ``strategy`` ("min:NAME" or "max:NAME": follow Storm's scheduler of property
+        NAME), ``progress``. ``to_json()`` is `afsmc simulate --json`. Raises AfsmError
+        (E407 if the mission declares no properties and no ``traces`` are asked for)."""
         from afsmc.api.simulate import simulate
 
         return simulate(self, runs, **options)
+
+    def sim_check(self, runs: int = 10_000, **options: Any) -> SimCheck:
+        """Re-run the simulation behind every `from sim ...` constant and judge the value
+        in the file against it, as `afsmc sim-check` does: options ``seed`` (0),
+        ``timeout`` (seconds per simulator), ``update`` (rewrite the drifted constants in
+        the file), ``progress`` (a function that receives a line per constant). A drift
+        is in the result (``.ok`` is False, ``.errors`` has E502), not raised. Raises
+        AfsmError (a simulator failed: E505)."""
+        from afsmc.api.sim_check import sim_check
+
+        return sim_check(self, runs, **options)
 
     def diagram(self, **options: Any) -> Diagram:
         """The mission diagram (`afsmc diagram`): it shows inline in Jupyter, and

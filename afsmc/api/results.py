@@ -18,7 +18,10 @@ from afsmc.api.errors import AfsmError
 from afsmc.diagnostics import CompileError, Diagnostic
 from afsmc.lifetime import without_main
 from afsmc.text import num
+from afsmc.verify import parametric
+from afsmc.verify.parametric import Extreme
 from afsmc.verify.results import PropertyResult, VerifyResult
+from afsmc.verify.verdicts import judge_over
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -30,6 +33,7 @@ if TYPE_CHECKING:
 VERIFY_DEFAULTS: dict[str, Any] = {"engine": "auto"}
 VALUES = ("min", "max", "uniform", "value")
 EXTRA = ("verdict",)  # fields of a property's JSON that become columns when present
+SPAN = ("interval_min", "interval_max")  # over interval probabilities, when there are any
 
 
 def names(properties: Sequence[str] | str | None) -> list[str]:
@@ -57,9 +61,46 @@ def verify_file(path: str, properties: Sequence[str] | str | None = None, *,
         with without_main():
             res = lib.run(path, text=text, consts=dict(consts or {}),
                           properties=names(properties), **kwargs)
+            # interval probabilities (const prob P = [lo, hi]): min/max over every fixed
+            # value, from Storm's parametric engine, as `afsmc verify` prints them
+            box, bounds = parametric.for_file(
+                path, consts, names(properties), kwargs.get("formulas", ()),
+                via=kwargs.get("via", "prism"), reductions=kwargs.get("reductions"),
+                text=text)
     except CompileError as exc:
         raise AfsmError.of(exc) from None
-    return Results(res)
+    if not bounds:
+        return Results(res)
+    # a requirement holds only if it holds at every fixed interval probability
+    judge_over(res.properties, {e.name: (e.min_attained, e.max_attained) for e in bounds},
+               parametric.DEFAULT_PRECISION + 1e-6,
+               "over every fixed value of the interval probabilities")
+    return Results(res, Intervals(box, bounds))
+
+
+@dataclass(frozen=True)
+class Intervals:
+    """The properties' bounds over the mission's interval probabilities (`const prob P =
+    [lo, hi]`): ``box`` (each one's interval) and one
+    :class:`afsmc.verify.parametric.Extreme` per property: ``min`` and ``max`` (sound
+    bounds over every fixed value in the box), ``min_at`` and ``max_at`` (where Storm
+    found them). The main table's values are at the intervals' midpoints."""
+
+    box: dict[str, tuple[float, float]]
+    bounds: list[Extreme]
+
+    def __getitem__(self, name: str) -> Extreme:
+        for e in self.bounds:
+            if e.name == name:
+                return e
+        raise KeyError(f"no property {name!r}")
+
+    def to_json(self) -> dict[str, object]:
+        """The ``probability_intervals`` object of `afsmc verify --json`."""
+        return parametric.to_json(self.box, self.bounds)
+
+    def __str__(self) -> str:
+        return parametric.render(self.box, self.bounds)
 
 
 @dataclass(frozen=True)
@@ -69,6 +110,7 @@ class Results:
     ``results.value("finish")`` gives one property."""
 
     raw: VerifyResult
+    intervals: Intervals | None = None  # bounds over interval probabilities, if any
 
     @property
     def kind(self) -> str:
@@ -96,8 +138,12 @@ class Results:
         return p.value if p.value is not None else p.uniform
 
     def to_json(self) -> dict[str, object]:
-        """The object `afsmc verify --json` prints for the same file, constants and options."""
-        return self.raw.to_json()
+        """The object `afsmc verify --json` prints for the same file, constants and options
+        (with ``probability_intervals`` when the mission has interval probabilities)."""
+        out = self.raw.to_json()
+        if self.intervals is not None:
+            out["probability_intervals"] = self.intervals.to_json()
+        return out
 
     def rows(self) -> list[dict[str, object]]:
         """One dict per property: name, formula, kind, min, max, uniform, value (an infinite
@@ -110,20 +156,26 @@ class Results:
             row: dict[str, object] = {"property": p.name, "formula": p.formula, "kind": p.kind}
             row |= {k: getattr(p, k) for k in VALUES}
             row |= {k: entry.get(k) for k in extras}
+            if self.intervals is not None:
+                bound = self.intervals[p.name]
+                row |= {"interval_min": bound.min, "interval_max": bound.max}
             out.append(row)
         return out
 
     def to_pandas(self) -> pd.DataFrame:
         """One row per property, indexed by its name: ``formula``, ``kind`` ("P" or "R"),
         ``min``, ``max``, ``uniform``, ``value`` (NaN where not asked: a DTMC has only a
-        value, an MDP min, max and uniform), and ``verdict`` if the results have one."""
+        value, an MDP min, max and uniform), and ``verdict`` if the results have one. A
+        mission with interval probabilities (`const prob P = [lo, hi]`) has two more,
+        ``interval_min`` and ``interval_max``: the bounds over every fixed value of them
+        (``intervals``), while the other values are at their midpoints."""
         import pandas as pd
 
         rows = self.rows()
         columns = ["property", "formula", "kind", *VALUES,
-                   *[k for k in EXTRA if rows and k in rows[0]]]
+                   *[k for k in (*EXTRA, *SPAN) if rows and k in rows[0]]]
         df = pd.DataFrame(rows, columns=columns).set_index("property")
-        for k in VALUES:
+        for k in (*VALUES, *[k for k in SPAN if k in df.columns]):
             df[k] = df[k].astype(float)
         return df
 
@@ -142,6 +194,11 @@ class Results:
                 if self.kind == "mdp" else "a DTMC")
         caption = (f"{html.escape(self.raw.path)}: {what}; {m.states:,} states, "
                    f"{m.transitions:,} transitions, engine {html.escape(m.engine)}")
+        if self.intervals is not None:
+            over = ", ".join(f"{html.escape(n)} in [{lo:g}, {hi:g}]"
+                             for n, (lo, hi) in self.intervals.box.items())
+            caption += (f"; interval_min and interval_max: over every fixed {over} (the "
+                        "other values at the midpoints)")
         return (f'<table class="afsmc-results"><caption>{caption}</caption>'
                 f"<thead><tr>{head}</tr></thead><tbody>{body}</tbody></table>")
 

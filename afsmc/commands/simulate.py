@@ -5,11 +5,14 @@ with a confidence interval. See docs/monte-carlo.md."""
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import json
 import math
 import sys
 from typing import Any
 
+from afsmc.api.simulate import Estimates, Simulation, estimates, prepare
+from afsmc.api.simulate import run as run_simulation
 from afsmc.commands.common import (
     add_consts,
     add_file,
@@ -19,12 +22,12 @@ from afsmc.commands.common import (
     overrides,
     print_json,
     report,
+    usage_error,
 )
-from afsmc.commands.simulate_strategy import follow, followed_json, followed_text
-from afsmc.diagnostics import CompileError, Diagnostic, Severity, codes
+from afsmc.commands.simulate_strategy import followed_text
+from afsmc.diagnostics import CompileError, codes
 from afsmc.files import check_writable, read_source, write_atomic
 from afsmc.interrupt import Stopped
-from afsmc.sim.compile import SimError
 from afsmc.sim.run import (
     BATCH,
     LOWERING,
@@ -33,12 +36,8 @@ from afsmc.sim.run import (
     STRATEGIES,
     Outcome,
     batch_count,
-    job_for,
-    program,
-    simulate,
 )
 from afsmc.text import literal, num
-from afsmc.verify.policy import Policy
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
@@ -116,15 +115,17 @@ def run(args: argparse.Namespace) -> int:
         if args.traces_out:  # said before the runs, not after them
             check_writable(args.traces_out, protect=(args.file,))
         text = read_source(args.file)
-        job = job_for(args.file, text, overrides(args), args.resolve, args.max_steps, args.at)
-        job, strategy = follow(job, args)  # --strategy: the runs follow Storm's scheduler
-        # Without properties there is nothing to estimate; sample runs (--traces) are
-        # the one use of such a file, as verify has none (E407 there too).
-        if not args.traces and not program(job).monitors:
-            raise CompileError([Diagnostic(
-                codes.E407, Severity.ERROR, f"{args.file} declares no properties", None,
-                hint="declare one ('property ok = P=? [ F \"done\" ];'), or watch sample "
-                     "runs with --traces K")])
+        if args.strategy and args.resolve != "uniform":
+            usage_error("--strategy resolves the interval constants itself: give it or "
+                        "--resolve, not both")
+
+        def say(text: str) -> None:  # Storm extracting the strategy
+            if not args.json:
+                print(f"simulate: {text}", file=sys.stderr)
+
+        sim = prepare(args.file, text, overrides(args), resolve=args.resolve,
+                      max_steps=args.max_steps, at=args.at, strategy=args.strategy,
+                      traces=args.traces, progress=say)
         last = [-1]
 
         def progress(done: int, total: int) -> None:
@@ -133,58 +134,39 @@ def run(args: argparse.Namespace) -> int:
                 last[0] = pct // 10
                 print(f"simulate: {done}/{total} runs ({pct}%)", file=sys.stderr)
 
-        prog = program(job)
-        model = prog.model
-        # the check's warnings, as verify shows them: W602 (a mode the mission cannot end
-        # from) is why runs stay undecided whatever --max-steps
-        warnings = [d for d in prog.diagnostics if d.severity is Severity.WARNING]
         if not args.json:
-            report(warnings)
+            report(sim.warnings)
         try:
-            out = simulate(job, args.runs, args.seed, confidence=args.confidence,
-                           jobs=args.jobs, dask=args.dask, trace=args.traces,
-                           batch_size=args.batch_size, progress=progress)
+            est = run_simulation(sim, args.runs, seed=args.seed, confidence=args.confidence,
+                                 jobs=args.jobs, dask=args.dask, traces=args.traces,
+                                 batch_size=args.batch_size, progress=progress)
         except Stopped as exc:
             # The runs that finished are not lost to a Ctrl-C: the CLI prints the note and,
             # for --json, the estimates as data.
             part = exc.partial
             if not isinstance(part, Outcome):
                 raise
-            consts: dict[str, object] = {c.name: c.value for c in model.constants
-                                         if c.is_param}
+            kept = estimates(dataclasses.replace(sim, policy=None), part, seed=args.seed,
+                             confidence=args.confidence, traced=args.traces > 0)
             raise Stopped(notes=[_so_far(part, args)],
-                          partial=_Partial(_json(part, args, model.name, consts,
-                                                 warnings))) from exc
+                          partial=_Partial(kept.to_json())) from exc
         if args.traces_out:
-            write_atomic(args.traces_out, json.dumps(out.traces, indent=1) + "\n",
+            write_atomic(args.traces_out, json.dumps(est.traces, indent=1) + "\n",
                          protect=(args.file,))
     except CompileError as exc:
         return fail(exc, args.json, wrapped=True)
-    except SimError as exc:
-        return fail(CompileError([Diagnostic(codes.E506, Severity.ERROR,
-                                             f"cannot simulate {args.file}: {exc}", None)]),
-                    args.json, wrapped=True)
-    except OSError as exc:  # e.g. the Dask scheduler is unreachable
-        return fail(CompileError([Diagnostic(codes.E507, Severity.ERROR,
-                                             f"simulation failed: {exc}", None,
-                                             hint=f"is a Dask scheduler running at {args.dask}?"
-                                             if args.dask else None)]),
-                    args.json, wrapped=True)
-    _finish(out, args, model, warnings, strategy)
+    _finish(sim, est, args)
     return 0
 
 
-def _finish(out: Outcome, args: argparse.Namespace, model: Any, warnings: list[Diagnostic],
-            strategy: Policy | None) -> None:
+def _finish(sim: Simulation, est: Estimates, args: argparse.Namespace) -> None:
     """Print the estimates (and the strategy the runs followed, if any)."""
     if args.json:
-        print_json(followed_json(strategy) | _json(
-            out, args, model.name, {c.name: c.value for c in model.constants if c.is_param},
-            warnings))
+        print_json(est.to_json())
     else:
-        _print(out, args, model.is_nondeterministic,
-               endless=any(d.code == codes.W602 for d in warnings))
-        followed_text(strategy)
+        _print(est.raw, args, sim.model.is_nondeterministic,
+               endless=any(d.code == codes.W602 for d in est.warnings))
+        followed_text(est.policy)
 
 
 class _Partial:
@@ -207,12 +189,6 @@ def _so_far(part: Outcome, args: argparse.Namespace) -> str:
     return "\n".join(lines)
 
 
-def _num(v: float) -> Any:
-    if math.isnan(v):
-        return None  # an expected reward no run finished: no estimate
-    return v if math.isfinite(v) else ("inf" if v > 0 else "-inf")
-
-
 def _strategy(text: str) -> str:
     if text in ("min", "max"):
         raise argparse.ArgumentTypeError(
@@ -223,25 +199,6 @@ def _strategy(text: str) -> str:
         raise argparse.ArgumentTypeError(
             f"invalid choice: {text!r} (choose from {', '.join(STRATEGIES)})")
     return text
-
-
-def _json(out: Outcome, args: argparse.Namespace, machine: str,
-          constants: dict[str, object], warnings: list[Diagnostic]) -> dict[str, Any]:
-    return {
-        "file": args.file,  # which machine and instance, as verify --json says them
-        "machine": machine,
-        "constants": constants,
-        "runs": out.runs,
-        "seed": args.seed,
-        "resolve": args.resolve,
-        "at": args.at,  # interval probabilities: mid, min or max
-        "confidence": args.confidence,
-        "properties": [{"name": e.name, "estimate": _num(e.estimate), "low": _num(e.low),
-                        "high": _num(e.high), "undecided": e.undecided}
-                       for e in out.estimates],
-        **({"traces": out.traces} if args.traces else {}),  # as --traces-out writes them
-        "warnings": [d.to_json() for d in warnings],
-    }
 
 
 def _print(out: Outcome, args: argparse.Namespace, intervals: bool, endless: bool) -> None:

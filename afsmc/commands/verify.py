@@ -27,10 +27,10 @@ from afsmc.commands.requirements import (
 )
 from afsmc.diagnostics import CompileError
 from afsmc.text import literal, num
-from afsmc.verify import VerifyResult, parametric
+from afsmc.verify import VerifyResult
 from afsmc.verify.junit import write_junit
 from afsmc.verify.storm import ENGINES, SOLVERS, VIAS
-from afsmc.verify.verdicts import failing, judge_over
+from afsmc.verify.verdicts import failing
 
 
 def positive(text: str) -> int:
@@ -176,37 +176,28 @@ def run(args: argparse.Namespace) -> int:
     if args.traces_out and args.witness is None:
         usage_error("--traces-out writes the --witness paths: give --witness K as well")
     try:
-        res = verify_file(args.file, args.property, consts=overrides(args),
+        done = verify_file(args.file, args.property, consts=overrides(args),
                           formulas=args.formula, via=args.via, engine=args.engine,
                           max_states=args.max_states, uniform=args.uniform,
                           progress=progress_printer(args), reductions=reductions(args),
                           bisimulation=args.bisim, split=args.split, solver=args.solver,
                           precision=args.precision, exact=args.exact,
                           strategy=args.strategy, witness=extras.witness(args),
-                          witness_dir=args.witness_dir).raw
+                          witness_dir=args.witness_dir)
+        res = done.raw
         if args.traces_out:
             extras.write_traces(args.traces_out, res, args.file)
-        box, bounds = parametric.for_file(  # interval probabilities: min/max over them
-            args.file, overrides(args), args.property, args.formula, via=args.via,
-            reductions=reductions(args))
     except CompileError as exc:
         return fail(exc, args.json, wrapped=True)
-    if bounds:  # a requirement holds only if it holds at every fixed interval probability
-        judge_over(res.properties, {e.name: (e.min_attained, e.max_attained) for e in bounds},
-                   parametric.DEFAULT_PRECISION + 1e-6,
-                   "over every fixed value of the interval probabilities")
     if args.junit:
         write_junit(args.junit, res)
     if args.json:
-        out = res.to_json()
-        if bounds:
-            out["probability_intervals"] = parametric.to_json(box, bounds)
-        print(json.dumps(out, indent=2))
+        print(json.dumps(done.to_json(), indent=2))
     else:
         report(res.warnings)
         more = extras.render(res)
         print(render(res) + ("\n" + more if more else ""))
-        if bounds:
-            print("\n" + parametric.render(box, bounds))
+        if done.intervals is not None:  # interval probabilities: min/max over them
+            print("\n" + str(done.intervals))
     return 1 if failing(res.properties) else 0
 

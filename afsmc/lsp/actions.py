@@ -72,6 +72,7 @@ def fixes(d: Diagnostic, text: str, index: I.Index | None) -> list[Fix]:
         out.append(Fix("Mark the mode final", ((semi, semi, " final"),)))
     if "make the last outcome '1 - ...'" in hint:
         out += _complement(text, start, end)
+    out += _rewrites(d, text, start, end)
     if d.code == "E301" and (m := _TIE.search(d.message)) and d.related:
         other = d.related[0].span
         out.append(Fix(f"Give {m[2]} the weight 1 - w({m[1]})",
@@ -81,6 +82,9 @@ def fixes(d: Diagnostic, text: str, index: I.Index | None) -> list[Fix]:
 
 def _rename(index: I.Index, start: int, end: int, new: str) -> list[Fix]:
     occ = index.at(start)
+    if occ is None and index.text[max(0, start - 8):start].rstrip() == "machine":
+        # the machine's name is named nowhere else
+        return [Fix(f"Rename the machine to '{new}'", ((start, end, new),))]
     if occ is None or (occ.start, occ.end) != (start, end) or (occ.ns, new) in index.defs:
         return []
     edits = tuple((o.start, o.end, new) for o in index.references(occ.ns, occ.name))
@@ -123,3 +127,59 @@ def code_action(ls: AfsmServer, params: T.CodeActionParams) -> list[T.CodeAction
                 title=fix["title"], kind=T.CodeActionKind.QuickFix, diagnostics=[diag],
                 edit=T.WorkspaceEdit(changes={uri: edits}), is_preferred=len(diag.data) == 1))
     return out
+
+
+_OPERATOR = re.compile(r"is not (?:an operator in afsm|a comparison)[:;] write '([^']+)'")
+_CLAMP = re.compile(r"declare (?:the tuple )?'(\w+)' with 'clamp'")
+_MOD = re.compile(r"write 'mod\(([^,']+), ([^']+)\)'")
+_IF = re.compile(r"write '(\w+) := (\(.+\))'$")
+
+
+def _rewrites(d: Diagnostic, text: str, start: int, end: int) -> list[Fix]:
+    """The hints that rewrite the flagged text or the line around it: an operator from
+    another language ('and' -> '&&', '=' -> '==' or ':='), infix 'mod', an update's
+    'if', an unclosed comment or name, Pmax in a requirement, an int given a double, a
+    variable to saturate."""
+    hint, flagged = d.hint or "", text[start:end]
+    line_end = text.find("\n", end)
+    line_end = len(text) if line_end < 0 else line_end
+    line_start = text.rfind("\n", 0, start) + 1
+    if m := _OPERATOR.search(d.message):
+        return [Fix(f"Write '{m[1]}'", ((start, end, m[1]),))]
+    if flagged == "=" and "an update is written 'x := value'" in d.message:
+        return [Fix("Write ':='", ((start, end, ":="),))]
+    if (m := _MOD.search(hint)) and flagged == "mod":
+        a, b = m[1], m[2]
+        left = text[:start].rstrip()
+        right = text[end:].lstrip()
+        if left.endswith(a) and right.startswith(b):
+            lo = len(left) - len(a)
+            hi = end + (len(text[end:]) - len(right)) + len(b)
+            return [Fix(f"Write 'mod({a}, {b})'", ((lo, hi, f"mod({a}, {b})"),))]
+    if (m := _IF.search(hint)) and flagged == "if":
+        head = re.search(rf"\b{re.escape(m[1])}\s*:=", text[line_start:start])
+        stop = re.search(r"[,;}]", text[end:line_end])
+        if head is not None and stop is not None:
+            return [Fix(f"Write '{m[1]} := {m[2]}'", ((line_start + head.start(),
+                                                      end + stop.start(),
+                                                      f"{m[1]} := {m[2]}"),))]
+    if d.code == "E117" and flagged == "/*":
+        return [Fix("Close the comment at the end of the line",
+                    ((line_end, line_end, " */"),))]
+    if d.code == "E117" and flagged == '"':
+        # before the declaration's ';' if the line ends with one
+        body = text[end:line_end].rstrip()
+        at = end + len(body) - 1 if body.endswith(";") else end + len(body)
+        return [Fix("Close the name", ((at, at, '"'),))]
+    if "without 'max'" in hint or "without 'min'" in hint:
+        op = re.match(r"[PR](max|min)", flagged)
+        if op is not None:
+            return [Fix(f"Remove '{op[1]}'", ((start + 1, start + 4, ""),))]
+    if "round it with floor(...) or ceil(...)" in hint:
+        return [Fix(f"Write '{f}({flagged})'", ((start, end, f"{f}({flagged})"),))
+                for f in ("floor", "ceil")]
+    if m := _CLAMP.search(hint):
+        decl = re.search(rf"^[ \t]*var\s+{m[1]}\s*:[^;]*?(?=\s*;)", text, re.M)
+        if decl is not None and not decl[0].rstrip().endswith("clamp"):
+            return [Fix(f"Declare '{m[1]}' with 'clamp'", ((decl.end(), decl.end(), " clamp"),))]
+    return []

@@ -386,17 +386,20 @@ def extremes(low: Lowered, props: Sequence[ir.Property], *, via: str = "prism",
 
 def for_file(path: str, consts: Mapping[str, str] | None, properties: Sequence[str],
              formulas: Sequence[str], *, via: str = "prism", reductions: Any = None,
-             precision: float = DEFAULT_PRECISION) -> tuple[dict[str, tuple[float, float]],
-                                                            list[Extreme]]:
+             precision: float = DEFAULT_PRECISION, text: str | None = None
+             ) -> tuple[dict[str, tuple[float, float]], list[Extreme]]:
     """`afsmc verify`'s bounds over the file's interval probabilities: their box and one
-    `Extreme` per property checked (nothing when the file has none)."""
+    `Extreme` per property checked (nothing when the file has none). `text`: the file's
+    text, if already read (or a mission given as text)."""
     from afsmc.compiler import lowered
     from afsmc.files import read_source
     from afsmc.verify.api import load_with_formulas, select
 
-    if not _MAY_HAVE_INTERVAL.search(read_source(path)):
+    if text is None:
+        text = read_source(path)
+    if not _MAY_HAVE_INTERVAL.search(text):
         return {}, []  # not loaded a second time: most files have none
-    loaded = load_with_formulas(path, consts, formulas)
+    loaded = load_with_formulas(path, consts, formulas, text=text)
     box = interval_box(loaded.model)
     if not box:
         return {}, []

@@ -179,3 +179,41 @@ def test_the_snippet_on_uav_runs_storm_isolated_from_a_plain_script(
     assert got["isolated"] == got["direct"]
     cli = cli_json("examples/uav.afsm", "--const", "T_LIMIT=100", "--property", "success")
     assert without_times(got["result"]) == without_times(cli)
+
+
+def _with_slip_interval(tmp_path: Path) -> Path:
+    text = Path(PATROL).read_text(encoding="utf-8")
+    wide = text.replace("const prob P_SLIP   = 0.1;", "const prob P_SLIP = [0.05, 0.15];")
+    assert wide != text
+    f = tmp_path / "patrol_slip.afsm"
+    f.write_text(wide.replace('property finish      = P=? [ F "done" ];',
+                              'property finish = P>=0.8 [ F "done" ];'), encoding="utf-8")
+    return f
+
+
+@pytest.mark.slow  # Storm's parametric engine on every property, twice: about 15 s
+def test_interval_probabilities_give_the_bounds_of_verify(tmp_path: Path) -> None:
+    f = _with_slip_interval(tmp_path)
+    res = afsmc.load(str(f)).verify()
+    run = run_cli("verify", "--json", str(f))
+    assert run.code == 1, run.err  # finish >= 0.8 fails somewhere in P_SLIP's interval
+    cli = json.loads(run.out)
+    assert without_times(res.to_json()) == without_times(cli)
+    assert res.intervals is not None and res.intervals.box == {"P_SLIP": (0.05, 0.15)}
+    df = res.to_pandas()
+    for entry in cli["probability_intervals"]["properties"]:
+        assert (df.loc[entry["name"], "interval_min"], df.loc[entry["name"], "interval_max"]) \
+            == (entry["min"], entry["max"])
+    # the requirement is judged over the interval, as the CLI judges it
+    assert df.loc["finish", "verdict"] == cli["properties"][0]["verdict"] == "depends"
+    assert "interval_min" in res._repr_html_()
+    # the same from the mission's text, for one property
+    text = afsmc.load(f.read_text(encoding="utf-8")).verify("fault")
+    one = json.loads(run_cli("verify", "--json", str(f), "-p", "fault").out)
+    assert text.to_json()["probability_intervals"] == one["probability_intervals"]
+
+
+def test_a_mission_without_interval_probabilities_has_no_interval_columns() -> None:
+    res = afsmc.load(PATROL).verify("finish")
+    assert res.intervals is None and "probability_intervals" not in res.to_json()
+    assert "interval_min" not in res.to_pandas().columns

@@ -131,8 +131,19 @@ def test_simulate_defaults_are_the_cli_defaults() -> None:
     api = {k: v.default for k, v in inspect.signature(simulate).parameters.items()}
     for option, arg in [("runs", "runs"), ("seed", "seed"), ("resolve", "resolve"),
                         ("confidence", "confidence"), ("max_steps", "max_steps"),
-                        ("jobs", "jobs"), ("batch_size", "batch_size"), ("traces", "traces")]:
+                        ("jobs", "jobs"), ("batch_size", "batch_size"), ("traces", "traces"),
+                        ("at", "at"), ("strategy", "strategy")]:
         assert api[arg] == cli[option], option
+
+
+def test_sim_check_defaults_are_the_cli_defaults() -> None:
+    from afsmc.api.sim_check import sim_check
+    from afsmc.commands.sim_check import add_arguments as sim_check_arguments
+
+    cli = _defaults(sim_check_arguments)
+    api = {k: v.default for k, v in inspect.signature(sim_check).parameters.items()}
+    for option in ("runs", "seed", "timeout", "update"):
+        assert api[option] == cli[option], option
 
 
 def _result(props: list[PropertyResult]) -> Results:
