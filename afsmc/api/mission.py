@@ -189,7 +189,9 @@ class Mission:
         """Monte Carlo estimates of every declared property with confidence intervals, as
         `afsmc simulate` gives them: options ``seed`` (0), ``resolve`` ("uniform"),
         ``confidence`` (0.999), ``max_steps`` (100000), ``jobs`` (1), ``batch_size``,
-        ``dask``, ``traces``. Raises AfsmError."""
+        ``dask``, ``traces``, ``at`` ("draw": each run draws its interval probabilities
+        uniformly from their intervals; "mid", "min", "max": every run there). Raises
+        AfsmError."""
         from afsmc.api.simulate import simulate
 
         return simulate(self, runs, **options)

@@ -23,7 +23,7 @@ if TYPE_CHECKING:
 def simulate(mission: Mission, runs: int = 100_000, *, seed: int = 0,
              resolve: Strategy = "uniform", confidence: float = 0.999,
              max_steps: int = 100_000, jobs: int = 1, batch_size: int = BATCH,
-             dask: Any = None, traces: int = 0, at: str = "mid") -> Estimates:
+             dask: Any = None, traces: int = 0, at: str = "draw") -> Estimates:
     """:meth:`Mission.simulate`, with `afsmc simulate`'s defaults: the job `afsmc simulate`
     makes (:func:`afsmc.sim.run.job_for`) run by :func:`afsmc.sim.run.simulate`. `at`:
     interval probabilities at their midpoint ("mid"), lower ("min") or upper ("max") end."""
@@ -31,8 +31,8 @@ def simulate(mission: Mission, runs: int = 100_000, *, seed: int = 0,
         raise ValueError("runs, max_steps, jobs and batch_size must be positive")
     if not 0.0 < confidence < 1.0:
         raise ValueError(f"confidence must be in (0, 1); got {confidence!r}")
-    if at not in ("mid", "min", "max"):
-        raise ValueError(f"at must be mid, min or max; got {at!r}")
+    if at not in ("draw", "mid", "min", "max"):
+        raise ValueError(f"at must be draw, mid, min or max; got {at!r}")
     job = job_for(mission.path, mission.text, mission.consts, resolve, max_steps, at)
     try:
         with without_main():

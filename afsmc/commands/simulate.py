@@ -52,9 +52,11 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    help="interval constants: uniform floor/ceil choice (default), or always "
                         "the floor (floor, lo) or the ceiling (ceil, hi): one fixed strategy; "
                         "`afsmc verify` gives the MDP's min and max")
-    p.add_argument("--at", choices=("mid", "min", "max"), default="mid",
-                   help="interval probabilities (const prob P = [lo, hi]): every run at "
-                        "their midpoint (default), their lower end or their upper end")
+    p.add_argument("--at", choices=("draw", "mid", "min", "max"), default="draw",
+                   help="interval probabilities (const prob P = [lo, hi]): each run draws "
+                        "its own p, uniform in [lo, hi], when it starts (draw, the default); "
+                        "or every run at the midpoint (mid), the lower end (min) or the upper "
+                        "end (max)")
     p.add_argument("--confidence", type=float, default=0.999, metavar="C",
                    help="confidence level of the intervals (default 0.999)")
     p.add_argument("--max-steps", type=int, default=100_000, metavar="K",
@@ -183,7 +185,8 @@ def _finish(out: Outcome, args: argparse.Namespace, model: Any, warnings: list[D
             warnings))
     else:
         _print(out, args, model.is_nondeterministic,
-               endless=any(d.code == codes.W602 for d in warnings))
+               endless=any(d.code == codes.W602 for d in warnings),
+               prob_intervals=bool(model.prob_intervals))
         followed_text(strategy)
 
 
@@ -234,7 +237,7 @@ def _json(out: Outcome, args: argparse.Namespace, machine: str,
         "runs": out.runs,
         "seed": args.seed,
         "resolve": args.resolve,
-        "at": args.at,  # interval probabilities: mid, min or max
+        "at": args.at,  # interval probabilities: draw, mid, min or max
         "confidence": args.confidence,
         "properties": [{"name": e.name, "estimate": _num(e.estimate), "low": _num(e.low),
                         "high": _num(e.high), "undecided": e.undecided}
@@ -244,7 +247,8 @@ def _json(out: Outcome, args: argparse.Namespace, machine: str,
     }
 
 
-def _print(out: Outcome, args: argparse.Namespace, intervals: bool, endless: bool) -> None:
+def _print(out: Outcome, args: argparse.Namespace, intervals: bool, endless: bool,
+           prob_intervals: bool = False) -> None:
     if args.traces:
         print(_traces_text(out.traces))
     name = args.file  # as given, as verify names it
@@ -254,6 +258,11 @@ def _print(out: Outcome, args: argparse.Namespace, intervals: bool, endless: boo
     resolved = f"interval constants {how}" if intervals else "no interval constants"
     if args.strategy:
         resolved = f"interval constants by the {args.strategy} strategy"
+    if prob_intervals:
+        resolved += ", " + {"draw": "interval probabilities drawn once per run (uniform)",
+                            "mid": "interval probabilities at their midpoints",
+                            "min": "interval probabilities at their lower ends",
+                            "max": "interval probabilities at their upper ends"}[args.at]
     print(f"{name}: {out.runs} runs, {resolved}, seed {args.seed}, "
           f"{args.confidence:g} confidence")
     width = max([len(e.name) for e in out.estimates] + [8])
