@@ -20,11 +20,12 @@ from afsmc.text import article
 INTERVAL = "interval"  # const int X = [lo, hi] from sim <duration|battery>
 NUMBER = "number"  # const int|double X = v from sim <duration|battery>
 PROBABILITY = "probability"  # const prob|double X = p from sim <probability>
+PROB_INTERVAL = "probability interval"  # const prob X = [lo, hi] from sim <probability>
 
 # policy key -> (the shapes it applies to, default, (low, high) open/closed range text)
 POLICY_KEYS: dict[str, tuple[frozenset[str], str]] = {
     "coverage": (frozenset({INTERVAL}), "the central fraction of samples [lo, hi] must hull (0 < c < 1)"),
-    "confidence": (frozenset({INTERVAL, NUMBER, PROBABILITY}),
+    "confidence": (frozenset({INTERVAL, NUMBER, PROBABILITY, PROB_INTERVAL}),
                    "confidence level of the statistical test (0 < c < 1)"),
     "tolerance": (frozenset({NUMBER}), "allowed distance between value and mean (>= 0)"),
 }
@@ -41,6 +42,8 @@ class Policy:
 
 
 def shape_of(const: ir.Constant) -> str:
+    if const.prob_interval is not None:
+        return PROB_INTERVAL
     if const.interval is not None:
         return INTERVAL
     if const.declared_type == "prob":
@@ -48,15 +51,17 @@ def shape_of(const: ir.Constant) -> str:
     return NUMBER
 
 
-def policy_of(const: ir.Constant) -> Policy:
-    """The constant's policy with defaults filled in (assumes the rule below passed)."""
+def policy_of(const: ir.Constant, confidence: float | None = None) -> Policy:
+    """The constant's policy with defaults filled in (assumes the rule below passed);
+    `confidence` replaces the default confidence (a constant that states one keeps it)."""
     assert const.source is not None
     given = dict(const.source.policy)
     shape = shape_of(const)
     if shape == NUMBER and const.source is not None and _kind(const.source.ref) == "probability":
         shape = PROBABILITY  # a `double` fed by a probability output
     return Policy(shape, float(given.get("coverage", DEFAULT_COVERAGE)),
-                  float(given.get("confidence", DEFAULT_CONFIDENCE)),
+                  float(given.get("confidence", DEFAULT_CONFIDENCE if confidence is None
+                                  else confidence)),
                   float(given["tolerance"]) if "tolerance" in given else None)
 
 
@@ -113,7 +118,7 @@ def check_sim_sources(model: ir.Model, rep: Reporter) -> None:
 
 def _shape_text(shape: str) -> str:
     return {INTERVAL: "the interval constant", NUMBER: "the number",
-            PROBABILITY: "the probability"}[shape]
+            PROBABILITY: "the probability", PROB_INTERVAL: "the interval probability"}[shape]
 
 
 def _check_kind(c: ir.Constant, kind: str, shape: str, rep: Reporter) -> None:

@@ -32,6 +32,10 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    metavar="SECONDS",
                    help="stop a simulator that runs longer than this, per constant; each runs "
                         f"in its own process (default {sandbox.DEFAULT_TIMEOUT:g})")
+    p.add_argument("--confidence", type=_level, metavar="C",
+                   help="confidence of the statistical tests of the constants that state none "
+                        "(`with confidence = C` in the file wins; default 0.999); an interval "
+                        "probability must cover the runs' Clopper-Pearson interval at it")
     p.add_argument("--update", action="store_true",
                    help="rewrite drifted constants in FILE in place, with a provenance comment")
     p.add_argument("--json", action="store_true", help="print the evidence as JSON")
@@ -117,6 +121,16 @@ def run(args: argparse.Namespace) -> int:
     return 1 if diags else 0
 
 
+def _level(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        value = math.nan
+    if not 0.0 < value < 1.0:
+        raise argparse.ArgumentTypeError(f"expected a confidence in (0, 1), got {text!r}")
+    return value
+
+
 def _seconds(text: str) -> float:
     try:
         value = float(text)
@@ -190,7 +204,8 @@ def _judge_all(args: argparse.Namespace, sourced: list[ir.Constant],
                 raise sandbox.SimulatorFailure(f"{bad:,} of its {x.size:,} samples are not "
                                                "finite numbers (inf or nan)")
             with np.errstate(all="ignore"):  # a sum past 1e308 is inf, and said so
-                results.append(judge(c, args.runs, args.seed, samples=x))
+                results.append(judge(c, args.runs, args.seed, samples=x,
+                                     confidence=args.confidence))
         except Exception as exc:  # a broken third-party simulator: report, don't crash
             return fail(CompileError([Diagnostic(
                 codes.E505, Severity.ERROR, f"simulator '{c.source.ref}' failed: {exc}",
@@ -278,4 +293,6 @@ def _table(results: list[Evidence]) -> None:
     print(f"\n{len(results)} constant(s), {sum(not e.consistent for e in results)} drifted"
           + (f", {few} with too few runs to judge" if few else "") + "; "
           f"{results[0].runs} runs, seed {results[0].seed}, confidence "
-          + ", ".join(f"{c:g}" for c in sorted(conf)))
+          + ", ".join(f"{c:g}" for c in sorted(conf))
+          + ("; probabilities: Clopper-Pearson intervals"
+             if any(e.method for e in results) else ""))
