@@ -1,5 +1,7 @@
-"""Check rule for `from sim ...` constants: the reference names a registered simulator
-output of a fitting kind, and the policy keys are known and in range.
+"""Check rule for `from sim ...` and `from data ...` constants: the reference names a
+registered simulator output of a fitting kind (a data column backs an `int`, `double` or
+`prob`), and the policy keys are known and in range. A data file is read by `sim-check`
+only (afsmc.simlib.datafile), never here.
 
 A reference is only ever looked up in the simulator registry (`afsmc.simlib.registry`),
 which is filled from the `afsmc.simulators` entry-point group: nothing the spec names is
@@ -29,6 +31,7 @@ POLICY_KEYS: dict[str, tuple[frozenset[str], str]] = {
                    "confidence level of the statistical test (0 < c < 1)"),
     "tolerance": (frozenset({NUMBER}), "allowed distance between value and mean (>= 0)"),
 }
+DATA = "data"  # the kind of a data column of measurements (`from data ... column ...`)
 DEFAULT_COVERAGE = 0.95
 DEFAULT_CONFIDENCE = 0.999
 
@@ -57,12 +60,19 @@ def policy_of(const: ir.Constant, confidence: float | None = None) -> Policy:
     assert const.source is not None
     given = dict(const.source.policy)
     shape = shape_of(const)
-    if shape == NUMBER and const.source is not None and _kind(const.source.ref) == "probability":
+    if shape == NUMBER and const.source.column is None and \
+            _kind(const.source.ref) == "probability":
         shape = PROBABILITY  # a `double` fed by a probability output
     return Policy(shape, float(given.get("coverage", DEFAULT_COVERAGE)),
                   float(given.get("confidence", DEFAULT_CONFIDENCE if confidence is None
                                   else confidence)),
                   float(given["tolerance"]) if "tolerance" in given else None)
+
+
+def data_kind(const: ir.Constant) -> str:
+    """What a data column backing `const` holds: outcomes (0/1, true/false) for a `prob`,
+    measured figures for an `int` or a `double`; "" for a type no column can back."""
+    return {"prob": "probability", "int": DATA, "double": DATA}.get(const.declared_type, "")
 
 
 def _kind(ref: str) -> str | None:
@@ -78,7 +88,7 @@ def check_sim_sources(model: ir.Model, rep: Reporter) -> None:
         src = c.source
         if src is None:
             continue
-        kind = _kind(src.ref)
+        kind = data_kind(c) if src.column is not None else _kind(src.ref)
         if kind is None:
             refs = registry.available() if refs is None else refs
             close = difflib.get_close_matches(src.ref, refs, n=3, cutoff=0.6)
@@ -123,6 +133,14 @@ def _shape_text(shape: str) -> str:
 
 def _check_kind(c: ir.Constant, kind: str, shape: str, rep: Reporter) -> None:
     assert c.source is not None
+    if c.source.column is not None:
+        if not kind:
+            rep.error(codes.E503, f"a data column cannot back {_a(c.declared_type)} constant "
+                      f"'{c.name}'", c.source.span,
+                      hint="a column of outcomes (0/1) backs a 'prob' (a value or an interval "
+                           "[lo, hi]); a column of measurements backs an 'int' (a value or an "
+                           "interval [floor, ceil]) or a 'double'")
+        return
     if kind == "probability":
         if shape == INTERVAL or c.declared_type not in ("prob", "double"):
             what = "an interval" if shape == INTERVAL else f"{_a(c.declared_type)} constant"

@@ -5,6 +5,7 @@ drifted ones in place (see docs/monte-carlo.md for the rules)."""
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import datetime
 import math
 import os
@@ -13,13 +14,14 @@ import time
 
 import numpy as np
 
+from afsmc.check.sim_sources import data_kind
 from afsmc.commands.common import add_consts, add_seed, fail, overrides, print_json, report
 from afsmc.compiler import Checked, load
 from afsmc.diagnostics import CompileError, Diagnostic, Severity, codes
 from afsmc.files import write_atomic
 from afsmc.model import ir
 from afsmc.sim.evidence import Evidence, judge, rewrite
-from afsmc.simlib import registry, sandbox
+from afsmc.simlib import datafile, registry, sandbox
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
@@ -194,6 +196,14 @@ def _judge_all(args: argparse.Namespace, sourced: list[ir.Constant],
     started = time.monotonic()
     for i, c in enumerate(sourced, 1):
         assert c.source is not None
+        if c.source.column is not None:  # a data file: its rows are the runs
+            print(f"sim-check: [{i}/{len(sourced)}] {c.name} <- {c.source.display} "
+                  f"({time.monotonic() - started:.1f} s)", file=sys.stderr)
+            try:
+                results.append(_from_data(args, c))
+            except CompileError as exc:
+                return fail(exc, args.json, wrapped=True)
+            continue
         print(f"sim-check: [{i}/{len(sourced)}] {c.name} <- {c.source.ref} "
               f"({args.runs} runs, {time.monotonic() - started:.1f} s)", file=sys.stderr)
         try:
@@ -213,12 +223,23 @@ def _judge_all(args: argparse.Namespace, sourced: list[ir.Constant],
     return results
 
 
+def _from_data(args: argparse.Namespace, c: ir.Constant) -> Evidence:
+    """A constant backed by a data file judged by the rule of its shape, the file's values
+    standing for the runs (a `prob`'s column holds outcomes)."""
+    assert c.source is not None
+    x = datafile.read(args.file, c, outcomes=c.declared_type == "prob")
+    e = judge(c, len(x), 0, samples=x, confidence=args.confidence,
+              kind=data_kind(c))
+    return dataclasses.replace(e, ref=c.source.display, seed=None)
+
+
 def _update(args: argparse.Namespace, text: str, drifted: list[Evidence],
             by_name: dict[str, ir.Constant]) -> int | None:
     """--update: rewrite the drifted constants in FILE, if the new text checks as
     `afsmc check` would check it; the exit code if it cannot (the file unchanged)."""
     date = _today()
-    changes = {e.name: (e.suggestion, f"{e.ref}, {e.runs} runs, seed {e.seed}, {date}")
+    changes = {e.name: (e.suggestion, f"{e.ref}, {e.runs} runs, seed {e.seed}, {date}"
+                        if e.seed is not None else f"{e.ref}, {e.runs} rows, {date}")
                for e in drifted}
     new = rewrite(text, args.file, changes)
     refused = _refuse(args, text, new, drifted, by_name)
@@ -290,9 +311,13 @@ def _table(results: list[Evidence]) -> None:
         print("  ".join(cell.ljust(w) for cell, w in zip(r, widths, strict=True)).rstrip())
     conf = {e.confidence for e in results}
     few = sum(e.inconclusive for e in results)
+    sims = [e for e in results if e.seed is not None]
+    data = len(results) - len(sims)
+    where = ([f"{sims[0].runs} runs, seed {sims[0].seed}"] if sims else []) + (
+        [f"{data} from data files"] if data else [])
     print(f"\n{len(results)} constant(s), {sum(not e.consistent for e in results)} drifted"
           + (f", {few} with too few runs to judge" if few else "") + "; "
-          f"{results[0].runs} runs, seed {results[0].seed}, confidence "
+          + ", ".join(where) + ", confidence "
           + ", ".join(f"{c:g}" for c in sorted(conf))
           + ("; probabilities: Clopper-Pearson intervals"
              if any(e.method for e in results) else ""))

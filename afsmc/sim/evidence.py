@@ -31,8 +31,8 @@ class Evidence:
     kind: str  # the simulator output's kind
     shape: str  # interval | number | probability
     declared: str  # as the spec states it, e.g. "[12, 13]"
-    runs: int
-    seed: int
+    runs: int  # simulator runs, or a data file's values
+    seed: int | None  # None: a data file's values
     mean: float
     mean_low: float  # confidence interval of the mean (Clopper-Pearson for probabilities)
     mean_high: float
