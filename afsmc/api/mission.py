@@ -174,13 +174,16 @@ class Mission:
 
         return verify(self, properties, **options)
 
-    def sweep(self, variable: str, values: Sequence[int | float | bool] | str, *,
+    def sweep(self, variable: str | Mapping[str, Sequence[int | float | bool] | str],
+              values: Sequence[int | float | bool] | str = (), *,
               properties: Sequence[str] | str | None = None, **options: Any) -> Sweep:
         """Each property at each value of one open constant (`afsmc sweep --const
         T=0:900:25`), or of the properties' step bound with ``variable="bound"`` (`afsmc
         sweep --bound`). `values`: a list, or a range text ``"0:900:25"`` (stop included) or
-        ``"1,2,5"``. `options`: those of :func:`afsmc.verify.sweep` (``jobs``, ``engine``,
-        ``formulas``, ``dask``, ...). Raises AfsmError."""
+        ``"1,2,5"``. A mapping ``{"CELLS": "2:4", "ROUNDS": [1, 2, 3]}`` for `variable`
+        sweeps the grid of several constants (`afsmc sweep --const CELLS=2:4 --const
+        ROUNDS=1:3`). `options`: those of :func:`afsmc.verify.sweep` (``jobs``,
+        ``engine``, ``formulas``, ``dask``, ...). Raises AfsmError."""
         from afsmc.api.sweep import sweep
 
         return sweep(self, variable, values, properties=properties, **options)

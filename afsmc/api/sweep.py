@@ -25,18 +25,26 @@ if TYPE_CHECKING:
 COLUMNS = ("min", "max", "uniform", "value")
 
 
-def sweep(mission: Mission, variable: str, values: Sequence[Number] | str, *,
+def sweep(mission: Mission, variable: str | Mapping[str, Sequence[Number] | str],
+          values: Sequence[Number] | str = (), *,
           properties: Sequence[str] | str | None = None, **options: Any) -> Sweep:
     """:meth:`Mission.sweep`: :func:`afsmc.verify.sweep`, the function `afsmc sweep` calls,
-    with the command's defaults; `variable` "bound" sweeps the step bound."""
-    if isinstance(values, str):
+    with the command's defaults; `variable` "bound" sweeps the step bound, a mapping
+    {name: values} the grid of several constants."""
+    def parsed(vals: Sequence[Number] | str) -> Sequence[Number]:
+        if not isinstance(vals, str):
+            return vals
         try:
-            values = parse_values(values)
+            return parse_values(vals)
         except ValueError as exc:
-            raise ValueError(f"values {values!r}: {exc}") from None
+            raise ValueError(f"values {vals!r}: {exc}") from None
+    if not isinstance(variable, str):
+        grid = {name: list(parsed(vals)) for name, vals in variable.items()}
+        return sweep_file(mission.path, grid, properties=properties, text=mission.text,
+                          consts=dict(mission.consts), **options)
     if variable == "bound":
         options.setdefault("kind", "bound")
-    return sweep_file(mission.path, variable, values, properties=properties,
+    return sweep_file(mission.path, variable, parsed(values), properties=properties,
                       text=mission.text, consts=dict(mission.consts), **options)
 
 

@@ -103,3 +103,19 @@ def test_a_grid_too_large_is_a_usage_error(tmp_path: Path) -> None:
     r = run_cli("sweep", str(spec), "--const", "P_FAIL=0:0.999:0.001", "--const", "D=0:20")
     assert r.code == 2
     assert "at most 10,000" in r.err
+
+
+@pytest.mark.storm
+def test_the_api_sweeps_a_grid_from_a_mapping(tmp_path: Path) -> None:
+    import afsmc
+
+    spec = tmp_path / "deadline.afsm"
+    spec.write_text(DEADLINE)
+    sw = afsmc.load(str(spec)).sweep({"P_FAIL": "0.1,0.2", "D": [4, 6]},
+                                     properties="by_deadline", jobs=1)
+    df = sw.to_pandas()
+    assert list(df.columns[:3]) == ["P_FAIL", "D", "property"]
+    assert [tuple(r) for r in df[["P_FAIL", "D"]].itertuples(index=False)] == [
+        (0.1, 4), (0.1, 6), (0.2, 4), (0.2, 6)]
+    assert sw.to_csv() == run_cli("sweep", str(spec), "--const", "P_FAIL=0.1,0.2", "--const",
+                                  "D=4,6", "-p", "by_deadline", "--jobs", "1").out
