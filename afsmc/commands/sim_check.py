@@ -81,7 +81,7 @@ def run(args: argparse.Namespace) -> int:
     # --update would write a value the next sim-check rejects again.
     unfit = [Diagnostic(
         codes.E508, Severity.ERROR,
-        f"constant '{e.name}' has drifted from simulation '{e.ref}' (mean {e.mean:.4g}), and "
+        f"constant '{e.name}' has drifted from {_origin(e)} (mean {e.mean:.4g}), and "
         f"no {by_name[e.name].type.value} fits the rule: it accepts {e.accept}",
         by_name[e.name].span, hint="widen its `tolerance`, or declare the constant double")
         for e in drifted if not e.fits]
@@ -101,7 +101,7 @@ def run(args: argparse.Namespace) -> int:
         for e in results if e.inconclusive]
     diags = unfit + ([] if updated else [Diagnostic(
         codes.E502, Severity.ERROR,
-        f"constant '{e.name}' = {e.declared} has drifted from simulation '{e.ref}' "
+        f"constant '{e.name}' = {e.declared} has drifted from {_origin(e)} "
         f"(mean {e.mean:.4g}; the rule accepts {e.accept})", by_name[e.name].span,
         hint=f"the simulation suggests {e.suggestion}; `afsmc sim-check --update` rewrites it")
         for e in drifted])
@@ -121,6 +121,11 @@ def run(args: argparse.Namespace) -> int:
     if (diags or few) and not args.json:
         report(diags + few)
     return 1 if diags else 0
+
+
+def _origin(e: Evidence) -> str:
+    """Where a constant's evidence comes from, for a message."""
+    return f"simulation '{e.ref}'" if e.seed is not None else e.ref
 
 
 def _level(text: str) -> float:
