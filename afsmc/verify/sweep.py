@@ -186,8 +186,9 @@ def _gather(tasks: list[Task], finished: Finished, t0: float,
         if len(wheres) == len(tasks) > 1:
             return ("at every point of the grid" if ranges else f"at every value of {variable}"
                     if kind == "const" else "at every bound")
-        return "at " + (", ".join(wheres) if len(wheres) <= 5 else
-                        f"{', '.join(wheres[:5])} and {len(wheres) - 5} more")
+        sep = "; " if ranges else ", "  # a grid's point is itself `A=1, B=2`
+        return "at " + (sep.join(wheres) if len(wheres) <= 5 else
+                        f"{sep.join(wheres[:5])} and {len(wheres) - 5} more")
     errors = [dataclasses.replace(d, message=f"{at(wheres)}: {d.message}")
               for d, wheres in failed.values()]
     in_part = any(pts and diags for pts, diags in finished.values())

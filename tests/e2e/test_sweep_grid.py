@@ -119,3 +119,14 @@ def test_the_api_sweeps_a_grid_from_a_mapping(tmp_path: Path) -> None:
         (0.1, 4), (0.1, 6), (0.2, 4), (0.2, 6)]
     assert sw.to_csv() == run_cli("sweep", str(spec), "--const", "P_FAIL=0.1,0.2", "--const",
                                   "D=4,6", "-p", "by_deadline", "--jobs", "1").out
+
+
+@pytest.mark.storm
+def test_a_failed_point_of_a_grid_is_named_and_the_others_kept(tmp_path: Path) -> None:
+    spec = tmp_path / "deadline.afsm"
+    spec.write_text(DEADLINE)
+    r = run_cli("sweep", str(spec), "--const", "P_FAIL=0.5,1.5", "--const", "D=4,6",
+                "-p", "by_deadline", "--jobs", "1")
+    assert r.code == 1
+    assert "error[E207]: at P_FAIL=1.5, D=4; P_FAIL=1.5, D=6:" in r.err
+    assert [(row["P_FAIL"], row["D"]) for row in rows(r.out)] == [("0.5", "4"), ("0.5", "6")]
