@@ -130,3 +130,19 @@ def test_a_failed_point_of_a_grid_is_named_and_the_others_kept(tmp_path: Path) -
     assert r.code == 1
     assert "error[E207]: at P_FAIL=1.5, D=4; P_FAIL=1.5, D=6:" in r.err
     assert [(row["P_FAIL"], row["D"]) for row in rows(r.out)] == [("0.5", "4"), ("0.5", "6")]
+
+
+@pytest.mark.slow
+@pytest.mark.storm
+def test_a_grid_on_dask_equals_one_process(tmp_path: Path) -> None:
+    distributed = pytest.importorskip("distributed")
+    spec = tmp_path / "deadline.afsm"
+    spec.write_text(DEADLINE)
+    grid = {"P_FAIL": [0.1, 0.3], "D": [3, 5, 7]}
+    one = sweep(str(spec), grid, properties=["by_deadline"], jobs=1)
+    with distributed.LocalCluster(n_workers=1, threads_per_worker=1, processes=False,
+                                  dashboard_address=None) as cluster:
+        remote = sweep(str(spec), grid, properties=["by_deadline"],
+                       dask=cluster.scheduler_address)
+    assert remote.to_csv() == one.to_csv()
+    assert remote.to_json() == one.to_json()
