@@ -163,3 +163,17 @@ def test_a_bool_from_data_and_a_bad_policy_are_check_errors(tmp_path: Path) -> N
         "with confidence = 0.95", "with coverage = 0.9"))
     r = run_cli("check", str(path))
     assert r.code == 1 and "E504" in r.err
+
+
+@pytest.mark.parametrize(("wrong", "hint"), [
+    ('from data runs.csv column success', "expected a quoted string"),
+    ('from data "runs.csv" success', "expected 'column'"),
+    ('from dat "runs.csv" column success', "expected 'data', 'sim'"),
+])
+def test_a_malformed_data_source_is_a_syntax_error(tmp_path: Path, wrong: str,
+                                                   hint: str) -> None:
+    path = spec(tmp_path)
+    path.write_text(path.read_text().replace('from data "runs.csv" column success', wrong))
+    r = run_cli("check", str(path))
+    assert r.code == 1 and "error[E101]" in r.err and f"hint: {hint}" in r.err
+    assert "carry.afsm:2:" in r.err and "^" in r.err
