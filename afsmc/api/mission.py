@@ -175,13 +175,16 @@ class Mission:
 
         return verify(self, properties, **options)
 
-    def sweep(self, variable: str, values: Sequence[int | float | bool] | str, *,
+    def sweep(self, variable: str | Mapping[str, Sequence[int | float | bool] | str],
+              values: Sequence[int | float | bool] | str = (), *,
               properties: Sequence[str] | str | None = None, **options: Any) -> Sweep:
         """Each property at each value of one open constant (`afsmc sweep --const
         T=0:900:25`), or of the properties' step bound with ``variable="bound"`` (`afsmc
         sweep --bound`). `values`: a list, or a range text ``"0:900:25"`` (stop included) or
-        ``"1,2,5"``. `options`: those of :func:`afsmc.verify.sweep` (``jobs``, ``engine``,
-        ``formulas``, ``dask``, ...). Raises AfsmError."""
+        ``"1,2,5"``. A mapping ``{"CELLS": "2:4", "ROUNDS": [1, 2, 3]}`` for `variable`
+        sweeps the grid of several constants (`afsmc sweep --const CELLS=2:4 --const
+        ROUNDS=1:3`). `options`: those of :func:`afsmc.verify.sweep` (``jobs``,
+        ``engine``, ``formulas``, ``dask``, ...). Raises AfsmError."""
         from afsmc.api.sweep import sweep
 
         return sweep(self, variable, values, properties=properties, **options)
@@ -190,7 +193,8 @@ class Mission:
         """Monte Carlo estimates of every declared property with confidence intervals, as
         `afsmc simulate` gives them: options ``seed`` (0), ``resolve`` ("uniform"),
         ``confidence`` (0.999), ``max_steps`` (100000), ``jobs`` (1), ``batch_size``,
-        ``dask``, ``traces``, ``at`` ("mid", "min", "max": interval probabilities),
+        ``dask``, ``traces``, ``at`` ("draw": each run draws its interval probabilities
+        uniformly from their intervals; "mid", "min", "max": every run there),
         ``strategy`` ("min:NAME" or "max:NAME": follow Storm's scheduler of property
         NAME), ``progress``. ``to_json()`` is `afsmc simulate --json`. Raises AfsmError
         (E407 if the mission declares no properties and no ``traces`` are asked for)."""
@@ -202,7 +206,8 @@ class Mission:
         """Re-run the simulation behind every `from sim ...` constant and judge the value
         in the file against it, as `afsmc sim-check` does: options ``seed`` (0),
         ``timeout`` (seconds per simulator), ``update`` (rewrite the drifted constants in
-        the file), ``progress`` (a function that receives a line per constant). A drift
+        the file), ``confidence`` (the tests' level where a constant states none; 0.999),
+        ``progress`` (a function that receives a line per constant). A drift
         is in the result (``.ok`` is False, ``.errors`` has E502), not raised. Raises
         AfsmError (a simulator failed: E505)."""
         from afsmc.api.sim_check import sim_check

@@ -7,6 +7,7 @@ sim-check`); ``to_pandas()``, ``to_json()`` and ``_repr_html_``.
 
 from __future__ import annotations
 
+import dataclasses
 import datetime
 import html
 import os
@@ -18,12 +19,13 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from afsmc.api.errors import AfsmError
+from afsmc.check.sim_sources import data_kind
 from afsmc.compiler import Checked, load
 from afsmc.diagnostics import CompileError, Diagnostic, Severity, codes
 from afsmc.files import write_atomic
 from afsmc.model import ir
 from afsmc.sim.evidence import Evidence, judge, rewrite
-from afsmc.simlib import sandbox
+from afsmc.simlib import datafile, sandbox
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -37,25 +39,29 @@ COLUMNS = ("constant", "simulation", "declared", "mean", "mean_low", "mean_high"
 
 def sim_check(mission: Mission, runs: int = 10_000, *, seed: int = 0,
               timeout: float = sandbox.DEFAULT_TIMEOUT, update: bool = False,
-              progress: Say | None = None) -> SimCheck:
+              confidence: float | None = None, progress: Say | None = None) -> SimCheck:
     """:meth:`Mission.sim_check`: :func:`sim_check_file` on the mission's file (re-read
     as it is on disk for `update`, which rewrites it) or text, and constants."""
     if update and not os.path.isfile(mission.path):
         raise ValueError(f"update rewrites the mission's file; {mission.path} is not a file")
     return sim_check_file(mission.path, mission.consts, None if update else mission.text,
                           runs=runs, seed=seed, timeout=timeout, update=update,
-                          progress=progress)
+                          confidence=confidence, progress=progress)
 
 
 def sim_check_file(path: str, consts: Mapping[str, str], text: str | None = None, *,
                    runs: int = 10_000, seed: int = 0,
                    timeout: float = sandbox.DEFAULT_TIMEOUT, update: bool = False,
-                   budget: int | None = None, progress: Say | None = None) -> SimCheck:
+                   budget: int | None = None, confidence: float | None = None,
+                   progress: Say | None = None) -> SimCheck:
     """The one way afsmc judges simulated constants, for `afsmc sim-check` and
     :meth:`Mission.sim_check`. Each simulator runs `runs` times in its own process
     (stopped after `timeout` seconds or past `budget` bytes; default: the sandbox's share
     of the free memory). `update` rewrites the drifted constants in the file, with a
-    provenance comment, if the new text checks. `progress` receives a line per constant.
+    provenance comment, if the new text checks. `confidence`: the level of the statistical
+    tests of constants whose declaration states none (default 0.999). A constant backed by
+    a data file (`from data ...`) is judged on the file's rows instead of runs.
+    `progress` receives a line per constant.
 
     A drift is a result, not an exception: ``SimCheck.errors`` holds E502 (E508 if no
     value fits the constant's rule). Raises AfsmError: the file's errors, E505 (a
@@ -74,14 +80,14 @@ def sim_check_file(path: str, consts: Mapping[str, str], text: str | None = None
             text = None  # loading reports it (E001)
     checked = load_sourced(path, consts, text, say)
     sourced = [c for c in checked.model.constants if c.source is not None]
-    results = judge_all(sourced, runs, seed, timeout, budget, say)
+    results = judge_all(path, sourced, runs, seed, timeout, budget, say, confidence)
     by_name = {c.name: c for c in sourced}
     drifted = [e for e in results if not e.consistent]
     # No value its own rule accepts (an int whose accepted range holds no integer):
     # an update would write a value the next sim-check rejects again.
     unfit = [Diagnostic(
         codes.E508, Severity.ERROR,
-        f"constant '{e.name}' has drifted from simulation '{e.ref}' (mean {e.mean:.4g}), and "
+        f"constant '{e.name}' has drifted from {_origin(e)} (mean {e.mean:.4g}), and "
         f"no {by_name[e.name].type.value} fits the rule: it accepts {e.accept}",
         by_name[e.name].span, hint="widen its `tolerance`, or declare the constant double")
         for e in drifted if not e.fits]
@@ -99,7 +105,7 @@ def sim_check_file(path: str, consts: Mapping[str, str], text: str | None = None
         for e in results if e.inconclusive]
     errors = unfit + ([] if updated else [Diagnostic(
         codes.E502, Severity.ERROR,
-        f"constant '{e.name}' = {e.declared} has drifted from simulation '{e.ref}' "
+        f"constant '{e.name}' = {e.declared} has drifted from {_origin(e)} "
         f"(mean {e.mean:.4g}; the rule accepts {e.accept})", by_name[e.name].span,
         hint=f"the simulation suggests {e.suggestion}; `afsmc sim-check --update` rewrites it")
         for e in drifted])
@@ -133,8 +139,13 @@ def load_sourced(path: str, consts: Mapping[str, str], text: str | None, say: Sa
     return checked
 
 
-def judge_all(sourced: list[ir.Constant], runs: int, seed: int, timeout: float,
-              budget: int | None, say: Say) -> list[Evidence]:
+def _origin(e: Evidence) -> str:
+    """Where a constant's evidence comes from, for a message."""
+    return f"simulation '{e.ref}'" if e.seed is not None else e.ref
+
+
+def judge_all(path: str, sourced: list[ir.Constant], runs: int, seed: int, timeout: float,
+              budget: int | None, say: Say, confidence: float | None = None) -> list[Evidence]:
     """Each simulated constant judged against its simulation, run in a child process
     (afsmc.simlib.sandbox), a progress line before each; AfsmError E505 if a simulator
     fails in any way: an exception, an exit, a hang past `timeout`, too much memory."""
@@ -142,6 +153,14 @@ def judge_all(sourced: list[ir.Constant], runs: int, seed: int, timeout: float,
     started = time.monotonic()
     for i, c in enumerate(sourced, 1):
         assert c.source is not None
+        if c.source.column is not None:  # a data file: its rows are the runs
+            say(f"sim-check: [{i}/{len(sourced)}] {c.name} <- {c.source.display} "
+                f"({time.monotonic() - started:.1f} s)")
+            try:
+                results.append(_from_data(path, c, confidence))
+            except CompileError as exc:
+                raise AfsmError.of(exc) from None
+            continue
         say(f"sim-check: [{i}/{len(sourced)}] {c.name} <- {c.source.ref} "
             f"({runs} runs, {time.monotonic() - started:.1f} s)")
         try:
@@ -151,7 +170,7 @@ def judge_all(sourced: list[ir.Constant], runs: int, seed: int, timeout: float,
                 raise sandbox.SimulatorFailure(f"{bad:,} of its {x.size:,} samples are not "
                                                "finite numbers (inf or nan)")
             with np.errstate(all="ignore"):  # a sum past 1e308 is inf, and said so
-                results.append(judge(c, runs, seed, samples=x))
+                results.append(judge(c, runs, seed, samples=x, confidence=confidence))
         except Exception as exc:  # a broken third-party simulator: report, don't crash
             raise AfsmError([Diagnostic(
                 codes.E505, Severity.ERROR, f"simulator '{c.source.ref}' failed: {exc}",
@@ -159,12 +178,22 @@ def judge_all(sourced: list[ir.Constant], runs: int, seed: int, timeout: float,
     return results
 
 
+def _from_data(path: str, c: ir.Constant, confidence: float | None) -> Evidence:
+    """A constant backed by a data file judged by the rule of its shape, the file's values
+    standing for the runs (a `prob`'s column holds outcomes)."""
+    assert c.source is not None
+    x = datafile.read(path, c, outcomes=c.declared_type == "prob")
+    e = judge(c, len(x), 0, samples=x, confidence=confidence, kind=data_kind(c))
+    return dataclasses.replace(e, ref=c.source.display, seed=None)
+
+
 def _update(path: str, consts: Mapping[str, str], text: str, drifted: list[Evidence],
             by_name: dict[str, ir.Constant]) -> None:
     """Rewrite the drifted constants in the file, if the new text checks as `afsmc check`
     would check it; AfsmError (the file unchanged) if it cannot."""
     date = _today()
-    changes = {e.name: (e.suggestion, f"{e.ref}, {e.runs} runs, seed {e.seed}, {date}")
+    changes = {e.name: (e.suggestion, f"{e.ref}, {e.runs} runs, seed {e.seed}, {date}"
+                        if e.seed is not None else f"{e.ref}, {e.runs} rows, {date}")
                for e in drifted}
     new = rewrite(text, path, changes)
     refused = _refuse(path, consts, text, new, drifted, by_name)

@@ -29,13 +29,13 @@ if TYPE_CHECKING:
 
     from afsmc.api.mission import Mission
 
-AT = ("mid", "min", "max")
+AT = ("draw", "mid", "min", "max")
 
 
 def simulate(mission: Mission, runs: int = 100_000, *, seed: int = 0,
              resolve: Strategy = "uniform", confidence: float = 0.999,
              max_steps: int = 100_000, jobs: int = 1, batch_size: int = BATCH,
-             dask: Any = None, traces: int = 0, at: str = "mid", strategy: str | None = None,
+             dask: Any = None, traces: int = 0, at: str = "draw", strategy: str | None = None,
              progress: Callable[[str], None] | None = None) -> Estimates:
     """:meth:`Mission.simulate`, with `afsmc simulate`'s defaults: :func:`simulate_file` on
     the mission's text and constants."""
@@ -48,12 +48,13 @@ def simulate(mission: Mission, runs: int = 100_000, *, seed: int = 0,
 def simulate_file(path: str, text: str, consts: Mapping[str, str], runs: int = 100_000, *,
                   seed: int = 0, resolve: Strategy = "uniform", confidence: float = 0.999,
                   max_steps: int = 100_000, jobs: int = 1, batch_size: int = BATCH,
-                  dask: Any = None, traces: int = 0, at: str = "mid",
+                  dask: Any = None, traces: int = 0, at: str = "draw",
                   strategy: str | None = None,
                   progress: Callable[[str], None] | None = None) -> Estimates:
     """The one way afsmc simulates, for `afsmc simulate` and :meth:`Mission.simulate`:
-    :func:`prepare` then :func:`run`. `at`: interval probabilities at their midpoint
-    ("mid"), lower ("min") or upper ("max") end; `strategy` ("min:NAME" or "max:NAME"):
+    :func:`prepare` then :func:`run`. `at`: interval probabilities drawn once per run,
+    uniformly from their intervals ("draw"), or at their midpoint ("mid"), lower ("min") or
+    upper ("max") end; `strategy` ("min:NAME" or "max:NAME"):
     the runs follow Storm's min or max scheduler of property NAME instead of `resolve`;
     `progress` receives the strategy extraction's lines. Raises AfsmError, ValueError."""
     if runs < 1 or max_steps < 1 or jobs < 1 or batch_size < 1:
@@ -87,7 +88,7 @@ class Simulation:
 
 
 def prepare(path: str, text: str, consts: Mapping[str, str], *,
-            resolve: Strategy = "uniform", max_steps: int = 100_000, at: str = "mid",
+            resolve: Strategy = "uniform", max_steps: int = 100_000, at: str = "draw",
             strategy: str | None = None, traces: int = 0,
             progress: Callable[[str], None] | None = None) -> Simulation:
     """Load and compile the machine for the simulator (and extract Storm's scheduler for
@@ -97,7 +98,7 @@ def prepare(path: str, text: str, consts: Mapping[str, str], *,
     if resolve not in STRATEGIES:
         raise ValueError(f"resolve must be one of {', '.join(STRATEGIES)}; got {resolve!r}")
     if at not in AT:
-        raise ValueError(f"at must be mid, min or max; got {at!r}")
+        raise ValueError(f"at must be draw, mid, min or max; got {at!r}")
     if strategy and resolve != "uniform":
         raise ValueError("strategy resolves the interval constants itself: give it or "
                          "resolve, not both")
@@ -171,7 +172,7 @@ class Estimates:
     seed: int
     confidence: float
     resolve: str
-    at: str = "mid"
+    at: str = "draw"
     path: str = ""
     machine: str = ""
     constants: dict[str, object] = field(default_factory=dict)
@@ -208,7 +209,7 @@ class Estimates:
             "runs": self.raw.runs,
             "seed": self.seed,
             "resolve": self.resolve,
-            "at": self.at,  # interval probabilities: mid, min or max
+            "at": self.at,  # interval probabilities: draw, mid, min or max
             "confidence": self.confidence,
             "properties": [{"name": e.name, "estimate": _num(e.estimate), "low": _num(e.low),
                             "high": _num(e.high), "undecided": e.undecided}

@@ -25,27 +25,37 @@ if TYPE_CHECKING:
 COLUMNS = ("min", "max", "uniform", "value")
 
 
-def sweep(mission: Mission, variable: str, values: Sequence[Number] | str, *,
+def sweep(mission: Mission, variable: str | Mapping[str, Sequence[Number] | str],
+          values: Sequence[Number] | str = (), *,
           properties: Sequence[str] | str | None = None, **options: Any) -> Sweep:
     """:meth:`Mission.sweep`: :func:`afsmc.verify.sweep`, the function `afsmc sweep` calls,
-    with the command's defaults; `variable` "bound" sweeps the step bound."""
-    if isinstance(values, str):
+    with the command's defaults; `variable` "bound" sweeps the step bound, a mapping
+    {name: values} the grid of several constants."""
+    def parsed(vals: Sequence[Number] | str) -> Sequence[Number]:
+        if not isinstance(vals, str):
+            return vals
         try:
-            values = parse_values(values)
+            return parse_values(vals)
         except ValueError as exc:
-            raise ValueError(f"values {values!r}: {exc}") from None
+            raise ValueError(f"values {vals!r}: {exc}") from None
+    if not isinstance(variable, str):
+        grid = {name: list(parsed(vals)) for name, vals in variable.items()}
+        return sweep_file(mission.path, grid, properties=properties, text=mission.text,
+                          consts=dict(mission.consts), **options)
     if variable == "bound":
         options.setdefault("kind", "bound")
-    return sweep_file(mission.path, variable, values, properties=properties,
+    return sweep_file(mission.path, variable, parsed(values), properties=properties,
                       text=mission.text, consts=dict(mission.consts), **options)
 
 
-def sweep_file(path: str, variable: str, values: Sequence[Number], *,
+def sweep_file(path: str, variable: str | Mapping[str, Sequence[Number]],
+               values: Sequence[Number] = (), *,
                properties: Sequence[str] | str | None = None, text: str | None = None,
                consts: Mapping[str, str] | None = None, **options: Any) -> Sweep:
     """The one way afsmc sweeps, for `afsmc sweep` and :meth:`Mission.sweep`:
     :func:`afsmc.verify.sweep` with the command's defaults (every option passed on as
-    given), its worker processes started without re-running a user's script."""
+    given), its worker processes started without re-running a user's script. `variable`
+    a mapping {name: values} sweeps the grid of several constants."""
     kwargs: dict[str, Any] = {**VERIFY_DEFAULTS, **options}
     try:
         with without_main():
@@ -73,17 +83,19 @@ class Sweep:
 
     def to_pandas(self) -> pd.DataFrame:
         """One row per point and property, as `afsmc sweep` writes its CSV: the swept
-        value (a column named after the constant, or "bound"), ``property``, ``min``,
+        value (a column named after the constant, or "bound"; a column per constant for
+        a grid), ``property``, ``min``,
         ``max``, ``uniform``, ``value`` (NaN where not asked), ``states``, ``transitions``.
         ``df.pivot(index=variable, columns="property", values="value")`` gives a curve
         per column."""
         import pandas as pd
 
-        rows = [{self.variable: pt.x, "property": r.name,
+        swept = self.raw.swept
+        rows = [{**dict(zip(swept, self.raw.coords(pt), strict=True)), "property": r.name,
                  **{k: getattr(r, k) for k in COLUMNS},
                  "states": pt.states, "transitions": pt.transitions}
                 for pt in self.raw.points for r in pt.properties]
-        df = pd.DataFrame(rows, columns=[self.variable, "property", *COLUMNS, "states",
+        df = pd.DataFrame(rows, columns=[*swept, "property", *COLUMNS, "states",
                                          "transitions"])
         for k in COLUMNS:
             df[k] = df[k].astype(float)

@@ -1,5 +1,7 @@
-"""Check rule for `from sim ...` constants: the reference names a registered simulator
-output of a fitting kind, and the policy keys are known and in range.
+"""Check rule for `from sim ...` and `from data ...` constants: the reference names a
+registered simulator output of a fitting kind (a data column backs an `int`, `double` or
+`prob`), and the policy keys are known and in range. A data file is read by `sim-check`
+only (afsmc.simlib.datafile), never here.
 
 A reference is only ever looked up in the simulator registry (`afsmc.simlib.registry`),
 which is filled from the `afsmc.simulators` entry-point group: nothing the spec names is
@@ -20,14 +22,16 @@ from afsmc.text import article
 INTERVAL = "interval"  # const int X = [lo, hi] from sim <duration|battery>
 NUMBER = "number"  # const int|double X = v from sim <duration|battery>
 PROBABILITY = "probability"  # const prob|double X = p from sim <probability>
+PROB_INTERVAL = "probability interval"  # const prob X = [lo, hi] from sim <probability>
 
 # policy key -> (the shapes it applies to, default, (low, high) open/closed range text)
 POLICY_KEYS: dict[str, tuple[frozenset[str], str]] = {
     "coverage": (frozenset({INTERVAL}), "the central fraction of samples [lo, hi] must hull (0 < c < 1)"),
-    "confidence": (frozenset({INTERVAL, NUMBER, PROBABILITY}),
+    "confidence": (frozenset({INTERVAL, NUMBER, PROBABILITY, PROB_INTERVAL}),
                    "confidence level of the statistical test (0 < c < 1)"),
     "tolerance": (frozenset({NUMBER}), "allowed distance between value and mean (>= 0)"),
 }
+DATA = "data"  # the kind of a data column of measurements (`from data ... column ...`)
 DEFAULT_COVERAGE = 0.95
 DEFAULT_CONFIDENCE = 0.999
 
@@ -41,6 +45,8 @@ class Policy:
 
 
 def shape_of(const: ir.Constant) -> str:
+    if const.prob_interval is not None:
+        return PROB_INTERVAL
     if const.interval is not None:
         return INTERVAL
     if const.declared_type == "prob":
@@ -48,16 +54,25 @@ def shape_of(const: ir.Constant) -> str:
     return NUMBER
 
 
-def policy_of(const: ir.Constant) -> Policy:
-    """The constant's policy with defaults filled in (assumes the rule below passed)."""
+def policy_of(const: ir.Constant, confidence: float | None = None) -> Policy:
+    """The constant's policy with defaults filled in (assumes the rule below passed);
+    `confidence` replaces the default confidence (a constant that states one keeps it)."""
     assert const.source is not None
     given = dict(const.source.policy)
     shape = shape_of(const)
-    if shape == NUMBER and const.source is not None and _kind(const.source.ref) == "probability":
+    if shape == NUMBER and const.source.column is None and \
+            _kind(const.source.ref) == "probability":
         shape = PROBABILITY  # a `double` fed by a probability output
     return Policy(shape, float(given.get("coverage", DEFAULT_COVERAGE)),
-                  float(given.get("confidence", DEFAULT_CONFIDENCE)),
+                  float(given.get("confidence", DEFAULT_CONFIDENCE if confidence is None
+                                  else confidence)),
                   float(given["tolerance"]) if "tolerance" in given else None)
+
+
+def data_kind(const: ir.Constant) -> str:
+    """What a data column backing `const` holds: outcomes (0/1, true/false) for a `prob`,
+    measured figures for an `int` or a `double`; "" for a type no column can back."""
+    return {"prob": "probability", "int": DATA, "double": DATA}.get(const.declared_type, "")
 
 
 def _kind(ref: str) -> str | None:
@@ -73,7 +88,7 @@ def check_sim_sources(model: ir.Model, rep: Reporter) -> None:
         src = c.source
         if src is None:
             continue
-        kind = _kind(src.ref)
+        kind = data_kind(c) if src.column is not None else _kind(src.ref)
         if kind is None:
             refs = registry.available() if refs is None else refs
             close = difflib.get_close_matches(src.ref, refs, n=3, cutoff=0.6)
@@ -113,11 +128,19 @@ def check_sim_sources(model: ir.Model, rep: Reporter) -> None:
 
 def _shape_text(shape: str) -> str:
     return {INTERVAL: "the interval constant", NUMBER: "the number",
-            PROBABILITY: "the probability"}[shape]
+            PROBABILITY: "the probability", PROB_INTERVAL: "the interval probability"}[shape]
 
 
 def _check_kind(c: ir.Constant, kind: str, shape: str, rep: Reporter) -> None:
     assert c.source is not None
+    if c.source.column is not None:
+        if not kind:
+            rep.error(codes.E503, f"a data column cannot back {_a(c.declared_type)} constant "
+                      f"'{c.name}'", c.source.span,
+                      hint="a column of outcomes (0/1) backs a 'prob' (a value or an interval "
+                           "[lo, hi]); a column of measurements backs an 'int' (a value or an "
+                           "interval [floor, ceil]) or a 'double'")
+        return
     if kind == "probability":
         if shape == INTERVAL or c.declared_type not in ("prob", "double"):
             what = "an interval" if shape == INTERVAL else f"{_a(c.declared_type)} constant"

@@ -25,6 +25,10 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    metavar="SECONDS",
                    help="stop a simulator that runs longer than this, per constant; each runs "
                         f"in its own process (default {sandbox.DEFAULT_TIMEOUT:g})")
+    p.add_argument("--confidence", type=_level, metavar="C",
+                   help="confidence of the statistical tests of the constants that state none "
+                        "(`with confidence = C` in the file wins; default 0.999); an interval "
+                        "probability must cover the runs' Clopper-Pearson interval at it")
     p.add_argument("--update", action="store_true",
                    help="rewrite drifted constants in FILE in place, with a provenance comment")
     p.add_argument("--json", action="store_true", help="print the evidence as JSON")
@@ -56,6 +60,7 @@ def run(args: argparse.Namespace) -> int:
     try:
         res = sim_check_file(args.file, overrides(args), runs=args.runs, seed=args.seed,
                              timeout=args.timeout, update=args.update, budget=budget,
+                             confidence=args.confidence,
                              progress=say)
     except CompileError as exc:
         return fail(exc, args.json, wrapped=True)
@@ -72,6 +77,16 @@ def run(args: argparse.Namespace) -> int:
     if res.diagnostics and not args.json:
         report(res.diagnostics)
     return 0 if res.ok else 1
+
+
+def _level(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        value = math.nan
+    if not 0.0 < value < 1.0:
+        raise argparse.ArgumentTypeError(f"expected a confidence in (0, 1), got {text!r}")
+    return value
 
 
 def _seconds(text: str) -> float:
@@ -118,7 +133,13 @@ def _table(results: list[Evidence]) -> None:
         print("  ".join(cell.ljust(w) for cell, w in zip(r, widths, strict=True)).rstrip())
     conf = {e.confidence for e in results}
     few = sum(e.inconclusive for e in results)
+    sims = [e for e in results if e.seed is not None]
+    data = len(results) - len(sims)
+    where = ([f"{sims[0].runs} runs, seed {sims[0].seed}"] if sims else []) + (
+        [f"{data} from data files"] if data else [])
     print(f"\n{len(results)} constant(s), {sum(not e.consistent for e in results)} drifted"
           + (f", {few} with too few runs to judge" if few else "") + "; "
-          f"{results[0].runs} runs, seed {results[0].seed}, confidence "
-          + ", ".join(f"{c:g}" for c in sorted(conf)))
+          + ", ".join(where) + ", confidence "
+          + ", ".join(f"{c:g}" for c in sorted(conf))
+          + ("; probabilities: Clopper-Pearson intervals"
+             if any(e.method for e in results) else ""))

@@ -51,9 +51,11 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    help="interval constants: uniform floor/ceil choice (default), or always "
                         "the floor (floor, lo) or the ceiling (ceil, hi): one fixed strategy; "
                         "`afsmc verify` gives the MDP's min and max")
-    p.add_argument("--at", choices=("mid", "min", "max"), default="mid",
-                   help="interval probabilities (const prob P = [lo, hi]): every run at "
-                        "their midpoint (default), their lower end or their upper end")
+    p.add_argument("--at", choices=("draw", "mid", "min", "max"), default="draw",
+                   help="interval probabilities (const prob P = [lo, hi]): each run draws "
+                        "its own p, uniform in [lo, hi], when it starts (draw, the default); "
+                        "or every run at the midpoint (mid), the lower end (min) or the upper "
+                        "end (max)")
     p.add_argument("--confidence", type=float, default=0.999, metavar="C",
                    help="confidence level of the intervals (default 0.999)")
     p.add_argument("--max-steps", type=int, default=100_000, metavar="K",
@@ -165,7 +167,8 @@ def _finish(sim: Simulation, est: Estimates, args: argparse.Namespace) -> None:
         print_json(est.to_json())
     else:
         _print(est.raw, args, sim.model.is_nondeterministic,
-               endless=any(d.code == codes.W602 for d in est.warnings))
+               endless=any(d.code == codes.W602 for d in est.warnings),
+               prob_intervals=bool(sim.model.prob_intervals))
         followed_text(est.policy)
 
 
@@ -201,7 +204,8 @@ def _strategy(text: str) -> str:
     return text
 
 
-def _print(out: Outcome, args: argparse.Namespace, intervals: bool, endless: bool) -> None:
+def _print(out: Outcome, args: argparse.Namespace, intervals: bool, endless: bool,
+           prob_intervals: bool = False) -> None:
     if args.traces:
         print(_traces_text(out.traces))
     name = args.file  # as given, as verify names it
@@ -211,6 +215,11 @@ def _print(out: Outcome, args: argparse.Namespace, intervals: bool, endless: boo
     resolved = f"interval constants {how}" if intervals else "no interval constants"
     if args.strategy:
         resolved = f"interval constants by the {args.strategy} strategy"
+    if prob_intervals:
+        resolved += ", " + {"draw": "interval probabilities drawn once per run (uniform)",
+                            "mid": "interval probabilities at their midpoints",
+                            "min": "interval probabilities at their lower ends",
+                            "max": "interval probabilities at their upper ends"}[args.at]
     print(f"{name}: {out.runs} runs, {resolved}, seed {args.seed}, "
           f"{args.confidence:g} confidence")
     width = max([len(e.name) for e in out.estimates] + [8])

@@ -1,6 +1,7 @@
 """`afsmc sweep FILE --const T=0:900:25 --property success [--plot fig.png] [-o out.csv]`.
 
-One open constant takes a range (`start:stop:step`, stop included) or a list (`a,b,c`);
+An open constant takes a range (`start:stop:step`, stop included) or a list (`a,b,c`);
+several such constants sweep their grid (every combination, long-format CSV and JSON);
 or `--bound 0:40:5` sweeps the step bound of the properties (F<=k, C<=k, I=k; a property
 without one is an error, E410).
 """
@@ -9,6 +10,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 import os
 import sys
 from collections.abc import Callable
@@ -26,14 +28,15 @@ from afsmc.files import check_writable, write_atomic
 from afsmc.verify import sweep_verdicts
 from afsmc.verify.sweep import without_kept_note
 from afsmc.verify.sweep_result import SweepResult
-from afsmc.verify.sweep_values import Number, parse_values
+from afsmc.verify.sweep_values import MAX_POINTS, Number, parse_values
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
     add_file(p)
     p.add_argument("--const", "-c", action="append", default=[], metavar="NAME=VALUES",
-                   help="an open constant's value; exactly one may take a range "
-                        "start:stop:step (stop included) or a list a,b,c: the sweep's x axis")
+                   help="an open constant's value; a range start:stop:step (stop included) or a "
+                        "list a,b,c sweeps it: the x axis; several ranges sweep their grid "
+                        "(every combination, the first varying slowest)")
     p.add_argument("--bound", metavar="RANGE",
                    help="sweep the step bound k of the properties (F<=k, G<=k, U<=k, C<=k, I=k; "
                         "each must have one) instead")
@@ -43,7 +46,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                         "'-' is stdout")
     p.add_argument("--json", action="store_true", help="print the points as one JSON object")
     p.add_argument("--plot", metavar="FILE.png|FILE.svg",
-                   help="draw min, max and uniform curves (matplotlib)")
+                   help="draw min, max and uniform curves (matplotlib); for several constants, "
+                        "heat maps of the first two (small multiples over the others)")
     p.add_argument("--jobs", "-j", type=positive, metavar="N",
                    help="parallel processes on this machine (default: the number of cores); "
                         "with --dask, it sizes the tasks instead: points that share one model "
@@ -109,11 +113,13 @@ def run(args: argparse.Namespace) -> int:
             usage_error(f"--bound {args.bound}: a step bound is a whole number, not true/false")
         variable, kind = "bound", "bound"
     else:
-        if len(swept) != 1:
-            usage_error("give exactly one constant a range (--const T=0:900:25) or use --bound"
-                        if not swept else "only one constant can take a range: "
-                        + ", ".join(sorted(swept)))
-        ((variable, values),) = swept.items()
+        if not swept:
+            usage_error("give a constant a range (--const T=0:900:25) or use --bound")
+        points = math.prod(len(v) for v in swept.values())
+        if points > MAX_POINTS:
+            usage_error(f"the grid of {' x '.join(swept)} has {points:,} points; at most "
+                        f"{MAX_POINTS:,}")
+        ((variable, values),) = swept.items() if len(swept) == 1 else (("", []),)
         kind = "const"
     if args.plot and os.path.splitext(args.plot)[1].lower() not in (".png", ".svg"):
         usage_error(f"--plot {args.plot}: the name must end in .png or .svg")
@@ -147,7 +153,7 @@ def run(args: argparse.Namespace) -> int:
         for out in (args.output, args.plot):
             if out:
                 check_writable(out, protect=(args.file,))
-        res = sweep_file(args.file, variable, values, kind=kind,
+        res = sweep_file(args.file, variable if len(swept) <= 1 else swept, values, kind=kind,
                          consts=fixed, properties=args.property, formulas=args.formula,
                          via=args.via, engine=args.engine, max_states=args.max_states,
                          jobs=args.jobs, dask=args.dask, uniform=args.uniform,

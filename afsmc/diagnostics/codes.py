@@ -204,6 +204,11 @@ E506 = Code("E506", Severity.ERROR, "the machine cannot be simulated")
 E507 = Code("E507", Severity.ERROR, "the simulation's workers cannot be reached")
 E508 = Code("E508", Severity.ERROR, "a constant has drifted and no value of its type fits")
 E509 = Code("E509", Severity.ERROR, "the value sim-check --update would write does not check")
+E510 = Code("E510", Severity.ERROR, "a constant's data file cannot be read")
+E511 = Code("E511", Severity.ERROR, "a constant's data file has no such column")
+E512 = Code("E512", Severity.ERROR, "a data column holds a cell that is not a number")
+E513 = Code("E513", Severity.ERROR, "a data column holds no values")
+E514 = Code("E514", Severity.ERROR, "a data column of outcomes holds a value other than 0 or 1")
 
 
 # E6xx: diagrams

@@ -306,8 +306,9 @@ def _facts(d: Definition, model: ir.Model) -> list[str]:
                 out.append(f"open constant: `--const {c.name}=VALUE` overrides it")
             if c.source is not None:
                 policy = ", ".join(f"{k} = {number(v)}" for k, v in c.source.policy)
-                out.append(f"source: simulation `{c.source.ref}`" + (f" with {policy}" if policy
-                                                                    else ""))
+                what = "simulation" if c.source.column is None else "data file"
+                out.append(f"source: {what} `{c.source.display}`"
+                           + (f" with {policy}" if policy else ""))
             return out
         if d.kind == "variable":
             out = []

@@ -22,10 +22,19 @@ Value = Union[int, float, bool]
 
 @dataclass(frozen=True)
 class SimSource:
-    ref: str
+    ref: str  # a simulator output (uav.transport.drop), or a data file's path as written
     policy: tuple[tuple[str, float], ...]
     span: Span
     keys: tuple[Span, ...] = ()  # where each policy key is written, for E504's caret
+    column: str | None = None  # `from data "PATH" column NAME`: the column; None: `from sim`
+
+    @property
+    def display(self) -> str:
+        """The source as the file says it: `uav.transport.drop`, `data "runs.csv" column ok`."""
+        if self.column is None:
+            return self.ref
+        col = self.column if self.column.isidentifier() else f'"{self.column}"'
+        return f'data "{self.ref}" column {col}'
 
 
 @dataclass(frozen=True)

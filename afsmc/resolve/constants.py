@@ -70,7 +70,8 @@ class ConstantsMixin(ResolverBase):
         if isinstance(d, ast.ConstDecl) and d.source is not None:
             source = ir.SimSource(d.source.ref.text,
                                   tuple((k.text, v) for k, v in d.source.policy), d.source.span,
-                                  tuple(k.span for k, _ in d.source.policy))
+                                  tuple(k.span for k, _ in d.source.policy),
+                                  d.source.column.text if d.source.column else None)
         if self.reading_open:
             self.open_reads[name] = frozenset(self.reading_open)
         if self.tainted or len(self.rep.diagnostics) > errors:

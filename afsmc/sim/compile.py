@@ -35,10 +35,15 @@ class Scope:
     labels: Mapping[str, E.Expr]
     weights: Mapping[str, E.Expr]  # action -> effective weight w(s, a)
     mode: int | None = None  # known inside one mode's partition
+    # constants with a value per run (interval probabilities drawn once per run): read
+    # from the runs' frame, as a variable is
+    per_run: frozenset[str] = frozenset()
 
 
 def fold(e: E.Expr, sc: Scope) -> E.Expr:
     if isinstance(e, E.ConstRef):
+        if e.name in sc.per_run:
+            return E.VarRef(e.name, e.type, e.span)
         return E.lit(sc.consts[e.name])
     if isinstance(e, E.ModeVal):
         return E.Lit(e.number, Type.INT)

@@ -80,20 +80,28 @@ class Program:
     diagnostics: list[Diagnostic] = field(default_factory=list)
     # a strategy's command per state (simulate --strategy), else the first enabled command
     policy: Lookup | None = None
+    # interval probabilities drawn once per run, uniform in [lo, hi] (simulate --at draw)
+    draws: dict[str, tuple[float, float]] = field(default_factory=dict)
 
 
-def build(low: Lowered) -> Program:
+def build(low: Lowered, draw: bool = False) -> Program:
+    """The program of `low`; `draw`: each interval probability takes a value per run,
+    drawn uniformly from its interval when the run starts (else its value, the midpoint
+    or the end the caller fixed)."""
     model = low.model
     consts: dict[str, Any] = dict(model.const_values)
     for gen, (_, value) in low.bounds.items():
         consts[gen] = value
+    draws = {c.name: (float(c.prob_interval[0]), float(c.prob_interval[1]))
+             for c in model.prob_intervals if c.prob_interval is not None} if draw else {}
     formulas = {f.name: f.value for f in model.formulas}
     labels = {lb.name: lb.value for lb in model.labels}
-    base = Scope(consts, formulas, labels, low.weights)
+    per_run = frozenset(draws)
+    base = Scope(consts, formulas, labels, low.weights, per_run=per_run)
     reward_index = {r.name: i for i, r in enumerate(model.rewards)}
     modes: dict[int, list[CCommand]] = {}
     for m in model.modes:
-        sc = Scope(consts, formulas, labels, low.weights, m.number)
+        sc = Scope(consts, formulas, labels, low.weights, m.number, per_run)
         cmds: list[CCommand] = []
         for i, cmd in enumerate(low.commands):
             if m.number not in cmd.modes:
@@ -139,7 +147,7 @@ def build(low: Lowered) -> Program:
     return Program(model, [v.name for v in model.variables], [v.display for v in model.variables],
                    {v.name: v.init for v in model.variables}, dtypes, modes,
                    max(numbers) - min(numbers) + 1, min(numbers), monitors, state_rewards,
-                   list(low.commands))
+                   list(low.commands), draws=draws)
 
 
 
@@ -215,6 +223,8 @@ def simulate_batch(prog: Program, runs: int, rng: np.random.Generator, max_steps
     """Simulate `runs` runs of `prog` together for at most `max_steps` steps; keep the first
     `trace` runs' traces."""
     batch = _Batch(prog, runs, trace)
+    for name, (lo, hi) in prog.draws.items():  # before any step: one value per run
+        batch.state[name] = rng.uniform(lo, hi, runs)
     if batch.traces:
         batch.record(0)
     batch.retire(batch.observe(0, None))

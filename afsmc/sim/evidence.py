@@ -15,7 +15,7 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
-from afsmc.check.sim_sources import INTERVAL, NUMBER, PROBABILITY, policy_of
+from afsmc.check.sim_sources import INTERVAL, NUMBER, PROB_INTERVAL, PROBABILITY, policy_of
 from afsmc.model import ir
 from afsmc.sim import stats
 from afsmc.simlib import registry
@@ -31,8 +31,8 @@ class Evidence:
     kind: str  # the simulator output's kind
     shape: str  # interval | number | probability
     declared: str  # as the spec states it, e.g. "[12, 13]"
-    runs: int
-    seed: int
+    runs: int  # simulator runs, or a data file's values
+    seed: int | None  # None: a data file's values
     mean: float
     mean_low: float  # confidence interval of the mean (Clopper-Pearson for probabilities)
     mean_high: float
@@ -48,6 +48,8 @@ class Evidence:
     # Consistent, but with too few runs to bound what the rule accepts (a quantile's
     # interval reaches infinity): nothing could have been rejected there, so not called so.
     inconclusive: bool = False
+    # the confidence interval's method, for the probabilities (Clopper-Pearson)
+    method: str | None = None
 
     @property
     def verdict(self) -> str:
@@ -64,22 +66,28 @@ class Evidence:
             "verdict": self.verdict,
             "suggestion": self.suggestion if self.fits else None,
             "confidence": self.confidence, "coverage": self.coverage,
+            "method": self.method,
         }
 
 
 def judge(const: ir.Constant, runs: int, seed: int,
-          samples: npt.NDArray[Any] | None = None) -> Evidence:
+          samples: npt.NDArray[Any] | None = None, confidence: float | None = None,
+          kind: str | None = None) -> Evidence:
     """Apply the rule for the constant's shape to `samples` of its simulator output (by
-    default sampled here: `registry.sample(ref, runs, seed)`)."""
+    default sampled here: `registry.sample(ref, runs, seed)`). `confidence` replaces the
+    default confidence of a constant that states none; `kind` is the output's kind (by
+    default the registry's)."""
     assert const.source is not None
     ref = const.source.ref
-    pol = policy_of(const)
-    kind = registry.kind(ref)
+    pol = policy_of(const, confidence)
+    kind = registry.kind(ref) if kind is None else kind
     x = np.asarray(registry.sample(ref, runs, seed) if samples is None else samples,
                    dtype=np.float64)
     n = len(x)
     mean = float(np.mean(x))
     conf = pol.confidence
+    if pol.shape == PROB_INTERVAL:
+        return _prob_interval(const, ref, kind, x, runs, seed, conf)
     if pol.shape == PROBABILITY:
         k = int(np.count_nonzero(x))
         low, high = stats.clopper_pearson(k, n, conf)
@@ -87,7 +95,8 @@ def judge(const: ir.Constant, runs: int, seed: int,
         return Evidence(const.name, ref, kind, pol.shape, short(p, 6), runs, seed, mean, low, high,
                         None, None, None,
                         f"p in [{short(low, 6)}, {short(high, 6)}] (Clopper-Pearson)",
-                        low <= p <= high, stats.shortest_decimal(mean, low, high), conf, None)
+                        low <= p <= high, stats.shortest_decimal(mean, low, high), conf, None,
+                        method=stats.CLOPPER_PEARSON)
     low, high = stats.mean_interval(x, conf)
     if pol.shape == NUMBER:
         is_int = const.type.value == "int"
@@ -128,6 +137,25 @@ def judge(const: ir.Constant, runs: int, seed: int,
                     high, cdf_lo, cdf_hi, hull, accept, ok, f"[{hull[0]}, {hull[1]}]", conf, c,
                     accepted(*hull),
                     inconclusive=ok and not all(math.isfinite(v) for v in (*lo_ok, *hi_ok)))
+
+
+def _prob_interval(const: ir.Constant, ref: str, kind: str, x: npt.NDArray[np.float64],
+                   runs: int, seed: int, conf: float) -> Evidence:
+    """An interval probability [lo, hi] is consistent when it covers the simulation's
+    Clopper-Pearson interval at `conf`: every p the runs leave plausible is in the box that
+    verify bounds over. --update writes that interval, rounded outwards."""
+    assert const.prob_interval is not None
+    lo, hi = (float(v) for v in const.prob_interval)
+    n = len(x)
+    k = int(np.count_nonzero(x))
+    low, high = stats.clopper_pearson(k, n, conf)
+    a, b = stats.outward_decimals(low, high)
+    return Evidence(const.name, ref, kind, PROB_INTERVAL, f"[{short(lo, 6)}, {short(hi, 6)}]",
+                    runs, seed, k / n if n else math.nan, low, high, None, None, None,
+                    f"[lo, hi] covering [{short(low, 6)}, {short(high, 6)}] "
+                    f"({k} of {n}: Clopper-Pearson at {short(conf, 6)})",
+                    lo <= low and high <= hi, f"[{a}, {b}]", conf, None,
+                    method=stats.CLOPPER_PEARSON)
 
 
 # ---- rewriting the file ------------------------------------------------------------

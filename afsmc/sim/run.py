@@ -51,13 +51,16 @@ class Job:
     overrides: tuple[tuple[str, str], ...]
     strategy: str
     max_steps: int
-    at: str = "mid"  # interval probabilities: their midpoint, lower ("min") or upper ("max") end
+    # interval probabilities: drawn once per run, uniform in the interval ("draw"), or every
+    # run at their midpoint ("mid"), lower ("min") or upper ("max") end
+    at: str = "draw"
     policy: Table | None = None  # a scheduler to follow (strategy is then ignored)
 
 
 def fix_prob_intervals(model: ir.Model, at: str) -> ir.Model:
-    """`model` with each interval probability at one end, or at its midpoint (its value)."""
-    if at == "mid" or not model.prob_intervals:
+    """`model` with each interval probability at one end, or at its midpoint (its value;
+    also for "draw", whose runs draw their own)."""
+    if at in ("mid", "draw") or not model.prob_intervals:
         return model
     consts = tuple(dataclasses.replace(c, value=c.prob_interval[0 if at == "min" else 1])
                    if c.prob_interval is not None else c for c in model.constants)
@@ -96,11 +99,12 @@ def program(job: Job) -> Program:
     if prog is None:
         checked = load(job.path, dict(job.overrides), text=job.text)
         model = fix_prob_intervals(checked.model, job.at)
+        draw = job.at == "draw"
         if job.policy is not None:
-            prog = build(lower(model, "nondet"))
+            prog = build(lower(model, "nondet"), draw)
             prog.policy = Lookup(job.policy, model)
         else:
-            prog = build(lower(model, LOWERING[job.strategy]))  # type: ignore[arg-type]
+            prog = build(lower(model, LOWERING[job.strategy]), draw)  # type: ignore[arg-type]
         prog.diagnostics = checked.diagnostics
         _PROGRAMS.clear()
         _PROGRAMS[job] = prog
@@ -250,5 +254,5 @@ def combine(prog: Program, results: list[BatchResult], confidence: float) -> lis
 
 
 def job_for(path: str, text: str, overrides: Mapping[str, str], strategy: str,
-            max_steps: int, at: str = "mid") -> Job:
+            max_steps: int, at: str = "draw") -> Job:
     return Job(path, text, tuple(sorted(overrides.items())), strategy, max_steps, at)

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+from decimal import ROUND_CEILING, ROUND_FLOOR, Decimal
 from typing import Any
 
 import numpy as np
@@ -19,6 +20,28 @@ class _Stats:
 
 
 stats: Any = _Stats()
+
+
+CLOPPER_PEARSON = "Clopper-Pearson"
+
+
+def outward_decimals(low: float, high: float) -> tuple[str, str]:
+    """A probability interval [low, high] rounded outwards (within [0, 1]) to the fewest
+    decimals that widen it by at most 5% (or 1e-12): short numbers for a file that
+    still cover the interval."""
+    width = max(high - low, 0.0)
+    for digits in range(1, 16):
+        q = Decimal(1).scaleb(-digits)
+        a = Decimal(repr(low)).quantize(q, rounding=ROUND_FLOOR)
+        b = Decimal(repr(high)).quantize(q, rounding=ROUND_CEILING)
+        if float(b - a) <= width * 1.05 + 1e-12 or digits == 15:
+            break
+    a, b = max(a, Decimal(0)), min(b, Decimal(1))
+    return _plain(a), _plain(b)
+
+
+def _plain(d: Decimal) -> str:
+    return format(d.normalize(), "f")
 
 
 def clopper_pearson(k: int, n: int, confidence: float) -> tuple[float, float]:

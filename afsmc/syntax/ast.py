@@ -163,9 +163,10 @@ class Interval:
 
 @dataclass(frozen=True)
 class SimSource:
-    ref: Ident  # dotted reference, e.g. uav.approach.duration
+    ref: Ident  # dotted reference, e.g. uav.approach.duration; a data file's path
     policy: tuple[tuple[Ident, float], ...]
     span: Span
+    column: Ident | None = None  # `from data "PATH" column NAME`: the data file's column
 
 
 @dataclass(frozen=True)

@@ -116,6 +116,15 @@ class Builder(Transformer[Token, Any]):
         policy = c[1] if len(c) > 1 else ()
         return ast.SimSource(c[0], policy, self._s(meta))
 
+    def data_source(self, meta: Any, c: list[Any]) -> ast.SimSource:
+        """`from data "PATH" column NAME`: the path and a quoted column as written between
+        their quotes (no escapes are read)."""
+        path, column = c[0], c[1]
+        policy = c[2] if len(c) > 2 else ()
+        col = str(column)[1:-1] if column.type == "ESCAPED_STRING" else str(column)
+        return ast.SimSource(ast.Ident(str(path)[1:-1], span_of(self.source, path)), policy,
+                             self._s(meta), ast.Ident(col, span_of(self.source, column)))
+
     def sim_policy(self, meta: Any, c: list[Any]) -> tuple[tuple[ast.Ident, float], ...]:
         return tuple(c)
 

@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import bisect
 import dataclasses
+import re
 from functools import cache
 from typing import Any
 
@@ -273,7 +274,8 @@ class _Formatter:
             head = f"const {d.type} {d.name.text}"
             if d.source is None:
                 return [head, value + ";"]
-            src = f"from sim {d.source.ref.text}"
+            src = f"from sim {d.source.ref.text}" if d.source.column is None else \
+                f'from data "{d.source.ref.text}" column {_column(d.source.column.text)}'
             if d.source.policy:
                 src += " with " + ", ".join(f"{name.text} = {self._signed_after(name.span.end)}"
                                             for name, _ in d.source.policy)
@@ -449,3 +451,8 @@ def line_ending(raw: str) -> str:
     crlf = raw.count("\r\n")
     counts = {"\r\n": crlf, "\r": raw.count("\r") - crlf, "\n": raw.count("\n") - crlf}
     return max(("\n", "\r\n", "\r"), key=lambda e: counts[e])  # ties: LF first
+
+
+def _column(name: str) -> str:
+    """A data column as written: bare if it is a name, else quoted."""
+    return name if re.fullmatch(r"[A-Za-z_][A-Za-z0-9_]*", name) else f'"{name}"'

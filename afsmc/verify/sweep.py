@@ -10,7 +10,9 @@ cluster, and gathers their points into a :class:`SweepResult` (afsmc.verify.swee
 from __future__ import annotations
 
 import dataclasses
+import itertools
 import json
+import math
 import os
 import time
 from collections.abc import Mapping, Sequence
@@ -30,14 +32,22 @@ from afsmc.verify.api import check_choice, load_with_formulas, select
 from afsmc.verify.guard import Progress
 from afsmc.verify.storm import Engine, Solver, Via
 from afsmc.verify.sweep_result import SweepPoint, SweepResult
-from afsmc.verify.sweep_tasks import Task, evaluate, make_tasks, unbounded, user_words
+from afsmc.verify.sweep_tasks import (
+    Task,
+    evaluate,
+    independent,
+    make_tasks,
+    unbounded,
+    user_words,
+)
 from afsmc.verify.sweep_values import Kind, Number
 
 Finished = dict[int, tuple[list[SweepPoint], list[Diagnostic]]]  # task index -> its outcome
 
 
 @deep
-def sweep(path: str, variable: str, values: Sequence[Number], *, kind: Kind = "const",
+def sweep(path: str, variable: str | Mapping[str, Sequence[Number]],
+          values: Sequence[Number] = (), *, kind: Kind = "const",
           consts: Mapping[str, str | bool | int | float] | None = None,
           properties: Sequence[str] = (),
           formulas: Sequence[str] = (), via: Via = "prism", engine: Engine = "sparse",
@@ -46,18 +56,35 @@ def sweep(path: str, variable: str, values: Sequence[Number], *, kind: Kind = "c
           text: str | None = None, reductions: Reductions | None = None,
           bisimulation: bool = False, split: bool = False,
           solver: Solver = "auto") -> SweepResult:
-    """Evaluate the properties at every value; see the package docstring. Raises CompileError,
-    or ValueError for an unknown `kind`, `via`, `engine` or `solver`."""
+    """Evaluate the properties at every value; see the package docstring. `variable` a
+    mapping {name: values, ...} sweeps the grid of several constants (every combination;
+    the first constant varies slowest). Raises CompileError, or ValueError for an unknown
+    `kind`, `via`, `engine` or `solver`, or a grid of the step bound."""
     check_choice("kind", kind, Kind)
     check_choice("via", via, Via)
     check_choice("engine", engine, Engine)
     check_choice("solver", solver, Solver)
     t0 = time.perf_counter()
-    if not values:
+    ranges: list[tuple[str, list[Number]]] = []
+    if not isinstance(variable, str):
+        ranges = [(n, list(v)) for n, v in variable.items()]
+        if kind != "const" or not ranges:
+            raise ValueError("a grid sweeps constants: give each a list of values")
+        if len(ranges) == 1:  # one constant: the usual sweep
+            (variable, values), ranges = ranges[0], []
+        else:
+            variable, values = ranges[-1]
+    if not values or any(not v for _, v in ranges):
         raise CompileError([Diagnostic(codes.E410, Severity.ERROR, "the sweep has no values", None)])
     source = read_source(path) if text is None else text
     texts = {k: literal(v) for k, v in (consts or {}).items()}  # as run() takes them
-    if kind == "const":
+    if ranges:
+        for name, _ in ranges:
+            texts.pop(name, None)
+        for name, vals in ranges:
+            others = {n: literal(v[0]) for n, v in ranges if n != name}
+            _check_names(path, source, texts | others, name, vals, properties, formulas)
+    elif kind == "const":
         texts.pop(variable, None)
         _check_names(path, source, texts, variable, values, properties, formulas)
     else:
@@ -70,41 +97,72 @@ def sweep(path: str, variable: str, values: Sequence[Number], *, kind: Kind = "c
                 kind=kind, xs=(), via=via, engine=engine, max_states=max_states,
                 uniform=uniform, isolate=isolate, reductions=reductions,
                 bisimulation=bisimulation, split=split, solver=solver)
-    tasks = make_tasks(base, values, jobs, dask, progress)
+    tasks = grid_tasks(base, ranges, jobs, dask, progress) if ranges else \
+        make_tasks(base, values, jobs, dask, progress)
+    total = math.prod(len(v) for _, v in ranges) if ranges else len(values)
     finished: Finished = {}
     try:
-        _run(tasks, jobs, dask, progress, len(values), finished)
+        _run(tasks, jobs, dask, progress, total, finished)
     except KeyboardInterrupt as exc:
         # The points of the tasks that finished are not lost: the CLI prints the note and
         # the errors, in place of check()'s (their properties have internal names, NAME__atI),
         # and for --json the points as data.
-        result, errors, notes = _gather(tasks, finished, t0)
+        result, errors, notes = _gather(tasks, finished, t0, ranges)
         inner = exc.errors if isinstance(exc, Stopped) else []
         raise Stopped([*user_words(inner), *errors], [d.message for d in notes],
                       result) from exc
     except Exception as exc:
         if not worker_died(exc):
             raise
-        result, errors, notes = _gather(tasks, finished, t0)
+        result, errors, notes = _gather(tasks, finished, t0, ranges)
         got = len(result.points) if result else 0
         raise CompileError([Diagnostic(
             codes.E414, Severity.ERROR, f"a process of the sweep died before it finished: "
-            f"{got} of {len(values)} points were evaluated", None,
+            f"{got} of {total} points were evaluated", None,
             hint="was it killed, or out of memory? --jobs 1 runs one point at a time; "
                  "--max-states stops a model that is too large before it is built"),
             *errors, *notes], result) from None
     # Every error names its points. The points evaluated, whole or in part, are kept: in
     # the error (the CLI writes them as it would have written the result) and in a note,
     # for whoever reads only the message.
-    result, errors, notes = _gather(tasks, finished, t0)
+    result, errors, notes = _gather(tasks, finished, t0, ranges)
     if errors:
         raise CompileError(errors + notes, result)
     assert result is not None  # every task returned points, or failed
     return result
 
 
-def _gather(tasks: list[Task], finished: Finished,
-            t0: float) -> tuple[SweepResult | None, list[Diagnostic], list[Diagnostic]]:
+def grid_tasks(base: Task, ranges: list[tuple[str, list[Number]]], jobs: int, dask: Any,
+               progress: Progress | None) -> list[Task]:
+    """A grid cut into tasks: for each combination of all constants but one (the inner),
+    the tasks of a one-constant sweep of the inner one (chunks on one shared model if the
+    model does not read it). The inner one is the last that only the properties read (a
+    deadline), else the last given."""
+    firsts = {n: literal(v[0]) for n, v in ranges}
+    consts = dict(base.consts)
+
+    def shared(name: str, vals: list[Number]) -> bool:
+        others = {n: t for n, t in firsts.items() if n != name}
+        return independent(base.path, base.text, consts | others, name, vals)
+
+    inner = next((n for n, v in reversed(ranges) if shared(n, v)), ranges[-1][0])
+    outer = [(n, v) for n, v in ranges if n != inner]
+    combos = list(itertools.product(*(v for _, v in outer)))
+    # the local processes (or Dask's chunks) shared among the combinations
+    per = max(1, -(-jobs // len(combos)))
+    tasks: list[Task] = []
+    for combo in combos:
+        at = tuple((n, x) for (n, _), x in zip(outer, combo, strict=True))
+        these = consts | {n: literal(x) for n, x in at}
+        tasks += make_tasks(dataclasses.replace(base, consts=tuple(sorted(these.items())),
+                                                variable=inner, at=at),
+                            dict(ranges)[inner], per, dask, progress)
+    return tasks
+
+
+def _gather(tasks: list[Task], finished: Finished, t0: float,
+            ranges: Sequence[tuple[str, Sequence[Number]]] = (),
+            ) -> tuple[SweepResult | None, list[Diagnostic], list[Diagnostic]]:
     """The tasks finished so far: a result of their points (in order; a failed task's
     too, None where a query failed) and their errors, each with the points it covers
     and once (an error that does not depend on the value, say an undeclared label,
@@ -117,8 +175,8 @@ def _gather(tasks: list[Task], finished: Finished,
         task, (pts, diags) = tasks[i], finished[i]
         first, last = literal(task.xs[0]), literal(task.xs[-1])
         where = (f"bounds {first}..{last}" if kind != "const" else
-                 f"{variable}={first}" if len(task.xs) == 1 else
-                 f"{variable}={first}..{last}")  # a shared model
+                 task.where(task.xs[0]) if len(task.xs) == 1 else
+                 f"{task.where(task.xs[0])}..{last}")  # a shared model
         for d in diags:
             key = json.dumps(d.to_json(), sort_keys=True)
             failed.setdefault(key, (d, []))[1].append(where)
@@ -126,16 +184,27 @@ def _gather(tasks: list[Task], finished: Finished,
 
     def at(wheres: list[str]) -> str:
         if len(wheres) == len(tasks) > 1:
-            return f"at every value of {variable}" if kind == "const" else "at every bound"
-        return "at " + (", ".join(wheres) if len(wheres) <= 5 else
-                        f"{', '.join(wheres[:5])} and {len(wheres) - 5} more")
+            return ("at every point of the grid" if ranges else f"at every value of {variable}"
+                    if kind == "const" else "at every bound")
+        sep = "; " if ranges else ", "  # a grid's point is itself `A=1, B=2`
+        return "at " + (sep.join(wheres) if len(wheres) <= 5 else
+                        f"{sep.join(wheres[:5])} and {len(wheres) - 5} more")
     errors = [dataclasses.replace(d, message=f"{at(wheres)}: {d.message}")
               for d, wheres in failed.values()]
     in_part = any(pts and diags for pts, diags in finished.values())
+    grid = [n for n, _ in ranges]
+    if ranges:  # in the order of the grid, whatever the tasks' order
+        index = [{v: i for i, v in enumerate(vals)} for _, vals in ranges]
+        where_in = {n: i for i, n in enumerate(grid)}
+
+        def order(pt: SweepPoint) -> tuple[int, ...]:
+            at = dict(pt.at) | {variable: pt.x}
+            return tuple(index[where_in[n]][at[n]] for n in grid)
+        points.sort(key=order)
     result = SweepResult(path, name, kind, _type(points), points,
                          [r.name for r in points[0].properties],
-                         time.perf_counter() - t0) if points else None
-    return result, errors, _kept(path, name, kind, points, in_part)
+                         time.perf_counter() - t0, grid) if points else None
+    return result, errors, _kept(path, name, kind, points, in_part, grid)
 
 
 def _type(points: list[SweepPoint]) -> str:
@@ -219,12 +288,13 @@ def _check_names(path: str, text: str, consts: dict[str, str], variable: str,
 
 
 def _kept(path: str, variable: str, kind: Kind, points: list[SweepPoint],
-          in_part: bool = False) -> list[Diagnostic]:
+          in_part: bool = False, grid: list[str] | None = None) -> list[Diagnostic]:
     """A note with the points evaluated before a failure or a Ctrl-C, as CSV."""
     if not points:
         return []
-    points = sorted(points, key=lambda pt: pt.x)
-    part = SweepResult(path, variable, kind, "", points)
+    if not grid:  # (a grid's points are in order already)
+        points = sorted(points, key=lambda pt: pt.x)
+    part = SweepResult(path, variable, kind, "", points, grid=list(grid or []))
     return [Diagnostic(codes.N412, Severity.NOTE, f"{plural(len(points), 'point')} "
                        f"{'were' if len(points) != 1 else 'was'} evaluated before "
                        "this" + (", some in part (the cells of the queries that failed are "

@@ -11,7 +11,7 @@ from typing import TYPE_CHECKING, Any
 from afsmc.diagnostics import CompileError, Diagnostic, Severity, codes
 from afsmc.files import write_atomic
 from afsmc.text import literal
-from afsmc.verify import sweep_verdicts
+from afsmc.verify import sweep_grid, sweep_verdicts
 from afsmc.verify.results import PropertyResult, find_property
 from afsmc.verify.storm import finite
 from afsmc.verify.sweep_values import Kind, Number
@@ -21,7 +21,7 @@ if TYPE_CHECKING:
 
 RC: Any = {"svg.hashsalt": "afsmc", "font.size": 9}  # byte-identical SVGs; small print
 
-_REQUIREMENT_KEYS = ("threshold", "verdict", "error")
+REQUIREMENT_KEYS = ("threshold", "verdict", "error")
 
 
 @dataclass
@@ -33,6 +33,8 @@ class SweepPoint:
     uniform_states: int | None = None
     uniform_transitions: int | None = None
     seconds: float = 0.0  # wall time of the point (not written to the outputs)
+    # A sweep over several constants: the others' values here (x is the last one's).
+    at: tuple[tuple[str, Number], ...] = ()
 
     def property(self, name: str) -> PropertyResult:
         return find_property(self.properties, name)
@@ -47,6 +49,21 @@ class SweepResult:
     points: list[SweepPoint]
     names: list[str] = field(default_factory=list)  # the properties, in order
     seconds: float = 0.0
+    # A sweep over several constants: their names in the order given (the first varies
+    # slowest); `variable` is then the one each task steps through. Empty for one constant.
+    grid: list[str] = field(default_factory=list)
+
+    @property
+    def swept(self) -> list[str]:
+        """The swept constants' names (or ["bound"]): the CSV's first columns."""
+        return self.grid or [self.variable]
+
+    def coords(self, pt: SweepPoint) -> list[Number]:
+        """The point's value of each swept constant, in the order of `swept`."""
+        if not self.grid:
+            return [pt.x]
+        at = dict(pt.at) | {self.variable: pt.x}
+        return [at[n] for n in self.grid]
 
     def curve(self, name: str, key: str) -> list[float | None]:
         """The values of one property: key is "min", "max", "uniform" or "value"."""
@@ -61,7 +78,7 @@ class SweepResult:
         buf = io.StringIO()
         w = csv.writer(buf, lineterminator="\n")
         verdicts = bool(sweep_verdicts.requirements(self))
-        w.writerow([self.variable, "property", "min", "max", "uniform", "value", "states",
+        w.writerow([*self.swept, "property", "min", "max", "uniform", "value", "states",
                     "transitions", "uniform_states", "uniform_transitions"]
                    + (["verdict"] if verdicts else []))
 
@@ -70,7 +87,7 @@ class SweepResult:
 
         for pt in self.points:
             for r in pt.properties:
-                w.writerow([literal(pt.x), r.name, cell(r.min), cell(r.max), cell(r.uniform),
+                w.writerow([*(literal(v) for v in self.coords(pt)), r.name, cell(r.min), cell(r.max), cell(r.uniform),
                             cell(r.value), pt.states, pt.transitions, cell(pt.uniform_states),
                             cell(pt.uniform_transitions)]
                            + ([r.verdict.kind if r.verdict is not None else ""]
@@ -78,6 +95,8 @@ class SweepResult:
         return buf.getvalue()
 
     def to_json(self) -> dict[str, object]:
+        if self.grid:
+            return sweep_grid.to_json(self)
         first = self.points[0].properties if self.points else []
         reqs = sweep_verdicts.ranges_json(self)
         out: dict[str, object] = {
@@ -97,7 +116,7 @@ class SweepResult:
                 # a property that is not a requirement: no threshold/verdict/error keys
                 "properties": [{k: v for k, v in r.to_json().items()
                                 if k != "seconds" and (k != "formula" or self.kind == "bound")
-                                and (v is not None or k not in _REQUIREMENT_KEYS)}
+                                and (v is not None or k not in REQUIREMENT_KEYS)}
                                for r in pt.properties],
             } for pt in self.points],
         }
@@ -124,7 +143,10 @@ class SweepResult:
         write_atomic(path, buf.getvalue(), protect=protect)
 
     def figure(self) -> Figure:
-        """The plot as a matplotlib Figure: a panel per property."""
+        """The plot as a matplotlib Figure: a panel per property (heat maps for a sweep
+        over several constants)."""
+        if self.grid:
+            return sweep_grid.figure(self)
         from matplotlib import figure, rc_context
         from matplotlib.backends.backend_agg import FigureCanvasAgg
         from matplotlib.ticker import MaxNLocator

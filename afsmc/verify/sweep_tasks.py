@@ -57,6 +57,15 @@ class Task:
     bisimulation: bool = False
     split: bool = False  # one Storm process per query
     solver: Solver = "auto"
+    # A sweep over several constants: the values of the others at this task's points
+    # (in `consts` too), in the order the sweep was given them.
+    at: tuple[tuple[str, Number], ...] = ()
+
+    def where(self, x: Number) -> str:
+        """The point in the user's words: `T=5`, `bound 5`, `N=2, T=5`."""
+        if self.kind != "const":
+            return f"bound {literal(x)}"
+        return ", ".join(f"{n}={literal(v)}" for n, v in (*self.at, (self.variable, x)))
 
 
 def unbounded(p: ir.Property) -> Diagnostic | None:
@@ -89,11 +98,19 @@ def _with_bound(p: ir.Property, k: int, name: str) -> ir.Property:
 def evaluate(task: Task) -> tuple[list[SweepPoint], list[Diagnostic]]:
     """Run one task; failures are returned (diagnostics pickle, CompileError does not)."""
     try:
-        return _evaluate(task), []
+        return _stamped(_evaluate(task), task), []
     except CompileError as exc:
         # the points it answered in part (a query failed) are kept, their values None there
         kept = exc.partial if isinstance(exc.partial, list) else []
-        return kept, user_words(exc.diagnostics, task)
+        return _stamped(kept, task), user_words(exc.diagnostics, task)
+
+
+def _stamped(points: list[SweepPoint], task: Task) -> list[SweepPoint]:
+    """The points with the other swept constants' values of a grid sweep."""
+    if task.at:
+        for pt in points:
+            pt.at = task.at
+    return points
 
 
 def user_words(diags: list[Diagnostic], task: Task | None = None) -> list[Diagnostic]:
@@ -104,9 +121,7 @@ def user_words(diags: list[Diagnostic], task: Task | None = None) -> list[Diagno
         i = int(m.group(2))
         if task is None or i >= len(task.xs):
             return m.group(1) + (m.group(3) or "")
-        x = literal(task.xs[i])
-        where = f"{task.variable}={x}" if task.kind == "const" else f"bound {x}"
-        return f"{m.group(1)}{m.group(3) or ''} at {where}"
+        return f"{m.group(1)}{m.group(3) or ''} at {task.where(task.xs[i])}"
 
     out: list[Diagnostic] = []
     for d in diags:

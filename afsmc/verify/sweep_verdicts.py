@@ -44,7 +44,12 @@ def ranges_json(res: SweepResult) -> list[dict[str, object]]:
 
 
 def summary(res: SweepResult) -> list[str]:
-    """One line per requirement: `need: holds for CELLS 1..3, depends for 4, fails for 5..6`."""
+    """One line per requirement: `need: holds for CELLS 1..3, depends for 4, fails for 5..6`
+    (over several constants: how many points have each verdict)."""
+    if res.grid:
+        from afsmc.verify.sweep_grid import summary as grid_summary
+
+        return grid_summary(res)
     var = res.variable if res.kind == "const" else "step bound"
     lines = []
     for name in requirements(res):

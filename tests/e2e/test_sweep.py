@@ -162,7 +162,8 @@ def test_bound_sweep_formulas_are_written_as_in_the_file(tmp_path: Path) -> None
 
 @pytest.mark.storm
 def test_usage_errors(deadline: str) -> None:
-    assert run_cli("sweep", deadline, "--const", "D=1:3", "--const", "P_FAIL=0,0.1").code == 2
+    # (two constants with ranges sweep their grid: tests/e2e/test_sweep_grid.py)
+    assert run_cli("sweep", deadline, "--const", "D=1:3", "--const", "D=4:5").code == 2
     assert run_cli("sweep", deadline).code == 2
     assert run_cli("sweep", deadline, "--const", "D=5:1").code == 2
     assert run_cli("sweep", deadline, "--const", "D=1:3", "--plot", "x.gif").code == 2

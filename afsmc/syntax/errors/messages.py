@@ -17,7 +17,7 @@ OPERATORS = "afsm's boolean operators are '&&' (and), '||' (or), '!' (not) and '
 
 # Human names for the grammar's terminals, used in "expected ..." messages.
 _TOKEN_NAMES = {
-    "NAME": "a name", "NUMBER": "a number", "ESCAPED_STRING": "a quoted label name",
+    "NAME": "a name", "NUMBER": "a number", "ESCAPED_STRING": "a quoted string",
     "SEMICOLON": "';'", "COLON": "':'", "COMMA": "','", "LBRACE": "'{'", "RBRACE": "'}'",
     "LPAR": "'('", "RPAR": "')'", "LSQB": "'['", "RSQB": "']'", "EQUAL": "'='",
     "__ANON_0": "'..'", "$END": "end of file", "DOT": "'.'", "STAR": "'*'",

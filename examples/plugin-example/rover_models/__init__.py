@@ -1,0 +1,1 @@
+"""An example simulator plugin for afsmc (see README.md)."""
