@@ -88,7 +88,7 @@ class _Names:
     def fn(self, here: str | None) -> Callable[[Any], Any]:
         def go(n: Any) -> Any:
             if isinstance(n, ast.Binary) and n.op in ("==", "!="):
-                return self._mode_compare(n, go)
+                return self._mode_compare(n, go, here)
             if isinstance(n, ast.FieldRef) and n.base.text in self.agents:
                 return self._field(n, here)
             if isinstance(n, ast.ModeRef) and here is None:
@@ -97,11 +97,13 @@ class _Names:
             return None
         return go
 
-    def _mode_compare(self, n: ast.Binary, go: Callable[[Any], Any]) -> Any:
+    def _mode_compare(self, n: ast.Binary, go: Callable[[Any], Any], here: str | None) -> Any:
         for ref, other in ((n.left, n.right), (n.right, n.left)):
             if (isinstance(ref, ast.FieldRef) and ref.field.text == "mode"
                     and ref.base.text in self.agents and isinstance(other, ast.Name)
                     and other.name.text in self.modes[ref.base.text]):
+                if ref.base.text == here:
+                    return None  # its own mode: `mode == Idle` as a single machine reads it
                 number = self.modes[ref.base.text][other.name.text]
                 left = rewrite(ref, go)
                 num = ast.Num(number, str(number), other.span)
