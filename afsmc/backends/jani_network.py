@@ -79,7 +79,7 @@ def emit_network(low: Lowered) -> dict[str, Any]:
         loc = _location(low, names, ex) if i == 0 else {"name": LOCATION}
         automata.append({"name": part.agent.name, "locations": [loc],
                          "initial-locations": [LOCATION], "edges": edges})
-    for name, lead in sorted(leads.items(), key=lambda kv: kv[0]):
+    for name in sorted(leads):
         takers = [j for j, q in enumerate(net.parts) if any(s == name for s, _ in q.sync)]
         if len(takers) < 2:
             continue

@@ -40,7 +40,8 @@ def check_writers(comp: ir.Composition, rep: Reporter) -> None:
     never another agent's mode, which it sees as a variable)."""
     allowed = dict(comp.writers)
     for agent in comp.agents:
-        for a in (*agent.model.actions, *agent.model.hazards):
+        acts: list[ir.Action | ir.Hazard] = [*agent.model.actions, *agent.model.hazards]
+        for a in acts:
             for u in _writes(agent, a):
                 who = allowed.get(u.var)
                 if who is None or agent.name not in who:

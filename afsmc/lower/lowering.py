@@ -75,8 +75,8 @@ class Lowered:
     @property
     def kind(self) -> Literal["dtmc", "mdp"]:
         net = self.network
-        if net is not None and (net.kind == "interleaving" and len(net.parts) > 1
-                                or net.kind == "timed" and net.ties == "nondet"):
+        if net is not None and ((net.kind == "interleaving" and len(net.parts) > 1)
+                                or (net.kind == "timed" and net.ties == "nondet")):
             return "mdp"
         return "mdp" if self.resolution == "nondet" and self.model.is_nondeterministic else "dtmc"
 

@@ -16,7 +16,6 @@ from collections.abc import Callable, Mapping
 from typing import Any, Literal, cast
 
 from afsmc.diagnostics import CompileError, Diagnostic, Reporter, Span, codes
-from afsmc.model import ir
 from afsmc.syntax import ast
 
 _AGENT_ITEMS = (ast.VarDecl, ast.ModeDecl, ast.ActionDecl, ast.HazardDecl, ast.FormulaDecl)
