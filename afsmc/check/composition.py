@@ -24,12 +24,23 @@ def check_composition(model: ir.Model, used_names: frozenset[str], run: Run) -> 
                 continue  # about the mission's declarations, which every agent sees
             if d.code == codes.W602:
                 continue  # an agent that never ends (a server) is no fault in a mission
+            if d.code == codes.W303 and f"variable {agent.clock} " in d.message:
+                continue  # its clock: the timed composition reads it
+            if d.code == codes.W302 and _waits(agent, d):
+                continue  # a mode of synchronised actions only: the agent waits there
             code = codes.E313 if d.code == codes.E301 else d.code
             rep.extend([dataclasses.replace(d, code=code,
                                             message=f"agent {agent.name}: {d.message}")])
     check_writers(comp, rep)
     check_syncs(comp, rep)
     return rep.sorted()
+
+
+def _waits(agent: ir.Agent, d: Diagnostic) -> bool:
+    """The diagnostic is about a mode whose actions are all synchronised."""
+    mode = next((m for m in agent.model.modes if d.span is not None and m.span == d.span), None)
+    return mode is not None and all(a.name in agent.syncs
+                                    for a in agent.model.actions_in(mode.number))
 
 
 def _writes(agent: ir.Agent, action: ir.Action | ir.Hazard) -> list[ir.Update]:
