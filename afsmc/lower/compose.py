@@ -69,7 +69,8 @@ def _rename(agent: ir.Agent, cmd: Command, name: str) -> Command:
     branches = tuple(Branch(go(b.prob), tuple(
         (agent.mode_var if v == "mode" else agent.mission_name(v), go(x)) for v, x in b.updates),
         b.span, b.hazard) for b in cmd.branches)
-    return Command(name, cmd.modes, go(cmd.guard), branches, cmd.span, cmd.choice, cmd.kind)
+    # The mission has one mode (its states are the agents' modes, tested in the guard).
+    return Command(name, (0,), go(cmd.guard), branches, cmd.span, cmd.choice, cmd.kind)
 
 
 def _product(cmds: tuple[Command, ...], name: str, guard: E.Expr) -> Command:
