@@ -7,6 +7,7 @@ from __future__ import annotations
 import itertools
 import os
 import re
+from collections.abc import Callable
 
 import graphviz
 
@@ -42,11 +43,16 @@ def network(model: ir.Model, draw: object) -> graphviz.Digraph:
                 # no agent can move
                 line = line.replace("\\n(cannot end)", "").replace(' color="#a93226"', "")
                 line = re.sub(r": the mission cannot end from here \(W602\)", "", line)
-            cluster.body.append(_ID.sub(lambda m, a=agent.name: f"{m.group(1)}{a}_{m.group(2)}",
-                                        line))
+            cluster.body.append(_ID.sub(_prefixed(agent.name), line))
         g.subgraph(cluster)
     _sync_edges(g, comp)
     return g
+
+
+def _prefixed(agent: str) -> Callable[[re.Match[str]], str]:
+    def sub(m: re.Match[str]) -> str:
+        return f"{m.group(1)}{agent}_{m.group(2)}"
+    return sub
 
 
 def _sync_edges(g: graphviz.Digraph, comp: ir.Composition) -> None:
