@@ -12,10 +12,10 @@ cross agents (`uav2.mode == Search`, `uav1.t`) are rewritten in the syntax tree 
 from __future__ import annotations
 
 import dataclasses
-from collections.abc import Callable, Mapping
+from collections.abc import Callable
 from typing import Any, Literal, cast
 
-from afsmc.diagnostics import CompileError, Diagnostic, Reporter, Span, codes
+from afsmc.diagnostics import Diagnostic, Reporter, Span, codes
 from afsmc.syntax import ast
 
 _AGENT_ITEMS = (ast.VarDecl, ast.ModeDecl, ast.ActionDecl, ast.HazardDecl, ast.FormulaDecl)
@@ -282,10 +282,3 @@ def writers(mission: list[ast.Decl], agents: list[ast.AgentDecl],
                 rep.error(codes.E253, f"'{w.text}' is no agent", w.span)
         out.append((d.name.text, tuple(w.text for w in d.writers)))
     return tuple(out)
-
-
-def errors_of(exc: CompileError) -> list[Diagnostic]:
-    return list(exc.diagnostics)
-
-
-Overrides = Mapping[str, str]
