@@ -117,6 +117,10 @@ def _group_id(sources: tuple[int, ...], kind: str, live: bool) -> str:
 
 def diagram(model: ir.Model, overlay: Overlay | None = None) -> graphviz.Digraph:
     """The mission as a graphviz.Digraph (nothing is rendered here)."""
+    if model.composition is not None:
+        from afsmc.backends.dot_network import network
+
+        return network(model, diagram)
     mg = analyse(model)
     overlay = overlay or Overlay()
     g = _graph(model, overlay)

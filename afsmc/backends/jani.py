@@ -343,6 +343,10 @@ def notes(low: Lowered) -> list[Diagnostic]:
 
 def emit(low: Lowered) -> dict[str, Any]:
     """The JANI model of `low` (properties included) as a JSON-ready dict."""
+    if low.network is not None:
+        from afsmc.backends.jani_network import emit_network
+
+        return emit_network(low)
     model = low.model
     names = _Names(low)
     ex = _Exprs(low, names)

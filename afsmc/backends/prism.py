@@ -125,6 +125,10 @@ def emit(low: Lowered, variant_labels: bool = False) -> PrismOutput:
     """The PRISM model. `variant_labels`: each command that resolves an interval constant
     gets its own action label (`variant_label`), and the action rewards of its action are
     repeated for each such label, so that the values stay the same."""
+    if low.network is not None:
+        from afsmc.backends.prism_network import emit_network
+
+        return emit_network(low)
     model = low.model
     labels = {i: variant_label(low, i) if variant_labels and c.choice else
               "" if c.silent else c.action for i, c in enumerate(low.commands)}

@@ -62,7 +62,12 @@ STRUCTURAL: tuple[Rule, ...] = (unused.check_unused, check_sim_sources, weights.
 
 def run(model: ir.Model, *, used_names: frozenset[str] = frozenset()) -> list[Diagnostic]:
     """Every rule's diagnostics, sorted. `used_names`: the names the source refers to
-    where the IR keeps no reference (`afsmc.resolve.Resolved.used_names`), for W303/W304."""
+    where the IR keeps no reference (`afsmc.resolve.Resolved.used_names`), for W303/W304.
+    A composed mission: every rule on each agent, and the composition's own rules."""
+    if model.composition is not None:
+        from afsmc.check.composition import check_composition
+
+        return check_composition(model, used_names, run)
     rep = Reporter()
     for rule in RULES:
         if rule is not overflow.check_overflow and rule not in STRUCTURAL and any(

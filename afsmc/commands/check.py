@@ -72,6 +72,13 @@ def clean_summary(files: list[str], checked: list[Mission]) -> str:
         return f"{len(checked)} files: no errors, no warnings"
     m = checked[0].model
     name = "<stdin>" if files[0] == "-" else files[0]
+    if m.composition is not None:
+        agents = m.composition.agents
+        sizes = ", ".join([plural(len(agents), "agent"),
+                           plural(sum(len(a.model.modes) for a in agents), "mode"),
+                           plural(len(m.variables), "variable"),
+                           plural(len(m.properties), "property", "properties")])
+        return f"{name}: no errors, no warnings (mission {m.name}: {sizes})"
     sizes = ", ".join([plural(len(m.modes), "mode"), plural(len(m.variables), "variable"),
                        plural(len(m.properties), "property", "properties")])
     return f"{name}: no errors, no warnings (machine {m.name}: {sizes})"

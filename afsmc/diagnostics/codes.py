@@ -142,6 +142,9 @@ E249 = Code("E249", Severity.ERROR, "a value beyond what Storm stores in a state
 E250 = Code("E250", Severity.ERROR, "an interval probability is used outside probabilities")
 E251 = Code("E251", Severity.ERROR, "a threshold on a min or max query")
 E252 = Code("E252", Severity.ERROR, "a threshold that is not a constant in range")
+E253 = Code("E253", Severity.ERROR, "a composed mission that is not well formed")
+E254 = Code("E254", Severity.ERROR, "an agent reads another agent's own variable")
+E255 = Code("E255", Severity.ERROR, "an agent writes a shared variable it may not write")
 
 
 # E3xx: the checks of a well-formed model
@@ -155,6 +158,9 @@ E306 = Code("E306", Severity.ERROR, "an expression is undefined in some state")
 E307 = Code("E307", Severity.ERROR, "an integer expression can leave 64 bits")
 E308 = Code("E308", Severity.ERROR, "an int variable is assigned a pow with a negative exponent")
 E310 = Code("E310", Severity.ERROR, "an expression nests deeper than Storm evaluates")
+E311 = Code("E311", Severity.ERROR, "agents write the same variable in one step")
+E312 = Code("E312", Severity.ERROR, "a synchronised action with no partner")
+E313 = Code("E313", Severity.ERROR, "weights of an agent's enabled actions tie")
 
 
 # W3xx: warnings of the checks

@@ -17,7 +17,7 @@ from __future__ import annotations
 
 import itertools
 from dataclasses import dataclass, field
-from typing import Literal
+from typing import Any, Literal
 
 from afsmc.diagnostics import Span
 from afsmc.model import expr as E
@@ -68,13 +68,24 @@ class Lowered:
     # constants the backends leave undefined, for Storm's parametric engine
     # (afsmc.verify.parametric): interval probabilities and params given as regions
     parameters: tuple[str, ...] = ()
+    # A composed mission: its agents' commands apart (afsmc.lower.compose.Network), for
+    # the backends that write one module per agent; `commands` are then their product.
+    network: Any = None
 
     @property
     def kind(self) -> Literal["dtmc", "mdp"]:
+        net = self.network
+        if net is not None and ((net.kind == "interleaving" and len(net.parts) > 1)
+                                or (net.kind == "timed" and net.ties == "nondet")):
+            return "mdp"
         return "mdp" if self.resolution == "nondet" and self.model.is_nondeterministic else "dtmc"
 
 
 def lower(model: ir.Model, resolution: Resolution = "nondet") -> Lowered:
+    if model.composition is not None:
+        from afsmc.lower.compose import lower_composed
+
+        return lower_composed(model, resolution)
     names = model.mode_names
     commands: list[Command] = []
     bounds: dict[str, tuple[str, int]] = {}

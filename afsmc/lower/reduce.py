@@ -46,6 +46,8 @@ class Reductions:
 
 
 def reduce(low: Lowered, options: Reductions = Reductions()) -> Lowered:
+    if low.network is not None:
+        return low  # a composed mission is checked as it is: no reduction is applied
     if options.saturate:
         low, done = saturate(low)
         if done:

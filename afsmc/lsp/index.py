@@ -130,8 +130,14 @@ def build(module: ast.Module, text: str) -> Index:
             for f in dataclasses.fields(node):
                 walk(getattr(node, f.name))
 
-    for d in module.decls:
-        if isinstance(d, (ast.ConstDecl, ast.ParamDecl)):
+    decls = list(module.decls)
+    while decls:
+        d = decls.pop(0)
+        if isinstance(d, ast.AgentDecl):  # an agent's declarations, as if they stood here
+            decls[:0] = d.decls
+            if d.clock is not None:
+                use(VALUE, d.clock.text, d.clock.span)
+        elif isinstance(d, (ast.ConstDecl, ast.ParamDecl)):
             define(VALUE, d.name, "constant", d)
             walk(d.value if isinstance(d, ast.ConstDecl) else d.default)
         elif isinstance(d, ast.VarDecl):

@@ -206,6 +206,53 @@ class Property:
     threshold: Threshold | None = None
 
 
+@dataclass(frozen=True)
+class Agent:
+    """One agent of a composed mission (docs/language.md, "Composition").
+
+    `model` is the agent's own view, a machine of its own that the single-agent checks
+    and lowering take as they are: its modes, variables (by their names in the agent),
+    actions and hazards, with the shared variables and the other agents' modes it reads
+    as variables it never writes. In the mission, its variable `x` is `<name>_x` and its
+    mode `<name>_mode` (`prefix` + name)."""
+
+    name: str
+    model: Model
+    own: tuple[str, ...]  # the view's names of the agent's own variables
+    syncs: tuple[str, ...]  # its `sync action`s
+    clock: str | None  # the view's name of its clock (timed composition)
+    span: Span
+    name_span: Span
+
+    @property
+    def prefix(self) -> str:
+        return f"{self.name}_"
+
+    @property
+    def mode_var(self) -> str:
+        return f"{self.name}_mode"
+
+    def mission_name(self, var: str) -> str:
+        """A view's variable in the mission: the agent's own prefixed, a shared one as is."""
+        return self.prefix + var if var in self.own else var
+
+
+@dataclass(frozen=True)
+class Composition:
+    """How a mission's agents move together: `interleaving` (any agent with an enabled
+    action may move next: nondeterminism) or `timed` (the agent whose clock is least
+    moves; `ties` "order": the one declared first, "nondet": left to min/max)."""
+
+    kind: Literal["interleaving", "timed"]
+    ties: Literal["nondet", "order"]
+    agents: tuple[Agent, ...]
+    writers: tuple[tuple[str, tuple[str, ...]], ...]  # shared variable -> who may write it
+    span: Span | None
+
+    def agent(self, name: str) -> Agent:
+        return next(a for a in self.agents if a.name == name)
+
+
 @dataclass
 class Memo:
     """What later stages derive from a model, kept with it (the model itself is frozen):
@@ -239,6 +286,10 @@ class Model:
     rewards: tuple[RewardStruct, ...]
     properties: tuple[Property, ...]
     memo: Memo = field(default_factory=Memo, compare=False, repr=False)
+    # Several agents (`agent` blocks): the variables hold every agent's mode and own
+    # variables by their mission names; modes, actions and hazards are each agent's
+    # (`composition.agents[i].model`). None: one machine, as always.
+    composition: Composition | None = None
 
     # Lookups, by indexes built on first use (a scan per lookup would make a model of N
     # declarations cost N^2 to check).

@@ -7,13 +7,15 @@ by concern into mixins (see afsmc.resolve.base); this module runs them in order.
 
 from __future__ import annotations
 
+import dataclasses
 import os
 from collections.abc import Mapping
 from dataclasses import dataclass
 
-from afsmc.diagnostics import CompileError, Diagnostic
+from afsmc.diagnostics import CompileError, Diagnostic, Reporter
 from afsmc.model import ir
 from afsmc.model.names import safe_identifier
+from afsmc.resolve import compose
 from afsmc.resolve.actions import ActionsMixin
 from afsmc.resolve.constants import ConstantsMixin
 from afsmc.resolve.declarations import DeclarationsMixin
@@ -46,12 +48,54 @@ def resolve(module: ast.Module, overrides: Mapping[str, str] | None = None, *,
     `open_params`: a param with no value is no error but a stand-in (for sim-check, which
     needs only the values of the simulated constants); `Resolved.open_params` and
     `Resolved.open_reads` say which params and which constants that concerns."""
+    if compose.is_composed(module):
+        return _resolve_composed(module, overrides, open_params)
     r = _Resolver(module, dict(overrides or {}), open_params)
     model = r.run()
     if r.rep.has_errors:
         raise CompileError(r.rep.sorted())
     return Resolved(model, tuple(d for d in r.rep.sorted() if not d.is_error),
                     frozenset(r.used), dict(r.open_errors), dict(r.open_reads))
+
+
+def _resolve_composed(module: ast.Module, overrides: Mapping[str, str] | None,
+                      open_params: bool) -> Resolved:
+    """A mission of several agents: each agent's view and the mission's own module,
+    resolved as single machines (afsmc.resolve.compose says how they are made)."""
+    rep = Reporter()
+    kw, agents, mission = compose.split(module, rep)
+    kind, ties = compose.composition_kind(kw, agents, rep)
+    names = compose._Names(agents, rep)
+    views: list[ir.Agent] = []
+    used: set[str] = set()
+    for a in agents:
+        view = compose.agent_module(module, a, names, mission)
+        r = _Resolver(view, dict(overrides or {}), open_params)
+        model = r.run()
+        for d in r.rep.sorted():
+            mine = compose.in_agent(d, a)
+            if mine is not None:
+                rep.extend([mine])
+        used |= r.used
+        own = tuple(d.name.text for d in a.decls if isinstance(d, ast.VarDecl))
+        own_flat = tuple(v.name for v in model.variables if v.display.split(".")[0] in own)
+        syncs = tuple(d.name.text for d in a.decls if isinstance(d, ast.ActionDecl) and d.sync)
+        views.append(ir.Agent(a.name.text, model, own_flat, syncs,
+                              a.clock.text if a.clock else None, a.span, a.name.span))
+    shared = compose.writers(mission, agents, rep)
+    r = _Resolver(compose.mission_module(module, agents, names, mission),
+                  dict(overrides or {}), open_params)
+    r.action_names.update(compose.mission_actions(agents))
+    model = r.run()
+    rep.extend(r.rep.diagnostics)
+    used |= r.used
+    if rep.has_errors:
+        raise CompileError(rep.sorted())
+    warnings = [d for d in rep.sorted() if not d.is_error]
+    comp = ir.Composition(kind, ties, tuple(views), shared, kw.span if kw else None)
+    model = dataclasses.replace(model, actions=(), hazards=(), composition=comp)
+    return Resolved(model, tuple(warnings), frozenset(used), dict(r.open_errors),
+                    dict(r.open_reads))
 
 
 class _Resolver(NamesMixin, ConstantsMixin, DeclarationsMixin, ExpressionsMixin, ActionsMixin,

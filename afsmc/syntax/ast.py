@@ -218,6 +218,9 @@ class VarDecl:
     init: Expr | TupleLit | None
     clamp: bool
     span: Span
+    # a shared variable of a composed mission: the agents that may write it
+    # (`written by a, b`); None: not stated
+    writers: tuple[Ident, ...] | None = None
 
 
 @dataclass(frozen=True)
@@ -281,6 +284,7 @@ class ActionDecl:
     weight: Expr | None
     body: Body
     span: Span
+    sync: bool = False  # `sync action`: taken together by every agent that declares it
 
 
 @dataclass(frozen=True)
@@ -314,6 +318,7 @@ class RewardItem:
     guard: Expr
     value: Expr
     span: Span
+    agent: Ident | None = None  # `[uav1.Search]`: the agent of the action
 
 
 @dataclass(frozen=True)
@@ -410,8 +415,27 @@ class PropertyDecl:
     span: Span
 
 
+@dataclass(frozen=True)
+class ComposeDecl:
+    """`compose interleaving;` or `compose timed ties order;`."""
+
+    kind: Ident
+    ties: Ident | None
+    span: Span
+
+
+@dataclass(frozen=True)
+class AgentDecl:
+    """`agent NAME clock VAR { ... }`: one agent of a composed mission."""
+
+    name: Ident
+    clock: Ident | None
+    decls: tuple[Decl, ...]
+    span: Span
+
+
 Decl = Union[ConstDecl, ParamDecl, VarDecl, ModeDecl, ActionDecl, HazardDecl, FormulaDecl,
-             LabelDecl, RewardsDecl, PropertyDecl]
+             LabelDecl, RewardsDecl, PropertyDecl, ComposeDecl, AgentDecl]
 
 
 @dataclass(frozen=True)

@@ -149,12 +149,32 @@ class Builder(Transformer[Token, Any]):
         name, vtype, rest = c[0], c[1], c[2:]
         init = None
         clamp = False
+        writers = None
         for item in rest:
             if item == "clamp":
                 clamp = True
+            elif isinstance(item, tuple) and item and item[0] == "writers":
+                writers = item[1]
             else:
                 init = item
-        return ast.VarDecl(self._id(name), vtype, init, clamp, self._s(meta))
+        return ast.VarDecl(self._id(name), vtype, init, clamp, self._s(meta), writers)
+
+    def writers(self, meta: Any, c: list[Token]) -> tuple[str, tuple[ast.Ident, ...]]:
+        return ("writers", tuple(self._id(t) for t in c))
+
+    # -- composition
+    def compose_decl(self, meta: Any, c: list[Token]) -> ast.ComposeDecl:
+        return ast.ComposeDecl(self._id(c[0]), self._id(c[1]) if len(c) > 1 else None,
+                               self._s(meta))
+
+    def agent_decl(self, meta: Any, c: list[Any]) -> ast.AgentDecl:
+        clock = self._id(c[1]) if len(c) > 1 and isinstance(c[1], Token) else None
+        decls = tuple(x for x in c[1:] if not isinstance(x, Token))
+        return ast.AgentDecl(self._id(c[0]), clock, decls, self._s(meta))
+
+    def sync_action(self, meta: Any, c: list[Any]) -> ast.ActionDecl:
+        a: ast.ActionDecl = c[0]
+        return ast.ActionDecl(a.name, a.modes, a.guard, a.weight, a.body, self._s(meta), True)
 
     def clamp(self, meta: Any, c: list[Any]) -> str:
         return "clamp"
@@ -314,6 +334,9 @@ class Builder(Transformer[Token, Any]):
 
     def action_reward(self, meta: Any, c: list[Any]) -> ast.RewardItem:
         return ast.RewardItem(self._id(c[0]), c[1], c[2], self._s(meta))
+
+    def agent_action_reward(self, meta: Any, c: list[Any]) -> ast.RewardItem:
+        return ast.RewardItem(self._id(c[1]), c[2], c[3], self._s(meta), self._id(c[0]))
 
     def state_reward(self, meta: Any, c: list[Any]) -> ast.RewardItem:
         return ast.RewardItem(None, c[0], c[1], self._s(meta))

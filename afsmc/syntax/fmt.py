@@ -287,7 +287,13 @@ class _Formatter:
             text = f": {self.var_type(d.type)}"
             if d.init is not None:
                 text += f" init {self.value(d.init)}"
-            return [f"var {d.name.text}", text + (" clamp;" if d.clamp else ";")]
+            text += " clamp" if d.clamp else ""
+            if d.writers is not None:
+                text += " written by " + ", ".join(w.text for w in d.writers)
+            return [f"var {d.name.text}", text + ";"]
+        if isinstance(d, ast.ComposeDecl):
+            ties = f" ties {d.ties.text}" if d.ties is not None else ""
+            return [f"compose {d.kind.text}{ties};"]
         if isinstance(d, ast.ModeDecl):
             attrs = " initial" * d.initial + " final" * d.final + ";"
             if d.number_span is None:
@@ -351,7 +357,7 @@ class _Formatter:
     def header(self, d: ast.ActionDecl | ast.HazardDecl, depth: int) -> list[str]:
         pad = INDENT * depth
         if isinstance(d, ast.ActionDecl):
-            base = f"action {d.name.text} in {self.mode_set(d.modes)}"
+            base = ("sync " if d.sync else "") + f"action {d.name.text} in {self.mode_set(d.modes)}"
             extras = []
             if d.guard is not None:
                 extras.append(f"when {self.expr(d.guard)}")
@@ -422,23 +428,41 @@ class _Formatter:
             out.append(Unit(m.machine.span.start, m.machine.span.end, 0,
                             [" ".join(self.simple(m.machine))]))
         for d in m.decls:
-            if isinstance(d, (ast.ActionDecl, ast.HazardDecl)):
-                out.append(Unit(d.span.start, d.body.span.start + 1, 0, self.header(d, 0), "open"))
-                out.extend(self.body_units(d.body, 1))
-                out.append(Unit(d.span.end - 1, d.span.end, 0, ["}"], "close"))
-            elif isinstance(d, ast.RewardsDecl):
-                brace = self._next(d.name.span.end, "LBRACE")
-                out.append(Unit(d.span.start, brace.end_pos or 0, 0,
-                                [f"rewards {d.name.text} {{"], "open"))
-                for item in d.items:
-                    head = f"[{item.action.text}] " if item.action is not None else ""
-                    out.append(Unit(item.span.start, item.span.end, 1, [
-                        f"{INDENT}{head}{self.expr(item.guard)} : {self.expr(item.value)};"]))
-                out.append(Unit(d.span.end - 1, d.span.end, 0, ["}"], "close"))
-            else:
-                cols = self.simple(d)
-                out.append(Unit(d.span.start, d.span.end, 0, [" ".join(cols)], cols=cols,
-                                group=type(d).__name__))
+            out.extend(self.decl_units(d, 0))
+        return out
+
+    def decl_units(self, d: ast.Decl, depth: int) -> list[Unit]:
+        out: list[Unit] = []
+        pad = INDENT * depth
+        if isinstance(d, (ast.ActionDecl, ast.HazardDecl)):
+            out.append(Unit(d.span.start, d.body.span.start + 1, depth, self.header(d, depth),
+                            "open"))
+            out.extend(self.body_units(d.body, depth + 1))
+            out.append(Unit(d.span.end - 1, d.span.end, depth, [pad + "}"], "close"))
+        elif isinstance(d, ast.AgentDecl):
+            brace = self._next((d.clock or d.name).span.end, "LBRACE")
+            clock = f" clock {d.clock.text}" if d.clock is not None else ""
+            out.append(Unit(d.span.start, brace.end_pos or 0, depth,
+                            [f"{pad}agent {d.name.text}{clock} {{"], "open"))
+            for x in d.decls:
+                out.extend(self.decl_units(x, depth + 1))
+            out.append(Unit(d.span.end - 1, d.span.end, depth, [pad + "}"], "close"))
+        elif isinstance(d, ast.RewardsDecl):
+            brace = self._next(d.name.span.end, "LBRACE")
+            out.append(Unit(d.span.start, brace.end_pos or 0, depth,
+                            [f"{pad}rewards {d.name.text} {{"], "open"))
+            for item in d.items:
+                head = f"[{item.action.text}] " if item.action is not None else ""
+                if item.agent is not None and item.action is not None:
+                    head = f"[{item.agent.text}.{item.action.text}] "
+                out.append(Unit(item.span.start, item.span.end, depth + 1, [
+                    f"{pad}{INDENT}{head}{self.expr(item.guard)} : {self.expr(item.value)};"]))
+            out.append(Unit(d.span.end - 1, d.span.end, depth, [pad + "}"], "close"))
+        else:
+            cols = self.simple(d)
+            cols[0] = pad + cols[0]
+            out.append(Unit(d.span.start, d.span.end, depth, [" ".join(cols)], cols=cols,
+                            group=type(d).__name__))
         return out
 
     def run(self) -> str:

@@ -147,13 +147,13 @@ class CheckRun:
         self.model = dataclasses.replace(model, properties=tuple(self.props) + tuple(
             p for n, p in sorted(self.comp.items())) + tuple(preserve))
         self.lows: list[tuple[str, Lowered, str]] = []
-        if self.model.is_nondeterministic:
-            self.lows.append(("nondet", lowered(self.model, "nondet", reductions), "MDP"))
-            if uniform:
-                self.lows.append(("uniform", lowered(self.model, "uniform", reductions),
-                                  "uniform DTMC"))
-        else:
-            self.lows.append(("nondet", lowered(self.model, "nondet", reductions), "DTMC"))
+        first = lowered(self.model, "nondet", reductions)
+        self.lows.append(("nondet", first, "MDP" if first.kind == "mdp" else "DTMC"))
+        if self.model.is_nondeterministic and uniform:
+            # (a composed mission's interleaving stays an MDP: no uniform model then)
+            low = lowered(self.model, "uniform", reductions)
+            if low.kind == "dtmc":
+                self.lows.append(("uniform", low, "uniform DTMC"))
         self.stats: list[ModelStats | None] = []  # None: every process of that model failed
         self.values: list[dict[str, float]] = []
         self.timings: list[dict[str, float]] = []  # each query's check time, as `values`

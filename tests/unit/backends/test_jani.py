@@ -22,7 +22,8 @@ from afsmc.lower.lowering import RESOLUTIONS, Lowered
 from tests.conftest import EXAMPLES, run_cli
 
 # `--const`-style overrides that keep an example's instance small enough for a test.
-OVERRIDES: dict[str, dict[str, str]] = {"uav": {"WIDTH": "2", "HEIGHT": "2", "T_LIMIT": "60"}}
+OVERRIDES: dict[str, dict[str, str]] = {"uav": {"WIDTH": "2", "HEIGHT": "2", "T_LIMIT": "60"},
+                                        "two_uav": {"OBJECTS": "1", "T_LIMIT": "25"}}
 
 
 # Two interval constants in one action, a tuple variable, clamping, a weight that refers
@@ -202,11 +203,15 @@ def assert_same_as_prism(low: Lowered, directory: Path) -> None:
 
 
 EXAMPLE_FILES = sorted(EXAMPLES.glob("*.afsm"))
+# Examples whose default instance takes more than about 2 s on both routes.
+SLOW_EXAMPLES = {"charging"}
+EXAMPLE_PARAMS = [pytest.param(p, id=p.stem, marks=[pytest.mark.slow] if p.stem in SLOW_EXAMPLES
+                               else []) for p in EXAMPLE_FILES]
 
 
 @pytest.mark.storm
 @pytest.mark.parametrize("resolution", ["nondet", "uniform"])
-@pytest.mark.parametrize("path", EXAMPLE_FILES, ids=[p.stem for p in EXAMPLE_FILES])
+@pytest.mark.parametrize("path", EXAMPLE_PARAMS)
 def test_examples_agree_with_prism(path: Path, resolution: str, tmp_path: Path) -> None:
     low = lowered(str(path), resolution, overrides=OVERRIDES.get(path.stem, {}))
     assert_same_as_prism(low, tmp_path)

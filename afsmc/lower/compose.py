@@ -1,0 +1,163 @@
+"""A composed mission lowered: each agent lowered as a machine of its own, its commands
+renamed into the mission's variables, then put together (docs/language.md, "Composition").
+
+* An agent's command keeps its guard (Definition 2 within the agent); its mode is the
+  variable `<agent>_mode`, its own variables `<agent>_x`. Its final and deadlock
+  self-loops go: an agent that cannot move simply does not; the mission stays where it
+  is (one silent self-loop) only when no agent can move.
+* A synchronised action: one command per combination of its partners' commands, guarded
+  by all their guards, each branch a product of theirs (PRISM's synchronous product).
+* Interleaving: every agent's commands stand side by side (an MDP). Timed: a command may
+  fire only if its agents' least clock is no greater than that of any other agent that
+  can move (ties: `order`, the agent declared first; `nondet`, all of them).
+"""
+
+from __future__ import annotations
+
+import itertools
+from collections.abc import Callable
+from dataclasses import dataclass
+
+from afsmc.lower.lowering import Branch, Command, Lowered, Resolution, lower
+from afsmc.model import expr as E
+from afsmc.model import ir
+from afsmc.model.expr import Type
+from afsmc.model.semantics import inline
+
+
+@dataclass(frozen=True)
+class Part:
+    """One agent's commands in the mission's names: `local` are its own, `sync` each of
+    its synchronised actions' commands by name; `timing` the condition under which it may
+    move first (timed composition; TRUE otherwise)."""
+
+    agent: ir.Agent
+    local: tuple[Command, ...]
+    sync: tuple[tuple[str, tuple[Command, ...]], ...]
+    timing: E.Expr
+    sync_timing: tuple[tuple[str, E.Expr], ...]
+
+
+@dataclass(frozen=True)
+class Network:
+    kind: str  # "interleaving" | "timed"
+    ties: str
+    parts: tuple[Part, ...]
+    stay: Command  # the mission's self-loop where no agent can move
+
+
+def _renamer(agent: ir.Agent) -> Callable[[E.Expr], E.Expr]:
+    model = agent.model
+    mode_var = E.VarRef(agent.mode_var, Type.INT)
+
+    def fn(n: E.Expr) -> E.Expr | None:
+        if isinstance(n, E.CurrentMode):
+            return mode_var
+        if isinstance(n, E.ModeVal):
+            return E.Lit(n.number, Type.INT, n.span)
+        if isinstance(n, E.VarRef) and n.name in agent.own:
+            return E.VarRef(agent.prefix + n.name, n.type, n.span)
+        return None
+
+    def go(e: E.Expr) -> E.Expr:
+        return E.transform(inline(e, model), fn)
+    return go
+
+
+def _rename(agent: ir.Agent, cmd: Command, name: str) -> Command:
+    go = _renamer(agent)
+    branches = tuple(Branch(go(b.prob), tuple(
+        (agent.mode_var if v == "mode" else agent.mission_name(v), go(x)) for v, x in b.updates),
+        b.span, b.hazard) for b in cmd.branches)
+    # The mission has one mode (its states are the agents' modes, tested in the guard).
+    return Command(name, (0,), go(cmd.guard), branches, cmd.span, cmd.choice, cmd.kind)
+
+
+def _product(cmds: tuple[Command, ...], name: str, guard: E.Expr) -> Command:
+    branches = []
+    for combo in itertools.product(*(c.branches for c in cmds)):
+        prob = combo[0].prob
+        for b in combo[1:]:
+            prob = E.mul(prob, b.prob)
+        updates = tuple(u for b in combo for u in b.updates)
+        hazard = next((b.hazard for b in combo if b.hazard), None)
+        branches.append(Branch(prob, updates, combo[0].span, hazard))
+    choice = tuple(x for c in cmds for x in c.choice)
+    return Command(name, cmds[0].modes, E.conj(guard, *(c.guard for c in cmds)),
+                   tuple(branches), cmds[0].span, choice, "action")
+
+
+def lower_composed(model: ir.Model, resolution: Resolution = "nondet") -> Lowered:
+    comp = model.composition
+    assert comp is not None
+    bounds: dict[str, tuple[str, int]] = {}
+    weights: dict[str, E.Expr] = {}
+    raw: list[tuple[ir.Agent, list[Command], dict[str, list[Command]]]] = []
+    for agent in comp.agents:
+        low = lower(agent.model, resolution)
+        bounds.update(low.bounds)
+        local: list[Command] = []
+        sync: dict[str, list[Command]] = {}
+        for c in low.commands:
+            if c.kind in ("final", "deadlock"):
+                continue
+            if c.action in agent.syncs:
+                sync.setdefault(c.action, []).append(_rename(agent, c, c.action))
+            else:
+                local.append(_rename(agent, c, agent.prefix + c.action))
+        for a in agent.model.actions:
+            weights[agent.prefix + a.name] = _renamer(agent)(low.weights[a.name])
+        raw.append((agent, local, sync))
+    takers: dict[str, list[int]] = {}
+    for i, (_, _, sync) in enumerate(raw):
+        for name in sync:
+            takers.setdefault(name, []).append(i)
+
+    def offers(i: int, name: str) -> E.Expr:
+        return E.disj(*(c.guard for c in raw[i][2].get(name, [])))
+
+    def joint(name: str) -> E.Expr:
+        return E.conj(*(offers(i, name) for i in takers[name]))
+
+    movable = [E.disj(*(c.guard for c in local), *(joint(n) for n in sync if len(takers[n]) > 1))
+               for _, local, sync in raw]
+    clocks = [E.VarRef(a.mission_name(a.clock), Type.INT) if a.clock else None
+              for a, _, _ in raw]
+
+    def first(group: list[int]) -> E.Expr:
+        """The group's least clock beats every other agent that can move."""
+        if comp is None or comp.kind != "timed":
+            return E.TRUE
+        parts = []
+        for j in range(len(raw)):
+            if j in group:
+                continue
+            beats = []
+            for i in group:
+                ci, cj = clocks[i], clocks[j]
+                assert ci is not None and cj is not None
+                op = "<" if comp.ties == "order" and j < i else "<="
+                beats.append(E.Binary(op, ci, cj, Type.BOOL))
+            parts.append(E.disj(E.neg(movable[j]), *beats))
+        return E.conj(*parts)
+
+    parts: list[Part] = []
+    commands: list[Command] = []
+    for i, (agent, local, sync) in enumerate(raw):
+        timing = first([i])
+        sync_timing = tuple((n, first(takers[n])) for n in sync)
+        parts.append(Part(agent, tuple(local), tuple((n, tuple(cs)) for n, cs in sync.items()),
+                          timing, sync_timing))
+        commands += [Command(c.action, c.modes, E.conj(c.guard, timing), c.branches, c.span,
+                             c.choice, c.kind) for c in local]
+    for name, who in takers.items():
+        if len(who) < 2:
+            continue
+        for combo in itertools.product(*(raw[i][2][name] for i in who)):
+            commands.append(_product(tuple(combo), name, first(who)))
+    stay = Command("_stay", (0,), E.neg(E.disj(*movable)),
+                   (Branch(E.Lit(1, Type.INT), (), model.modes[0].span),), model.modes[0].span,
+                   (), "deadlock")
+    commands.append(stay)
+    network = Network(comp.kind, comp.ties, tuple(parts), stay)
+    return Lowered(model, tuple(commands), resolution, weights, bounds, network=network)
