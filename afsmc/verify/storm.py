@@ -17,7 +17,7 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any, Literal
 
-from afsmc.verify import precision
+from afsmc.verify import acyclic, precision
 from afsmc.verify.strategy_storm import Extract, Extracted, analyse, builder_options
 
 Engine = Literal["sparse", "dd", "hybrid", "auto"]
@@ -258,7 +258,10 @@ def _execute(job: Job, notify: Notify) -> JobResult:
     if job.bisimulation and not built.symbolic and not _bisimulation(built, res, notify):
         return res
     t0 = time.perf_counter()
-    if not _check_each(stormpy, built, check_env, res, notify, job, program):
+    if check_env is None and job.extract is None and res.solver == "topological" \
+            and job.solver == "auto":
+        _acyclic(stormpy, built, res, notify, job.what)
+    if built.names and not _check_each(stormpy, built, check_env, res, notify, job, program):
         return res
     res.check_time = time.perf_counter() - t0
     res.failure = built.deferred
@@ -469,6 +472,38 @@ def _check_each(stormpy: Any, built: _Built, check_env: Any, res: JobResult,
         # A process that dies later (memory) has still answered this one: the watcher keeps it.
         notify("value", (name, float(value), res.seconds[name]))
     return True
+
+
+def _acyclic(stormpy: Any, built: _Built, res: JobResult, notify: Notify, what: str) -> None:
+    """Answer what one backward pass can (afsmc.verify.acyclic) if the sparse model is
+    acyclic but for self-loops; the rest stays in `built` for Storm's solver."""
+    p = acyclic.plan(built.names, built.props, res.kind == "mdp")
+    if not p.queries:
+        return
+    notify("phase", "acyclic")
+    started = time.perf_counter()
+    arrays = acyclic.prepare(stormpy, built.model, p)
+    if arrays is None:
+        notify("solver", f"the {what} has cycles: Storm's topological solver checks it")
+        return
+    if not p.left:
+        built.model = None  # the arrays hold all that is needed
+        _give_back()
+    notify("solver", f"the {what} is acyclic but for self-loops ({len(arrays.layers) - 1:,} "
+           "layers): each query by one exact backward pass")
+    share = (time.perf_counter() - started) / len(p.queries)  # labelling, export, layering
+    for q in p.queries:
+        notify("phase", f"check {q.name}")
+        t0 = time.perf_counter()
+        value = acyclic.solve(arrays, q)
+        res.values[q.name] = value
+        res.seconds[q.name] = share + time.perf_counter() - t0
+        notify("value", (q.name, value, res.seconds[q.name]))
+    del arrays
+    _give_back()
+    left = [(n, prop) for n, prop in zip(built.names, built.props, strict=True) if n in p.left]
+    built.names, built.props = [n for n, _ in left], [prop for _, prop in left]
+    res.solver = "acyclic" if not left else "acyclic and topological"
 
 
 def solver_for(solver: Solver, engine: str) -> str:
