@@ -23,6 +23,7 @@ a choice that loops to its own state with probability s < 1 is solved exactly as
 
 from __future__ import annotations
 
+import itertools
 import json
 import os
 import shutil
@@ -37,6 +38,7 @@ import numpy.typing as npt
 F64 = npt.NDArray[np.float64]
 I64 = npt.NDArray[np.int64]
 Bools = npt.NDArray[np.bool_]
+Idx = npt.NDArray[np.int32]  # state numbers (a model of 2^31 states or branches is Storm's)
 
 LABEL = "__afsmc_target_"  # the labels this module adds for each query's target states
 
@@ -96,13 +98,13 @@ class Arrays:
 
     states: I64  # state -> its first choice (n + 1 offsets)
     choices: I64  # choice -> its first branch (m + 1 offsets)
-    target: npt.NDArray[np.int32] | I64  # branch -> successor state
+    target: Idx  # branch -> successor state
     prob: F64  # branch -> probability
     stay: F64 | None  # choice -> probability of its self-loop (None: no self-loops)
     layers: I64  # layer boundaries (len = layers + 1)
     initial: int  # the initial state
     labels: dict[str, Bools]  # label -> states (targets)
-    rewards: dict[str, F64]  # reward model -> its reward per choice (state + action + branch)
+    rewards: dict[str, F64]  # reward model -> its reward per choice (state + action)
 
 
 def _ranges(starts: I64, ends: I64) -> I64:
@@ -112,25 +114,32 @@ def _ranges(starts: I64, ends: I64) -> I64:
     if total == 0:
         return np.zeros(0, np.int64)
     offsets = np.cumsum(lens) - lens
-    return np.arange(total, dtype=np.int64) + np.repeat(starts - offsets, lens)
+    out: I64 = np.arange(total, dtype=np.int64) + np.repeat(starts - offsets, lens)
+    return out
 
 
-def layers_of(states: I64, choices: I64, target: I64) -> list[I64] | None:
+def _state_of_branches(states: I64, choices: I64) -> Idx:
+    """The state of each branch."""
+    n = len(states) - 1
+    per_choice = np.repeat(np.arange(n, dtype=np.int32), np.diff(states))
+    out: Idx = np.repeat(per_choice, np.diff(choices))
+    return out
+
+
+def layers_of(states: I64, choices: I64, target: Idx) -> list[I64] | None:
     """States in layers (Kahn's algorithm, backwards, ignoring self-loops): layer 0 has no
     successor but itself, each later one only successors in earlier layers. None if the
     model has a cycle of more than one state."""
     n = len(states) - 1
-    branch_state = np.repeat(np.repeat(np.arange(n, dtype=np.int64), np.diff(states)),
-                             np.diff(choices))
+    branch_state = _state_of_branches(states, choices)
     moving = target != branch_state
     src, dst = branch_state[moving], target[moving]
     del branch_state, moving
     pending = np.bincount(src, minlength=n)
-    order = np.argsort(dst, kind="stable")
-    rev_src = src[order]
     rev_ptr = np.zeros(n + 1, np.int64)
     np.cumsum(np.bincount(dst, minlength=n), out=rev_ptr[1:])
-    del order, src, dst
+    rev_src = src[np.argsort(dst, kind="stable")]
+    del src, dst
     out = []
     done = 0
     frontier = np.flatnonzero(pending == 0)
@@ -144,38 +153,43 @@ def layers_of(states: I64, choices: I64, target: I64) -> list[I64] | None:
     return out if done == n else None
 
 
-def renumber(states: I64, choices: I64, target: I64, prob: F64,
-             layers: list[I64]) -> tuple[I64, I64, I64, npt.NDArray[Any], F64, I64]:
-    """The model with states in layer order: (state offsets, choice offsets, old choice of
-    each new choice, new targets, probabilities, new number of each old state)."""
-    perm = np.concatenate(layers)
+CHUNK = 1 << 22  # choices gathered at a time while renumbering (bounds the temporary arrays)
+
+
+def renumber(states: I64, choices: I64, target: Idx, prob: F64,
+             perm: I64) -> tuple[I64, I64, I64, Idx, F64, Idx]:
+    """The model with its states in the order `perm` (new -> old): (state offsets, choice
+    offsets, old choice of each new choice, new targets, probabilities, new number of each
+    old state)."""
     n = len(perm)
-    inv = np.empty(n, np.int64)
-    inv[perm] = np.arange(n, dtype=np.int64)
+    inv = np.empty(n, np.int32)
+    inv[perm] = np.arange(n, dtype=np.int32)
     new_states = np.zeros(n + 1, np.int64)
     np.cumsum(np.diff(states)[perm], out=new_states[1:])
     old_choice = _ranges(states[perm], states[perm + 1])
-    new_choices = np.zeros(len(old_choice) + 1, np.int64)
+    m = len(old_choice)
+    new_choices = np.zeros(m + 1, np.int64)
     np.cumsum(np.diff(choices)[old_choice], out=new_choices[1:])
-    branch = _ranges(choices[old_choice], choices[old_choice + 1])
-    small = np.int32 if n < 2**31 else np.int64
-    new_target = inv[target[branch]].astype(small)
-    new_prob = prob[branch]
-    del branch
+    new_target = np.empty(len(target), np.int32)
+    new_prob = np.empty(len(prob))
+    for c in range(0, m, CHUNK):
+        old = old_choice[c:c + CHUNK]
+        branch = _ranges(choices[old], choices[old + 1])
+        lo, hi = new_choices[c], new_choices[min(c + CHUNK, m)]
+        new_target[lo:hi] = inv[target[branch]]
+        new_prob[lo:hi] = prob[branch]
     return new_states, new_choices, old_choice, new_target, new_prob, inv
 
 
-def self_loops(states: I64, choices: I64, target: npt.NDArray[Any], prob: F64) -> F64 | None:
+def self_loops(states: I64, choices: I64, target: Idx, prob: F64) -> F64 | None:
     """Each choice's probability of staying in its state; None if no choice loops."""
-    n, m = len(states) - 1, len(choices) - 1
-    branch_state = np.repeat(np.repeat(np.arange(n, dtype=target.dtype), np.diff(states)),
-                             np.diff(choices))
-    loops = np.flatnonzero(target == branch_state)
-    del branch_state
+    loops = np.flatnonzero(target == _state_of_branches(states, choices))
     if loops.size == 0:
         return None
     choice = np.searchsorted(choices, loops, side="right") - 1
-    return np.bincount(choice, weights=prob[loops], minlength=m)
+    stay: F64 = np.bincount(choice, weights=prob[loops],
+                            minlength=len(choices) - 1).astype(np.float64)
+    return stay
 
 
 def solve(a: Arrays, q: Query) -> float:
@@ -187,7 +201,7 @@ def solve(a: Arrays, q: Query) -> float:
     reached = 1.0 if q.kind == "P" else 0.0  # on the target
     pick = np.minimum if q.opt == "min" else np.maximum
     bounds = a.layers.tolist()
-    for lo, hi in zip(bounds[:-1], bounds[1:], strict=True):
+    for lo, hi in itertools.pairwise(bounds):
         c0, c1 = int(a.states[lo]), int(a.states[hi])
         b0, b1 = int(a.choices[c0]), int(a.choices[c1])
         succ = value[a.target[b0:b1]]
@@ -209,13 +223,23 @@ def solve(a: Arrays, q: Query) -> float:
     return float(value[a.initial])
 
 
-def _member(tar: tarfile.TarFile, path: str, name: str, dtype: Any,
-            count: int) -> npt.NDArray[Any] | None:
+def _member(tar: tarfile.TarFile, path: str, name: str, dtype: Any, count: int,
+            into: Any = None) -> npt.NDArray[Any] | None:
+    """The array stored as `name`, read as `dtype`; converted to `into` a slice at a time
+    (the unsigned 64-bit offsets and targets of the export as int64 and int32)."""
     try:
         info = tar.getmember(name)
     except KeyError:
         return None
-    return np.fromfile(path, dtype=dtype, count=count, offset=info.offset_data)
+    if into is None:
+        return np.fromfile(path, dtype=dtype, count=count, offset=info.offset_data)
+    out = np.empty(count, into)
+    size = np.dtype(dtype).itemsize
+    for i in range(0, count, CHUNK):
+        k = min(CHUNK, count - i)
+        out[i:i + k] = np.fromfile(path, dtype=dtype, count=k,
+                                   offset=info.offset_data + i * size)
+    return out
 
 
 def _bits(tar: tarfile.TarFile, path: str, name: str, n: int) -> Bools | None:
@@ -237,7 +261,7 @@ class Raw:
 
     states: I64
     choices: I64
-    target: I64
+    target: Idx
     prob: F64
     initial: int
     labels: dict[str, Bools]
@@ -252,10 +276,13 @@ def read_umb(path: str, labels: list[str], rewards: list[str]) -> Raw | None:
         if ts.get("branch-probability-type", {}).get("type") != "double":
             return None
         n, m, b = int(ts["#states"]), int(ts["#choices"]), int(ts["#branches"])
-        states = _member(tar, path, "state-to-choices.bin", np.uint64, n + 1)
-        states = np.arange(n + 1, dtype=np.int64) if states is None else states.astype(np.int64)
-        choices = _member(tar, path, "choice-to-branches.bin", np.uint64, m + 1)
-        target = _member(tar, path, "branch-to-target.bin", np.uint64, b)
+        if max(n, b) >= 2**31:
+            return None
+        states = _member(tar, path, "state-to-choices.bin", np.uint64, n + 1, np.int64)
+        if states is None:  # a DTMC may leave out its trivial choices
+            states = np.arange(n + 1, dtype=np.int64)
+        choices = _member(tar, path, "choice-to-branches.bin", np.uint64, m + 1, np.int64)
+        target = _member(tar, path, "branch-to-target.bin", np.uint64, b, np.int32)
         prob = _member(tar, path, "branch-to-probability.bin", np.float64, b)
         initial = _bits(tar, path, "state-is-initial.bin", n)
         if choices is None or target is None or prob is None or initial is None:
@@ -270,9 +297,11 @@ def read_umb(path: str, labels: list[str], rewards: list[str]) -> Raw | None:
             if key is None:
                 return None
             folder, desc = rws[key]
-            size = {"states": n, "choices": m, "branches": b}
+            size = {"states": n, "choices": m}  # transition rewards: left to Storm
             rw[x] = []
             for where in desc.get("applies-to", []):
+                if where not in size:
+                    return None
                 vals = _member(tar, path, f"annotations/rewards/{folder}/{where}/values.bin",
                                np.float64, size[where])
                 if vals is None or desc.get("type", {}).get("type") != "double":
@@ -280,7 +309,7 @@ def read_umb(path: str, labels: list[str], rewards: list[str]) -> Raw | None:
                 rw[x].append((where, vals))
     if any(v is None for v in found.values()) or len(found) < len(labels):
         return None
-    return Raw(states, choices.astype(np.int64), target.astype(np.int64), prob,
+    return Raw(states, choices, target, prob,
                int(np.flatnonzero(initial)[0]), {k: v for k, v in found.items()
                                                  if v is not None}, rw)
 
@@ -293,25 +322,21 @@ def arrange(raw: Raw) -> Arrays | None:
     layers = layers_of(raw.states, raw.choices, raw.target)
     if layers is None:
         return None
-    n = len(raw.states) - 1
     perm = np.concatenate(layers)
-    states, choices, old_choice, target, prob, inv = renumber(
-        raw.states, raw.choices, raw.target, raw.prob, layers)
     bounds = np.zeros(len(layers) + 1, np.int64)
     np.cumsum([len(x) for x in layers], out=bounds[1:])
     del layers
-    raw.target = raw.prob = np.zeros(0, np.int64)  # type: ignore[assignment]
+    states, choices, old_choice, target, prob, inv = renumber(
+        raw.states, raw.choices, raw.target, raw.prob, perm)
+    raw.target, raw.prob = np.zeros(0, np.int32), np.zeros(0)  # freed
     rewards = {}
     for name, parts in raw.state_rewards.items():
         per_choice = np.zeros(len(choices) - 1)
         for where, vals in parts:
             if where == "states":
                 per_choice += np.repeat(vals[perm], np.diff(states))
-            elif where == "choices":
+            else:
                 per_choice += vals[old_choice]
-            else:  # branches: the expected reward of the step
-                branch = _ranges(raw.choices[old_choice], raw.choices[old_choice + 1])
-                per_choice += np.add.reduceat(vals[branch] * prob, choices[:-1])
         rewards[name] = per_choice
     labels = {k: v[perm] for k, v in raw.labels.items()}
     stay = self_loops(states, choices, target, prob)
@@ -340,14 +365,20 @@ def export(stormpy: Any, model: Any, p: Plan, folder: str) -> str:
     return path
 
 
-def prepare(stormpy: Any, model: Any, p: Plan) -> Arrays | None:
-    """The layered arrays of Storm's sparse `model` with the plan's targets; None if the
-    model has cycles or Storm's export is not of the expected form."""
+def read(stormpy: Any, model: Any, p: Plan) -> Raw | None:
+    """Storm's sparse `model`, with the plan's targets, as arrays; None if Storm's export
+    is not of the expected form."""
     folder = tempfile.mkdtemp(prefix="afsmc-acyclic-")
     try:
         path = export(stormpy, model, p, folder)
-        raw = read_umb(path, [LABEL + str(i) for i in range(len(p.targets))],
-                       sorted({q.reward for q in p.queries if q.kind == "R"}))
+        return read_umb(path, [LABEL + str(i) for i in range(len(p.targets))],
+                        sorted({q.reward for q in p.queries if q.kind == "R"}))
     finally:
         shutil.rmtree(folder, ignore_errors=True)
+
+
+def prepare(stormpy: Any, model: Any, p: Plan) -> Arrays | None:
+    """The layered arrays of Storm's sparse `model`; None if it has cycles (or Storm's
+    export is not of the expected form)."""
+    raw = read(stormpy, model, p)
     return None if raw is None else arrange(raw)

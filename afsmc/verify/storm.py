@@ -30,8 +30,9 @@ SPARSE_BYTES_PER_STATE = 260
 Via = Literal["prism", "jani"]
 VIAS: tuple[Via, ...] = ("prism", "jani")
 # How Storm solves the equation systems (an MDP's min/max ones, a DTMC's linear ones) on the
-# sparse and hybrid engines. "auto": value iteration on the hybrid engine, Storm's default
-# (topological) on sparse. The topological solver splits the model into strongly connected
+# sparse and hybrid engines. "auto": value iteration on the hybrid engine; on sparse, one
+# exact backward pass where the model is acyclic but for self-loops (afsmc.verify.acyclic;
+# the solver is then reported as "acyclic"), else Storm's default (topological). The topological solver splits the model into strongly connected
 # components first; a mission whose clock only grows is acyclic but for its final modes, so
 # every component is one state, and on scenario 1 (77.5 M states) that decomposition and
 # the state-by-state solution took 137 s of a 394 s query that value iteration answered in
@@ -260,7 +261,7 @@ def _execute(job: Job, notify: Notify) -> JobResult:
     t0 = time.perf_counter()
     if check_env is None and job.extract is None and res.solver == "topological" \
             and job.solver == "auto":
-        _acyclic(stormpy, built, res, notify, job.what)
+        _acyclic(stormpy, built, res, notify, job, program)
     if built.names and not _check_each(stormpy, built, check_env, res, notify, job, program):
         return res
     res.check_time = time.perf_counter() - t0
@@ -474,7 +475,8 @@ def _check_each(stormpy: Any, built: _Built, check_env: Any, res: JobResult,
     return True
 
 
-def _acyclic(stormpy: Any, built: _Built, res: JobResult, notify: Notify, what: str) -> None:
+def _acyclic(stormpy: Any, built: _Built, res: JobResult, notify: Notify, job: Job,
+             program: Any) -> None:
     """Answer what one backward pass can (afsmc.verify.acyclic) if the sparse model is
     acyclic but for self-loops; the rest stays in `built` for Storm's solver."""
     p = acyclic.plan(built.names, built.props, res.kind == "mdp")
@@ -482,14 +484,19 @@ def _acyclic(stormpy: Any, built: _Built, res: JobResult, notify: Notify, what: 
         return
     notify("phase", "acyclic")
     started = time.perf_counter()
-    arrays = acyclic.prepare(stormpy, built.model, p)
-    if arrays is None:
-        notify("solver", f"the {what} has cycles: Storm's topological solver checks it")
-        return
-    if not p.left:
-        built.model = None  # the arrays hold all that is needed
+    raw = acyclic.read(stormpy, built.model, p)
+    if raw is not None and not p.left:
+        built.model = None  # one model in memory at a time: the arrays hold all it needs
         _give_back()
-    notify("solver", f"the {what} is acyclic but for self-loops ({len(arrays.layers) - 1:,} "
+    arrays = None if raw is None else acyclic.arrange(raw)
+    del raw
+    if arrays is None:
+        notify("solver", f"the {job.what} has cycles: Storm's topological solver checks it")
+        if built.model is None:  # built again, rather than kept for a case this rare
+            notify("phase", "build")
+            built.model = _sparse(stormpy, program, built.props, job)
+        return
+    notify("solver", f"the {job.what} is acyclic but for self-loops ({len(arrays.layers) - 1:,} "
            "layers): each query by one exact backward pass")
     share = (time.perf_counter() - started) / len(p.queries)  # labelling, export, layering
     for q in p.queries:
