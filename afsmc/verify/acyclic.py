@@ -148,8 +148,9 @@ def layers_of(states: I64, choices: I64, target: Idx) -> list[I64] | None:
         done += frontier.size
         preds = rev_src[_ranges(rev_ptr[frontier], rev_ptr[frontier + 1])]
         np.subtract.at(pending, preds, 1)
-        preds = np.unique(preds)
-        frontier = preds[pending[preds] == 0]
+        ready = np.sort(preds[pending[preds] == 0])  # each as often as it was a predecessor
+        frontier = ready[np.concatenate(([True], ready[1:] != ready[:-1]))] \
+            if ready.size else ready
     return out if done == n else None
 
 
@@ -192,35 +193,62 @@ def self_loops(states: I64, choices: I64, target: Idx, prob: F64) -> F64 | None:
     return stay
 
 
+GROUP_BYTES = 1 << 31  # the most the values of one pass's queries take together
+
+
 def solve(a: Arrays, q: Query) -> float:
-    """The query's value in the initial state: one pass over the layers."""
-    value = np.zeros(len(a.states) - 1)
-    on_target = a.labels[LABEL + str(q.target)]
-    reward = a.rewards.get(q.reward) if q.kind == "R" else None
-    stuck = 0.0 if q.kind == "P" else np.inf  # a choice that only loops
-    reached = 1.0 if q.kind == "P" else 0.0  # on the target
-    pick = np.minimum if q.opt == "min" else np.maximum
-    bounds = a.layers.tolist()
-    for lo, hi in itertools.pairwise(bounds):
+    """The query's value in the initial state."""
+    return solve_many(a, [q])[q.name]
+
+
+def solve_many(a: Arrays, queries: list[Query]) -> dict[str, float]:
+    """Each query's value in the initial state. Queries of the same kind and direction
+    share their passes (the values of each state side by side), as many at a time as
+    GROUP_BYTES allows."""
+    n = len(a.states) - 1
+    most = max(1, GROUP_BYTES // (8 * max(n, 1)))
+    groups: dict[tuple[str, str], list[Query]] = {}
+    for q in queries:
+        groups.setdefault((q.kind, q.opt), []).append(q)
+    out: dict[str, float] = {}
+    for group in groups.values():
+        for i in range(0, len(group), most):
+            part = group[i:i + most]
+            out |= zip([q.name for q in part], _pass(a, part), strict=True)
+    return {q.name: out[q.name] for q in queries}
+
+
+def _pass(a: Arrays, qs: list[Query]) -> list[float]:
+    """One pass over the layers for queries of one kind and direction, from the
+    absorbing states back to the initial one."""
+    k = len(qs)
+    value = np.zeros((len(a.states) - 1, k))
+    on_target = np.stack([a.labels[LABEL + str(q.target)] for q in qs], axis=1)
+    reward = None
+    if qs[0].kind == "R":
+        reward = np.stack([a.rewards[q.reward] for q in qs], axis=1)
+    stuck = 0.0 if qs[0].kind == "P" else np.inf  # a choice that only loops
+    reached = 1.0 if qs[0].kind == "P" else 0.0  # on the target
+    pick = np.minimum if qs[0].opt == "min" else np.maximum
+    for lo, hi in itertools.pairwise(a.layers.tolist()):
         c0, c1 = int(a.states[lo]), int(a.states[hi])
         b0, b1 = int(a.choices[c0]), int(a.choices[c1])
-        succ = value[a.target[b0:b1]]
         with np.errstate(invalid="ignore"):
-            contrib = a.prob[b0:b1] * succ
-        per_choice = np.add.reduceat(contrib, a.choices[c0:c1] - b0)
+            contrib = a.prob[b0:b1, None] * value[a.target[b0:b1]]
+        per_choice = np.add.reduceat(contrib, a.choices[c0:c1] - b0, axis=0)
         if reward is not None:
             per_choice += reward[c0:c1]
         if a.stay is not None:
-            s = a.stay[c0:c1]
+            s = a.stay[c0:c1, None]
             if s.any():
                 with np.errstate(divide="ignore", invalid="ignore"):
                     per_choice = np.where(s >= 1.0, stuck, per_choice / (1.0 - s))
         if c1 - c0 == hi - lo:
             per_state = per_choice
         else:
-            per_state = pick.reduceat(per_choice, a.states[lo:hi] - c0)
+            per_state = pick.reduceat(per_choice, a.states[lo:hi] - c0, axis=0)
         value[lo:hi] = np.where(on_target[lo:hi], reached, per_state)
-    return float(value[a.initial])
+    return [float(v) for v in value[a.initial]]
 
 
 def _member(tar: tarfile.TarFile, path: str, name: str, dtype: Any, count: int,

@@ -498,14 +498,13 @@ def _acyclic(stormpy: Any, built: _Built, res: JobResult, notify: Notify, job: J
         return
     notify("solver", f"the {job.what} is acyclic but for self-loops ({len(arrays.layers) - 1:,} "
            "layers): each query by one exact backward pass")
-    share = (time.perf_counter() - started) / len(p.queries)  # labelling, export, layering
+    notify("phase", "check " + ", ".join(q.name for q in p.queries))
+    values = acyclic.solve_many(arrays, p.queries)
+    # the passes share their work: each query is given an equal share of the time
+    secs = (time.perf_counter() - started) / len(p.queries)
     for q in p.queries:
-        notify("phase", f"check {q.name}")
-        t0 = time.perf_counter()
-        value = acyclic.solve(arrays, q)
-        res.values[q.name] = value
-        res.seconds[q.name] = share + time.perf_counter() - t0
-        notify("value", (q.name, value, res.seconds[q.name]))
+        res.values[q.name], res.seconds[q.name] = values[q.name], secs
+        notify("value", (q.name, values[q.name], secs))
     del arrays
     _give_back()
     left = [(n, prop) for n, prop in zip(built.names, built.props, strict=True) if n in p.left]
