@@ -117,10 +117,13 @@ def table(rows: list[dict[str, object]]) -> str:
         base = first.setdefault((r["instance"], r["workload"]), vals)
         diff = max((abs(vals[k] - base[k]) for k in vals if k in base
                     and vals[k] is not None and base[k] is not None), default=0.0)
-        ub = sum(float(str(r.get(k) or 0)) for k in ("uniform_build_s", "uniform_check_s"))
+        def num(key: str, r: dict[str, object] = r) -> float:
+            return float(str(r.get(key) or 0))
+
+        ub = num("uniform_build_s") + num("uniform_check_s")
         lines.append(f"| {r['instance']} | {r['workload']} | {r['solver']} | "
-                     f"{r.get('solver_used', '')} | {r['wall_s']} | {r['peak_gb']} | "
-                     f"{r.get('states', '')} | {r.get('build_s', '')} | {r.get('check_s', '')} "
+                     f"{r.get('solver_used', '')} | {num('wall_s'):.1f} | {num('peak_gb'):.2f} | "
+                     f"{int(num('states')):,} | {num('build_s'):.1f} | {num('check_s'):.1f} "
                      f"| {ub:.1f} | {diff:.1e} | {r['load']} |")
     return "\n".join(lines)
 
@@ -136,7 +139,12 @@ def main() -> None:
                     help="instance checked first with Storm's solver ('' for none)")
     ap.add_argument("--timeout", type=float, default=4 * 3600)
     ap.add_argument("--out", default=os.path.join(ROOT, "benchmarks", "acyclic.csv"))
+    ap.add_argument("--table", action="store_true", help="print the CSV's table, run nothing")
     args = ap.parse_args()
+    if args.table:
+        with open(args.out, encoding="utf-8") as f:
+            print(table(list(csv.DictReader(f))))
+        return
     engine = (["--engine", args.engine] if args.engine else []) + (
         ["--max-states", args.max_states] if args.max_states else [])
     plan = [(i, s) for i in args.instances.split(",") for s in args.solvers.split(",")]
