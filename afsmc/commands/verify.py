@@ -61,11 +61,12 @@ def add_storm_options(p: argparse.ArgumentParser) -> None:
                         "(explicit matrices), dd (decision diagrams throughout) or hybrid "
                         "(symbolic model, explicit vectors)")
     p.add_argument("--solver", choices=SOLVERS, default="auto",
-                   help="how Storm solves the equations (an MDP's min/max, a DTMC's "
-                        "linear) on the sparse and hybrid engines: auto (default: value "
-                        "iteration on hybrid, topological on sparse), topological (Storm's "
-                        "default: strongly connected components first) or value-iteration "
-                        "(stops at a relative change of 1e-10)")
+                   help="how the equations (an MDP's min/max, a DTMC's linear) are "
+                        "solved on the sparse and hybrid engines: auto (default: value "
+                        "iteration on hybrid; on sparse one exact backward pass where the "
+                        "model is acyclic but for self-loops, else topological), topological "
+                        "(Storm's default: strongly connected components first) or "
+                        "value-iteration (stops at a relative change of 1e-10)")
     p.add_argument("--bisim", action="store_true",
                    help="minimise the sparse model by strong bisimulation before checking "
                         "(exact; faster checks, more memory while building)")

@@ -363,6 +363,8 @@ class _Watch:
             self.built = states
             self.say(f"built the {what}: {states:,} states, {transitions:,} transitions "
                      f"in {secs:.1f} s")
+        elif event == "solver":  # which path solves the queries (afsmc.verify.acyclic)
+            self.say(data)
         elif event == "refused":
             self.say(f"the hybrid engine cannot check {', '.join(data)}: E404 follows "
                      "once the other queries of this process are checked")

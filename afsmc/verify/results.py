@@ -42,7 +42,7 @@ class ModelStats:
     quotient_transitions: int | None = None
     bisimulation_time: float = 0.0
     processes: int = 1  # Storm runs that built this model (--split: one per query)
-    solver: str = ""  # "topological" | "value-iteration" (storm.solver_for)
+    solver: str = ""  # "topological", "value-iteration" (storm.solver_for), "acyclic"
 
     def to_json(self) -> dict[str, object]:
         out: dict[str, object] = {
