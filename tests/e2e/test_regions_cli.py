@@ -46,7 +46,9 @@ def test_the_table_the_plot_and_the_feasible_flags(patrol: str, tmp_path: Path) 
 
 
 @pytest.mark.parametrize(("param", "words"), [
-    ("CELLS=1:3", "'CELLS' is int constant"),
+    ("CELLS=1:3", "'CELLS' is an int constant"),
+    ("done=0:1", "'done' is a label, not a constant"),
+    ("P_FAULT=0.2:1.5", "a probability's range lies within [0, 1]"),
     ("cell=0:1", "'cell' is a variable, not a constant"),
     ("NOPE=0:1", "'NOPE' is not declared, not a constant"),
     ("P_FAULT=0.2:0.1", "the range is empty"),
