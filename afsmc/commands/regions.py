@@ -193,7 +193,8 @@ def run(args: argparse.Namespace) -> int:
     if args.json:
         print(json.dumps(res.to_json(), indent=2))
     else:
-        print(render(res))
+        fixed = [c.name for c in model.constants if c.name in box and not c.is_param]
+        print(render(res, fixed))
     return 0
 
 
@@ -235,7 +236,9 @@ def feasible(built: object, formula: str, res: R.RegionResult
             "the centre of the largest region where it holds")
 
 
-def render(res: R.RegionResult) -> str:
+def render(res: R.RegionResult, fixed: list[str] | None = None) -> str:
+    """The regions as a table; `fixed` names the parameters declared 'const' (not
+    'param'), which a --const flag cannot set."""
     names = list(res.box)
     rows = [[*names, "verdict"]]
     order = {"holds": 0, "fails": 1, "unknown": 2}
@@ -260,4 +263,9 @@ def render(res: R.RegionResult) -> str:
         lines.append("feasible: " + " ".join(f"--const {n}={v:.6g}"
                                              for n, v in sorted(res.feasible.items()))
                      + f" ({res.feasible_how})")
+        shown = [n for n in sorted(res.feasible) if n in (fixed or [])]
+        if shown:
+            lines.append(f"  --const sets only a 'param': {', '.join(shown)} "
+                         f"{'is' if len(shown) == 1 else 'are'} declared 'const', so write "
+                         "the value in the file, or declare it 'param double'")
     return "\n".join(lines)

@@ -43,6 +43,8 @@ def test_the_table_the_plot_and_the_feasible_flags(patrol: str, tmp_path: Path) 
     assert png.read_bytes().startswith(b"\x89PNG")
     assert "coverage" in r.out and "holds" in r.out
     assert "feasible: --const P_FAULT=" in r.out
+    # P_FAULT is a 'const prob', which --const cannot set: the output says so
+    assert "P_FAULT, P_SLIP are declared 'const'" in r.out
 
 
 @pytest.mark.parametrize(("param", "words"), [
