@@ -168,7 +168,9 @@ class Mission:
         those of :func:`afsmc.verify.run` (the CLI's options): ``formulas=[...]`` (ad-hoc
         properties), ``engine`` ("auto", "sparse", "hybrid", "dd"), ``via`` ("prism",
         "jani"), ``solver``, ``max_states``, ``uniform``, ``bisimulation``, ``split``,
-        ``reductions``, ``progress`` (a function that receives progress lines), and whatever
+        ``reductions``, ``progress`` (a function that receives progress lines),
+        ``strategy=True`` and ``witness=K`` (`--strategy`, `--witness K`; ``witness_dir``
+        "min" or "max"), and whatever
         later versions of `afsmc verify` add. Raises AfsmError (with ``.partial``, the
         queries answered, if some failed)."""
         from afsmc.api.results import verify

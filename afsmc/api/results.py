@@ -45,7 +45,12 @@ def names(properties: Sequence[str] | str | None) -> list[str]:
 
 def verify(mission: Mission, properties: Sequence[str] | str | None = None,
            **options: Any) -> Results:
-    """:meth:`Mission.verify`: :func:`verify_file` on the mission's text and constants."""
+    """:meth:`Mission.verify`: :func:`verify_file` on the mission's text and constants.
+    ``witness=K`` is `afsmc verify --witness K`: the paths of the one property checked."""
+    k = options.get("witness")
+    if isinstance(k, int) and not isinstance(k, bool):
+        wanted = names(properties)
+        options["witness"] = (wanted[0] if wanted and len(wanted) == 1 else None, k)
     return verify_file(mission.path, properties, text=mission.text,
                        consts=dict(mission.consts), **options)
 

@@ -126,13 +126,16 @@ def check_params(low: Lowered, box: dict[str, tuple[float, float]]) -> None:
     for n, (lo, hi) in box.items():
         c = names.get(n)
         if c is None:
-            what = "a variable" if n in variables else "not declared"
+            labels = {lb.name for lb in model.labels}
+            what = ("a variable" if n in variables else "a label" if n in labels
+                    else "not declared")
             raise _error(codes.E441, f"--param {n}: '{n}' is {what}, not a constant",
                          hint="parameters are 'param double', 'const prob' or interval-"
                               "probability constants: " + ", ".join(
                                   k for k, v in names.items() if v.type is E.Type.DOUBLE))
         if c.type is not E.Type.DOUBLE:
-            raise _error(codes.E441, f"--param {n}: '{n}' is {c.declared_type} constant; "
+            art = "an" if c.declared_type[:1] in ("a", "e", "i", "o", "u") else "a"
+            raise _error(codes.E441, f"--param {n}: '{n}' is {art} {c.declared_type} constant; "
                          "a parameter is a probability or a double", c.span,
                          hint="an integer figure is an interval constant [lo, hi] "
                               "(floor/ceil), or swept with `afsmc sweep`")
@@ -144,7 +147,8 @@ def check_params(low: Lowered, box: dict[str, tuple[float, float]]) -> None:
                               "probabilities only; sweep it with `afsmc sweep` instead")
         if c.declared_type == "prob" and not (lo >= 0.0 and hi <= 1.0):
             raise _error(codes.E441, f"--param {n}={lo:g}:{hi:g}: a probability's range lies "
-                         "within [0, 1]", c.span)
+                         "within [0, 1]", c.span,
+                         hint=f"e.g. --param {n}={max(lo, 1e-6):g}:{min(hi, 0.999999):g}")
 
 
 def run(args: argparse.Namespace) -> int:
@@ -189,7 +193,8 @@ def run(args: argparse.Namespace) -> int:
     if args.json:
         print(json.dumps(res.to_json(), indent=2))
     else:
-        print(render(res))
+        fixed = [c.name for c in model.constants if c.name in box and not c.is_param]
+        print(render(res, fixed))
     return 0
 
 
@@ -231,7 +236,9 @@ def feasible(built: object, formula: str, res: R.RegionResult
             "the centre of the largest region where it holds")
 
 
-def render(res: R.RegionResult) -> str:
+def render(res: R.RegionResult, fixed: list[str] | None = None) -> str:
+    """The regions as a table; `fixed` names the parameters declared 'const' (not
+    'param'), which a --const flag cannot set."""
     names = list(res.box)
     rows = [[*names, "verdict"]]
     order = {"holds": 0, "fails": 1, "unknown": 2}
@@ -256,4 +263,9 @@ def render(res: R.RegionResult) -> str:
         lines.append("feasible: " + " ".join(f"--const {n}={v:.6g}"
                                              for n, v in sorted(res.feasible.items()))
                      + f" ({res.feasible_how})")
+        shown = [n for n in sorted(res.feasible) if n in (fixed or [])]
+        if shown:
+            lines.append(f"  --const sets only a 'param': {', '.join(shown)} "
+                         f"{'is' if len(shown) == 1 else 'are'} declared 'const', so write "
+                         "the value in the file, or declare it 'param double'")
     return "\n".join(lines)

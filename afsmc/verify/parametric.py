@@ -342,13 +342,21 @@ def ill_defined(model: ir.Model, box: Box, why: str) -> CompileError:
     edge = [n for n, (lo, hi) in box.items() if lo == 0.0 or hi == 1.0]
     hint = ("Storm's parameter lifting needs every transition to keep a positive "
             "probability in the whole box: use an open bound, e.g. "
-            + ", ".join(f"{n} in [{_open(lo, 'lo')}, {_open(hi, 'hi')}] "
-                        f"(--param {n}={_open(lo, 'lo')}:{_open(hi, 'hi')})"
-                        for n, (lo, hi) in box.items() if n in edge)
+            + ", ".join(_open_bound(model, n, lo, hi) for n, (lo, hi) in box.items()
+                        if n in edge)
             if edge else "narrow the box so that every probability stays positive")
     span = next((c.span for c in model.constants if c.name in edge), None)
     return _fail(codes.E440, f"the parameter box makes the model ill-defined: {why}", span,
                  hint=hint)
+
+
+def _open_bound(model: ir.Model, name: str, lo: float, hi: float) -> str:
+    """The box's side `name` with open ends: as the file's declaration when the side is
+    the file's interval, else as a --param flag."""
+    a, b = _open(lo, "lo"), _open(hi, "hi")
+    if any(c.name == name and c.prob_interval == (lo, hi) for c in model.constants):
+        return f"const prob {name} = [{a}, {b}];"
+    return f"{name} in [{a}, {b}] (--param {name}={a}:{b})"
 
 
 def _open(x: float, end: str) -> str:

@@ -106,6 +106,16 @@ def test_options_flow_to_verify_run() -> None:
         afsmc.load(PATROL).verify(engine="fast")
 
 
+def test_strategy_and_witness_k_are_verify_strategy_and_witness_k() -> None:
+    # witness=K, as `--witness K` is written on the command line, for the one property
+    res = afsmc.load(PATROL).verify(["finish"], strategy=True, witness=2)
+    cli = cli_json(PATROL, "-p", "finish", "--strategy", "--witness", "2")
+    assert without_times(res.to_json()) == without_times(cli)
+    props = cli["properties"]
+    assert isinstance(props, list) and len(props[0]["witnesses"]) == 2
+    assert props[0]["strategy"] is not None
+
+
 def test_a_failed_verify_raises_afsm_error() -> None:
     with pytest.raises(afsmc.AfsmError) as info:
         afsmc.load(PATROL).verify(["nope"])

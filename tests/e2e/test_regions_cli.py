@@ -43,10 +43,14 @@ def test_the_table_the_plot_and_the_feasible_flags(patrol: str, tmp_path: Path) 
     assert png.read_bytes().startswith(b"\x89PNG")
     assert "coverage" in r.out and "holds" in r.out
     assert "feasible: --const P_FAULT=" in r.out
+    # P_FAULT is a 'const prob', which --const cannot set: the output says so
+    assert "P_FAULT, P_SLIP are declared 'const'" in r.out
 
 
 @pytest.mark.parametrize(("param", "words"), [
-    ("CELLS=1:3", "'CELLS' is int constant"),
+    ("CELLS=1:3", "'CELLS' is an int constant"),
+    ("done=0:1", "'done' is a label, not a constant"),
+    ("P_FAULT=0.2:1.5", "a probability's range lies within [0, 1]"),
     ("cell=0:1", "'cell' is a variable, not a constant"),
     ("NOPE=0:1", "'NOPE' is not declared, not a constant"),
     ("P_FAULT=0.2:0.1", "the range is empty"),
