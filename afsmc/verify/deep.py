@@ -3,7 +3,7 @@ than the default state limit is refused before Storm builds anything (E420).
 
 Storm's symbolic builder (engines dd and hybrid, and "auto" above its sparse bound)
 explores breadth-first, one step per level of the state graph, and reports nothing until
-it is done. A counter over a range of n values is n levels deep, so a variable of 10^9
+it is done. A counter over a range of n values is n levels deep, so a counter of 10^9
 values (`--const CELLS=1000000000`) keeps it building for hours in a few hundred MB that
 the memory guard never sees grow. With --max-states the build is explicit first and
 stopped at the limit (afsmc.verify.stopping); without it, a range beyond what that
@@ -14,16 +14,22 @@ raise it.
 from __future__ import annotations
 
 from afsmc.diagnostics import CompileError, Diagnostic, Severity, codes
-from afsmc.model import ir
+from afsmc.lower.lowering import Lowered
+from afsmc.model import expr as E
 
 
-def refuse_deep(model: ir.Model, engine: str, max_states: int | None, limit: int) -> None:
-    """E420 for each variable of more than `limit` values (the default --max-states) when
-    a symbolic engine (`engine` after "auto" is settled for small models) would build
-    without a --max-states."""
+def refuse_deep(low: Lowered, engine: str, max_states: int | None, limit: int) -> None:
+    """E420 for each variable of more than `limit` values (the default --max-states) that
+    an update sets to a value computed from the state (a counter: `x += 1`), when a
+    symbolic engine (`engine` once "auto" is settled for small models) would build `low`
+    without a --max-states. A variable no update changes, or sets only to numbers, takes
+    few values however wide its range."""
     if engine == "sparse" or max_states is not None:
         return
-    deep = [v for v in model.variables if v.size > limit]
+    wide = {v.name: v for v in low.model.variables if v.size > limit}
+    computed = {var for c in low.commands for b in c.branches for var, value in b.updates
+                if var in wide and not isinstance(value, E.Lit)}
+    deep = [v for name, v in wide.items() if name in computed]
     if not deep:
         return
     raise CompileError([Diagnostic(

@@ -156,7 +156,7 @@ class CheckRun:
         else:
             self.lows.append(("nondet", lowered(self.model, "nondet", reductions), "DTMC"))
         for _, low, _ in self.lows:  # a counter too deep for an unwatched symbolic build
-            refuse_deep(low.model, self.engine, options.max_states, default_max_states())
+            refuse_deep(low, self.engine, options.max_states, default_max_states())
         self.stats: list[ModelStats | None] = []  # None: every process of that model failed
         self.values: list[dict[str, float]] = []
         self.timings: list[dict[str, float]] = []  # each query's check time, as `values`

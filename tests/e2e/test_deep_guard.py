@@ -11,7 +11,7 @@ import time
 
 import pytest
 
-from afsmc.compiler import load
+from afsmc.compiler import load, lowered
 from afsmc.diagnostics import CompileError
 from afsmc.verify.deep import refuse_deep
 from afsmc.verify.guard import default_max_states
@@ -44,13 +44,31 @@ def test_a_billion_cells_are_refused_before_building(engine: str | None) -> None
 
 
 def test_the_guard_leaves_small_ranges_sparse_and_explicit_limits_alone() -> None:
-    model = load(PATROL, {"CELLS": "1000000"}).model  # 1,000,001 values
-    refuse_deep(model, "hybrid", None, 2_000_000)  # within the limit
-    refuse_deep(model, "sparse", None, 1000)  # the sparse engine has its own guard
-    refuse_deep(model, "dd", 5000, 1000)  # a --max-states: the build is watched
+    low = lowered(load(PATROL, {"CELLS": "1000000"}).model)  # 1,000,001 values
+    refuse_deep(low, "hybrid", None, 2_000_000)  # within the limit
+    refuse_deep(low, "sparse", None, 1000)  # the sparse engine has its own guard
+    refuse_deep(low, "dd", 5000, 1000)  # a --max-states: the build is watched
     with pytest.raises(CompileError) as caught:
-        refuse_deep(model, "dd", None, 1000)
+        refuse_deep(low, "dd", None, 1000)
     [d] = caught.value.diagnostics
     assert d.code == "E420" and d.span is not None and d.span.line == 14
     assert "variable 'cell' has 1,000,001 values, more than the default --max-states 1,000" \
         in d.message
+
+
+WIDE = """machine wide;
+var x : [0..10] init 0;
+var far : [0..1000000000] init 0;
+var flag : [0..1000000000] init 0;
+mode Run = 0 initial;
+mode End = 1 final;
+action Go in Run when x < 10 { 0.9: x := x + 1; 0.1: flag := 7; }
+action Stop in Run when x >= 10 { goto End; }
+property reach = P=? [ F mode == End && far == 0 && flag < 8 ];
+"""
+
+
+def test_a_wide_variable_that_no_update_computes_is_not_deep() -> None:
+    # `far` never changes and `flag` is only set to a number: a few values each, a shallow
+    # symbolic build, whatever their ranges
+    refuse_deep(lowered(load("wide.afsm", {}, text=WIDE).model), "hybrid", None, 1000)
