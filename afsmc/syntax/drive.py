@@ -107,6 +107,7 @@ def parse(parser: lark.Lark, text: str, start: str) -> Any:
     values: list[Any] = []
     pos, line, line_start, size = 0, 1, 0, len(text)
     last: Token | None = None
+    new_token: Any = Token._future_new  # Token(...) without its keyword-argument checks
     while True:
         # -- the next token, lexed in the context of the state on top
         token: Token | None = None
@@ -122,7 +123,7 @@ def parse(parser: lark.Lark, text: str, start: str) -> Any:
             ignored = kind in lexer.ignore
             callback = lexer.callbacks.get(kind)
             if not ignored or callback is not None:
-                token = Token(kind, value, pos, line, pos - line_start + 1)
+                token = new_token(kind, value, pos, line, pos - line_start + 1)
             if kind in lexer.newlines:
                 newlines = value.count("\n")
                 if newlines:
