@@ -32,6 +32,7 @@ import sys
 import time
 from collections import Counter
 from pathlib import Path
+from typing import Any
 
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
@@ -53,6 +54,33 @@ def draw(kind: str, rng: random.Random, seeds: list[bytes]) -> bytes:
     return generate.mutate(rng, generate.splice(rng, rng.choice(seeds), rng.choice(seeds)))
 
 
+def merge(runs: list[dict[str, Any]]) -> dict[str, Any]:
+    """The summaries of several runs as one: counts added, the slowest input kept, and
+    each run's seed, size and times listed under "runs"."""
+    out: dict[str, Any] = {"runs": [{k: r[k] for k in ("seed", "inputs", "cpu_s", "wall_s",
+                                                         "inputs_per_s", "commit") if k in r}
+                                    for r in runs]}
+    for r in runs:
+        for k, v in r.items():
+            if k in ("seed", "wall_s", "inputs_per_s", "slowest_input", "commit"):
+                continue
+            if isinstance(v, dict):
+                into = out.setdefault(k, {})
+                for kk, vv in v.items():
+                    into[kk] = into.get(kk, 0) + vv if isinstance(vv, int) else vv
+            elif isinstance(v, (int, float)) and not isinstance(v, bool) \
+                    and k != "slowest_input_cpu_s" and k != "cpu_limit_s":
+                out[k] = round(out.get(k, 0) + v, 1)
+            elif k == "slowest_input_cpu_s":
+                if v >= out.get(k, 0):
+                    out[k], out["slowest_input"] = v, f"seed {r['seed']}, {r['slowest_input']}"
+            else:
+                out[k] = v
+    for k in ("by_generator", "exit_codes"):
+        out[k] = dict(sorted(out.get(k, {}).items()))
+    return out
+
+
 def main() -> int:
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     p.add_argument("--inputs", type=int, default=100_000)
@@ -62,7 +90,14 @@ def main() -> int:
     p.add_argument("--summary", default=str(ROOT / "benchmarks" / "fuzz-summary.json"),
                    help="the JSON summary (default: %(default)s, the recorded run)")
     p.add_argument("--keep", default=str(ROOT / "benchmarks" / "fuzz-failures"))
+    p.add_argument("--merge", nargs="+", metavar="JSON",
+                   help="only combine the summaries of runs with different seeds (run side "
+                        "by side) into --summary")
     args = p.parse_args()
+    if args.merge:
+        runs = [json.loads(Path(f).read_text(encoding="utf-8")) for f in args.merge]
+        Path(args.summary).write_text(json.dumps(merge(runs), indent=2) + "\n", encoding="utf-8")
+        return 0
 
     rng = random.Random(args.seed)
     seeds = generate.seeds()

@@ -13,8 +13,9 @@ zero there is E306 (with the state), or E245 when it is made of constants only.
 from __future__ import annotations
 
 import itertools
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass
+from functools import cache, cached_property, partial
 
 from afsmc.diagnostics import Reporter, codes
 from afsmc.model import expr as E
@@ -107,53 +108,84 @@ def defined(e: E.Expr, model: ir.Model) -> E.Expr:
     return E.conj(*parts)
 
 
+Conditions = Callable[[], dict[int, E.Expr]]
+
+
 @dataclass(frozen=True)
 class Site:
     what: str  # "the guard of action Go"
     expr: E.Expr
-    when: dict[int, E.Expr]  # mode -> where in it the expression is evaluated
+    # mode -> where in it the expression is evaluated, computed when first asked: the
+    # checks ask only at a site where something may go wrong, and building them for every
+    # site was a tenth of a large file's check
+    conditions: Conditions
     target: str | None = None  # the variable an update assigns
+
+    @cached_property
+    def when(self) -> dict[int, E.Expr]:
+        return self.conditions()
+
+
+def _guard_when(model: ir.Model, a: ir.Action) -> dict[int, E.Expr]:
+    # An ordinary action's guard counts where no preemptive hazard of the mode holds.
+    return {m: E.conj(*(E.neg(h.guard) for h in model.actions_in(m)
+                        if a.kind == "action" and h.kind == "preemptive")) for m in a.modes}
+
+
+def _weight_when(model: ir.Model, a: ir.Action) -> dict[int, E.Expr]:
+    return {m: enabled(model, a, m) for m in a.modes}
+
+
+def _fires(model: ir.Model, a: ir.Action) -> dict[int, E.Expr]:
+    return {m: fire_condition(model, a, m, ties=True) for m in a.modes}
+
+
+def _hazard_when(model: ir.Model, h: ir.Hazard) -> dict[int, E.Expr]:
+    return {m: E.disj(*(enabled(model, a, m) for a in model.actions_in(m))) for m in h.modes}
+
+
+def _reward_when(model: ir.Model, item: ir.RewardItem, all_modes: dict[int, E.Expr]
+                 ) -> dict[int, E.Expr]:
+    if item.action is None:
+        return all_modes
+    acts = [a for a in model.actions if a.name == item.action]
+    return _fires(model, acts[0]) if acts else all_modes
+
+
+def _reward_value_when(model: ir.Model, item: ir.RewardItem, all_modes: dict[int, E.Expr]
+                       ) -> dict[int, E.Expr]:
+    return {m: E.conj(c, item.guard) for m, c in _reward_when(model, item, all_modes).items()}
 
 
 def sites(model: ir.Model) -> Iterator[Site]:
     """Every expression the machine evaluates, with the modes (and conditions) where."""
     all_modes: dict[int, E.Expr] = {m.number: E.TRUE for m in model.modes}
+    everywhere: Conditions = lambda: all_modes  # noqa: E731
     for a in model.actions:
         kind = "hazard" if a.kind == "preemptive" else "action"
-        # An ordinary action's guard counts where no preemptive hazard of the mode holds.
-        yield Site(f"the guard of {kind} {a.name}", a.guard,
-                   {m: E.conj(*(E.neg(h.guard) for h in model.actions_in(m)
-                                if a.kind == "action" and h.kind == "preemptive"))
-                    for m in a.modes})
-        yield Site(f"the weight of {kind} {a.name}", a.weight,
-                   {m: enabled(model, a, m) for m in a.modes})
-        fires = {m: fire_condition(model, a, m, ties=True) for m in a.modes}
-        yield from _outcome_sites(f"{kind} {a.name}", a.outcomes, fires)
+        yield Site(f"the guard of {kind} {a.name}", a.guard, partial(_guard_when, model, a))
+        yield Site(f"the weight of {kind} {a.name}", a.weight, partial(_weight_when, model, a))
+        yield from _outcome_sites(f"{kind} {a.name}", a.outcomes, cache(partial(_fires, model, a)))
     for h in model.hazards:
-        when = {m: E.disj(*(enabled(model, a, m) for a in model.actions_in(m))) for m in h.modes}
+        when = cache(partial(_hazard_when, model, h))
         yield Site(f"the probability of hazard {h.name}", h.prob, when)
         yield from _outcome_sites(f"hazard {h.name}", h.outcomes, when)
     for lb in model.labels:
-        yield Site(f"label {lb.name}", lb.value, all_modes)
+        yield Site(f"label {lb.name}", lb.value, everywhere)
     for r in model.rewards:
         for item in r.items:
-            if item.action is None:
-                when = all_modes
-            else:
-                acts = [a for a in model.actions if a.name == item.action]
-                when = ({m: fire_condition(model, acts[0], m, ties=True) for m in acts[0].modes}
-                        if acts else all_modes)
-            yield Site(f"reward structure {r.name}", item.guard, when)
+            yield Site(f"reward structure {r.name}", item.guard,
+                       partial(_reward_when, model, item, all_modes))
             yield Site(f"reward structure {r.name}", item.value,
-                       {m: E.conj(c, item.guard) for m, c in when.items()})
+                       partial(_reward_value_when, model, item, all_modes))
     for p in model.properties:
         for e in (p.path.target, getattr(p.path, "left", None)):
             if e is not None:
-                yield Site(f"property {p.name}", e, all_modes)
+                yield Site(f"property {p.name}", e, everywhere)
 
 
 def _outcome_sites(owner: str, outcomes: tuple[ir.Outcome, ...],
-                   when: dict[int, E.Expr]) -> Iterator[Site]:
+                   when: Conditions) -> Iterator[Site]:
     for o in outcomes:
         yield Site(f"an outcome probability of {owner}", o.prob, when)
         for u in o.updates:

@@ -15,7 +15,7 @@ from typing import Any, cast
 from lark import Token, Transformer, Tree, v_args
 from lark.visitors import _VArgsWrapper
 
-from afsmc.diagnostics import Reporter, Source, Span, codes
+from afsmc.diagnostics import BOM, Reporter, Source, Span, codes
 from afsmc.syntax import ast
 from afsmc.syntax.limits import MAX_TOKEN_CHARS, clip
 
@@ -24,12 +24,23 @@ _SIZED = {"NAME": "name", "NUMBER": "number", "ESCAPED_STRING": "label name"}
 
 
 def span_of(source: Source, meta_or_tok: Any) -> Span:
-    """The span of a token, or of a rule's meta (empty rules: the start of the file)."""
-    if isinstance(meta_or_tok, Token):
-        return Span.at_offset(source, meta_or_tok.start_pos or 0, meta_or_tok.end_pos)
-    if getattr(meta_or_tok, "empty", True):
+    """The span of a token, or of a rule's meta (empty rules: the start of the file).
+    Lines and columns are the lexer's (it counts lines at '\n' only, as Source does), so
+    no search for them: only a byte-order mark, which Source leaves out of line 1's
+    columns, moves them."""
+    if not isinstance(meta_or_tok, Token) and getattr(meta_or_tok, "empty", True):
         return Span.at_offset(source, 0, 0)
-    return Span.at_offset(source, meta_or_tok.start_pos, meta_or_tok.end_pos)
+    m = meta_or_tok
+    start, end, line, col, end_line, end_col = (m.start_pos, m.end_pos, m.line, m.column,
+                                                m.end_line, m.end_column)
+    if start is None or end is None or line is None or end_line is None:
+        return Span.at_offset(source, start or 0, end)
+    if source.text.startswith(BOM):
+        if line == 1 and start > 0:
+            col -= 1
+        if end_line == 1 and end > 0:
+            end_col -= 1
+    return Span(source, line, col, end_line, end_col, start, end)
 
 
 @cache

@@ -11,12 +11,13 @@ import re
 from collections.abc import Callable
 from functools import cache
 from importlib import resources
-from typing import Any
+from typing import Any, cast
 
 import lark
 from lark import Token, Tree
 from lark.parse_tree_builder import PropagatePositions
 
+from afsmc.syntax import drive
 from afsmc.syntax.limits import MAX_DEPTH
 
 # The grammar's start rules: a whole file, and one property (`verify --formula`).
@@ -159,6 +160,10 @@ def parse_tree(text: str, start: str) -> lark.Tree[Token]:
     or GluedKeyword for a keyword run into a name."""
     reset = _LEXING.set(text)
     try:
+        try:
+            return cast("lark.Tree[Token]", drive.parse(lalr(), text, start))
+        except Exception:  # anything unusual: lark's own parse decides
+            pass
         return lalr().parse(text, start=start)
     finally:
         _LEXING.reset(reset)

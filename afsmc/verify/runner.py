@@ -23,6 +23,7 @@ from afsmc.lower.lowering import Lowered
 from afsmc.lower.reduce import Reductions
 from afsmc.model import ir
 from afsmc.model.semantics import bounded_globally
+from afsmc.verify.deep import refuse_deep
 from afsmc.verify.failures import (
     after_failure,
     failure_diagnostic,
@@ -154,6 +155,8 @@ class CheckRun:
             low = lowered(self.model, "uniform", reductions)
             if low.kind == "dtmc":
                 self.lows.append(("uniform", low, "uniform DTMC"))
+        for _, low, _ in self.lows:  # a counter too deep for an unwatched symbolic build
+            refuse_deep(low, self.engine, options.max_states, default_max_states())
         self.stats: list[ModelStats | None] = []  # None: every process of that model failed
         self.values: list[dict[str, float]] = []
         self.timings: list[dict[str, float]] = []  # each query's check time, as `values`
