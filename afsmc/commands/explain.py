@@ -48,15 +48,28 @@ def listing() -> str:
     return "\n".join(out)
 
 
+def _one_edit(code: str, text: str) -> bool:
+    """`text` is `code` with one character changed, added or left out."""
+    if len(code) == len(text):
+        return sum(a != b for a, b in zip(code, text, strict=True)) == 1
+    short, long_ = sorted((code, text), key=len)
+    return len(long_) == len(short) + 1 and any(
+        long_[:i] + long_[i + 1:] == short for i in range(len(long_)))
+
+
 def _suggestion(text: str) -> str:
-    """` (did you mean E301?)` for a text close to codes: one character off, the three
-    digits of a code (301: E301 or W301), or else the closest by difflib."""
+    """` (did you mean E301?)` for a text close to codes: a look-alike letter for a digit
+    (E3O1), one character changed, added or left out (every such code), the three digits
+    of a code (301: E301 or W301), or else the closest by difflib."""
     text = text.strip().upper()
+    # Letters that look like digits, in a code's digit positions: E3O1 is E301.
+    text = text[:1] + text[1:].translate(str.maketrans("OIL", "011"))
     if text.isdigit():
         close = [c for c in REGISTRY if c[1:] == text]
+    elif text in REGISTRY:
+        close = [text]
     else:
-        close = [c for c in REGISTRY
-                 if len(c) == len(text) and sum(a != b for a, b in zip(c, text, strict=True)) == 1]
+        close = [c for c in REGISTRY if _one_edit(c, text)]
         close = close or difflib.get_close_matches(text, list(REGISTRY), n=1, cutoff=0.6)
     if not close:
         return ""

@@ -35,7 +35,7 @@ def test_explain_alone_lists_every_code_with_its_severity_and_title() -> None:
 @pytest.mark.parametrize(("given", "suggested"), [
     ("E3O1", " (did you mean E301?)"),
     ("301", " (did you mean E301 or W301?)"),
-    ("E3011", " (did you mean E301?)"),
+    ("E3011", " (did you mean E301 or E311?)"),
     ("frobnicate", ""),
 ])
 def test_an_unknown_code_exits_2_with_a_suggestion(given: str, suggested: str) -> None:
