@@ -16,6 +16,7 @@ from collections.abc import Callable
 from typing import Any, Literal, cast
 
 from afsmc.diagnostics import Diagnostic, Reporter, Span, codes
+from afsmc.resolve.declarations import numbered
 from afsmc.syntax import ast
 
 _AGENT_ITEMS = (ast.VarDecl, ast.ModeDecl, ast.ActionDecl, ast.HazardDecl, ast.FormulaDecl)
@@ -37,19 +38,10 @@ def mode_numbers(decls: tuple[ast.Decl, ...]) -> dict[str, int]:
     for d in modes:
         if d.number is not None and d.number not in used:
             used[d.number] = d
-    out: dict[str, int] = {}
-    nxt = 0
+    first: dict[str, ast.ModeDecl] = {}
     for d in modes:
-        if d.name.text in out:
-            continue
-        number = d.number
-        if number is None or used.get(number) is not d:
-            while nxt in used:
-                nxt += 1
-            number = nxt
-            used[number] = d
-        out[d.name.text] = number
-    return out
+        first.setdefault(d.name.text, d)
+    return {d.name.text: number for d, number in numbered(list(first.values()), used)}
 
 
 def rewrite(node: Any, fn: Callable[[Any], Any]) -> Any:

@@ -25,20 +25,30 @@ from afsmc.syntax.limits import MAX_DEPTH, clip
 MAX_INLINED_DEPTH = 2 * MAX_DEPTH
 
 
+
+def numbered(decls: list[ast.ModeDecl],
+             used: dict[int, ast.ModeDecl]) -> list[tuple[ast.ModeDecl, int]]:
+    """Each mode with its number: the number written, where `used` gives it to this mode;
+    else the next number no mode uses, in order (`used` takes those in)."""
+    out: list[tuple[ast.ModeDecl, int]] = []
+    nxt = 0
+    for d in decls:
+        number = d.number
+        if number is None or used.get(number) is not d:
+            while nxt in used:
+                nxt += 1
+            number = nxt
+            used[number] = d
+        out.append((d, number))
+    return out
+
 class DeclarationsMixin(ResolverBase):
     # ---- modes -----------------------------------------------------------------------
     def _modes(self, decls: list[ast.ModeDecl]) -> None:
         used = self._mode_numbers(decls)
-        nxt = 0
-        for d in decls:
-            if self.value_names.get(d.name.text, ("", None))[1] != d.name.span:
-                continue
-            number = d.number
-            if number is None or used.get(number) is not d:
-                while nxt in used:
-                    nxt += 1
-                number = nxt
-                used[number] = d
+        declared = [d for d in decls
+                    if self.value_names.get(d.name.text, ("", None))[1] == d.name.span]
+        for d, number in numbered(declared, used):
             self.modes[d.name.text] = ir.Mode(d.name.text, number, d.initial, d.final, d.span)
         initial = [d for d in decls if d.initial]
         if not decls:
