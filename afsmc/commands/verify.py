@@ -116,11 +116,22 @@ def table(rows: list[list[str]], right: set[int]) -> list[str]:
     return out
 
 
+def _choices(res: VerifyResult) -> str:
+    """What the MDP's choices are: the interval constants' ends, and for agents that
+    interleave (or tie with no rule), which agent moves next."""
+    if res.composition == "interleaving":
+        return "which agent moves next, and interval constants as floor/ceil choices"
+    if res.composition == "timed, ties nondet":
+        return "which of the agents due together moves first, and interval constants as " \
+               "floor/ceil choices"
+    return "interval constants as floor/ceil choices"
+
+
 def render(res: VerifyResult) -> str:
     lines = []
     u = res.uniform_model
     if res.kind == "mdp":
-        lines.append(f"{res.path}: an MDP (interval constants as floor/ceil choices): min and max "
+        lines.append(f"{res.path}: an MDP ({_choices(res)}): min and max "
                      "bound every property" + ("; uniform picks floor or ceil at random"
                                               if u is not None else ""))
         head = ["property", "formula", "min", "max"] + (["uniform"] if u is not None else [])

@@ -164,6 +164,7 @@ class VerifyResult:
     load_time: float
     total_time: float
     warnings: list[Diagnostic] = field(default_factory=list)
+    composition: str | None = None  # agents: "interleaving", "timed, ties order|nondet"
 
     @property
     def kind(self) -> str:

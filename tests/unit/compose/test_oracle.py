@@ -52,3 +52,14 @@ def test_compiled_mission_agrees_with_the_hand_written_prism(via: str) -> None:
     for r in result.properties:
         assert r.min == pytest.approx(expected[f"{r.name}_min"], rel=1e-6, abs=1e-9), r.name
         assert r.max == pytest.approx(expected[f"{r.name}_max"], rel=1e-6, abs=1e-9), r.name
+
+
+@pytest.mark.storm
+def test_the_heading_says_the_agents_order_is_a_choice() -> None:
+    from afsmc.commands.verify import render
+
+    res = run(os.path.join(HERE, "charge_pair.afsm"))
+    assert res.composition == "interleaving"
+    assert render(res).splitlines()[0].endswith(
+        ": an MDP (which agent moves next, and interval constants as floor/ceil choices): "
+        "min and max bound every property")
