@@ -68,14 +68,23 @@ def _resolve_composed(module: ast.Module, overrides: Mapping[str, str] | None,
     names = compose._Names(agents, rep)
     views: list[ir.Agent] = []
     used: set[str] = set()
+    # An agent's errors about no text of its own (no modes at all: E213 on the whole
+    # file), reported at the agent's name unless the mission's module reports errors.
+    unplaced: list[Diagnostic] = []
     for a in agents:
         view = compose.agent_module(module, a, names, mission)
         r = _Resolver(view, dict(overrides or {}), open_params)
         model = r.run()
+        kept = False
         for d in r.rep.sorted():
             mine = compose.in_agent(d, a)
             if mine is not None:
                 rep.extend([mine])
+                kept = kept or mine.is_error
+        if r.rep.has_errors and not kept:
+            unplaced += [dataclasses.replace(d, span=a.name.span, related=(),
+                                             message=f"agent {a.name.text}: {d.message}")
+                         for d in r.rep.sorted() if d.is_error]
         used |= r.used
         own = tuple(d.name.text for d in a.decls if isinstance(d, ast.VarDecl))
         own_flat = tuple(v.name for v in model.variables if v.display.split(".")[0] in own)
@@ -89,6 +98,8 @@ def _resolve_composed(module: ast.Module, overrides: Mapping[str, str] | None,
     model = r.run()
     rep.extend(r.rep.diagnostics)
     used |= r.used
+    if not rep.has_errors:
+        rep.extend(unplaced)
     if rep.has_errors:
         raise CompileError(rep.sorted())
     warnings = [d for d in rep.sorted() if not d.is_error]

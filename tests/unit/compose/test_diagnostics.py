@@ -93,3 +93,10 @@ def test_reading_another_agent_s_mode_is_allowed() -> None:
     checked = load("pair.afsm", {}, text=text)
     assert checked.model.composition is not None
     assert [a.name for a in checked.model.composition.agents] == ["a", "b"]
+
+
+def test_an_agent_without_modes_is_an_error_at_its_name() -> None:
+    text = "machine x;\nagent a { mode A = 0 initial final; }\nagent b { }\n"
+    d = _one(text, "E213")
+    assert d.message.startswith("agent b: ") and d.span is not None
+    assert text[d.span.start:d.span.end] == "b"
