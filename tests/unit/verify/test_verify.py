@@ -318,16 +318,18 @@ def test_max_states_stops_patrol() -> None:
 @pytest.mark.slow
 def test_default_max_states_binds_the_sparse_engine_only(monkeypatch: pytest.MonkeyPatch) -> None:
     """The default limit predicts sparse memory; the symbolic engines are held by the
-    memory guard (scenario 1's 77.6 M states are over the default of 50 M)."""
+    memory guard (scenario 1's 77.6 M states are over the default of 50 M). A limit above
+    every variable's range: a counter beyond it is refused before a symbolic build (E420,
+    tests/e2e/test_deep_guard.py)."""
     import afsmc.verify.api as api
     import afsmc.verify.runner as runner
     from afsmc.compiler import CompileError
     from afsmc.verify import run
 
-    monkeypatch.setattr(api, "default_max_states", lambda: 10)
-    monkeypatch.setattr(runner, "default_max_states", lambda: 10)
+    monkeypatch.setattr(api, "default_max_states", lambda: 30)
+    monkeypatch.setattr(runner, "default_max_states", lambda: 30)
     hybrid = run(PATROL, engine="hybrid", isolate=False)
-    assert hybrid.model.states > 10
+    assert hybrid.model.states > 30
     with pytest.raises(CompileError) as sparse:
         run(PATROL, engine="sparse", isolate=False)
     assert "E405" in str(sparse.value.diagnostics[0].code)
