@@ -24,6 +24,7 @@ from afsmc.backends.jani import (
 from afsmc.lower.compose import Network
 from afsmc.lower.lowering import Command, Lowered
 from afsmc.model import expr as E
+from afsmc.model import ir
 
 
 def _edge(cmd: Command, extra: E.Expr, label: str | None, rewarded: bool, low: Lowered,
@@ -85,7 +86,7 @@ def emit_network(low: Lowered) -> dict[str, Any]:
         actions.append(name)
         syncs.append({"synchronise": [name if j in takers else None for j in range(n)],
                       "result": name})
-    how = net.kind + (f", ties {net.ties}" if net.kind == "timed" else "")
+    how = ir.composition_text(net.kind, net.ties)
     return {
         **header(low, f"mission {model.name}, {how}", actions),
         "variables": _variables(low, names),

@@ -252,6 +252,16 @@ class Composition:
     def agent(self, name: str) -> Agent:
         return next(a for a in self.agents if a.name == name)
 
+    @property
+    def text(self) -> str:
+        return composition_text(self.kind, self.ties)
+
+
+def composition_text(kind: str, ties: str) -> str:
+    """How agents move together, as a `compose` line says it: "interleaving", "timed, ties
+    order" or "timed, ties nondet"."""
+    return kind + (f", ties {ties}" if kind == "timed" else "")
+
 
 @dataclass
 class Memo:

@@ -264,16 +264,7 @@ def run(path: str, *, consts: Mapping[str, str | bool | int | float] | None = No
     return VerifyResult(path, model.name, consts_used, via, engine, bound, limit, checks.model,
                         checks.uniform_model, checks.properties, load_time,
                         time.perf_counter() - t0, loaded.warnings,
-                        _composition(model))
-
-
-def _composition(model: ir.Model) -> str | None:
-    """How a mission's agents move together, as its `compose` line says it; None for one
-    machine."""
-    c = model.composition
-    if c is None:
-        return None
-    return c.kind + (f", ties {c.ties}" if c.kind == "timed" else "")
+                        None if model.composition is None else model.composition.text)
 
 
 @dataclass
