@@ -142,22 +142,36 @@ def lower_composed(model: ir.Model, resolution: Resolution = "nondet") -> Lowere
         return E.conj(*parts)
 
     parts: list[Part] = []
-    commands: list[Command] = []
     for i, (agent, local, sync) in enumerate(raw):
         timing = first([i])
         sync_timing = tuple((n, first(takers[n])) for n in sync)
         parts.append(Part(agent, tuple(local), tuple((n, tuple(cs)) for n, cs in sync.items()),
                           timing, sync_timing))
-        commands += [Command(c.action, c.modes, E.conj(c.guard, timing), c.branches, c.span,
-                             c.choice, c.kind) for c in local]
-    for name, who in takers.items():
-        if len(who) < 2:
-            continue
-        for combo in itertools.product(*(raw[i][2][name] for i in who)):
-            commands.append(_product(tuple(combo), name, first(who)))
     stay = Command("_stay", (0,), E.neg(E.disj(*movable)),
                    (Branch(E.Lit(1, Type.INT), (), model.modes[0].span),), model.modes[0].span,
                    (), "deadlock")
-    commands.append(stay)
     network = Network(comp.kind, comp.ties, tuple(parts), stay)
-    return Lowered(model, tuple(commands), resolution, weights, bounds, network=network)
+    return Lowered(model, assemble(network), resolution, weights, bounds, network=network)
+
+
+def assemble(net: Network) -> tuple[Command, ...]:
+    """The mission's commands from its agents' (the product PRISM and JANI form from the
+    modules): each agent's own commands under its timing, a synchronised action's
+    combinations of its partners' commands, and the self-loop where no agent can move.
+    The reductions (afsmc.lower.reduce_compose) rewrite the agents' commands and call it
+    again."""
+    commands: list[Command] = []
+    takers: dict[str, list[int]] = {}
+    for i, part in enumerate(net.parts):
+        commands += [Command(c.action, c.modes, E.conj(c.guard, part.timing), c.branches,
+                             c.span, c.choice, c.kind) for c in part.local]
+        for name, _ in part.sync:
+            takers.setdefault(name, []).append(i)
+    for name, who in takers.items():
+        if len(who) < 2:
+            continue
+        timing = dict(net.parts[who[0]].sync_timing)[name]
+        for combo in itertools.product(*(dict(net.parts[i].sync)[name] for i in who)):
+            commands.append(_product(tuple(combo), name, timing))
+    commands.append(net.stay)
+    return tuple(commands)
