@@ -20,7 +20,7 @@ from afsmc.lower.reduce import Reductions
 from afsmc.model import ir
 from afsmc.verify.results import Checks, PropertyResult
 from afsmc.verify.storm import Via
-from afsmc.verify.strategy_compose import displays, mover, range_text
+from afsmc.verify.strategy_compose import action_text, displays, mover, range_text
 from afsmc.verify.strategy_storm import Extract, Extracted, Group, RawPath, WitnessRequest
 from afsmc.verify.witness import describe
 
@@ -54,9 +54,43 @@ class StrategyEntry:
             + (f" when {self.when}" if self.when else "")
 
 
+@dataclass(frozen=True)
+class TurnEntry:
+    """A composed mission whose agents' turns are a choice: the scheduler moves `action`
+    ("uav1: Look", or a synchronised "Launch (uav1, uav2)") in `states` of the states it
+    reaches where the choice matters, with its agents in `mode`."""
+
+    action: str
+    mode: str
+    states: int
+
+    def to_json(self) -> dict[str, object]:
+        return {"action": self.action, "mode": self.mode, "states": self.states}
+
+
+def turns_open(low: Lowered) -> bool:
+    """Whether the scheduler also chooses which agent moves (interleaving, ties nondet)."""
+    net = low.network
+    return net is not None and low.kind == "mdp" and (
+        net.kind == "interleaving" or net.ties == "nondet")
+
+
 def decisive(low: Lowered) -> tuple[int, ...]:
-    """The commands where the scheduler chooses: a floor/ceil variant of an action."""
-    return tuple(i for i, c in enumerate(low.commands) if c.choice)
+    """The commands where the scheduler chooses: a floor/ceil variant of an action; in a
+    composed mission whose turns are a choice, every agent's command."""
+    every = turns_open(low)
+    return tuple(i for i, c in enumerate(low.commands) if c.choice or (every and not c.silent))
+
+
+def turns(groups: Sequence[Group], variables: Sequence[str], low: Lowered) -> list[TurnEntry]:
+    """Which agent the scheduler moves, where the choice matters, per action and modes."""
+    count: dict[tuple[str, str], int] = {}
+    for g in groups:
+        if g.matters:
+            _, mode = _where(low, g, variables)
+            key = (action_text(low, low.commands[g.command]), str(mode))
+            count[key] = count.get(key, 0) + g.states
+    return [TurnEntry(a, m, n) for (a, m), n in sorted(count.items())]
 
 
 @dataclass
@@ -192,6 +226,9 @@ def attach(results: Sequence[PropertyResult], props: Sequence[ir.Property], low:
             if query in groups and opt in ("min", "max"):
                 r.strategy = r.strategy or {}
                 r.strategy[opt] = summarise(groups[query], variables, low)
+                if turns_open(low):
+                    r.turns = r.turns or {}
+                    r.turns[opt] = turns(groups[query], variables, low)
             if any(query == x.witness_query for x in extracted if x.witness_query):
                 r.witnesses = describe(paths, variables, low)
                 r.witness_note = note

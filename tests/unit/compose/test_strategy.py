@@ -89,3 +89,25 @@ def test_witness_paths_name_the_agent_that_moved(interleaving: bool) -> None:
             assert all(f"{a}: " in s.mode for a in AGENTS)
         assert w.steps[-1].hazard == "Crash"
         assert math.prod(s.probability for s in w.steps) == pytest.approx(w.probability)
+
+
+def test_an_interleaving_s_strategies_say_which_agent_moves() -> None:
+    """Interleaved, the scheduler also chooses who moves: its turns name the agent, its
+    action and mode, where the choice matters; a timed mission with `ties order` has no
+    such choice, and no turns."""
+    pytest.importorskip("stormpy")
+    res = run(TWO_UAV, text=_interleaving(), consts=SMALL, properties=["success"],
+              strategy=True, uniform=False)
+    p = res.property("success")
+    assert p.turns is not None and set(p.turns) == {"min", "max"}
+    entries = [e for opt in ("min", "max") for e in p.turns[opt]]
+    assert entries and all(e.states > 0 for e in entries)
+    for e in entries:
+        agent, _, action = e.action.partition(": ")
+        assert agent in AGENTS and action in ("Look", "Stop", "Grab", "Deliver"), e
+        assert e.mode.startswith(agent + ": ")
+    assert {e.action.split(":")[0] for e in entries} == set(AGENTS)
+    js = p.to_json()["turns"]
+    assert isinstance(js, dict) and set(js["min"][0]) == {"action", "mode", "states"}
+    timed = run(TWO_UAV, consts=SMALL, properties=["success"], strategy=True, uniform=False)
+    assert timed.property("success").turns is None
