@@ -125,13 +125,18 @@ def emit(low: Lowered, variant_labels: bool = False) -> PrismOutput:
     """The PRISM model. `variant_labels`: each command that resolves an interval constant
     gets its own action label (`variant_label`), and the action rewards of its action are
     repeated for each such label, so that the values stay the same."""
-    if low.network is not None:
+    composed = low.network is not None
+    if composed and not variant_labels:
         from afsmc.backends.prism_network import emit_network
 
         return emit_network(low)
+    # A composed mission with its commands labelled apart is one module of the mission's
+    # commands (the product its modules form): Storm's choice labels then name the command
+    # and so the agent that moved (afsmc.verify.strategy).
     model = low.model
-    labels = {i: variant_label(low, i) if variant_labels and c.choice else
-              "" if c.silent else c.action for i, c in enumerate(low.commands)}
+    labels = {i: "" if c.silent else variant_label(low, i)
+              if variant_labels and (c.choice or composed) else
+              c.action for i, c in enumerate(low.commands)}
     wnames = weight_formula_names(low)
     p = PrismPrinter(wnames, low)
     out: list[str] = []

@@ -80,6 +80,9 @@ def emit_network(low: Lowered) -> PrismOutput:
                "uniform": "a uniform random floor/ceil choice",
                "lo": "their floor", "hi": "their ceiling"}[low.resolution]
         out.append(f"// Interval constants are resolved by {how}.")
+    if low.reductions:
+        out.append(f"// Exact reductions: {', '.join(low.reductions)} "
+                   "(afsmc compile --no-reduce: none).")
     out += [low.kind, ""]
     out += _constants(low)
     if model.formulas:

@@ -1,13 +1,15 @@
 """The checks of a composed mission: every single-agent rule on each agent (the weight
 proof among them, with its witness, per agent), and the rules of composition itself:
-who may write a shared variable (E255), a synchronised action's partners (E312) and the
-variables two agents would write in the same step (E311)."""
+who may write a shared variable (E255), a synchronised action's partners (E312), the
+variables two agents would write in the same step (E311) and, under `ties weight`, two
+agents' weights that tie at the same time (E314, afsmc.check.agent_ties)."""
 
 from __future__ import annotations
 
 import dataclasses
 from collections.abc import Callable
 
+from afsmc.check.agent_ties import check_weight_ties
 from afsmc.diagnostics import Diagnostic, Related, Reporter, codes
 from afsmc.model import ir
 
@@ -33,6 +35,8 @@ def check_composition(model: ir.Model, used_names: frozenset[str], run: Run) -> 
                                             message=f"agent {agent.name}: {d.message}")])
     check_writers(comp, rep)
     check_syncs(comp, rep)
+    if not any(d.is_error for d in rep.sorted()):
+        check_weight_ties(model, comp, rep)
     return rep.sorted()
 
 

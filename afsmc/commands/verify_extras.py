@@ -44,6 +44,8 @@ def render(res: VerifyResult) -> str:
     for p in res.properties:
         if p.strategy is not None:
             lines += ["", *strategy_lines(p)]
+        if p.turns is not None:
+            lines += ["", *turn_lines(p)]
         elif asked:
             lines += ["", f"strategies of {p.name} ({p.formula}): none, as it is step-bounded "
                       "(its strategies count the steps; Storm gives no scheduler for them)"]
@@ -69,6 +71,22 @@ def strategy_lines(p: PropertyResult) -> list[str]:
         return out
     out += ["  " + line for line in table(rows, {5, 6})]
     return out
+
+
+def turn_lines(p: PropertyResult) -> list[str]:
+    """A composed mission's turns: which agent each strategy moves where it matters."""
+    from afsmc.commands.verify import table
+
+    assert p.turns is not None
+    out = [f"turns of {p.name} ({p.formula}): the agent each strategy moves, in the states "
+           "it reaches where the choice matters"]
+    rows = [["strategy", "moves", "mode", "states"]]
+    for opt in ("min", "max"):
+        rows += [[opt, e.action, e.mode, f"{e.states:,}"] for e in p.turns.get(opt, [])]
+    if len(rows) == 1:
+        return [*out, "  (no choice: in every state the strategies reach, who moves first "
+                "makes no difference)"]
+    return out + ["  " + line for line in table(rows, {3})]
 
 
 def witness_lines(p: PropertyResult) -> list[str]:

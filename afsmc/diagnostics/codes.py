@@ -161,6 +161,7 @@ E310 = Code("E310", Severity.ERROR, "an expression nests deeper than Storm evalu
 E311 = Code("E311", Severity.ERROR, "agents write the same variable in one step")
 E312 = Code("E312", Severity.ERROR, "a synchronised action with no partner")
 E313 = Code("E313", Severity.ERROR, "weights of an agent's enabled actions tie")
+E314 = Code("E314", Severity.ERROR, "two agents' weights tie at the same time (ties weight)")
 
 
 # W3xx: warnings of the checks

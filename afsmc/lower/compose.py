@@ -124,6 +124,8 @@ def lower_composed(model: ir.Model, resolution: Resolution = "nondet") -> Lowere
     clocks = [E.VarRef(a.mission_name(a.clock), Type.INT) if a.clock else None
               for a, _, _ in raw]
 
+    current = [current_weight(a, weights) for a, _, _ in raw]
+
     def first(group: list[int]) -> E.Expr:
         """The group's least clock beats every other agent that can move."""
         if comp is None or comp.kind != "timed":
@@ -136,28 +138,65 @@ def lower_composed(model: ir.Model, resolution: Resolution = "nondet") -> Lowere
             for i in group:
                 ci, cj = clocks[i], clocks[j]
                 assert ci is not None and cj is not None
+                if comp.ties == "weight":
+                    beats.append(_beats_by_weight(ci, cj, current[i], current[j], j < i))
+                    continue
                 op = "<" if comp.ties == "order" and j < i else "<="
                 beats.append(E.Binary(op, ci, cj, Type.BOOL))
             parts.append(E.disj(E.neg(movable[j]), *beats))
         return E.conj(*parts)
 
     parts: list[Part] = []
-    commands: list[Command] = []
     for i, (agent, local, sync) in enumerate(raw):
         timing = first([i])
         sync_timing = tuple((n, first(takers[n])) for n in sync)
         parts.append(Part(agent, tuple(local), tuple((n, tuple(cs)) for n, cs in sync.items()),
                           timing, sync_timing))
-        commands += [Command(c.action, c.modes, E.conj(c.guard, timing), c.branches, c.span,
-                             c.choice, c.kind) for c in local]
-    for name, who in takers.items():
-        if len(who) < 2:
-            continue
-        for combo in itertools.product(*(raw[i][2][name] for i in who)):
-            commands.append(_product(tuple(combo), name, first(who)))
     stay = Command("_stay", (0,), E.neg(E.disj(*movable)),
                    (Branch(E.Lit(1, Type.INT), (), model.modes[0].span),), model.modes[0].span,
                    (), "deadlock")
-    commands.append(stay)
     network = Network(comp.kind, comp.ties, tuple(parts), stay)
-    return Lowered(model, tuple(commands), resolution, weights, bounds, network=network)
+    return Lowered(model, assemble(network), resolution, weights, bounds, network=network)
+
+
+def assemble(net: Network) -> tuple[Command, ...]:
+    """The mission's commands from its agents' (the product PRISM and JANI form from the
+    modules): each agent's own commands under its timing, a synchronised action's
+    combinations of its partners' commands, and the self-loop where no agent can move.
+    The reductions (afsmc.lower.reduce_compose) rewrite the agents' commands and call it
+    again."""
+    commands: list[Command] = []
+    takers: dict[str, list[int]] = {}
+    for i, part in enumerate(net.parts):
+        commands += [Command(c.action, c.modes, E.conj(c.guard, part.timing), c.branches,
+                             c.span, c.choice, c.kind) for c in part.local]
+        for name, _ in part.sync:
+            takers.setdefault(name, []).append(i)
+    for name, who in takers.items():
+        if len(who) < 2:
+            continue
+        timing = dict(net.parts[who[0]].sync_timing)[name]
+        for combo in itertools.product(*(dict(net.parts[i].sync)[name] for i in who)):
+            commands.append(_product(tuple(combo), name, timing))
+    commands.append(net.stay)
+    return tuple(commands)
+
+
+def current_weight(agent: ir.Agent, weights: dict[str, E.Expr]) -> E.Expr:
+    """The weight of the action the agent takes in a state (in the mission's names): the
+    largest of its actions' effective weights (each 0 where its action is disabled)."""
+    out: E.Expr | None = None
+    for a in agent.model.actions:
+        w = weights[agent.prefix + a.name]
+        out = w if out is None else E.Call("max", (out, w), Type.DOUBLE)
+    return E.Lit(0, Type.INT) if out is None else out
+
+
+def _beats_by_weight(ci: E.Expr, cj: E.Expr, wi: E.Expr, wj: E.Expr, later: bool) -> E.Expr:
+    """`ties weight`: agent i moves before agent j if its clock is less, or equal and its
+    current action's weight larger. Equal weights at equal clocks are E314 where actions
+    move both; should a hazard's move tie, declaration order settles it (`later`: j was
+    declared first), so that some agent always moves."""
+    same = E.Binary("==", ci, cj, Type.BOOL)
+    settle = E.Binary(">" if later else ">=", wi, wj, Type.BOOL)
+    return E.disj(E.Binary("<", ci, cj, Type.BOOL), E.conj(same, settle))

@@ -47,7 +47,9 @@ class Reductions:
 
 def reduce(low: Lowered, options: Reductions = Reductions()) -> Lowered:
     if low.network is not None:
-        return low  # a composed mission is checked as it is: no reduction is applied
+        from afsmc.lower.reduce_compose import reduce_composed
+
+        return reduce_composed(low, options)
     if options.saturate:
         low, done = saturate(low)
         if done:
@@ -326,7 +328,8 @@ def _monotone(var: str, updates: list[E.Expr], model: ir.Model,
     return True
 
 
-def saturate(low: Lowered) -> tuple[Lowered, list[str]]:
+def saturation_points(low: Lowered) -> tuple[dict[str, tuple[bool, int]], list[str]]:
+    """The counters that saturate: variable -> (upwards?, point), and their description."""
     model = low.model
     reads: dict[str, list[E.Expr]] = {v.name: [] for v in model.variables}
     exprs: list[E.Expr] = [inline(lb.value, model) for lb in model.labels]
@@ -364,29 +367,44 @@ def saturate(low: Lowered) -> tuple[Lowered, list[str]]:
                 saturated[v.name] = (up, int(point))
                 done.append(f"{v.display} {'at' if up else 'from'} {int(point)}")
                 break
-    if not saturated:
-        return low, []
+    return saturated, done
 
-    def cap(var: str, value: E.Expr) -> E.Expr:
-        if var not in saturated:
-            return value
-        up, point = saturated[var]
-        k = static(value, model, gen)
-        if k is not None:
-            return E.lit(int(min(k, point) if up else max(k, point)))
-        if _clamped(var, value, model, gen, up):
-            assert isinstance(value, E.Call)
-            value = value.args[0]  # the clamp at the old end is subsumed
-        return E.Call("min" if up else "max", (value, E.lit(point)), E.Type.INT)
 
-    commands = tuple(replace(cmd, branches=tuple(
-        replace(b, updates=tuple((var, cap(var, val)) for var, val in b.updates))
-        for b in cmd.branches)) for cmd in low.commands)
+def capped(low: Lowered, saturated: dict[str, tuple[bool, int]], var: str,
+           value: E.Expr) -> E.Expr:
+    """An update of `var` to `value`, kept at its saturation point."""
+    if var not in saturated:
+        return value
+    model, gen = low.model, low.bounds
+    up, point = saturated[var]
+    k = static(value, model, gen)
+    if k is not None:
+        return E.lit(int(min(k, point) if up else max(k, point)))
+    if _clamped(var, value, model, gen, up):
+        assert isinstance(value, E.Call)
+        value = value.args[0]  # the clamp at the old end is subsumed
+    return E.Call("min" if up else "max", (value, E.lit(point)), E.Type.INT)
+
+
+def saturated_variables(model: ir.Model,
+                        saturated: dict[str, tuple[bool, int]]) -> tuple[ir.Variable, ...]:
     variables = []
     for v in model.variables:
         if v.name in saturated:
             up, point = saturated[v.name]
             v = replace(v, hi=point) if up else replace(v, lo=point)
         variables.append(v)
-    return replace(low, model=replace(model, variables=tuple(variables)),
+    return tuple(variables)
+
+
+def saturate(low: Lowered) -> tuple[Lowered, list[str]]:
+    saturated, done = saturation_points(low)
+    if not saturated:
+        return low, []
+    commands = tuple(replace(cmd, branches=tuple(
+        replace(b, updates=tuple((var, capped(low, saturated, var, val))
+                                 for var, val in b.updates))
+        for b in cmd.branches)) for cmd in low.commands)
+    variables = saturated_variables(low.model, saturated)
+    return replace(low, model=replace(low.model, variables=variables),
                    commands=commands), done

@@ -241,10 +241,11 @@ class Agent:
 class Composition:
     """How a mission's agents move together: `interleaving` (any agent with an enabled
     action may move next: nondeterminism) or `timed` (the agent whose clock is least
-    moves; `ties` "order": the one declared first, "nondet": left to min/max)."""
+    moves; `ties` "order": the one declared first, "nondet": left to min/max, "weight":
+    the one whose current action has the larger weight)."""
 
     kind: Literal["interleaving", "timed"]
-    ties: Literal["nondet", "order"]
+    ties: Literal["nondet", "order", "weight"]
     agents: tuple[Agent, ...]
     writers: tuple[tuple[str, tuple[str, ...]], ...]  # shared variable -> who may write it
     span: Span | None

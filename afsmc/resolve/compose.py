@@ -171,7 +171,7 @@ def split(module: ast.Module, rep: Reporter) -> tuple[
 
 def composition_kind(compose: ast.ComposeDecl | None, agents: list[ast.AgentDecl],
                      rep: Reporter) -> tuple[Literal["interleaving", "timed"],
-                                             Literal["nondet", "order"]]:
+                                             Literal["nondet", "order", "weight"]]:
     if compose is None:
         return "interleaving", "nondet"
     kind = compose.kind.text
@@ -180,10 +180,10 @@ def composition_kind(compose: ast.ComposeDecl | None, agents: list[ast.AgentDecl
                   hint="write 'compose interleaving;' or 'compose timed;'")
         kind = "interleaving"
     ties = compose.ties.text if compose.ties is not None else "nondet"
-    if ties not in ("nondet", "order"):
+    if ties not in ("nondet", "order", "weight"):
         rep.error(codes.E253, f"'{ties}' is no rule for ties", cast(ast.Ident, compose.ties).span,
-                  hint="write 'ties order' (the agent declared first moves) or 'ties nondet' "
-                  "(min/max over both)")
+                  hint="write 'ties order' (the agent declared first moves), 'ties weight' "
+                  "(the larger weight moves) or 'ties nondet' (min/max over both)")
         ties = "nondet"
     if kind == "interleaving" and compose.ties is not None:
         rep.error(codes.E253, "ties are a rule of the timed composition", compose.ties.span)

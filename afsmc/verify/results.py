@@ -20,7 +20,7 @@ from afsmc.verify.storm import JobResult, finite
 from afsmc.verify.verdicts import Verdict, requirement_json
 
 if TYPE_CHECKING:
-    from afsmc.verify.strategy import StrategyEntry
+    from afsmc.verify.strategy import StrategyEntry, TurnEntry
     from afsmc.verify.witness import Witness
 
 
@@ -81,6 +81,9 @@ class PropertyResult:
     exact: dict[str, str] = field(default_factory=dict)  # --exact: the values as `num/den`
     # --strategy: the min and max schedulers in mission terms (afsmc.verify.strategy)
     strategy: dict[str, list[StrategyEntry]] | None = None
+    # a composed mission whose agents' turns are a choice: which agent the min and max
+    # schedulers move, where that matters (afsmc.verify.strategy.turns)
+    turns: dict[str, list[TurnEntry]] | None = None
     # --witness: the most probable paths into the target ("min"/"max": following that
     # scheduler; "value": a DTMC's), and why fewer than asked, if so
     witnesses: list[Witness] | None = None
@@ -103,6 +106,8 @@ class PropertyResult:
         out.update(requirement_json(self.threshold, self.verdict, self.error, self.exact))
         if self.strategy is not None:
             out["strategy"] = {k: [e.to_json() for e in v] for k, v in self.strategy.items()}
+        if self.turns is not None:
+            out["turns"] = {k: [e.to_json() for e in v] for k, v in self.turns.items()}
         if self.witnesses is not None:
             out["witnesses"] = [w.to_json() for w in self.witnesses]
             out["witness_strategy"] = self.witness_of

@@ -20,6 +20,7 @@ from afsmc.lower.reduce import Reductions
 from afsmc.model import ir
 from afsmc.verify.results import Checks, PropertyResult
 from afsmc.verify.storm import Via
+from afsmc.verify.strategy_compose import action_text, displays, mover, range_text
 from afsmc.verify.strategy_storm import Extract, Extracted, Group, RawPath, WitnessRequest
 from afsmc.verify.witness import describe
 
@@ -53,9 +54,43 @@ class StrategyEntry:
             + (f" when {self.when}" if self.when else "")
 
 
+@dataclass(frozen=True)
+class TurnEntry:
+    """A composed mission whose agents' turns are a choice: the scheduler moves `action`
+    ("uav1: Look", or a synchronised "Launch (uav1, uav2)") in `states` of the states it
+    reaches where the choice matters, with its agents in `mode`."""
+
+    action: str
+    mode: str
+    states: int
+
+    def to_json(self) -> dict[str, object]:
+        return {"action": self.action, "mode": self.mode, "states": self.states}
+
+
+def turns_open(low: Lowered) -> bool:
+    """Whether the scheduler also chooses which agent moves (interleaving, ties nondet)."""
+    net = low.network
+    return net is not None and low.kind == "mdp" and (
+        net.kind == "interleaving" or net.ties == "nondet")
+
+
 def decisive(low: Lowered) -> tuple[int, ...]:
-    """The commands where the scheduler chooses: a floor/ceil variant of an action."""
-    return tuple(i for i, c in enumerate(low.commands) if c.choice)
+    """The commands where the scheduler chooses: a floor/ceil variant of an action; in a
+    composed mission whose turns are a choice, every agent's command."""
+    every = turns_open(low)
+    return tuple(i for i, c in enumerate(low.commands) if c.choice or (every and not c.silent))
+
+
+def turns(groups: Sequence[Group], variables: Sequence[str], low: Lowered) -> list[TurnEntry]:
+    """Which agent the scheduler moves, where the choice matters, per action and modes."""
+    count: dict[tuple[str, str], int] = {}
+    for g in groups:
+        if g.matters:
+            _, mode = _where(low, g, variables)
+            key = (action_text(low, low.commands[g.command]), str(mode))
+            count[key] = count.get(key, 0) + g.states
+    return [TurnEntry(a, m, n) for (a, m), n in sorted(count.items())]
 
 
 @dataclass
@@ -70,16 +105,16 @@ def summarise(groups: Sequence[Group], variables: Sequence[str],
     """The entries of a scheduler from its groups (`variables`: the Storm model's)."""
     model = low.model
     mode_i = list(variables).index("mode") if "mode" in variables else -1
-    ranges: dict[tuple[str, str, int], dict[str, _Range]] = {}
-    same: dict[tuple[str, str, int], int] = {}
+    ranges: dict[tuple[str, str, int | str], dict[str, _Range]] = {}
+    same: dict[tuple[str, str, int | str], int] = {}
     for g in groups:
         cmd = low.commands[g.command]
+        action, mode = _where(low, g, variables)
         for const, end in cmd.choice:
             if not g.matters:
-                same[(const, cmd.action, g.mode)] = same.get((const, cmd.action, g.mode),
-                                                             0) + g.states
+                same[(const, action, mode)] = same.get((const, action, mode), 0) + g.states
                 continue
-            by_end = ranges.setdefault((const, cmd.action, g.mode), {})
+            by_end = ranges.setdefault((const, action, mode), {})
             r = by_end.get(end)
             if r is None:
                 by_end[end] = _Range(g.states, list(g.low), list(g.high))
@@ -88,11 +123,17 @@ def summarise(groups: Sequence[Group], variables: Sequence[str],
                 r.low = [min(a, b) for a, b in zip(r.low, g.low, strict=True)]
                 r.high = [max(a, b) for a, b in zip(r.high, g.high, strict=True)]
     display = {v.name: v.display for v in model.variables}
+    skip = {mode_i}
+    if model.composition is not None:
+        display = displays(low)
+        # a threshold on a mode number says nothing to people: the modes are named
+        skip |= {i for i, v in enumerate(variables) if v.endswith("_mode") and any(
+            a.mode_var == v for a in model.composition.agents)}
     out = []
     for (const, action, mode), by_end in sorted(ranges.items()):
         c = model.constant(const)
         assert c.interval is not None
-        conds = _separate(by_end, [i for i in range(len(variables)) if i != mode_i],
+        conds = _separate(by_end, [i for i in range(len(variables)) if i not in skip],
                           [display.get(v, v) for v in variables])
         for end in ("lo", "hi"):
             r = by_end.get(end)
@@ -100,9 +141,22 @@ def summarise(groups: Sequence[Group], variables: Sequence[str],
                 continue
             value = int(c.interval[0] if end == "lo" else c.interval[1])
             out.append(StrategyEntry(const, END[end], value, action,
+                                     mode if isinstance(mode, str) else
                                      model.mode_by_number(mode).name, r.states, conds.get(end),
                                      same.get((const, action, mode), 0)))
     return out
+
+
+def _where(low: Lowered, g: Group, variables: Sequence[str]) -> tuple[str, int | str]:
+    """A group's action and mode: the mode's number in a machine; in a composed mission,
+    the agent's action and the modes of the agents it moves ("uav2: Search")."""
+    cmd = low.commands[g.command]
+    if low.model.composition is None:
+        return cmd.action, g.mode
+    who, action = mover(low, cmd)
+    names = list(variables)
+    return action, "; ".join(range_text(a, g.low[names.index(a.mode_var)],
+                                        g.high[names.index(a.mode_var)]) for a in who)
 
 
 def _separate(by_end: dict[str, _Range], columns: list[int],
@@ -146,7 +200,9 @@ def extract_for(low: Lowered, strategies: tuple[str, ...], policy: str | None,
                 witness: WitnessRequest | None) -> Extract:
     """The Extract of a job on `low`'s PRISM model emitted with variant labels."""
     cmds = decisive(low)
-    labels = {i: variant_label(low, i) for i in cmds}
+    # a composed mission's commands are all labelled apart (the agent that moved)
+    labels = {i: variant_label(low, i) for i, c in enumerate(low.commands)
+              if i in cmds or (low.network is not None and not c.silent)}
     return Extract(strategies, policy, witness, cmds, tuple(labels[i] for i in cmds),
                    tuple((labels.get(i, "" if c.silent else c.action), c.modes)
                          for i, c in enumerate(low.commands)))
@@ -170,6 +226,9 @@ def attach(results: Sequence[PropertyResult], props: Sequence[ir.Property], low:
             if query in groups and opt in ("min", "max"):
                 r.strategy = r.strategy or {}
                 r.strategy[opt] = summarise(groups[query], variables, low)
+                if turns_open(low):
+                    r.turns = r.turns or {}
+                    r.turns[opt] = turns(groups[query], variables, low)
             if any(query == x.witness_query for x in extracted if x.witness_query):
                 r.witnesses = describe(paths, variables, low)
                 r.witness_note = note

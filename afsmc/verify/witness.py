@@ -18,6 +18,7 @@ from typing import Any
 
 from afsmc.lower.lowering import Command, Lowered
 from afsmc.model.evaluate import Env, evaluate
+from afsmc.verify.strategy_compose import action_text, agents, displays, mode_name, modes_text
 from afsmc.verify.strategy_storm import RawPath
 
 # A replayed step's probability may differ from Storm's by rounding only.
@@ -109,6 +110,9 @@ def describe(paths: Sequence[RawPath], variables: Sequence[str], low: Lowered) -
     """Storm's paths as mission traces, each step replayed through the lowered model."""
     model = low.model
     display = {v.name: v.display for v in model.variables} | {"mode": "mode"}
+    composed = model.composition is not None
+    if composed:
+        display |= displays(low)
     booleans = {v.name for v in model.variables if v.type.name == "BOOL"}
     names = list(variables)
     out = []
@@ -125,21 +129,35 @@ def describe(paths: Sequence[RawPath], variables: Sequence[str], low: Lowered) -
             else:
                 ok = False
             action = "(no enabled action)" if cmd is None or cmd.kind == "deadlock" else (
-                "(final)" if cmd.kind == "final" else cmd.action)
+                "(final)" if cmd.kind == "final" else
+                action_text(low, cmd) if composed else cmd.action)
             changes: dict[str, int | bool | str] = {}
             for k in names:
                 if there[k] != here[k]:
-                    v = there[k]
-                    changes[display.get(k, k) if k != "mode" else "mode"] = (
-                        model.mode_by_number(v).name if k == "mode" else
-                        bool(v) if k in booleans else v)
+                    changes[display.get(k, k) if k != "mode" else "mode"] = _value(
+                        low, k, there[k], booleans)
             choice = tuple((c, "floor" if e == "lo" else "ceil")
                            for c, e in (cmd.choice if cmd is not None else ()))
-            steps.append(Step(model.mode_by_number(here["mode"]).name, action, p.steps[i],
-                              changes, choice, hazard))
+            steps.append(Step(_mode(low, here), action, p.steps[i], changes, choice, hazard))
         start: dict[str, int | bool] = {display.get(k, k): (bool(v) if k in booleans else v)
                                         for k, v in vals[0].items() if k != "mode"}
         ok = ok and math.isclose(math.prod(p.steps), p.probability, rel_tol=1e-6)
-        out.append(Witness(p.probability, tuple(steps), start,
-                           model.mode_by_number(vals[-1]["mode"]).name, ok))
+        out.append(Witness(p.probability, tuple(steps), start, _mode(low, vals[-1]), ok))
     return out
+
+
+def _mode(low: Lowered, values: dict[str, int]) -> str:
+    """The mode of a state: a composed mission's, each agent's ("uav1: Search, uav2:
+    Home")."""
+    if low.model.composition is not None:
+        return modes_text(low, values)
+    return low.model.mode_by_number(values["mode"]).name
+
+
+def _value(low: Lowered, var: str, v: int, booleans: set[str]) -> int | bool | str:
+    if var == "mode":
+        return low.model.mode_by_number(v).name
+    agent = next((a for a in agents(low) if a.mode_var == var), None)
+    if agent is not None:
+        return mode_name(agent, v)
+    return bool(v) if var in booleans else v

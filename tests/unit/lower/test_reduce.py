@@ -15,6 +15,9 @@ from tests.storm_util import storm_prism
 from tests.unit.backends.test_prism import CLIMB, GEOMETRIC, SMALL
 
 EXAMPLE_FILES = sorted(EXAMPLES.glob("*.afsm"))
+# the composed examples at the sizes tests/unit/compose takes (their defaults are large)
+SIZES = SMALL | {"two_uav": {"OBJECTS": "1", "T_LIMIT": "25"},
+                 "charging": {"ORDERS": "2", "T_LIMIT": "10"}}
 OPTIONS = [Reductions(dead_reset=True, reorder=False, saturate=False),
            Reductions(dead_reset=False, reorder=True, saturate=False),
            Reductions(dead_reset=False, reorder=False, saturate=True),
@@ -24,7 +27,7 @@ OPTIONS = [Reductions(dead_reset=True, reorder=False, saturate=False),
 def _cases(tmp: Path) -> list[tuple[str, object]]:
     out = []
     for path in EXAMPLE_FILES:
-        out.append((path.stem, load(str(path), SMALL.get(path.stem, {})).model))
+        out.append((path.stem, load(str(path), SIZES.get(path.stem, {})).model))
     for name, text in (("geometric", GEOMETRIC), ("climb", CLIMB)):
         p = tmp / f"{name}.afsm"
         p.write_text(text)
