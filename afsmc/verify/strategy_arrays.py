@@ -364,8 +364,9 @@ class _Paths:
                 if first[0] is not None:
                     cand.pop((first[0], 1), None)
         if not (k == 2 and v == self.a.initial):
-            u, tail_k = paths[k - 2][0], paths[k - 2][1]
-            assert u is not None
+            last, tail_k = paths[k - 2][0], paths[k - 2][1]
+            assert last is not None
+            u = last
             tail = self._paths_of(u)
             if len(tail) < tail_k + 1:
                 self._next(u, tail_k + 1)
