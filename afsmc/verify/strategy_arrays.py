@@ -141,17 +141,16 @@ def run(stormpy: Any, built: Any, res: Any, notify: Callable[[str, Any], None], 
     notify("phase", "acyclic")
     started = time.perf_counter()
     raw = acyclic.read(stormpy, built.model, p, _label_bits(stormpy, built.model, program))
+    built.model = None  # one model in memory at a time: the arrays hold all it needs
+    acyclic_give_back()
     arrays = None if raw is None else acyclic.arrange(raw)
     del raw
     if arrays is None or arrays.order is None:
+        # built again with state valuations, rather than kept for a case this rare
         notify("solver", f"the {job.what} has cycles: Storm's topological solver checks it")
-        built.model = None
-        acyclic_give_back()
         notify("phase", "build")
         built.model = rebuild()
         return False
-    built.model = None
-    acyclic_give_back()
     notify("solver", f"the {job.what} is acyclic but for self-loops "
            f"({len(arrays.layers) - 1:,} layers): each query by one exact backward pass")
     out = res.extracted = res.extracted or Extracted()
