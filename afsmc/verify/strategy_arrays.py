@@ -142,7 +142,7 @@ def run(stormpy: Any, built: Any, res: Any, notify: Callable[[str, Any], None], 
     started = time.perf_counter()
     raw = acyclic.read(stormpy, built.model, p, _label_bits(stormpy, built.model, program))
     built.model = None  # one model in memory at a time: the arrays hold all it needs
-    acyclic_give_back()
+    _give_back()
     arrays = None if raw is None else acyclic.arrange(raw)
     del raw
     if arrays is None or arrays.order is None:
@@ -176,10 +176,11 @@ def run(stormpy: Any, built: Any, res: Any, notify: Callable[[str, Any], None], 
     return True
 
 
-def acyclic_give_back() -> None:
-    from afsmc.verify.storm import _give_back
+def _give_back() -> None:
+    """Return the freed heap to the system (afsmc.verify.storm, which imports this module)."""
+    from afsmc.verify import storm
 
-    _give_back()
+    storm._give_back()
 
 
 def _extract(a: acyclic.Arrays, q: acyclic.Query, extract: Extract, program: Any,
