@@ -105,6 +105,13 @@ class Arrays:
     initial: int  # the initial state
     labels: dict[str, Bools]  # label -> states (targets)
     rewards: dict[str, F64]  # reward model -> its reward per choice (state + action)
+    # for a strategy's extraction (afsmc.verify.strategy_arrays), else None: each state's
+    # number in Storm's model, each choice's action (index into `action_names`), and the
+    # labels read packed (8 states a byte, in Storm's numbering)
+    order: I64 | None = None
+    actions: npt.NDArray[np.uint32] | None = None
+    action_names: list[str] = field(default_factory=list)
+    packed: dict[str, npt.NDArray[np.uint8]] = field(default_factory=dict)
 
 
 def _ranges(starts: I64, ends: I64) -> I64:
@@ -218,11 +225,15 @@ def solve_many(a: Arrays, queries: list[Query]) -> dict[str, float]:
     return {q.name: out[q.name] for q in queries}
 
 
-def _pass(a: Arrays, qs: list[Query]) -> list[float]:
+def _pass(a: Arrays, qs: list[Query], best: npt.NDArray[np.int64] | None = None,
+          value: F64 | None = None) -> list[float]:
     """One pass over the layers for queries of one kind and direction, from the
-    absorbing states back to the initial one."""
+    absorbing states back to the initial one. With `best` (one query): each state's first
+    choice (number within the state) whose value is the optimum, which is the choice
+    Storm's topological solver keeps; with `value` (n x 1): every state's value."""
     k = len(qs)
-    value = np.zeros((len(a.states) - 1, k))
+    if value is None:
+        value = np.zeros((len(a.states) - 1, k))
     on_target = np.stack([a.labels[LABEL + str(q.target)] for q in qs], axis=1)
     reward = None
     if qs[0].kind == "R":
@@ -247,8 +258,20 @@ def _pass(a: Arrays, qs: list[Query]) -> list[float]:
             per_state = per_choice
         else:
             per_state = pick.reduceat(per_choice, a.states[lo:hi] - c0, axis=0)
+        if best is not None:
+            best[lo:hi] = _first_best(per_choice[:, 0], per_state[:, 0], a.states[lo:hi + 1] - c0)
         value[lo:hi] = np.where(on_target[lo:hi], reached, per_state)
     return [float(v) for v in value[a.initial]]
+
+
+def _first_best(per_choice: F64, per_state: F64, offsets: I64) -> I64:
+    """Each state's first choice (number within the state) whose value is the state's
+    optimum (`offsets`: the states' first choices, and the end)."""
+    sizes = np.diff(offsets)
+    local = np.arange(len(per_choice), dtype=np.int64) - np.repeat(offsets[:-1], sizes)
+    hit = per_choice == np.repeat(per_state, sizes)
+    out: I64 = np.minimum.reduceat(np.where(hit, local, np.int64(1) << 40), offsets[:-1])
+    return np.where(out == np.int64(1) << 40, 0, out)
 
 
 def _member(tar: tarfile.TarFile, path: str, name: str, dtype: Any, count: int,
@@ -294,10 +317,17 @@ class Raw:
     initial: int
     labels: dict[str, Bools]
     state_rewards: dict[str, list[tuple[str, F64]]]  # name -> (applies-to, values)
+    # what Arrays keeps for a strategy's extraction (None: nothing)
+    actions: npt.NDArray[np.uint32] | None = None
+    action_names: list[str] = field(default_factory=list)
+    packed: dict[str, npt.NDArray[np.uint8]] | None = None
 
 
-def read_umb(path: str, labels: list[str], rewards: list[str]) -> Raw | None:
-    """The arrays of a UMB archive (uncompressed, doubles); None if it is not of that form."""
+def read_umb(path: str, labels: list[str], rewards: list[str],
+             packed: tuple[str, ...] | None = None) -> Raw | None:
+    """The arrays of a UMB archive (uncompressed, doubles); None if it is not of that form.
+    `packed`: labels read as they are stored (8 states a byte), with each choice's action:
+    what a strategy's extraction needs."""
     with tarfile.open(path) as tar:
         index = json.loads(tar.extractfile("index.json").read())  # type: ignore[union-attr]
         ts = index["transition-system"]
@@ -335,11 +365,43 @@ def read_umb(path: str, labels: list[str], rewards: list[str]) -> Raw | None:
                 if vals is None or desc.get("type", {}).get("type") != "double":
                     return None
                 rw[x].append((where, vals))
-    if any(v is None for v in found.values()) or len(found) < len(labels):
+        extra = None if packed is None else _extra(tar, path, index, packed, n, m)
+    if any(v is None for v in found.values()) or len(found) < len(labels) or (
+            packed is not None and extra is None):
         return None
-    return Raw(states, choices, target, prob,
-               int(np.flatnonzero(initial)[0]), {k: v for k, v in found.items()
-                                                 if v is not None}, rw)
+    out = Raw(states, choices, target, prob,
+              int(np.flatnonzero(initial)[0]), {k: v for k, v in found.items()
+                                                if v is not None}, rw)
+    if extra is not None:
+        out.packed, out.actions, out.action_names = extra
+    return out
+
+
+def _extra(tar: tarfile.TarFile, path: str, index: dict[str, Any], packed: tuple[str, ...],
+           n: int, m: int) -> tuple[dict[str, npt.NDArray[np.uint8]], npt.NDArray[np.uint32],
+                                    list[str]] | None:
+    """The labels `packed`, as stored, and each choice's action with the actions' names
+    (an archive without actions: every choice unlabelled)."""
+    aps = _annotations(index, "aps")
+    bits = {}
+    for x in packed:
+        raw = None if x not in aps else _member(
+            tar, path, f"annotations/aps/{aps[x][0]}/states/values.bin", np.uint8,
+            (n + 63) // 64 * 8)
+        if raw is None:
+            return None
+        bits[x] = raw
+    actions = _member(tar, path, "actions/choices/values.bin", np.uint32, m)
+    if actions is None:
+        return bits, np.zeros(m, np.uint32), [""]
+    offsets = _member(tar, path, "actions/choices/string-mapping.bin", np.uint64,
+                      int(index["transition-system"].get("#choice-actions", 0)) + 1)
+    member = tar.extractfile("actions/choices/strings.bin")
+    if offsets is None or member is None:
+        return None
+    text = member.read().decode("utf-8")
+    names = [text[int(a):int(b)] for a, b in itertools.pairwise(offsets.tolist())]
+    return bits, actions, names
 
 
 def arrange(raw: Raw) -> Arrays | None:
@@ -368,9 +430,13 @@ def arrange(raw: Raw) -> Arrays | None:
         rewards[name] = per_choice
     labels = {k: v[perm] for k, v in raw.labels.items()}
     stay = self_loops(states, choices, target, prob)
+    out = Arrays(states, choices, target, prob, stay, bounds, int(inv[raw.initial]),
+                 labels, rewards)
+    if raw.packed is not None and raw.actions is not None:
+        out.order, out.actions, out.action_names = perm, raw.actions[old_choice], raw.action_names
+        out.packed, raw.packed, raw.actions = raw.packed, None, None
     del perm, old_choice
-    return Arrays(states, choices, target, prob, stay, bounds, int(inv[raw.initial]),
-                  labels, rewards)
+    return out
 
 
 def export(stormpy: Any, model: Any, p: Plan, folder: str) -> str:
@@ -393,14 +459,14 @@ def export(stormpy: Any, model: Any, p: Plan, folder: str) -> str:
     return path
 
 
-def read(stormpy: Any, model: Any, p: Plan) -> Raw | None:
+def read(stormpy: Any, model: Any, p: Plan, packed: tuple[str, ...] | None = None) -> Raw | None:
     """Storm's sparse `model`, with the plan's targets, as arrays; None if Storm's export
-    is not of the expected form."""
+    is not of the expected form. `packed`: see :func:`read_umb`."""
     folder = tempfile.mkdtemp(prefix="afsmc-acyclic-")
     try:
         path = export(stormpy, model, p, folder)
         return read_umb(path, [LABEL + str(i) for i in range(len(p.targets))],
-                        sorted({q.reward for q in p.queries if q.kind == "R"}))
+                        sorted({q.reward for q in p.queries if q.kind == "R"}), packed)
     finally:
         shutil.rmtree(folder, ignore_errors=True)
 

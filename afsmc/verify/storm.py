@@ -17,7 +17,7 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any, Literal
 
-from afsmc.verify import acyclic, precision
+from afsmc.verify import acyclic, precision, strategy_arrays
 from afsmc.verify.strategy_storm import Extract, Extracted, analyse, builder_options
 
 Engine = Literal["sparse", "dd", "hybrid", "auto"]
@@ -259,9 +259,12 @@ def _execute(job: Job, notify: Notify) -> JobResult:
     if job.bisimulation and not built.symbolic and not _bisimulation(built, res, notify):
         return res
     t0 = time.perf_counter()
-    if check_env is None and job.extract is None and res.solver == "topological" \
-            and job.solver == "auto":
-        _acyclic(stormpy, built, res, notify, job, program)
+    if check_env is None and res.solver == "topological" and job.solver == "auto":
+        if job.extract is None:
+            _acyclic(stormpy, built, res, notify, job, program)
+        elif _lean(job, built.props):  # strategies from the backward pass, if acyclic
+            strategy_arrays.run(stormpy, built, res, notify, job, program,
+                                lambda: _sparse(stormpy, program, built.props, job, lean=False))
     if built.names and not _check_each(stormpy, built, check_env, res, notify, job, program):
         return res
     res.check_time = time.perf_counter() - t0
@@ -369,15 +372,25 @@ def _build(stormpy: Any, job: Job, program: Any, props: list[Any], res: JobResul
     return built
 
 
-def _sparse(stormpy: Any, program: Any, props: list[Any], job: Job) -> Any:
-    """The sparse model: over rationals for an exact job; with state valuations and choice
-    origins if the job extracts."""
+def _sparse(stormpy: Any, program: Any, props: list[Any], job: Job, lean: bool = True) -> Any:
+    """The sparse model: over rationals for an exact job; if the job extracts, with choice
+    labels and either state valuations (Storm's route) or, where the backward pass may
+    answer (`lean`), one label per bit of each variable (strategy_arrays)."""
     if job.exact:
         return precision.build_exact(stormpy, program, _for_builder(props, job))
     if job.extract is not None:
-        return stormpy.build_model(program, options=builder_options(
+        opts = strategy_arrays.options(stormpy, [p.get_raw_formula() for p in _for_builder(
+            props, job)], program) if lean and _lean(job, props) else None
+        return stormpy.build_model(program, options=opts or builder_options(
             stormpy, _for_builder(props, job), program, job.extract))
     return stormpy.build_model(program, _for_builder(props, job))
+
+
+def _lean(job: Job, props: list[Any]) -> bool:
+    """Whether the job's extraction may come from the backward pass (strategy_arrays)."""
+    return job.extract is not None and job.solver == "auto" and not job.exact \
+        and job.precision is None and strategy_arrays.fits(
+            job.extract, [p.get_name() for p in props], props)
 
 
 def _choose(job: Job, states: int, names: list[str], props: list[Any],

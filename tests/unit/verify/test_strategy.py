@@ -284,3 +284,24 @@ def test_a_requirements_witnesses_show_how_it_is_violated_under_its_deciding_str
     assert p.witnesses is not None and p.witness_of == "max" and not p.witness_avoids
     assert p.max is not None
     check_witnesses(p.witnesses, p.max, model, "Halted")
+
+
+def _entries(res: Any, name: str) -> tuple[Any, Any]:
+    p = res.property(name)
+    return ({k: [e.to_json() for e in v] for k, v in (p.strategy or {}).items()},
+            [w.to_json() for w in p.witnesses or []])
+
+
+def test_the_backward_pass_gives_storm_s_strategies_and_paths() -> None:
+    """On an acyclic model the strategies and paths come from the backward pass
+    (strategy_arrays); Storm's own scheduler and path generator (the topological solver's
+    route) must give the same tables and the same paths, ties included."""
+    consts = {"T_LIMIT": 90, "DEADLINE": 90}
+    ours = run(UAV, consts=consts, properties=["success"], strategy=True,
+               witness=("success", 12), uniform=False)
+    storms = run(UAV, consts=consts, properties=["success"], strategy=True,
+                 witness=("success", 12), uniform=False, solver="topological")
+    assert ours.model.solver == "acyclic" and storms.model.solver == "topological"
+    assert _entries(ours, "success") == _entries(storms, "success")
+    assert ours.property("success").strategy
+    assert len(ours.property("success").witnesses or []) >= 5

@@ -1,0 +1,427 @@
+"""Schedulers and most probable paths from the exact backward pass (inside the Storm
+process), without Storm's scheduler, its induced DTMC or its state valuations.
+
+On a model that is acyclic but for self-loops (:mod:`afsmc.verify.acyclic`), the pass that
+computes a query's values also gives each state's optimal choice: the first choice whose
+value is the state's optimum, which is the choice Storm's topological solver keeps (its
+trivial components are solved row by row, a later row replacing the best only if strictly
+better). From those choices come the states the strategy reaches, their floor/ceil variants
+(each choice's action, from Storm's export) and whether the choice matters there (the
+one-step values of the state's choices differ, as Storm's `Rmin`/`Rmax [I=1]` with the
+values as state rewards). The variables' values of a state are read from one label per bit
+of each variable, which Storm builds at a byte per 8 states, instead of its state
+valuations (a vector per state: 1.7 GB more on scenario 2). The K most probable paths are
+found by the recursive enumeration algorithm with the choices of Storm's generator
+(:func:`_Paths`), on the strategy's transitions only.
+
+Only what this route covers is sent here (:func:`fits`): probabilities of `F target`
+without a bound, no witness into other target states. The rest, and a model with cycles,
+stays on Storm's route (:mod:`afsmc.verify.strategy_storm`).
+"""
+
+from __future__ import annotations
+
+import itertools
+import time
+from collections.abc import Callable
+from typing import Any
+
+import numpy as np
+import numpy.typing as npt
+
+from afsmc.verify import acyclic
+from afsmc.verify.strategy_storm import SAME, Extract, Extracted, RawPath, _groups
+
+I64 = npt.NDArray[np.int64]
+BIT = "__afsmc_bit_"  # the labels of the variables' bits
+
+
+def fits(extract: Extract, names: list[str], props: list[Any]) -> bool:
+    """Whether every query `extract` asks of is a P [F T] with min or max that the
+    backward pass answers, and the witness (if any) goes into that T."""
+    p = acyclic.plan(names, props, True)
+    kinds = {q.name: q.kind for q in p.queries}
+    w = extract.witness
+    if w is not None and (w.target is not None or w.avoid):
+        return False
+    return all(kinds.get(q) == "P" and (q in extract.strategies or q == extract.policy
+                                        or (w is not None and q == w.query))
+               for q in extract.queries)
+
+
+def _bit_vars(program: Any) -> list[tuple[str, int, int, bool]] | None:
+    """Each variable of the generated model (the order of Storm's valuations in
+    strategy_storm): name, lower bound, bits, boolean; None if a bound is not a number."""
+    out = []
+    for module in program.modules:
+        for v in module.integer_variables:
+            try:
+                lo = int(v.lower_bound_expression.evaluate_as_int())
+                hi = int(v.upper_bound_expression.evaluate_as_int())
+            except RuntimeError:
+                return None
+            out.append((v.name, lo, (hi - lo).bit_length(), False))
+        out += [(v.name, 0, 1, True) for v in module.boolean_variables]
+    return out
+
+
+def _bit_texts(variables: list[tuple[str, int, int, bool]]) -> list[str]:
+    """A state formula per bit: bit k of (value - lower bound)."""
+    out = []
+    for name, lo, bits, boolean in variables:
+        if boolean:
+            out.append(name)
+            continue
+        shifted = name if lo == 0 else f"({name} - ({lo}))"
+        out += [f"mod({shifted}, {2 ** (k + 1)}) >= {2 ** k}" for k in range(bits)]
+    return out
+
+
+def options(stormpy: Any, formulas: list[Any], program: Any) -> Any | None:
+    """Storm's builder options for this route: the properties' formulas and one label per
+    bit of each variable, choice labels, no state valuations; None if the variables'
+    bounds are not numbers."""
+    variables = _bit_vars(program)
+    if variables is None:
+        return None
+    bits = [p.get_raw_formula() for p in stormpy.parse_properties(
+        ";".join(f"P=? [ F ({t}) ]" for t in _bit_texts(variables)), program)] \
+        if variables else []
+    opts = stormpy.BuilderOptions(formulas + bits)
+    opts.set_build_choice_labels()
+    opts.set_build_all_labels()
+    return opts
+
+
+def _label_bits(stormpy: Any, model: Any, program: Any) -> tuple[str, ...]:
+    """Label each bit's states in Storm's model (BIT + number); the labels."""
+    texts = _bit_texts(_bit_vars(program) or [])
+    names = []
+    for i, prop in enumerate(stormpy.parse_properties(
+            ";".join(f"P=? [ F ({t}) ]" for t in texts), program) if texts else []):
+        states = stormpy.model_checking(
+            model, prop.get_raw_formula().subformula.subformula).get_truth_values_vector()
+        name = BIT + str(i)
+        if not model.labeling.contains_label(name):
+            model.labeling.add_label(name)
+        model.labeling.set_states(name, states)
+        names.append(name)
+    return tuple(names)
+
+
+def valuations(a: acyclic.Arrays, program: Any, states: I64) -> I64:
+    """The variables' values of `states` (the pass's numbers), states x variables."""
+    assert a.order is not None
+    old = a.order[states]
+    byte, shift = old >> 3, (old & 7).astype(np.uint8)
+    variables = _bit_vars(program) or []
+    out = np.zeros((len(states), len(variables)), np.int64)
+    i = 0
+    for j, (_, lo, bits, _) in enumerate(variables):
+        col = np.full(len(states), lo, np.int64)
+        for k in range(bits):
+            bit = (a.packed[BIT + str(i)][byte] >> shift) & 1
+            col += bit.astype(np.int64) << k
+            i += 1
+        out[:, j] = col
+    return out
+
+
+Rebuild = Callable[[], Any]
+
+
+def run(stormpy: Any, built: Any, res: Any, notify: Callable[[str, Any], None], job: Any,
+        program: Any, rebuild: Rebuild) -> bool:
+    """Check the job's queries by backward passes and extract what `job.extract` asks from
+    them; False if the model has cycles (it is then built again, for Storm's route)."""
+    extract: Extract = job.extract
+    if _bit_vars(program) is None:  # built with state valuations: Storm's route
+        return False
+    p = acyclic.plan(built.names, built.props, res.kind == "mdp")
+    notify("phase", "acyclic")
+    started = time.perf_counter()
+    raw = acyclic.read(stormpy, built.model, p, _label_bits(stormpy, built.model, program))
+    built.model = None  # one model in memory at a time: the arrays hold all it needs
+    _give_back()
+    arrays = None if raw is None else acyclic.arrange(raw)
+    del raw
+    if arrays is None or arrays.order is None:
+        # built again with state valuations, rather than kept for a case this rare
+        notify("solver", f"the {job.what} has cycles: Storm's topological solver checks it")
+        notify("phase", "build")
+        built.model = rebuild()
+        return False
+    notify("solver", f"the {job.what} is acyclic but for self-loops "
+           f"({len(arrays.layers) - 1:,} layers): each query by one exact backward pass")
+    out = res.extracted = res.extracted or Extracted()
+    out.variables = tuple(v[0] for v in _bit_vars(program) or [])
+    plain = [q for q in p.queries if q.name not in extract.queries]
+    values = acyclic.solve_many(arrays, plain) if plain else {}
+    for q in p.queries:
+        if q.name in extract.queries:
+            notify("phase", f"check {q.name}")
+            t0 = time.perf_counter()
+            values[q.name] = _extract(arrays, q, extract, program, out)
+            out.seconds += time.perf_counter() - t0
+    secs = (time.perf_counter() - started) / max(1, len(p.queries))
+    for q in p.queries:
+        res.values[q.name], res.seconds[q.name] = values[q.name], secs
+        notify("value", (q.name, values[q.name], secs))
+    left = [(n, x) for n, x in zip(built.names, built.props, strict=True) if n in p.left]
+    built.names, built.props = [n for n, _ in left], [x for _, x in left]
+    res.solver = "acyclic" if not left else "acyclic and topological"
+    if left:  # rare: a query of another shape beside the extracted ones
+        notify("phase", "build")
+        built.model = rebuild()
+    return True
+
+
+def _give_back() -> None:
+    """Return the freed heap to the system (afsmc.verify.storm, which imports this module)."""
+    from afsmc.verify import storm
+
+    storm._give_back()
+
+
+def _extract(a: acyclic.Arrays, q: acyclic.Query, extract: Extract, program: Any,
+             out: Extracted) -> float:
+    """Query `q`'s value, and its strategy and paths as `extract` asks, into `out`."""
+    n = len(a.states) - 1
+    best = np.zeros(n, np.int64)
+    value = np.zeros((n, 1))
+    result = acyclic._pass(a, [q], best, value)[0]
+    chosen = a.states[:-1] + best  # each state's choice (the pass's numbering)
+    del best
+    reached = _reached(a, chosen)
+    name = q.name
+    if name in extract.strategies or name == extract.policy:
+        index = {x: i for i, x in enumerate(a.action_names)}
+        command = np.full(len(a.action_names), -1, np.int64)
+        for c, label in zip(extract.decisive, extract.labels, strict=True):
+            if label in index:
+                command[index[label]] = c
+        assert a.actions is not None and a.order is not None
+        states = reached[command[a.actions[chosen[reached]]] >= 0]
+        states = states[np.argsort(a.order[states], kind="stable")]  # Storm's order
+        commands = command[a.actions[chosen[states]]]
+        vals = valuations(a, program, states)
+        out.reached[name] = len(states)
+        if name in extract.strategies:
+            out.groups[name] = _groups(commands, vals, _matters(a, value[:, 0], states),
+                                       out.variables)
+        if name == extract.policy:
+            out.policy_states = [tuple(int(x) for x in row) for row in vals]
+            out.policy_commands = [int(c) for c in commands]
+    w = extract.witness
+    if w is not None and w.query == name:
+        out.witness_query = name
+        target = a.labels[acyclic.LABEL + str(q.target)]
+        _Paths(a, chosen, reached, target).collect(w.k, extract, program, out)
+    return result
+
+
+def _reached(a: acyclic.Arrays, chosen: I64) -> I64:
+    """The states the strategy reaches from the initial state (ascending)."""
+    n = len(a.states) - 1
+    seen = np.zeros(n, bool)
+    seen[a.initial] = True
+    bounds = a.layers.tolist()
+    for lo, hi in reversed(list(itertools.pairwise(bounds))):
+        r = np.flatnonzero(seen[lo:hi]) + lo
+        if r.size:
+            c = chosen[r]
+            seen[a.target[acyclic._ranges(a.choices[c], a.choices[c + 1])]] = True
+    out: I64 = np.flatnonzero(seen)
+    return out
+
+
+def _matters(a: acyclic.Arrays, value: npt.NDArray[np.float64], states: I64) -> Any:
+    """Whether the choices of `states` differ in value: their one-step values (sum of
+    probability x successor's value) differ by more than SAME."""
+    w = np.where(np.isfinite(value), value, 1e300)
+    c0, c1 = a.states[states], a.states[states + 1]
+    choices = acyclic._ranges(c0, c1)
+    b0, b1 = a.choices[choices], a.choices[choices + 1]
+    branches = acyclic._ranges(b0, b1)
+    per_branch = a.prob[branches] * w[a.target[branches]]
+    starts = np.concatenate(([0], np.cumsum(b1 - b0)[:-1]))
+    per_choice = np.add.reduceat(per_branch, starts) if len(branches) else per_branch
+    sstarts = np.concatenate(([0], np.cumsum(c1 - c0)[:-1]))
+    lo = np.minimum.reduceat(per_choice, sstarts) if len(choices) else per_choice
+    hi = np.maximum.reduceat(per_choice, sstarts) if len(choices) else per_choice
+    return np.abs(hi - lo) > SAME * np.maximum(1.0, np.maximum(np.abs(hi), np.abs(lo)))
+
+
+class _Paths:
+    """The most probable paths of the strategy's DTMC into `target`, as Storm's
+    k-shortest-paths generator finds them (the recursive enumeration algorithm of Jiménez
+    and Marzal): the most probable path to each state first, a state's predecessor on it
+    the one with the largest product, then the largest probability, then the largest
+    number (Storm's Dijkstra queue); the next paths from candidates, the most probable
+    first, then the smallest predecessor and rank. A path stops at its first target state
+    and may loop on a self-loop. States are numbered as in Storm's model, so ties fall as
+    they do there."""
+
+    META = -1  # the meta-target: every target state leads to it with probability 1
+
+    def __init__(self, a: acyclic.Arrays, chosen: I64, reached: I64, target: Any) -> None:
+        assert a.order is not None
+        self.a, self.chosen, self.target = a, chosen, target
+        self.old = a.order  # Storm's number of each state, for the ties
+        # the strategy's transitions out of the reached states that are not targets
+        src_states = reached[~target[reached]]
+        c = chosen[src_states]
+        counts = a.choices[c + 1] - a.choices[c]
+        branches = acyclic._ranges(a.choices[c], a.choices[c + 1])
+        src = np.repeat(src_states, counts)
+        dst = a.target[branches].astype(np.int64)
+        prob = a.prob[branches]
+        self.dist, self.pred = self._dijkstra(src, dst, prob)
+        order = np.argsort(dst, kind="stable")
+        self.in_dst, self.in_src, self.in_prob = dst[order], src[order], prob[order]
+        self.targets = reached[target[reached]]
+        self.ksp: dict[int, list[tuple[int | None, int, float]]] = {}
+        self.cand: dict[int, dict[tuple[int, int], float]] = {}
+
+    def _dijkstra(self, src: I64, dst: I64, prob: Any) -> tuple[dict[int, float],
+                                                                 dict[int, int | None]]:
+        """The largest product of probabilities from the initial state to each state,
+        layer by layer (the model is acyclic but for self-loops, which never improve
+        it), and the predecessor Storm's Dijkstra keeps."""
+        a = self.a
+        n = len(a.states) - 1
+        dist = np.zeros(n)
+        dist[a.initial] = 1.0
+        best_src = np.full(n, -1, np.int64)
+        moving = src != dst
+        src, dst, prob = src[moving], dst[moving], prob[moving]
+        layer_of_src = np.searchsorted(a.layers, src, side="right") - 1
+        order = np.argsort(-layer_of_src, kind="stable")
+        src, dst, prob, layer_of_src = src[order], dst[order], prob[order], layer_of_src[order]
+        cuts = np.flatnonzero(np.diff(layer_of_src)) + 1
+        for s, d, p in zip(np.split(src, cuts), np.split(dst, cuts), np.split(prob, cuts),
+                           strict=True):
+            prod = dist[s] * p
+            keep = prod > 0
+            s, d, prod = s[keep], d[keep], prod[keep]
+            if not s.size:
+                continue
+            # per successor, the largest (product, probability, Storm's number) of the source
+            o = np.lexsort((self.old[s], dist[s], prod, d))
+            s, d, prod = s[o], d[o], prod[o]
+            last = np.concatenate((d[1:] != d[:-1], [True]))
+            s, d, prod = s[last], d[last], prod[last]
+            cur = best_src[d]
+            cur_prod = np.where(cur >= 0, dist[d], 0.0)
+            cs = np.where(cur >= 0, cur, 0)
+            better = (prod > cur_prod) | ((prod == cur_prod) & (
+                (dist[s] > dist[cs]) | ((dist[s] == dist[cs]) & (self.old[s] > self.old[cs]))))
+            better &= prod > 0
+            dist[d[better]] = prod[better]
+            best_src[d[better]] = s[better]
+        touched = np.flatnonzero(dist > 0)
+        dists = {int(x): float(dist[x]) for x in touched}
+        preds: dict[int, int | None] = {int(x): (None if best_src[x] < 0 else int(best_src[x]))
+                                        for x in touched}
+        tgt = self.target[touched]
+        if tgt.any():
+            t = touched[tgt]
+            o = np.lexsort((self.old[t], dist[t]))
+            dists[self.META], preds[self.META] = float(dist[t[o[-1]]]), int(t[o[-1]])
+        return dists, preds
+
+    def _edge(self, u: int, v: int) -> float:
+        if v == self.META:
+            return 1.0
+        c = int(self.chosen[u])
+        b0, b1 = int(self.a.choices[c]), int(self.a.choices[c + 1])
+        hit = np.flatnonzero(self.a.target[b0:b1] == v)
+        return float(self.a.prob[b0 + hit[0]])
+
+    def _preds(self, v: int) -> list[int]:
+        if v == self.META:
+            return [int(x) for x in self.targets]
+        lo, hi = np.searchsorted(self.in_dst, [v, v + 1])
+        return [int(x) for x in self.in_src[lo:hi]]
+
+    def _paths_of(self, v: int) -> list[tuple[int | None, int, float]]:
+        got = self.ksp.get(v)
+        if got is None:
+            got = self.ksp[v] = [(self.pred.get(v), 1, self.dist[v])] if v in self.dist else []
+        return got
+
+    def _key(self, u: int) -> int:
+        return -1 if u == self.META else int(self.old[u])
+
+    def _next(self, v: int, k: int) -> None:
+        """The k-th most probable path to `v` (k >= 2), if there is one."""
+        paths = self._paths_of(v)
+        cand = self.cand.setdefault(v, {})
+        if k == 2:
+            first = paths[0]
+            for u in self._preds(v):
+                cand.setdefault((u, 1), self.dist.get(u, 0.0) * self._edge(u, v))
+                if first[0] is not None:
+                    cand.pop((first[0], 1), None)
+        if not (k == 2 and v == self.a.initial):
+            last, tail_k = paths[k - 2][0], paths[k - 2][1]
+            assert last is not None
+            u = last
+            tail = self._paths_of(u)
+            if len(tail) < tail_k + 1:
+                self._next(u, tail_k + 1)
+            if len(tail) >= tail_k + 1:
+                cand.setdefault((u, tail_k + 1), tail[tail_k][2] * self._edge(u, v))
+        if cand:
+            # Storm's set is ordered by (predecessor, rank): the first of the most probable
+            pick = min(cand, key=lambda x: (-cand[x], self._key(x[0]), x[1]))
+            paths.append((pick[0], pick[1], cand.pop(pick)))
+
+    def path(self, k: int) -> tuple[float, list[int]] | None:
+        """The k-th most probable path (its probability, its states), or None."""
+        meta = self._paths_of(self.META)
+        if not meta:
+            return None
+        while len(meta) < k:
+            before = len(meta)
+            self._next(self.META, len(meta) + 1)
+            if len(meta) == before:
+                return None
+        prob = meta[k - 1][2]
+        states: list[int] = []
+        node, rank = meta[k - 1][0], meta[k - 1][1]
+        while node is not None:
+            states.append(node)
+            node, rank = self._paths_of(node)[rank - 1][:2]
+        states.reverse()
+        return prob, states
+
+    def collect(self, k: int, extract: Extract, program: Any, out: Extracted) -> None:
+        if not self.targets.size:
+            out.witness_note = "no state the strategy reaches is a target state"
+            return
+        found: list[RawPath] = []
+        for i in range(1, k + 1):
+            got = self.path(i)
+            if got is None or got[0] <= 0.0:
+                break
+            p, states = got
+            vals = valuations(self.a, program, np.asarray(states, np.int64))
+            steps = [self._edge(x, y) for x, y in itertools.pairwise(states)]
+            commands = [self._command(s, row, extract, out.variables)
+                        for s, row in zip(states[:-1], vals, strict=False)] + [-1]
+            found.append(RawPath(p, [tuple(int(x) for x in row) for row in vals], commands,
+                                 steps))
+        if len(found) < k:
+            out.witness_note = f"there are only {len(found)} paths into the target states"
+        out.paths = found
+
+    def _command(self, s: int, row: Any, extract: Extract, variables: tuple[str, ...]) -> int:
+        """The lowered command of state `s`'s choice: by its action label, and the mode."""
+        assert self.a.actions is not None
+        label = self.a.action_names[int(self.a.actions[self.chosen[s]])]
+        mode = int(row[variables.index("mode")]) if "mode" in variables else 0
+        for i, (name, modes) in enumerate(extract.commands):
+            if mode in modes and name == label:
+                return i
+        return -1
