@@ -1,13 +1,18 @@
-"""A faster run of lark's LALR parser over a whole text, giving the tree lark gives.
+"""A faster run of lark's LALR parser over a whole text that builds the AST directly.
 
 lark's loop (`ParserState.feed_token` fed by the contextual lexer's generator) costs a
 method call, a generator step and several attribute lookups per token and per reduction,
-and an expression operand goes through ten unit rules (`?ite: implies`, `?implies:
-or_expr`, ...) whose callbacks hand their one child on. This loop reads the same parse
-table, the same per-state lexers and the same callbacks, inlines the lexing, and moves a
-unit rule's value without calling its callback: half of a large file's parse time.
+then builds a parse tree with positions on every node, which a second pass turns into the
+AST. This loop reads the same parse table and the same per-state lexers, inlines the
+lexing, moves a unit rule's value (`?ite: implies`, ten per expression operand) without a
+call, and at every other reduction calls the Builder's method for the rule at once, with
+the rule's children filtered and inlined as lark would and its positions taken from a
+stack kept beside the values (a node spans from where its first child's container starts
+to where its last child's ends; `( e )` passed on by a `?rule` keeps its own span but its
+container is the brackets). The AST, every span and every diagnostic are the ones the
+tree and `Builder.build` give.
 
-It only ever succeeds with lark's result. At anything out of the ordinary (no action for a
+It only ever succeeds with that result. At anything out of the ordinary (no action for a
 token, no terminal matches, a callback raising: a keyword run into a name, an expression
 nested too deeply) it gives up, and the caller parses the text again with lark itself,
 whose exceptions the syntax-error diagnosis reads: a failed parse costs at most twice.
@@ -22,6 +27,13 @@ from typing import Any
 import lark
 from lark import Token, Tree
 from lark.parsers.lalr_analysis import Shift
+
+from afsmc.syntax.build import SIZED, Builder, rule_methods
+from afsmc.syntax.limits import MAX_DEPTH
+
+# How a reduction builds its value (the third item of a reduce action; None: a unit rule
+# that passes its one child on untouched, container included).
+INLINE, PASS, BUILD = 0, 1, 2
 
 
 class GiveUp(Exception):
@@ -42,8 +54,9 @@ class _Lexer:
 @dataclass(frozen=True)
 class _Tables:
     # state -> terminal -> a state to shift to (int), or a reduction:
-    # (size, nonterminal, callback), callback None for a unit rule that passes its one
-    # child on untouched.
+    # (size, nonterminal, None) for a unit rule that passes its one child on untouched,
+    # else (size, nonterminal, (how, children kept, method, counts depth)); children kept
+    # is None when all are, else (index, inlined) pairs.
     actions: dict[int, dict[str, Any]]
     gotos: dict[int, dict[str, int]]  # state -> nonterminal -> state
     lexers: dict[int, _Lexer]
@@ -63,8 +76,28 @@ def _passes_child_on(callback: Any) -> bool:
         return False
 
 
+def _reduction(rule: Any, callback: Any, expr_rules: frozenset[str]) -> Any:
+    """How the loop reduces by `rule` (see _Tables.actions)."""
+    size = len(rule.expansion)
+    if size == 1 and _passes_child_on(callback):
+        return None
+    keep_all = rule.options.keep_all_tokens
+    include = tuple((i, not sym.is_term and sym.name.startswith("_"))
+                    for i, sym in enumerate(rule.expansion)
+                    if keep_all or not (sym.is_term and sym.filter_out))
+    kept = None if len(include) == size and not any(x for _, x in include) else include
+    name = rule.alias or rule.origin.name
+    if rule.origin.name.startswith("_"):
+        how = INLINE
+    elif rule.options.expand1 and not rule.alias:
+        how = PASS
+    else:
+        how = BUILD
+    return (how, kept, rule_methods(Builder).get(name), name in expr_rules)
+
+
 @cache
-def tables(parser: lark.Lark) -> _Tables:
+def tables(parser: lark.Lark, expr_rules: frozenset[str]) -> _Tables:
     """The tables of `parser` (built once per parser) in the shape the loop reads."""
     frontend: Any = parser.parser
     table = frontend.parser.parser.parse_table
@@ -78,10 +111,8 @@ def tables(parser: lark.Lark) -> _Tables:
             if action is Shift:
                 (acts if symbol.isupper() or symbol == "$END" else goes)[symbol] = arg
                 continue
-            size = len(arg.expansion)
-            callback = callbacks[arg]
-            unit = size == 1 and _passes_child_on(callback)
-            acts[symbol] = (size, arg.origin.name, None if unit else callback)
+            acts[symbol] = (len(arg.expansion), arg.origin.name,
+                            _reduction(arg, callbacks[arg], expr_rules))
         actions[state], gotos[state] = acts, goes
     lexers: dict[int, _Lexer] = {}
     made: dict[int, _Lexer] = {}
@@ -97,17 +128,72 @@ def tables(parser: lark.Lark) -> _Tables:
                    dict(table.end_states))
 
 
-def parse(parser: lark.Lark, text: str, start: str) -> Any:
-    """lark's `parser.parse(text, start=start)`, or GiveUp."""
-    t = tables(parser)
+def _filtered(raw: list[Any], kept: tuple[tuple[int, bool], ...]) -> list[Any]:
+    """A rule's children as lark's child filter gives them: anonymous tokens left out,
+    an inlined rule's (a list) spliced in; a leading one is extended in place, as lark
+    does, so that a long left-recursive list costs linear time."""
+    out: list[Any] | None = None
+    for i, inlined in kept:
+        if inlined:
+            if out is None:
+                out = raw[i]
+            else:
+                out += raw[i]
+        elif out is None:
+            out = [raw[i]]
+        else:
+            out.append(raw[i])
+    return [] if out is None else out
+
+
+def _reduce(builder: Builder, red: Any, raw: list[Any], places: list[Any]) -> tuple[Any, Any]:
+    """The value of a reduction and its place (start, line, column, end, end line, end
+    column, nesting depth), from its children and theirs."""
+    how, kept, method, counts = red
+    first, last = places[0], places[-1]
+    depth = 0
+    if counts:
+        depth = 1 + max(p[6] for p in places)
+        if depth > MAX_DEPTH:
+            raise GiveUp  # lark's parse raises TooDeep at the same node
+    place = (first[0], first[1], first[2], last[3], last[4], last[5], depth)
+    children = raw if kept is None else _filtered(raw, kept)
+    if how == BUILD:
+        if method is None:
+            raise GiveUp  # a rule the builder has no method for: lark's tree says what
+        return method(builder, place, children), place
+    if how == INLINE:
+        return children, place
+    if len(children) != 1:  # a `?rule` of several children builds a node
+        if method is None:
+            raise GiveUp
+        return method(builder, place, children), place
+    child = children[0]
+    if isinstance(child, Token):  # a token passed on keeps its own place
+        return child, (child.start_pos, child.line, child.column, child.end_pos,
+                       child.end_line, child.end_column, 0)
+    if not counts:  # the child's nesting, not the rule's (`( e )`)
+        depth = places[next(i for i, c in enumerate(raw) if c is child)][6]
+    return child, (*place[:6], depth)
+
+
+def parse(parser: lark.Lark, text: str, start: str, builder: Builder,
+          expr_rules: frozenset[str]) -> Any:
+    """The AST of `text` from the start rule `start` (what `builder.build` gives for
+    lark's tree), or GiveUp."""
+    t = tables(parser, expr_rules)
     actions, gotos, lexers = t.actions, t.gotos, t.lexers
     token_callbacks = t.token_callbacks
     end_state = t.end_states[start]
     states = [t.start_states[start]]
     values: list[Any] = []
+    places: list[Any] = []
     pos, line, line_start, size = 0, 1, 0, len(text)
     last: Token | None = None
     new_token: Any = Token._future_new  # Token(...) without its keyword-argument checks
+    sized = SIZED
+    check_size = builder.__default_token__
+    place: Any = None
     while True:
         # -- the next token, lexed in the context of the state on top
         token: Token | None = None
@@ -122,19 +208,22 @@ def parse(parser: lark.Lark, text: str, start: str) -> Any:
             value, kind = m.group(0), m.lastgroup
             ignored = kind in lexer.ignore
             callback = lexer.callbacks.get(kind)
+            start_line, start_column = line, pos - line_start + 1
             if not ignored or callback is not None:
-                token = new_token(kind, value, pos, line, pos - line_start + 1)
+                token = new_token(kind, value, pos, line, start_column)
             if kind in lexer.newlines:
                 newlines = value.count("\n")
                 if newlines:
                     line += newlines
                     line_start = pos + value.rindex("\n") + 1
+            place = (pos, start_line, start_column)
             pos += len(value)
             if token is not None:
                 token.end_line, token.end_column, token.end_pos = line, pos - line_start + 1, pos
                 if callback is not None:
                     token = callback(token)
                 if not ignored:
+                    place += (pos, line, pos - line_start + 1, 0)
                     break
                 token = None
         is_end = token is None
@@ -153,19 +242,34 @@ def parse(parser: lark.Lark, text: str, start: str) -> Any:
                     raise GiveUp
                 states.append(action)
                 callback = token_callbacks.get(kind)
-                values.append(token if callback is None else callback(token))
+                if callback is not None:
+                    token = callback(token)
+                if kind in sized:
+                    token = check_size(token)
+                values.append(token)
+                places.append(place)
                 break
-            n, origin, callback = action
-            if callback is None:
+            n, origin, red = action
+            if red is None:
                 del states[-1]
+            elif n:
+                value, node_place = _reduce(builder, red, values[-n:], places[-n:])
+                del states[-n:]
+                del values[-n:]
+                del places[-n:]
+                values.append(value)
+                places.append(node_place)
             else:
-                if n:
-                    children = values[-n:]
-                    del states[-n:]
-                    del values[-n:]
-                else:
-                    children = []
-                values.append(callback(children))
+                values.append(_reduce_empty(builder, red))
+                places.append((0, 1, 1, 0, 1, 1, 0))  # never read: an empty rule is the root
             states.append(gotos[states[-1]][origin])
             if is_end and states[-1] == end_state:
                 return values[-1]
+
+
+def _reduce_empty(builder: Builder, red: Any) -> Any:
+    """The value of a rule that matched nothing (an empty file's `start`)."""
+    how, _, method, _ = red
+    if how != BUILD or method is None:
+        raise GiveUp
+    return method(builder, None, [])
