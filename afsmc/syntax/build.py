@@ -43,6 +43,17 @@ def span_of(source: Source, meta_or_tok: Any) -> Span:
     return Span(source, line, col, end_line, end_col, start, end)
 
 
+def _span(source: Source, line: int, column: int, end_line: int, end_column: int,
+          start: int, end: int) -> Span:
+    """Span(source, line, column, end_line, end_column, start, end), without the frozen
+    dataclass's __init__ (one object.__setattr__ per field: a parse makes a span for
+    nearly every token)."""
+    span: Span = object.__new__(Span)
+    span.__dict__.update(source=source, line=line, column=column, end_line=end_line,
+                         end_column=end_column, start=start, end=end)
+    return span
+
+
 # Where a node is: start offset, line, column, end offset, end line, end column (as lark's
 # meta has them), and how deeply it nests (afsmc.syntax.drive counts it; 0 here).
 Place = tuple[int, int, int, int, int, int, int]
@@ -119,10 +130,14 @@ class Builder(Transformer[Token, Any]):
                 col -= 1
             if end_line == 1 and end > 0:
                 end_col -= 1
-        return Span(self.source, line, col, end_line, end_col, start, end)
+        return _span(self.source, line, col, end_line, end_col, start, end)
 
     def _id(self, tok: Token) -> ast.Ident:
-        return ast.Ident(str(tok), span_of(self.source, tok))
+        t: Any = tok
+        if self.bom or t.start_pos is None or t.end_pos is None:
+            return ast.Ident(str(tok), span_of(self.source, tok))
+        return ast.Ident(str(tok), _span(self.source, t.line, t.column, t.end_line,
+                                         t.end_column, t.start_pos, t.end_pos))
 
     # -- module
     def start(self, meta: Any, children: list[Any]) -> ast.Module:

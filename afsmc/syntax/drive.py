@@ -20,6 +20,7 @@ whose exceptions the syntax-error diagnosis reads: a failed parse costs at most 
 
 from __future__ import annotations
 
+import re
 from dataclasses import dataclass
 from functools import cache
 from typing import Any
@@ -34,6 +35,9 @@ from afsmc.syntax.limits import MAX_DEPTH
 # How a reduction builds its value (the third item of a reduce action; None: a unit rule
 # that passes its one child on untouched, container included).
 INLINE, PASS, BUILD = 0, 1, 2
+# The white space the grammar ignores everywhere (`%ignore WS`): the loop skips it without
+# asking the state's lexer, as no other terminal starts with it.
+BLANKS = frozenset(" \t\f\r\n")
 
 
 class GiveUp(Exception):
@@ -63,6 +67,8 @@ class _Tables:
     token_callbacks: dict[str, Any]  # the parser's callbacks keyed by terminal
     start_states: dict[str, int]
     end_states: dict[str, int]
+    blank: Any  # WS's pattern's match
+    dropped: frozenset[str]  # terminals no rule keeps as a child: no Token is made for them
 
 
 def _passes_child_on(callback: Any) -> bool:
@@ -82,8 +88,9 @@ def _reduction(rule: Any, callback: Any, expr_rules: frozenset[str]) -> Any:
     if size == 1 and _passes_child_on(callback):
         return None
     keep_all = rule.options.keep_all_tokens
+    expansion: list[Any] = rule.expansion
     include = tuple((i, not sym.is_term and sym.name.startswith("_"))
-                    for i, sym in enumerate(rule.expansion)
+                    for i, sym in enumerate(expansion)
                     if keep_all or not (sym.is_term and sym.filter_out))
     kept = None if len(include) == size and not any(x for _, x in include) else include
     name = rule.alias or rule.origin.name
@@ -124,8 +131,22 @@ def tables(parser: lark.Lark, expr_rules: frozenset[str]) -> _Tables:
                                      frozenset(basic.ignore_types))
         lexers[state] = made[id(basic)]
     token_callbacks = {k: v for k, v in callbacks.items() if isinstance(k, str)}
+    (ws,) = (term for term in parser.terminals if term.name == "WS")
+    blank = re.compile(ws.pattern.to_regexp())
+    # (skipping it is what every state's lexer does: WS ignored, no callback, and no
+    # other terminal matches a blank)
+    assert all(not (lx.ignore & set(lx.callbacks)) for lx in lexers.values())
+    assert all("WS" in lx.ignore and "WS" not in lx.callbacks and all(
+        next(m.lastgroup for p in lx.patterns if (m := p.match(c))) == "WS" for c in BLANKS)
+        for lx in lexers.values())
+    assert all(blank.fullmatch(c) for c in BLANKS) and not blank.match("\v")
+    symbols: Any = [(rule, sym) for rule in parser.rules for sym in rule.expansion]
+    kept = {sym.name for rule, sym in symbols if sym.is_term and (rule.options.keep_all_tokens or not sym.filter_out)}
+    dropped = frozenset(term.name for term in parser.terminals
+                        if term.name not in kept and term.name not in token_callbacks
+                        and all(term.name not in lx.callbacks for lx in lexers.values()))
     return _Tables(actions, gotos, lexers, token_callbacks, dict(table.start_states),
-                   dict(table.end_states))
+                   dict(table.end_states), blank.match, dropped)
 
 
 def _filtered(raw: list[Any], kept: tuple[tuple[int, bool], ...]) -> list[Any]:
@@ -151,11 +172,7 @@ def _reduce(builder: Builder, red: Any, raw: list[Any], places: list[Any]) -> tu
     column, nesting depth), from its children and theirs."""
     how, kept, method, counts = red
     first, last = places[0], places[-1]
-    depth = 0
-    if counts:
-        depth = 1 + max(p[6] for p in places)
-        if depth > MAX_DEPTH:
-            raise GiveUp  # lark's parse raises TooDeep at the same node
+    depth = _depth(places) if counts else 0
     place = (first[0], first[1], first[2], last[3], last[4], last[5], depth)
     children = raw if kept is None else _filtered(raw, kept)
     if how == BUILD:
@@ -179,25 +196,30 @@ def _reduce(builder: Builder, red: Any, raw: list[Any], places: list[Any]) -> tu
 
 def parse(parser: lark.Lark, text: str, start: str, builder: Builder,
           expr_rules: frozenset[str]) -> Any:
-    """The AST of `text` from the start rule `start` (what `builder.build` gives for
-    lark's tree), or GiveUp."""
+    """The AST of `text` from `start` (what `builder.build` gives lark's tree), or GiveUp."""
     t = tables(parser, expr_rules)
-    actions, gotos, lexers = t.actions, t.gotos, t.lexers
-    token_callbacks = t.token_callbacks
-    end_state = t.end_states[start]
-    states = [t.start_states[start]]
+    actions, gotos, lexers, token_callbacks = t.actions, t.gotos, t.lexers, t.token_callbacks
+    end_state, states = t.end_states[start], [t.start_states[start]]
     values: list[Any] = []
-    places: list[Any] = []
+    places: list[Any] = []  # each value's place (see _reduce)
     pos, line, line_start, size = 0, 1, 0, len(text)
-    last: Token | None = None
     new_token: Any = Token._future_new  # Token(...) without its keyword-argument checks
-    sized = SIZED
-    check_size = builder.__default_token__
+    sized, check_size = SIZED, builder.__default_token__
+    blank, blanks, dropped = t.blank, BLANKS, t.dropped
+    units: dict[tuple[int, int, str], int] = {}
     place: Any = None
     while True:
         # -- the next token, lexed in the context of the state on top
-        token: Token | None = None
+        token: Any = None  # a Token, or a dropped terminal's name
         while pos < size:
+            if text[pos] in blanks:  # white space: skipped in every state, no token
+                value = blank(text, pos).group(0)
+                newlines = value.count("\n")
+                if newlines:
+                    line += newlines
+                    line_start = pos + value.rindex("\n") + 1
+                pos += len(value)
+                continue
             lexer = lexers[states[-1]]
             for pattern in lexer.patterns:
                 m = pattern.match(text, pos)
@@ -206,32 +228,27 @@ def parse(parser: lark.Lark, text: str, start: str, builder: Builder,
             else:
                 raise GiveUp
             value, kind = m.group(0), m.lastgroup
-            ignored = kind in lexer.ignore
-            callback = lexer.callbacks.get(kind)
-            start_line, start_column = line, pos - line_start + 1
-            if not ignored or callback is not None:
-                token = new_token(kind, value, pos, line, start_column)
+            start_pos, start_line, start_column = pos, line, pos - line_start + 1
             if kind in lexer.newlines:
                 newlines = value.count("\n")
                 if newlines:
                     line += newlines
                     line_start = pos + value.rindex("\n") + 1
-            place = (pos, start_line, start_column)
             pos += len(value)
-            if token is not None:
-                token.end_line, token.end_column, token.end_pos = line, pos - line_start + 1, pos
-                if callback is not None:
-                    token = callback(token)
-                if not ignored:
-                    place += (pos, line, pos - line_start + 1, 0)
-                    break
-                token = None
+            if kind in lexer.ignore:  # (a comment; no ignored terminal has a callback)
+                continue
+            place = (start_pos, start_line, start_column, pos, line, pos - line_start + 1, 0)
+            if kind in dropped:  # no rule reads it: its place will do
+                token = kind
+                break
+            token = new_token(kind, value, start_pos, start_line, start_column)
+            token.end_line, token.end_column, token.end_pos = line, place[5], pos
+            callback = lexer.callbacks.get(kind)
+            if callback is not None:
+                token = callback(token)
+            break
         is_end = token is None
-        if token is None:
-            token = (Token.new_borrow_pos("$END", "", last) if last is not None
-                     else Token("$END", "", 0, 1, 1))
-        last = token
-        kind = token.type
+        kind = "$END" if token is None else token if type(token) is str else token.type
         # -- reductions, then the shift (or, at the end, the accepting reduction)
         while True:
             action = actions[states[-1]].get(kind)
@@ -250,13 +267,25 @@ def parse(parser: lark.Lark, text: str, start: str, builder: Builder,
                 places.append(place)
                 break
             n, origin, red = action
-            if red is None:
-                del states[-1]
-            elif n:
-                value, node_place = _reduce(builder, red, values[-n:], places[-n:])
-                del states[-n:]
-                del values[-n:]
-                del places[-n:]
+            if red is None:  # a run of unit rules (see _units)
+                key = (states[-2], states[-1], kind)
+                top = units[key] if key in units else _units(units, actions, gotos, key, end_state)
+                states[-1] = top
+                if is_end and top == end_state:
+                    return values[-1]
+                continue
+            if n:
+                raw, at = values[-n:], places[-n:]
+                del states[-n:], values[-n:], places[-n:]
+                how, kept, method, counts = red
+                if how == BUILD and method is not None:  # the common case, inline
+                    first, end = at[0], at[-1]
+                    node_place = (first[0], first[1], first[2], end[3], end[4], end[5],
+                                  _depth(at) if counts else 0)
+                    value = method(builder, node_place, raw if kept is None
+                                   else _filtered(raw, kept))
+                else:
+                    value, node_place = _reduce(builder, red, raw, at)
                 values.append(value)
                 places.append(node_place)
             else:
@@ -265,6 +294,31 @@ def parse(parser: lark.Lark, text: str, start: str, builder: Builder,
             states.append(gotos[states[-1]][origin])
             if is_end and states[-1] == end_state:
                 return values[-1]
+
+
+def _depth(places: list[Any]) -> int:
+    """The nesting of an expression node: one more than its deepest child's."""
+    depth: int = 1 + max(p[6] for p in places)
+    if depth > MAX_DEPTH:
+        raise GiveUp  # lark's parse raises TooDeep at the same node
+    return depth
+
+
+def _units(known: dict[tuple[int, int, str], int], actions: dict[int, dict[str, Any]],
+           gotos: dict[int, dict[str, int]], key: tuple[int, int, str], end_state: int) -> int:
+    """The state on top after the unit rules that reduce from `key` (state below, state
+    on top, terminal), up to the first other action or the end state, kept in `known`. A
+    unit rule replaces the state on top only, so the run's end depends on `key` alone."""
+    below, top, kind = key
+    while True:
+        action = actions[top].get(kind)
+        if action is None or type(action) is int or action[2] is not None:
+            break
+        top = gotos[below][action[1]]
+        if top == end_state:
+            break
+    known[key] = top
+    return top
 
 
 def _reduce_empty(builder: Builder, red: Any) -> Any:
