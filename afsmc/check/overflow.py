@@ -21,7 +21,6 @@ from afsmc.model.bounds import bounds
 from afsmc.model.expr import Type
 from afsmc.model.limits import INT64
 from afsmc.model.pretty import with_names
-from afsmc.model.semantics import inline
 
 _STATE_FREE = (E.Lit, E.ConstRef, E.Unary, E.Binary, E.Ite, E.Call)
 
@@ -87,7 +86,7 @@ def check_overflow(model: ir.Model, rep: Reporter) -> None:
     show = with_names(model.display_names())
     reported: set[tuple[int, int] | int] = set()
     for site in sites(model):
-        x = inline(site.expr, model)
+        x = site.inlined
         # One pass, inner parts first (an outer expression overflows because an inner one
         # does), with each node's facts computed from its children's: linear in the size
         # of the expression (a node that walked its subtree would make a 2000-term sum take 12 s).
