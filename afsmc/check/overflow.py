@@ -87,6 +87,8 @@ def check_overflow(model: ir.Model, rep: Reporter) -> None:
     reported: set[tuple[int, int] | int] = set()
     for site in sites(model):
         x = site.inlined
+        if not isinstance(x, (E.Unary, E.Binary, E.Ite, E.Call)):
+            continue  # a number, constant or variable: nothing is computed
         # One pass, inner parts first (an outer expression overflows because an inner one
         # does), with each node's facts computed from its children's: linear in the size
         # of the expression (a node that walked its subtree would make a 2000-term sum take 12 s).
@@ -96,6 +98,10 @@ def check_overflow(model: ir.Model, rep: Reporter) -> None:
         tainted: dict[int, bool] = {}  # holds a node already reported
         for n in reversed(list(E.walk(x))):
             kids = E.children(n)
+            if not kids and not isinstance(n, E.Call):  # a leaf computes nothing
+                free[id(n)] = isinstance(n, _STATE_FREE)
+                tainted[id(n)] = node_key(n) in reported
+                continue
             free[id(n)] = isinstance(n, _STATE_FREE) and all(free[id(c)] for c in kids)
             key = node_key(n)
             below = key in reported or any(tainted[id(c)] for c in kids)
