@@ -25,3 +25,12 @@ def collector_paused() -> Iterator[None]:
     finally:
         if was_enabled:
             gc.enable()
+
+
+def leave_to_exit() -> None:
+    """Before the process exits: put every live object out of the collector's reach
+    (`gc.freeze`), so that the interpreter's last collection does not scan a heap of
+    millions of objects that the exit drops anyway (2.5 s of CPU after checking a 1 MB
+    file, a sixth of the command). Only where the process ends next: a caller that goes
+    on (a test, the fuzzer, the language server) keeps its collector as it was."""
+    gc.freeze()
