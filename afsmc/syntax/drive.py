@@ -58,7 +58,8 @@ class _Lexer:
 @dataclass(frozen=True)
 class _Tables:
     # state -> terminal -> a state to shift to (int), or a reduction:
-    # (size, nonterminal, None) for a unit rule that passes its one child on untouched,
+    # (size, nonterminal, k) for a unit rule that passes its one child on untouched, with
+    # k = 1 if the rule counts a level of nesting (`?ite: implies`) else 0,
     # else (size, nonterminal, (how, children kept, method, counts depth)); children kept
     # is None when all are, else (index, inlined) pairs.
     actions: dict[int, dict[str, Any]]
@@ -86,7 +87,7 @@ def _reduction(rule: Any, callback: Any, expr_rules: frozenset[str]) -> Any:
     """How the loop reduces by `rule` (see _Tables.actions)."""
     size = len(rule.expansion)
     if size == 1 and _passes_child_on(callback):
-        return None
+        return 0
     keep_all = rule.options.keep_all_tokens
     expansion: list[Any] = rule.expansion
     include = tuple((i, not sym.is_term and sym.name.startswith("_"))
@@ -97,6 +98,8 @@ def _reduction(rule: Any, callback: Any, expr_rules: frozenset[str]) -> Any:
     if rule.origin.name.startswith("_"):
         how = INLINE
     elif rule.options.expand1 and not rule.alias:
+        if size == 1 and kept is None and name in expr_rules:
+            return 1  # passes its one child on, one level deeper (`?ite: implies`)
         how = PASS
     else:
         how = BUILD
@@ -206,8 +209,7 @@ def parse(parser: lark.Lark, text: str, start: str, builder: Builder,
     new_token: Any = Token._future_new  # Token(...) without its keyword-argument checks
     sized, check_size = SIZED, builder.__default_token__
     blank, blanks, dropped = t.blank, BLANKS, t.dropped
-    units: dict[tuple[int, int, str], int] = {}
-    place: Any = None
+    units: dict[tuple[int, int, str], tuple[int, int]] = {}
     while True:
         # -- the next token, lexed in the context of the state on top
         token: Any = None  # a Token, or a dropped terminal's name
@@ -267,10 +269,12 @@ def parse(parser: lark.Lark, text: str, start: str, builder: Builder,
                 places.append(place)
                 break
             n, origin, red = action
-            if red is None:  # a run of unit rules (see _units)
+            if type(red) is int:  # a run of unit rules (see _units)
                 key = (states[-2], states[-1], kind)
-                top = units[key] if key in units else _units(units, actions, gotos, key, end_state)
+                top, deeper = units[key] if key in units else _units(units, t, key, end_state)
                 states[-1] = top
+                if deeper:
+                    places[-1] = _deeper(places[-1], deeper)
                 if is_end and top == end_state:
                     return values[-1]
                 continue
@@ -288,9 +292,8 @@ def parse(parser: lark.Lark, text: str, start: str, builder: Builder,
                     value, node_place = _reduce(builder, red, raw, at)
                 values.append(value)
                 places.append(node_place)
-            else:
-                values.append(_reduce_empty(builder, red))
-                places.append((0, 1, 1, 0, 1, 1, 0))  # never read: an empty rule is the root
+            else:  # an empty file's `start`
+                _reduce_empty(builder, red, values, places)
             states.append(gotos[states[-1]][origin])
             if is_end and states[-1] == end_state:
                 return values[-1]
@@ -304,26 +307,39 @@ def _depth(places: list[Any]) -> int:
     return depth
 
 
-def _units(known: dict[tuple[int, int, str], int], actions: dict[int, dict[str, Any]],
-           gotos: dict[int, dict[str, int]], key: tuple[int, int, str], end_state: int) -> int:
+def _units(known: dict[tuple[int, int, str], tuple[int, int]], t: _Tables,
+           key: tuple[int, int, str], end_state: int) -> tuple[int, int]:
     """The state on top after the unit rules that reduce from `key` (state below, state
-    on top, terminal), up to the first other action or the end state, kept in `known`. A
-    unit rule replaces the state on top only, so the run's end depends on `key` alone."""
+    on top, terminal), up to the first other action or the end state, and how many
+    levels of nesting they count; kept in `known`. A unit rule replaces the state on top
+    only, so the run depends on `key` alone."""
     below, top, kind = key
+    actions, gotos = t.actions, t.gotos
+    deeper = 0
     while True:
         action = actions[top].get(kind)
-        if action is None or type(action) is int or action[2] is not None:
+        if action is None or type(action) is int or type(action[2]) is not int:
             break
+        deeper += action[2]
         top = gotos[below][action[1]]
         if top == end_state:
             break
-    known[key] = top
-    return top
+    known[key] = (top, deeper)
+    return top, deeper
 
 
-def _reduce_empty(builder: Builder, red: Any) -> Any:
-    """The value of a rule that matched nothing (an empty file's `start`)."""
+def _deeper(place: Any, levels: int) -> Any:
+    """`place` nested `levels` deeper (a value passed on by `?ite: implies` and the like)."""
+    depth = place[6] + levels
+    if depth > MAX_DEPTH:
+        raise GiveUp  # lark's parse raises TooDeep at the same node
+    return (*place[:6], depth)
+
+
+def _reduce_empty(builder: Builder, red: Any, values: list[Any], places: list[Any]) -> None:
+    """Push the value of a rule that matched nothing (an empty file's `start`)."""
     how, _, method, _ = red
     if how != BUILD or method is None:
         raise GiveUp
-    return method(builder, None, [])
+    values.append(method(builder, None, []))
+    places.append((0, 1, 1, 0, 1, 1, 0))  # never read: an empty rule is the root
