@@ -129,3 +129,12 @@ def test_nesting_is_counted_as_lark_counts_it(levels: int) -> None:
         assert (isinstance(lark_answer, tuple)) == (isinstance(drive_answer, tuple))
         if isinstance(lark_answer, tuple):
             assert drive_answer == lark_answer
+
+
+def test_spans_made_without_init_are_spans() -> None:
+    from afsmc.syntax.build import _span
+
+    source = Source("s.afsm", "abc\ndef\n")
+    fast, plain = _span(source, 1, 2, 2, 3, 1, 6), Span(source, 1, 2, 2, 3, 1, 6)
+    assert fast == plain and hash(fast) == hash(plain)
+    assert vars(fast) == vars(plain)
