@@ -2,6 +2,6 @@
 
 import sys
 
-from afsmc.cli import main
+from afsmc.cli import entry
 
-sys.exit(main())
+sys.exit(entry())

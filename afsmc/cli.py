@@ -23,6 +23,7 @@ from typing import Any, TextIO
 
 from afsmc import __version__
 from afsmc.diagnostics import CompileError, Diagnostic, Severity, codes, render_all
+from afsmc.heap import leave_to_exit
 from afsmc.interrupt import JsonResult, Stopped
 from afsmc.stack import run_deep
 
@@ -139,6 +140,13 @@ def _run(args: argparse.Namespace) -> int:
             hint="shorten the longest expressions (long chains of operators or formulas "
             "that use each other)")]), getattr(args, "json", False),
             wrapped=args.command in ("verify", "sweep"))
+    return code
+
+
+def entry() -> int:
+    """The `afsmc` command and `python -m afsmc`: `main`, then the process ends."""
+    code = main()
+    leave_to_exit()
     return code
 
 

@@ -19,7 +19,6 @@ from afsmc.model.bounds import bounds
 from afsmc.model.expr import Type
 from afsmc.model.pretty import with_names
 from afsmc.model.search import find
-from afsmc.model.semantics import inline
 
 _NOT_ARITHMETIC = {"==", "!=", "<", "<=", ">", ">=", "&&", "||", "=>"}
 
@@ -45,7 +44,7 @@ def check_int_pow(model: ir.Model, rep: Reporter) -> None:
     for site in sites(model):
         if site.target is None or model.variable(site.target).type is not Type.INT:
             continue
-        for p in _powers(inline(site.expr, model)):
+        for p in _powers(site.inlined):
             k = p.args[1]
             if bounds(k, model)[0] >= 0:
                 continue

@@ -21,7 +21,6 @@ from afsmc.model.bounds import bounds
 from afsmc.model.expr import Type
 from afsmc.model.limits import INT64
 from afsmc.model.pretty import with_names
-from afsmc.model.semantics import inline
 
 _STATE_FREE = (E.Lit, E.ConstRef, E.Unary, E.Binary, E.Ite, E.Call)
 
@@ -87,7 +86,9 @@ def check_overflow(model: ir.Model, rep: Reporter) -> None:
     show = with_names(model.display_names())
     reported: set[tuple[int, int] | int] = set()
     for site in sites(model):
-        x = inline(site.expr, model)
+        x = site.inlined
+        if not isinstance(x, (E.Unary, E.Binary, E.Ite, E.Call)):
+            continue  # a number, constant or variable: nothing is computed
         # One pass, inner parts first (an outer expression overflows because an inner one
         # does), with each node's facts computed from its children's: linear in the size
         # of the expression (a node that walked its subtree would make a 2000-term sum take 12 s).
@@ -97,6 +98,10 @@ def check_overflow(model: ir.Model, rep: Reporter) -> None:
         tainted: dict[int, bool] = {}  # holds a node already reported
         for n in reversed(list(E.walk(x))):
             kids = E.children(n)
+            if not kids and not isinstance(n, E.Call):  # a leaf computes nothing
+                free[id(n)] = isinstance(n, _STATE_FREE)
+                tainted[id(n)] = node_key(n) in reported
+                continue
             free[id(n)] = isinstance(n, _STATE_FREE) and all(free[id(c)] for c in kids)
             key = node_key(n)
             below = key in reported or any(tainted[id(c)] for c in kids)

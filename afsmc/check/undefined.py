@@ -14,8 +14,9 @@ from __future__ import annotations
 
 import itertools
 from collections.abc import Callable, Iterator
-from dataclasses import dataclass
-from functools import cache, cached_property, partial
+from dataclasses import dataclass, field
+from functools import cached_property, partial
+from typing import Any
 
 from afsmc.diagnostics import Reporter, codes
 from afsmc.model import expr as E
@@ -120,10 +121,31 @@ class Site:
     # site was a tenth of a large file's check
     conditions: Conditions
     target: str | None = None  # the variable an update assigns
+    model: ir.Model | None = field(default=None, compare=False, repr=False)
 
     @cached_property
     def when(self) -> dict[int, E.Expr]:
         return self.conditions()
+
+    @cached_property
+    def inlined(self) -> E.Expr:
+        """The expression with formulas and weights inlined (each check reads it)."""
+        assert self.model is not None
+        return inline(self.expr, self.model)
+
+
+class _Once:
+    """A function of no arguments whose value is computed at the first call only (the
+    conditions several sites share), lighter than functools.cache."""
+
+    def __init__(self, fn: Conditions) -> None:
+        self.fn: Conditions | None = fn
+        self.value: dict[int, E.Expr] = {}
+
+    def __call__(self) -> dict[int, E.Expr]:
+        if self.fn is not None:
+            self.value, self.fn = self.fn(), None
+        return self.value
 
 
 def _guard_when(model: ir.Model, a: ir.Action) -> dict[int, E.Expr]:
@@ -158,39 +180,54 @@ def _reward_value_when(model: ir.Model, item: ir.RewardItem, all_modes: dict[int
 
 
 def sites(model: ir.Model) -> Iterator[Site]:
-    """Every expression the machine evaluates, with the modes (and conditions) where."""
+    """Every expression the machine evaluates, with the modes (and conditions) where.
+    Made once per model and shared by the checks, with what they compute on a site (its
+    conditions, its expression inlined): kept while the model's parts are the same
+    objects (`dataclasses.replace` shares the memo)."""
+    parts = (model.modes, model.actions, model.hazards, model.labels, model.rewards,
+             model.properties, model.formulas, model.constants, model.variables)
+    known: Any = model.memo.lookups.get("check.sites")
+    if known is not None and all(a is b for a, b in zip(known[0], parts, strict=True)):
+        return iter(known[1])
+    made = list(_sites(model))
+    model.memo.lookups["check.sites"] = (parts, made)
+    return iter(made)
+
+
+def _sites(model: ir.Model) -> Iterator[Site]:
     all_modes: dict[int, E.Expr] = {m.number: E.TRUE for m in model.modes}
     everywhere: Conditions = lambda: all_modes  # noqa: E731
     for a in model.actions:
         kind = "hazard" if a.kind == "preemptive" else "action"
-        yield Site(f"the guard of {kind} {a.name}", a.guard, partial(_guard_when, model, a))
-        yield Site(f"the weight of {kind} {a.name}", a.weight, partial(_weight_when, model, a))
-        yield from _outcome_sites(f"{kind} {a.name}", a.outcomes, cache(partial(_fires, model, a)))
+        yield Site(f"the guard of {kind} {a.name}", a.guard, partial(_guard_when, model, a), model=model)
+        yield Site(f"the weight of {kind} {a.name}", a.weight, partial(_weight_when, model, a), model=model)
+        yield from _outcome_sites(f"{kind} {a.name}", a.outcomes, _Once(partial(_fires, model, a)),
+                                  model)
     for h in model.hazards:
-        when = cache(partial(_hazard_when, model, h))
-        yield Site(f"the probability of hazard {h.name}", h.prob, when)
-        yield from _outcome_sites(f"hazard {h.name}", h.outcomes, when)
+        when = _Once(partial(_hazard_when, model, h))
+        yield Site(f"the probability of hazard {h.name}", h.prob, when, model=model)
+        yield from _outcome_sites(f"hazard {h.name}", h.outcomes, when, model)
     for lb in model.labels:
-        yield Site(f"label {lb.name}", lb.value, everywhere)
+        yield Site(f"label {lb.name}", lb.value, everywhere, model=model)
     for r in model.rewards:
         for item in r.items:
             yield Site(f"reward structure {r.name}", item.guard,
-                       partial(_reward_when, model, item, all_modes))
+                       partial(_reward_when, model, item, all_modes), model=model)
             yield Site(f"reward structure {r.name}", item.value,
-                       partial(_reward_value_when, model, item, all_modes))
+                       partial(_reward_value_when, model, item, all_modes), model=model)
     for p in model.properties:
         for e in (p.path.target, getattr(p.path, "left", None)):
             if e is not None:
-                yield Site(f"property {p.name}", e, everywhere)
+                yield Site(f"property {p.name}", e, everywhere, model=model)
 
 
-def _outcome_sites(owner: str, outcomes: tuple[ir.Outcome, ...],
-                   when: Conditions) -> Iterator[Site]:
+def _outcome_sites(owner: str, outcomes: tuple[ir.Outcome, ...], when: Conditions,
+                   model: ir.Model) -> Iterator[Site]:
     for o in outcomes:
-        yield Site(f"an outcome probability of {owner}", o.prob, when)
+        yield Site(f"an outcome probability of {owner}", o.prob, when, model=model)
         for u in o.updates:
             if u.var != "mode":
-                yield Site(f"an update of {owner}", u.value, when, u.var)
+                yield Site(f"an update of {owner}", u.value, when, u.var, model=model)
 
 
 def node_key(n: E.Expr) -> tuple[int, int] | int:
@@ -203,7 +240,7 @@ def check_undefined(model: ir.Model, rep: Reporter) -> None:
     show = with_names(model.display_names())
     reported: set[tuple[int, int] | int] = set()
     for site in sites(model):
-        x = inline(site.expr, model)
+        x = site.inlined
         for p in partials(x):
             if node_key(p.node) in reported or _never_zero(p, model):
                 continue

@@ -164,16 +164,25 @@ def depth(e: Expr, formulas: Callable[[str], int] | None = None) -> int:
 
 
 def transform(e: Expr, fn: Callable[[Expr], Expr | None]) -> Expr:
-    """Rebuild bottom-up; `fn` returns a replacement for a node or None to keep it."""
+    """Rebuild bottom-up; `fn` returns a replacement for a node or None to keep it. A node
+    none of whose parts changed is kept itself, not copied (inlining an expression that
+    refers to no formula rebuilds nothing)."""
     if isinstance(e, Unary):
-        e = replace(e, operand=transform(e.operand, fn))
+        operand = transform(e.operand, fn)
+        if operand is not e.operand:
+            e = replace(e, operand=operand)
     elif isinstance(e, Binary):
-        e = replace(e, left=transform(e.left, fn), right=transform(e.right, fn))
+        left, right = transform(e.left, fn), transform(e.right, fn)
+        if left is not e.left or right is not e.right:
+            e = replace(e, left=left, right=right)
     elif isinstance(e, Ite):
-        e = replace(e, cond=transform(e.cond, fn), then=transform(e.then, fn),
-                    other=transform(e.other, fn))
+        cond, then, other = transform(e.cond, fn), transform(e.then, fn), transform(e.other, fn)
+        if cond is not e.cond or then is not e.then or other is not e.other:
+            e = replace(e, cond=cond, then=then, other=other)
     elif isinstance(e, Call):
-        e = replace(e, args=tuple(transform(a, fn) for a in e.args))
+        args = tuple(transform(a, fn) for a in e.args)
+        if any(a is not b for a, b in zip(args, e.args, strict=True)):
+            e = replace(e, args=args)
     out = fn(e)
     return e if out is None else out
 

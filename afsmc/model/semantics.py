@@ -80,6 +80,8 @@ def key_label(name: str) -> str:
 
 def static_value(e: E.Expr, model: ir.Model) -> float | None:
     """The value of a state-free expression, or None if it depends on the state."""
+    if isinstance(e, E.Lit):  # (a plain outcome's probability 1, a weight 1)
+        return float(e.value)
     for n in E.walk(e):
         if isinstance(n, (E.VarRef, E.CurrentMode, E.WeightRef, E.LabelRef)):
             return None

@@ -20,7 +20,7 @@ from afsmc.syntax import ast
 from afsmc.syntax.limits import MAX_TOKEN_CHARS, clip
 
 # The tokens whose length the author chooses, and how E125 names them.
-_SIZED = {"NAME": "name", "NUMBER": "number", "ESCAPED_STRING": "label name"}
+SIZED = {"NAME": "name", "NUMBER": "number", "ESCAPED_STRING": "label name"}
 
 
 def span_of(source: Source, meta_or_tok: Any) -> Span:
@@ -43,8 +43,32 @@ def span_of(source: Source, meta_or_tok: Any) -> Span:
     return Span(source, line, col, end_line, end_col, start, end)
 
 
+def _span(source: Source, line: int, column: int, end_line: int, end_column: int,
+          start: int, end: int) -> Span:
+    """Span(source, line, column, end_line, end_column, start, end), without the frozen
+    dataclass's __init__ (one object.__setattr__ per field: a parse makes a span for
+    nearly every token)."""
+    span: Span = object.__new__(Span)
+    span.__dict__.update(source=source, line=line, column=column, end_line=end_line,
+                         end_column=end_column, start=start, end=end)
+    return span
+
+
+# Where a node is: start offset, line, column, end offset, end line, end column (as lark's
+# meta has them), and how deeply it nests (afsmc.syntax.drive counts it; 0 here).
+Place = tuple[int, int, int, int, int, int, int]
+
+
+def place(meta: Any) -> Place | None:
+    """The place of a node of lark's tree (None for a rule that matched nothing)."""
+    if meta is None or getattr(meta, "empty", True):
+        return None
+    return (meta.start_pos, meta.line, meta.column, meta.end_pos, meta.end_line,
+            meta.end_column, 0)
+
+
 @cache
-def _rule_methods(cls: type) -> dict[str, Callable[..., Any]]:
+def rule_methods(cls: type) -> dict[str, Callable[..., Any]]:
     """The rule methods of a Builder class by rule name, as plain functions of (self,
     meta, children)."""
     methods = {}
@@ -63,11 +87,14 @@ class Builder(Transformer[Token, Any]):
         super().__init__()
         self.source = source
         self.reporter = reporter
+        self.bom = source.text.startswith(BOM)
 
     def build(self, tree: Tree[Token]) -> Any:
         """What transform(tree) gives, children first and in order, in one frame per level
-        rather than lark's three (a generator among them)."""
-        methods = _rule_methods(type(self))
+        rather than lark's three (a generator among them). Each method is given the node's
+        place (see `place`) rather than lark's meta, as the parser's own loop gives it
+        (afsmc.syntax.drive)."""
+        methods = rule_methods(type(self))
         default_token = self.__default_token__
 
         def node(tree: Tree[Token]) -> Any:
@@ -76,14 +103,14 @@ class Builder(Transformer[Token, Any]):
             method = methods.get(tree.data)
             if method is None:
                 return Tree(tree.data, children, tree.meta)  # as lark's __default__
-            return method(self, tree.meta, children)
+            return method(self, place(tree.meta), children)
 
         return node(tree)
 
     def __default_token__(self, tok: Token) -> Token:
         """Each token, before the rule it is in is built: E125 for one too long to read
         (a number beyond it stands in as 0, so that nothing converts its digits)."""
-        what = _SIZED.get(tok.type)
+        what = SIZED.get(tok.type)
         if what is None or len(tok) <= MAX_TOKEN_CHARS:
             return tok
         self.reporter.error(codes.E125, f"this {what} has {len(tok):,} characters; afsmc reads "
@@ -92,11 +119,25 @@ class Builder(Transformer[Token, Any]):
                             "no 64-bit integer or double needs as many digits")
         return Token.new_borrow_pos(tok.type, "0", tok) if tok.type == "NUMBER" else tok
 
-    def _s(self, meta: Any) -> Span:
-        return span_of(self.source, meta)
+    def _s(self, place: Place | None) -> Span:
+        """The span of a node at `place` (None: a rule that matched nothing, at the start
+        of the file); columns as span_of gives them."""
+        if place is None:
+            return Span.at_offset(self.source, 0, 0)
+        start, line, col, end, end_line, end_col, _ = place
+        if self.bom:
+            if line == 1 and start > 0:
+                col -= 1
+            if end_line == 1 and end > 0:
+                end_col -= 1
+        return _span(self.source, line, col, end_line, end_col, start, end)
 
     def _id(self, tok: Token) -> ast.Ident:
-        return ast.Ident(str(tok), span_of(self.source, tok))
+        t: Any = tok
+        if self.bom or t.start_pos is None or t.end_pos is None:
+            return ast.Ident(str(tok), span_of(self.source, tok))
+        return ast.Ident(str(tok), _span(self.source, t.line, t.column, t.end_line,
+                                         t.end_column, t.start_pos, t.end_pos))
 
     # -- module
     def start(self, meta: Any, children: list[Any]) -> ast.Module:
@@ -146,7 +187,7 @@ class Builder(Transformer[Token, Any]):
         # The minus is an anonymous token; comments and line breaks may stand between it and
         # the number, so only the number's own text is converted.
         value = float(c[-1])
-        return -value if self.source.text[meta.start_pos:meta.end_pos].startswith("-") else value
+        return -value if self.source.text[meta[0]:meta[3]].startswith("-") else value
 
     def dotted_name(self, meta: Any, c: list[Token]) -> ast.Ident:
         return ast.Ident(".".join(str(t) for t in c), self._s(meta))

@@ -11,7 +11,7 @@ import re
 from collections.abc import Callable
 from functools import cache
 from importlib import resources
-from typing import Any, cast
+from typing import Any
 
 import lark
 from lark import Token, Tree
@@ -155,15 +155,27 @@ def _glued(tok: Token) -> Token:
     return tok
 
 
-def parse_tree(text: str, start: str) -> lark.Tree[Token]:
-    """The parse tree of `text` from the start rule `start`. Raises lark's UnexpectedInput,
-    or GluedKeyword for a keyword run into a name."""
+def parse_fast(text: str, start: str, builder: Any) -> Any:
+    """The AST of `text` from the start rule `start`, built by `builder` (a
+    afsmc.syntax.build.Builder) in the parser's own loop, or None where that loop gives up
+    (a syntax error, a keyword run into a name, an expression nested too deeply, ...):
+    then `parse_tree` and the builder's `build` say what is wrong, or give the same AST.
+    Diagnostics the builder reported before a None are not the text's: give it a reporter
+    of its own."""
     reset = _LEXING.set(text)
     try:
-        try:
-            return cast("lark.Tree[Token]", drive.parse(lalr(), text, start))
-        except Exception:  # anything unusual: lark's own parse decides
-            pass
+        return drive.parse(lalr(), text, start, builder, EXPR_RULES)
+    except Exception:  # anything unusual: lark's own parse decides
+        return None
+    finally:
+        _LEXING.reset(reset)
+
+
+def parse_tree(text: str, start: str) -> lark.Tree[Token]:
+    """lark's parse tree of `text` from the start rule `start`. Raises lark's
+    UnexpectedInput, or GluedKeyword for a keyword run into a name, or TooDeep."""
+    reset = _LEXING.set(text)
+    try:
         return lalr().parse(text, start=start)
     finally:
         _LEXING.reset(reset)

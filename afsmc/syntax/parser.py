@@ -19,7 +19,7 @@ from afsmc.heap import collector_paused
 from afsmc.syntax import ast
 from afsmc.syntax.build import Builder
 from afsmc.syntax.errors.diagnose import report_glued_keyword, report_syntax_error
-from afsmc.syntax.grammar import GluedKeyword, TooDeep, parse_tree
+from afsmc.syntax.grammar import GluedKeyword, TooDeep, parse_fast, parse_tree
 from afsmc.syntax.limits import MAX_DEPTH, MAX_SOURCE_CHARS
 
 __all__ = ["MAX_DEPTH", "parse", "parse_property", "too_large"]
@@ -49,9 +49,16 @@ def _parse(text: str, path: str, start: str) -> Any:
     reporter = Reporter()
     if len(text) > MAX_SOURCE_CHARS:
         raise CompileError([too_large(source)])
+    # A leading byte-order mark lexes as a blank, which keeps every offset as in `text`.
+    body = " " + text[1:] if text.startswith(BOM) else text
+    fast = Builder(source, Reporter())
+    node = parse_fast(body, start, fast)
+    if node is not None:
+        if fast.reporter.has_errors:
+            raise CompileError(fast.reporter.diagnostics)
+        return node
     try:
-        # A leading byte-order mark lexes as a blank, which keeps every offset as in `text`.
-        tree = parse_tree(" " + text[1:] if text.startswith(BOM) else text, start)
+        tree = parse_tree(body, start)
     except GluedKeyword as exc:
         report_glued_keyword(exc.token, source, reporter)
         raise CompileError(reporter.diagnostics) from None
