@@ -86,3 +86,12 @@ def test_a_single_machine_states_no_scheduler() -> None:
     path = os.path.join(ROOT, "examples", "uav.afsm")
     est = simulate_file(path, _read(path), {}, 200, seed=0)
     assert est.scheduler is None and "scheduler" not in est.to_json()
+
+
+def test_a_strategy_of_an_interleaving_without_interval_constants() -> None:
+    """Who moves next is the MDP's one choice: still a strategy to follow."""
+    pytest.importorskip("stormpy")
+    text = _read(PAIR).replace("const int USE     = [1, 2];", "const int USE = 1;")
+    est = simulate_file(PAIR, text, {}, 5_000, seed=3, strategy="max:done")
+    assert est.policy is not None
+    assert est["done"].low <= est.policy.value <= est["done"].high
