@@ -87,6 +87,10 @@ class Program:
     # how many agents there are; None: the first enabled command fires
     movers: dict[int, tuple[int, ...]] | None = None
     agents: int = 0
+    # a composed mission's traces: each agent's (name, mode variable, mode names), and
+    # each command's action in mission terms (afsmc.sim.scheduler.trace_names)
+    agent_modes: list[tuple[str, str, dict[int, str]]] = field(default_factory=list)
+    action_names: dict[int, str] = field(default_factory=dict)
 
 
 def build(low: Lowered, draw: bool = False) -> Program:
@@ -148,12 +152,16 @@ def build(low: Lowered, draw: bool = False) -> Program:
     nonneg = [all(bounds(it.value, model, generated=low.bounds)[0] >= 0 for it in r.items)
               for r in model.rewards]
     monitors = [_monitor(p, base, model, reward_index, nonneg) for p in model.properties]
+    names = scheduler.trace_names(low)
     dtypes = {v.name: (np.bool_ if v.type is E.Type.BOOL else np.int64) for v in model.variables}
-    return Program(model, [v.name for v in model.variables], [v.display for v in model.variables],
+    shown = scheduler.displays(low)
+    return Program(model, [v.name for v in model.variables],
+                   [shown.get(v.name, v.display) for v in model.variables],
                    {v.name: v.init for v in model.variables}, dtypes, modes,
                    max(numbers) - min(numbers) + 1, min(numbers), monitors, state_rewards,
                    list(low.commands), draws=draws, movers=scheduler.movers(low),
-                   agents=0 if low.network is None else len(low.network.parts))
+                   agents=0 if low.network is None else len(low.network.parts),
+                   agent_modes=names[0], action_names=names[1])
 
 
 
@@ -281,12 +289,14 @@ class _Batch:
         for j in sel:
             rid = int(self.ids[j])
             cmd_i, br = int(self.fired[j]), int(self.branch[j])
-            entry: dict[str, Any] = {"step": t,
-                                     "mode": prog.model.mode_by_number(int(state["mode"][j])).name}
+            mode = ", ".join(f"{a}: {ms.get(int(state[v][j]), '?')}"
+                             for a, v, ms in prog.agent_modes) \
+                or prog.model.mode_by_number(int(state["mode"][j])).name
+            entry: dict[str, Any] = {"step": t, "mode": mode}
             if t > 0 and cmd_i >= 0:
                 c = prog.commands[cmd_i]
                 entry["action"] = {"final": "(final)", "deadlock": "(no enabled action)"}.get(
-                    c.kind, c.action)
+                    c.kind, prog.action_names.get(cmd_i, c.action))
                 hz = c.branches[br].hazard if 0 <= br < len(c.branches) else None
                 if hz:
                     entry["hazard"] = hz

@@ -67,3 +67,30 @@ def pick(enabled: Sequence[npt.NDArray[np.bool_]], who: Sequence[tuple[int, ...]
         cols = np.arange(n)
         which[live] = first[chosen, cols][live]
     return which
+
+
+def trace_names(low: Lowered) -> tuple[list[tuple[str, str, dict[int, str]]], dict[int, str]]:
+    """A composed mission's sample runs in mission terms: each agent's name, mode
+    variable and mode names ("uav1: Search"), and each command's action as "uav1: Look"
+    (a synchronised one by its name). Empty for a single machine."""
+    net = low.network
+    if net is None:
+        return [], {}
+    modes = [(p.agent.name, p.agent.mode_var, {m.number: m.name for m in p.agent.model.modes})
+             for p in net.parts]
+    local = {c.action: f"{p.agent.name}: {c.action.removeprefix(p.agent.prefix)}"
+             for p in net.parts for c in p.local}
+    return modes, {i: local.get(c.action, c.action) for i, c in enumerate(low.commands)}
+
+
+def displays(low: Lowered) -> dict[str, str]:
+    """A composed mission's variables for people: `robot_b` is `robot.b`, the mode
+    variable `robot_mode` is `robot.mode`; shared variables keep their names."""
+    net = low.network
+    out: dict[str, str] = {}
+    for p in net.parts if net is not None else ():
+        out[p.agent.mode_var] = f"{p.agent.name}.mode"
+        for v in p.agent.model.variables:
+            if v.name in p.agent.own:
+                out[p.agent.prefix + v.name] = f"{p.agent.name}.{v.display}"
+    return out

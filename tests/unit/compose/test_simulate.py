@@ -95,3 +95,14 @@ def test_a_strategy_of_an_interleaving_without_interval_constants() -> None:
     est = simulate_file(PAIR, text, {}, 5_000, seed=3, strategy="max:done")
     assert est.policy is not None
     assert est["done"].low <= est.policy.value <= est["done"].high
+
+
+def test_sample_runs_name_agents_modes_and_actions() -> None:
+    est = simulate_file(PAIR, _read(PAIR), {}, 50, seed=0, traces=2)
+    for trace in est.traces:
+        assert trace[0]["mode"] == "robot: Work, station: Idle"
+        assert "robot.b" in trace[0]["vars"] and "charges" in trace[0]["vars"]
+        for st in trace[1:]:
+            who, _, _ = st["action"].partition(": ")
+            assert who in ("robot", "station") or st["action"] in ("Charge",
+                                                                   "(no enabled action)")
