@@ -22,6 +22,7 @@ from afsmc.sim.compile import SimError
 from afsmc.sim.policy import Table
 from afsmc.sim.run import BATCH, STRATEGIES, Estimate, Job, Outcome, Strategy, job_for, program
 from afsmc.sim.run import simulate as run_simulation
+from afsmc.sim.scheduler import UNIFORM
 from afsmc.verify.policy import Policy, extract
 
 if TYPE_CHECKING:
@@ -85,6 +86,16 @@ class Simulation:
     @property
     def warnings(self) -> list[Diagnostic]:
         return [d for d in program(self.job).diagnostics if d.severity is Severity.WARNING]
+
+    @property
+    def scheduler(self) -> str | None:
+        """Who moves next in a composed mission whose agents interleave (or tie): the
+        uniform scheduler, or the strategy; None where no such choice exists."""
+        if program(self.job).movers is None:
+            return None
+        if self.policy is not None:
+            return f"the {self.policy.direction}:{self.policy.property} strategy"
+        return UNIFORM
 
 
 def prepare(path: str, text: str, consts: Mapping[str, str], *,
@@ -154,7 +165,8 @@ def estimates(sim: Simulation, out: Outcome, *, seed: int, confidence: float,
     return Estimates(out, seed, confidence, sim.job.strategy, at=sim.job.at,
                      path=sim.job.path, machine=model.name,
                      constants={c.name: c.value for c in model.constants if c.is_param},
-                     warnings=sim.warnings, policy=sim.policy, traced=traced)
+                     warnings=sim.warnings, policy=sim.policy, traced=traced,
+                     scheduler=sim.scheduler)
 
 
 def _cannot(path: str, exc: SimError) -> AfsmError:
@@ -179,6 +191,7 @@ class Estimates:
     warnings: list[Diagnostic] = field(default_factory=list)
     policy: Policy | None = None
     traced: bool = False  # sample runs were asked for
+    scheduler: str | None = None  # who moves next in a composed MDP (Simulation.scheduler)
 
     @property
     def runs(self) -> int:
@@ -211,6 +224,7 @@ class Estimates:
             "resolve": self.resolve,
             "at": self.at,  # interval probabilities: draw, mid, min or max
             "confidence": self.confidence,
+            **({"scheduler": self.scheduler} if self.scheduler else {}),
             "properties": [{"name": e.name, "estimate": _num(e.estimate), "low": _num(e.low),
                             "high": _num(e.high), "undecided": e.undecided}
                            for e in self.raw.estimates],
@@ -234,7 +248,8 @@ class Estimates:
         how = (f"{self.policy.direction} strategy of {self.policy.property}"
                if self.policy is not None else self.resolve)
         caption = (f"{self.raw.runs:,} runs, seed {self.seed}, {self.confidence:g} confidence, "
-                   f"interval constants {how}")
+                   f"interval constants {how}"
+                   + (f", who moves next: {self.scheduler}" if self.scheduler else ""))
         table: str = self.to_pandas().to_html(na_rep="n/a", float_format=_fmt)
         return f"<div><p>{caption}</p>{table}</div>"
 

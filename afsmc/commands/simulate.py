@@ -168,7 +168,7 @@ def _finish(sim: Simulation, est: Estimates, args: argparse.Namespace) -> None:
     else:
         _print(est.raw, args, sim.model.is_nondeterministic,
                endless=any(d.code == codes.W602 for d in est.warnings),
-               prob_intervals=bool(sim.model.prob_intervals))
+               prob_intervals=bool(sim.model.prob_intervals), scheduler=est.scheduler)
         followed_text(est.policy)
 
 
@@ -205,7 +205,7 @@ def _strategy(text: str) -> str:
 
 
 def _print(out: Outcome, args: argparse.Namespace, intervals: bool, endless: bool,
-           prob_intervals: bool = False) -> None:
+           prob_intervals: bool = False, scheduler: str | None = None) -> None:
     if args.traces:
         print(_traces_text(out.traces))
     name = args.file  # as given, as verify names it
@@ -222,6 +222,8 @@ def _print(out: Outcome, args: argparse.Namespace, intervals: bool, endless: boo
                             "max": "interval probabilities at their upper ends"}[args.at]
     print(f"{name}: {out.runs} runs, {resolved}, seed {args.seed}, "
           f"{args.confidence:g} confidence")
+    if scheduler:  # a composed mission's agents interleave: the rule that picks who moves
+        print(f"who moves next: {scheduler}")
     width = max([len(e.name) for e in out.estimates] + [8])
     values = ["n/a" if math.isnan(e.estimate) else num(e.estimate) for e in out.estimates]
     vwidth = max([len(v) for v in values] + [1])  # the intervals start in one column

@@ -206,12 +206,76 @@ def agent_module(module: ast.Module, agent: ast.AgentDecl, names: _Names,
     here = agent.name.text
     names.read_modes = set()
     own = rewrite(agent.decls, names.fn(here))
+    formulas, formula_reads = _mission_formulas(agent, names, mission)
     outer = [d for d in mission if isinstance(d, (ast.ConstDecl, ast.ParamDecl))]
     shared = [dataclasses.replace(d, writers=None) for d in mission if isinstance(d, ast.VarDecl)]
     reads = [_mode_var(names.agents[b], names.modes[b], f"{b}_mode")
-             for b in sorted(names.read_modes)]
+             for b in sorted(names.read_modes | formula_reads)]
     machine = ast.MachineDecl(agent.name, agent.name.span)
-    return ast.Module(machine, (*outer, *shared, *reads, *own), module.span)
+    return ast.Module(machine, (*outer, *shared, *reads, *formulas, *own), module.span)
+
+
+def _name_uses(node: Any) -> dict[str, Span]:
+    """Every name an expression (or declarations) reads, at its first use."""
+    out: dict[str, Span] = {}
+
+    def go(n: Any) -> Any:
+        if isinstance(n, ast.Name):
+            out.setdefault(n.name.text, n.span)
+        return None
+    rewrite(node, go)
+    return out
+
+
+def _mission_formulas(agent: ast.AgentDecl, names: _Names, mission: list[ast.Decl]) -> tuple[
+        list[ast.FormulaDecl], set[str]]:
+    """The mission's formulas the agent uses (directly or through another), in the
+    agent's view, and the other agents' modes they read. A formula is visible to an agent
+    when it reads only constants, shared variables, the agent's own variables and other
+    agents' modes (`uav2.mode`); one the agent uses that reads what the agent may not see
+    (another agent's variable) is E254 at the use, naming the agent and the variable.
+    The agent's own declaration of the same name hides the mission's."""
+    here = agent.name.text
+    mine = {d.name.text for d in agent.decls if isinstance(d, (ast.VarDecl, ast.FormulaDecl))}
+    visible: dict[str, tuple[ast.FormulaDecl, set[str], set[str]]] = {}
+    blocked: dict[str, str] = {}
+    outer_rep, outer_reads = names.rep, names.read_modes
+    for d in mission:
+        if not isinstance(d, ast.FormulaDecl) or d.name.text in mine:
+            continue
+        names.rep, names.read_modes = Reporter(), set()
+        new = rewrite(d, names.fn(here))
+        errors = [x for x in names.rep.diagnostics if x.is_error]
+        refs = set(_name_uses(d.value))
+        through = next((r for r in sorted(refs) if r in blocked), None)
+        if errors:
+            blocked[d.name.text] = errors[0].message
+        elif through is not None:
+            blocked[d.name.text] = f"through formula '{through}': {blocked[through]}"
+        else:
+            visible[d.name.text] = (new, refs, names.read_modes)
+    names.rep, names.read_modes = outer_rep, outer_reads
+    uses = _name_uses(agent.decls)
+    for name, span in uses.items():
+        if name in blocked and name not in mine:
+            names.rep.error(codes.E254, f"agent {here} uses the mission's formula '{name}', "
+                            f"which it may not see: {blocked[name]}", span,
+                            hint=f"give agent {here} its own formula over what it may read, or "
+                            "share the variable (declare it outside the agents)")
+    needed: set[str] = set()
+    todo = [n for n in uses if n in visible]
+    while todo:
+        n = todo.pop()
+        if n not in needed:
+            needed.add(n)
+            todo += [r for r in visible[n][1] if r in visible]
+    reads: set[str] = set()
+    out = []
+    for name, (decl, _, modes) in visible.items():
+        if name in needed:
+            out.append(decl)
+            reads |= modes
+    return out, reads
 
 
 def mission_module(module: ast.Module, agents: list[ast.AgentDecl], names: _Names,
@@ -249,6 +313,13 @@ def mission_actions(agents: list[ast.AgentDecl]) -> dict[str, Span]:
                 name = d.name.text if d.sync else f"{a.name.text}_{d.name.text}"
                 out.setdefault(name, d.name.span)
     return out
+
+
+def explained(d: Diagnostic, rep: Reporter) -> bool:
+    """An agent's "not declared" (E203) where E254 already says the mission's formula of
+    that name is one the agent may not see."""
+    return d.code == codes.E203 and any(
+        x.code == codes.E254 and x.span == d.span for x in rep.diagnostics)
 
 
 def in_agent(d: Diagnostic, agent: ast.AgentDecl) -> Diagnostic | None:

@@ -78,7 +78,7 @@ def _resolve_composed(module: ast.Module, overrides: Mapping[str, str] | None,
         kept = False
         for d in r.rep.sorted():
             mine = compose.in_agent(d, a)
-            if mine is not None:
+            if mine is not None and not compose.explained(mine, rep):
                 rep.extend([mine])
                 kept = kept or mine.is_error
         if r.rep.has_errors and not kept:

@@ -21,6 +21,7 @@ from afsmc.model import expr as E
 from afsmc.model import ir
 from afsmc.model.bounds import bounds
 from afsmc.model.evaluate import scalar
+from afsmc.sim import scheduler
 from afsmc.sim.compile import Fn, Frame, Scope, SimError, compile_expr, fold, reads, static
 from afsmc.sim.policy import Lookup
 
@@ -82,6 +83,14 @@ class Program:
     policy: Lookup | None = None
     # interval probabilities drawn once per run, uniform in [lo, hi] (simulate --at draw)
     draws: dict[str, tuple[float, float]] = field(default_factory=dict)
+    # a composed MDP: each command's agents (afsmc.sim.scheduler picks who moves), and
+    # how many agents there are; None: the first enabled command fires
+    movers: dict[int, tuple[int, ...]] | None = None
+    agents: int = 0
+    # a composed mission's traces: each agent's (name, mode variable, mode names), and
+    # each command's action in mission terms (afsmc.sim.scheduler.trace_names)
+    agent_modes: list[tuple[str, str, dict[int, str]]] = field(default_factory=list)
+    action_names: dict[int, str] = field(default_factory=dict)
 
 
 def build(low: Lowered, draw: bool = False) -> Program:
@@ -143,11 +152,16 @@ def build(low: Lowered, draw: bool = False) -> Program:
     nonneg = [all(bounds(it.value, model, generated=low.bounds)[0] >= 0 for it in r.items)
               for r in model.rewards]
     monitors = [_monitor(p, base, model, reward_index, nonneg) for p in model.properties]
+    names = scheduler.trace_names(low)
     dtypes = {v.name: (np.bool_ if v.type is E.Type.BOOL else np.int64) for v in model.variables}
-    return Program(model, [v.name for v in model.variables], [v.display for v in model.variables],
+    shown = scheduler.displays(low)
+    return Program(model, [v.name for v in model.variables],
+                   [shown.get(v.name, v.display) for v in model.variables],
                    {v.name: v.init for v in model.variables}, dtypes, modes,
                    max(numbers) - min(numbers) + 1, min(numbers), monitors, state_rewards,
-                   list(low.commands), draws=draws)
+                   list(low.commands), draws=draws, movers=scheduler.movers(low),
+                   agents=0 if low.network is None else len(low.network.parts),
+                   agent_modes=names[0], action_names=names[1])
 
 
 
@@ -275,12 +289,14 @@ class _Batch:
         for j in sel:
             rid = int(self.ids[j])
             cmd_i, br = int(self.fired[j]), int(self.branch[j])
-            entry: dict[str, Any] = {"step": t,
-                                     "mode": prog.model.mode_by_number(int(state["mode"][j])).name}
+            mode = ", ".join(f"{a}: {ms.get(int(state[v][j]), '?')}"
+                             for a, v, ms in prog.agent_modes) \
+                or prog.model.mode_by_number(int(state["mode"][j])).name
+            entry: dict[str, Any] = {"step": t, "mode": mode}
             if t > 0 and cmd_i >= 0:
                 c = prog.commands[cmd_i]
                 entry["action"] = {"final": "(final)", "deadlock": "(no enabled action)"}.get(
-                    c.kind, c.action)
+                    c.kind, prog.action_names.get(cmd_i, c.action))
                 hz = c.branches[br].hazard if 0 <= br < len(c.branches) else None
                 if hz:
                     entry["hazard"] = hz
@@ -418,7 +434,7 @@ class _Batch:
             m = int(m_np)
             idx: npt.NDArray[np.intp] | None = None if counts[m - prog.mode_base] == size \
                 else np.flatnonzero(mode == m)
-            for c, local in self._plan(m, idx, size, new_absorbed):
+            for c, local in self._plan(m, idx, size, new_absorbed, rng):
                 gidx = idx if local is None else (local if idx is None else idx[local])
                 self._fire(c, m, gidx, size, rng, act_rw, new_absorbed, updates)
         # Updates are applied after every partition was evaluated on the old state.
@@ -441,9 +457,9 @@ class _Batch:
         self.retire(self.observe(t, act_rw * new_absorbed))
 
     def _plan(self, m: int, idx: npt.NDArray[np.intp] | None, size: int,
-              new_absorbed: npt.NDArray[np.bool_]) -> _Plan:
+              new_absorbed: npt.NDArray[np.bool_], rng: np.random.Generator) -> _Plan:
         """Which command each run in mode m (all runs if `idx` is None) fires: the first
-        enabled one. Each command with the runs that fire it (None: all of `idx`); runs
+        enabled one (a composed MDP: the scheduler's pick). Each command with the runs that fire it (None: all of `idx`); runs
         with none enabled are marked absorbed."""
         nmode = size if idx is None else len(idx)
         cmds = self.prog.modes.get(m, [])
@@ -452,7 +468,12 @@ class _Batch:
         sub = _gather(self.state, idx, set().union(*[c.reads for c in cmds]) if cmds else set())
         sub["mode"] = m
         which = np.full(nmode, -1, dtype=np.int64)
-        for ci in range(len(cmds) - 1, -1, -1):
+        movers = self.prog.movers
+        if movers is not None:
+            enabled = [_as_bool(c.guard(sub), nmode) for c in cmds]
+            which = scheduler.pick(enabled, [movers.get(c.index, ()) for c in cmds],
+                                   self.prog.agents, rng)
+        for ci in range(len(cmds) - 1, -1, -1) if movers is None else ():
             g = cmds[ci].guard(sub)
             if np.ndim(g) == 0:
                 if g:

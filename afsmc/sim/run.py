@@ -104,12 +104,7 @@ def program(job: Job) -> Program:
             prog = build(lower(model, "nondet"), draw)
             prog.policy = Lookup(job.policy, model)
         else:
-            low = lower(model, LOWERING[job.strategy])  # type: ignore[arg-type]
-            if low.network is not None and low.kind == "mdp":
-                raise SimError("its agents interleave (or tie) with no rule for who moves "
-                               "next, so no run is defined; simulate a 'compose timed ties "
-                               "order;' mission, or use verify for the min and max")
-            prog = build(low, draw)
+            prog = build(lower(model, LOWERING[job.strategy]), draw)  # type: ignore[arg-type]
         prog.diagnostics = checked.diagnostics
         _PROGRAMS.clear()
         _PROGRAMS[job] = prog

@@ -50,7 +50,10 @@ def extract(model: ir.Model, text: str, *, max_states: int | None = None,
             progress: Progress | None = None) -> Policy:
     """The scheduler `text` (min:NAME or max:NAME) of the loaded model, from Storm."""
     direction, name = parse(text)
-    if not model.is_nondeterministic:
+    comp = model.composition
+    turns = comp is not None and ((comp.kind == "interleaving" and len(comp.agents) > 1)
+                                  or (comp.kind == "timed" and comp.ties == "nondet"))
+    if not model.is_nondeterministic and not turns:
         raise refuse(f"--strategy {text}: {model.source.path} has no interval constants: its "
                      "model is a DTMC, which has no choices for a strategy to make",
                      hint="simulate it without --strategy")

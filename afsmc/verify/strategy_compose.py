@@ -64,3 +64,18 @@ def displays(low: Lowered) -> dict[str, str]:
             if v.name in a.own:
                 out[a.prefix + v.name] = f"{a.name}.{v.display}"
     return out
+
+
+def choice_owners(low: Lowered, cmd: Command) -> tuple[str, ...]:
+    """For a synchronised action's command, the agent that took each of its interval
+    ends (its `choice` is its partners' in declaration order); () for any other."""
+    net = low.network
+    who, _ = mover(low, cmd)
+    if net is None or len(who) < 2:
+        return ()
+    out: list[str] = []
+    for part in net.parts:
+        cmds = dict(part.sync).get(cmd.action, ())
+        if part.agent in who and cmds:
+            out += [part.agent.name] * len(cmds[0].choice)
+    return tuple(out) if len(out) == len(cmd.choice) else ()

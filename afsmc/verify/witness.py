@@ -18,7 +18,14 @@ from typing import Any
 
 from afsmc.lower.lowering import Command, Lowered
 from afsmc.model.evaluate import Env, evaluate
-from afsmc.verify.strategy_compose import action_text, agents, displays, mode_name, modes_text
+from afsmc.verify.strategy_compose import (
+    action_text,
+    agents,
+    choice_owners,
+    displays,
+    mode_name,
+    modes_text,
+)
 from afsmc.verify.strategy_storm import RawPath
 
 # A replayed step's probability may differ from Storm's by rounding only.
@@ -136,8 +143,11 @@ def describe(paths: Sequence[RawPath], variables: Sequence[str], low: Lowered) -
                 if there[k] != here[k]:
                     changes[display.get(k, k) if k != "mode" else "mode"] = _value(
                         low, k, there[k], booleans)
-            choice = tuple((c, "floor" if e == "lo" else "ceil")
-                           for c, e in (cmd.choice if cmd is not None else ()))
+            owners = choice_owners(low, cmd) if composed and cmd is not None else ()
+            # a synchronised action's ends by the partner that took each: "T_TAKEOFF[uav1]"
+            choice = tuple((f"{c}[{owners[j]}]" if owners else c,
+                            "floor" if e == "lo" else "ceil")
+                           for j, (c, e) in enumerate(cmd.choice if cmd is not None else ()))
             steps.append(Step(_mode(low, here), action, p.steps[i], changes, choice, hazard))
         start: dict[str, int | bool] = {display.get(k, k): (bool(v) if k in booleans else v)
                                         for k, v in vals[0].items() if k != "mode"}

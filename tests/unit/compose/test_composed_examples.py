@@ -5,8 +5,6 @@ and a simulation whose confidence interval holds the exact value."""
 from __future__ import annotations
 
 import os
-import subprocess
-import sys
 
 import pytest
 
@@ -94,10 +92,3 @@ def test_simulation_of_a_timed_mission_holds_the_exact_value() -> None:
     est = mission.simulate(4000, seed=1)["shift"]
     assert est.low <= value <= est.high
 
-
-def test_simulating_an_interleaving_is_refused_with_a_diagnostic() -> None:
-    env = dict(os.environ)
-    out = subprocess.run([sys.executable, "-m", "afsmc", "simulate",
-                          os.path.join(ROOT, "tests", "unit", "compose", "charge_pair.afsm"),
-                          "--runs", "10"], capture_output=True, text=True, env=env, check=False)
-    assert out.returncode != 0 and "E506" in out.stderr + out.stdout

@@ -83,6 +83,11 @@ def test_witness_paths_name_the_agent_that_moved(interleaving: bool) -> None:
         assert first.action == "Launch (uav1, uav2)"
         assert first.mode == "uav1: Ready, uav2: Ready"
         assert first.changes["uav1.mode"] == "Search" and first.changes["uav2.mode"] == "Search"
+        # each partner's interval end, named by the agent, is the one its clock shows
+        assert [c for c, _ in first.choice] == ["T_TAKEOFF[uav1]", "T_TAKEOFF[uav2]"]
+        for c, end in first.choice:
+            agent = c[len("T_TAKEOFF["):-1]
+            assert first.changes[f"{agent}.t"] == (10 if end == "floor" else 11)
         for s in w.steps[1:]:
             agent, _, action = s.action.partition(": ")
             assert agent in AGENTS and action in ("Look", "Stop", "Grab", "Deliver"), s
