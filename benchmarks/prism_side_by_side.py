@@ -32,12 +32,17 @@ import time
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 sys.path.insert(0, ROOT)
 
-from benchmarks.acyclic import timed, values_of  # noqa: E402
+from benchmarks.acyclic import values_of  # noqa: E402
 from benchmarks.run import INSTANCES, UAV  # noqa: E402
 
-FIELDS = ["measured", "load", "instance", "tool", "status", "wall_s", "peak_gb", "states",
-          "values"]
+FIELDS = ["measured", "load", "instance", "tool", "status", "wall_s", "cpu_s", "peak_gb",
+          "states", "values"]
 DEFAULT_PRISM = os.path.join(ROOT, ".bench", "prism", "prism", "bin", "prism")
+
+
+def cpu_of(stderr: str) -> float:
+    """User + system seconds of every process, from `/usr/bin/time -v`'s report."""
+    return sum(float(m) for m in re.findall(r"(?:User|System) time \(seconds\): (\S+)", stderr))
 
 
 def wall_and_peak(stderr: str) -> tuple[float, float]:
@@ -81,35 +86,43 @@ def run_prism(prism: str, engine: str, model: str, props: str, mem: str,
               for n, v in zip(names, results, strict=False)}
     ok = p.returncode == 0 and len(results) == len(names)
     return row | {"status": "ok" if ok else f"exit {p.returncode}: {p.stdout[-300:]}",
-                  "wall_s": round(wall, 1), "peak_gb": round(peak, 2),
-                  "states": int(states.group(1)) if states else "",
+                  "wall_s": round(wall, 1), "cpu_s": round(cpu_of(p.stderr), 1),
+                  "peak_gb": round(peak, 2), "states": int(states.group(1)) if states else "",
                   "values": json.dumps(values)}
 
 
 def run_afsmc(instance: str, timeout: float) -> dict[str, object]:
-    load = os.getloadavg()[0]
-    out, wall, peak, status = timed(["verify", UAV, *INSTANCES[instance], "--no-uniform",
-                                     "--json"], timeout)
-    row: dict[str, object] = {"tool": "afsmc --no-uniform", "load": round(load, 1),
-                              "status": status, "wall_s": round(wall, 1),
-                              "peak_gb": round(peak, 2)}
-    if out is not None:
-        m = out["model"]
-        assert isinstance(m, dict)
-        row |= {"states": m.get("states"), "values": json.dumps(values_of(out)),
-                "tool": f"afsmc --no-uniform ({m.get('solver', '')})"}
-    return row
+    env = dict(os.environ, PYTHONPATH=ROOT + os.pathsep + os.environ.get("PYTHONPATH", ""))
+    cmd = ["/usr/bin/time", "-v", sys.executable, "-m", "afsmc", "verify", UAV,
+           *INSTANCES[instance], "--no-uniform", "--json"]
+    row: dict[str, object] = {"tool": "afsmc --no-uniform", "load": round(os.getloadavg()[0], 1)}
+    try:
+        p = subprocess.run(cmd, capture_output=True, text=True, timeout=timeout, env=env,
+                           check=False)
+    except subprocess.TimeoutExpired:
+        return row | {"status": "timeout", "wall_s": timeout}
+    wall, peak = wall_and_peak(p.stderr)
+    row |= {"status": "ok" if p.returncode == 0 else f"exit {p.returncode}",
+            "wall_s": round(wall, 1), "cpu_s": round(cpu_of(p.stderr), 1),
+            "peak_gb": round(peak, 2)}
+    try:
+        out = json.loads(p.stdout)
+    except json.JSONDecodeError:
+        return row | {"status": f"error (exit {p.returncode}): {p.stderr.strip()[-200:]}"}
+    m = out["model"]
+    return row | {"states": m.get("states"), "values": json.dumps(values_of(out)),
+                  "tool": f"afsmc --no-uniform ({m.get('engine', '')}, {m.get('solver', '')})"}
 
 
 def table(rows: list[dict[str, object]], base: dict[str, float]) -> str:
-    lines = ["| instance | tool | wall s | peak GB | states | max diff from afsmc | load |",
-             "|---|---|---|---|---|---|---|"]
+    lines = ["| instance | tool | wall s | CPU s | peak GB | states | max diff from afsmc | load |",
+             "|---|---|---|---|---|---|---|---|"]
     for r in rows:
         vals = json.loads(str(r.get("values") or "{}"))
         diff = max((abs(vals[k] - base[k]) for k in vals if k in base), default=float("nan"))
         states = f"{int(str(r['states'])):,}" if r.get("states") else ""
         lines.append(f"| {r['instance']} | {r['tool']} | {float(str(r['wall_s'])):.1f} | "
-                     f"{float(str(r.get('peak_gb') or 0)):.2f} | {states} | {diff:.1e} | "
+                     f"{float(str(r.get('cpu_s') or 0)):.1f} | {float(str(r.get('peak_gb') or 0)):.2f} | {states} | {diff:.1e} | "
                      f"{r['load']} |")
     return "\n".join(lines)
 
