@@ -39,6 +39,7 @@ from afsmc.verify.guard import (
     upper_bound,
 )
 from afsmc.verify.jobs import choose_engine, make_job
+from afsmc.verify.explicit import applies
 from afsmc.verify.precision import complement
 from afsmc.verify.queries import (
     REST,
@@ -414,6 +415,9 @@ class ModelLoop:
                        hybrid_skip=tuple(n for n in mine if n not in first), hybrid_extra=extra)
         job = dataclasses.replace(job, solver=o.solver, all_states=o.all_states,
                                   precision=o.precision, exact=o.exact)
+        if applies(self.low, self.job_engine, o.solver, o.bisimulation or o.exact or o.strategy
+                   or o.precision is not None or o.witness is not None):
+            job = dataclasses.replace(job, explicit=self.low)  # afsmc's own exploration first
         ex = request(self.low, o.strategy, o.witness, mine, self.run.asked_as,
                      skip={n for p, n in unit if stepped(p)})
         if self.resolution == "nondet" and o.via == "prism" and ex is not None:

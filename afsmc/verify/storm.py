@@ -14,10 +14,10 @@ import os
 import tempfile
 import time
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any, Literal
 
-from afsmc.verify import acyclic, precision
+from afsmc.verify import acyclic, explicit, precision
 from afsmc.verify.strategy_storm import Extract, Extracted, analyse, builder_options
 
 Engine = Literal["sparse", "dd", "hybrid", "auto"]
@@ -91,6 +91,9 @@ class Job:
     exact: bool = False  # build over rationals and solve exactly (sparse engine only)
     # schedulers and most probable paths to extract (sparse engine only; strategy_storm)
     extract: Extract | None = None
+    # the lowered model, for afsmc's own exploration and backward pass first
+    # (afsmc.verify.explicit); None: Storm only
+    explicit: Any = None
 
     @property
     def wanted(self) -> tuple[str, ...]:
@@ -203,10 +206,16 @@ def execute(job: Job, notify: Notify | None = None) -> JobResult:
 
 
 def _execute(job: Job, notify: Notify) -> JobResult:
+    res = JobResult()
+    if job.explicit is not None:
+        left = _explicit(job, res, notify)
+        if left is None:
+            return res
+        job = left
+    mixed = bool(res.values)
     import stormpy
 
     _quiet()
-    res = JobResult()
     t0 = time.perf_counter()
     notify("phase", "parse")
     parsed = _parse(stormpy, job)
@@ -266,7 +275,29 @@ def _execute(job: Job, notify: Notify) -> JobResult:
         return res
     res.check_time = time.perf_counter() - t0
     res.failure = built.deferred
+    if mixed:  # some queries by afsmc's own exploration, the others by Storm
+        res.solver = f"acyclic (explicit) and {res.solver}"
     return res
+
+
+def _explicit(job: Job, res: JobResult, notify: Notify) -> Job | None:
+    """Answer what afsmc's own exploration can (afsmc.verify.explicit); the job of what
+    is left for Storm, or None if nothing is (or the model has too many states)."""
+    try:
+        ans = explicit.answer(job.explicit, job.names, job.what, notify, job.max_states)
+    except explicit.TooMany as exc:
+        res.states, res.failure = exc.states, too_big(job, exc.states)
+        return None
+    if ans is None:
+        return replace(job, explicit=None)
+    res.states, res.choices, res.transitions = ans.states, ans.choices, ans.transitions
+    res.kind, res.engine, res.solver = job.explicit.kind, "explicit", "acyclic"
+    res.build_time, res.check_time = ans.explore_time, sum(ans.seconds.values())
+    res.values, res.seconds = dict(ans.values), dict(ans.seconds)
+    notify("engine", "explicit")
+    if not ans.left:
+        return None
+    return replace(job, names=tuple(ans.left), explicit=None, hybrid_extra=())
 
 
 def too_big(job: Job, states: int) -> StormFailure:

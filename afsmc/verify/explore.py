@@ -1,0 +1,600 @@
+"""afsmc's own explicit-state exploration of a lowered model whose clock only grows.
+
+Storm's sparse build of the UAV mission needs about 267 bytes per state; this one keeps
+the states as packed int64 keys (each variable's offset in its range, the mode's too) and
+the transitions as flat arrays, explored with numpy a bucket at a time:
+
+* the **bucket** variable is one that only grows along every transition (the mission
+  clock, saturated at its cap, where it may stay equal): its states are explored bucket
+  by bucket in increasing order, each to a fixpoint (successors in the same bucket are
+  explored in further rounds, those in later buckets wait);
+* a transition that makes it smaller (the dead-variable reset of a final mode's clock)
+  leads to a **late** state, explored after every bucket, whose successors are late too;
+* within a bucket (and among the late states) the states are ordered topologically by the
+  edges between them (Kahn, self-loops ignored). A cycle of more than one state, a
+  variable out of its range, a probability that does not sum to 1, a state without a
+  command (or with two, in a DTMC): :func:`explore` returns None and Storm builds instead.
+
+Each choice is one enabled command (an MDP's), its branches those of non-zero probability
+with equal successors merged, as Storm builds them, so the counts of states, choices and
+transitions equal Storm's. The result is :class:`afsmc.verify.acyclic.Arrays`: the states
+numbered so that every successor of a state lies in an earlier layer, for its backward
+pass. Everything is vectorised per bucket, per mode and per command.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from afsmc.lower.lowering import Lowered
+from afsmc.lower.reduce import _step
+from afsmc.model import expr as E
+from afsmc.model import ir
+from afsmc.model.bounds import bounds
+from afsmc.sim.compile import Scope, fold, static
+from afsmc.verify import acyclic
+from afsmc.verify.acyclic import F64, I64, Arrays, Bools
+from afsmc.verify.explore_eval import MEMO, Compiler, Fn, frame
+
+KEY_BITS = 62  # a state's key must fit in a signed 64-bit integer
+SUM_TOLERANCE = 1e-6  # Storm's default check that a command's probabilities sum to 1
+
+Notify = Callable[[str, Any], None]
+
+
+class GiveUp(Exception):
+    """The model is not one this explorer handles: Storm builds it instead."""
+
+
+class TooManyStates(Exception):
+    def __init__(self, states: int) -> None:
+        super().__init__(states)
+        self.states = states
+
+
+@dataclass(frozen=True)
+class Field:
+    name: str  # a variable's name, or "mode"
+    lo: int
+    size: int
+    stride: int
+    boolean: bool
+
+
+@dataclass
+class Layout:
+    """How a state is packed into an int64: the bucket variable most significant, so that
+    keys sort by bucket first."""
+
+    fields: dict[str, Field]
+    bucket: Field | None
+
+    def decode(self, keys: I64) -> dict[str, Any]:
+        out: dict[str, Any] = {}
+        for f in self.fields.values():
+            v = (keys // f.stride) % f.size + f.lo
+            out[f.name] = v.astype(bool) if f.boolean else v
+        return out
+
+    def bucket_of(self, keys: I64) -> I64:
+        if self.bucket is None:
+            return np.zeros(len(keys), np.int64)
+        out: I64 = keys // self.bucket.stride
+        return out
+
+
+def bucket_variable(low: Lowered) -> str | None:
+    """An integer variable every update of which adds a non-negative amount to it (under
+    a cap) or sets a constant, and some update adds: the mission clock."""
+    model = low.model
+    best: tuple[int, str] | None = None
+    for v in model.variables:
+        if v.type is not E.Type.INT:
+            continue
+        ok, grows = True, False
+        for cmd in low.commands:
+            for b in cmd.branches:
+                for var, value in b.updates:
+                    if var != v.name:
+                        continue
+                    k = _step(v.name, _uncapped(value), model, low.bounds, True)
+                    if k is not None and v.name not in E.vars_read(k):
+                        grows = True
+                    elif not isinstance(value, E.Lit):
+                        ok = False
+        if ok and grows and (best is None or v.hi - v.lo > best[0]):
+            best = (v.hi - v.lo, v.name)
+    return None if best is None else best[1]
+
+
+def _uncapped(value: E.Expr) -> E.Expr:
+    """`x` of the saturation's `min(x, cap)`."""
+    if isinstance(value, E.Call) and value.func == "min" and len(value.args) == 2 \
+            and isinstance(value.args[1], E.Lit):
+        return value.args[0]
+    return value
+
+
+def layout(low: Lowered) -> Layout:
+    model = low.model
+    numbers = [m.number for m in model.modes]
+    spans = [("mode", min(numbers), max(numbers) - min(numbers) + 1, False)]
+    spans += [(v.name, int(v.lo), int(v.hi) - int(v.lo) + 1, v.type is E.Type.BOOL)
+              for v in model.variables]
+    bucket = bucket_variable(low)
+    spans.sort(key=lambda s: s[0] == bucket)  # the bucket variable last: most significant
+    fields: dict[str, Field] = {}
+    stride = 1
+    for name, lo, size, boolean in spans:
+        fields[name] = Field(name, lo, size, stride, boolean)
+        stride *= size
+    if stride >= 2**KEY_BITS:
+        raise GiveUp(f"{stride:,} combinations of values do not fit in a 64-bit key")
+    return Layout(fields, fields[bucket] if bucket is not None else None)
+
+
+@dataclass
+class CBranch:
+    prob: Fn
+    updates: list[tuple[Field, Fn, bool]]  # (variable, new value, checked against its range)
+
+
+@dataclass
+class CCommand:
+    index: int
+    guard: Fn
+    guard_key: int | None  # the guard's subexpression number: commands with one share states
+    branches: list[CBranch]
+    rewards: list[Fn | None]  # per reward structure asked: its action reward (None: none)
+
+
+@dataclass
+class Compiled:
+    layout: Layout
+    modes: dict[int, list[CCommand]]
+    targets: list[Fn]  # each query target's truth
+    state_rewards: list[list[tuple[Fn, Fn]]]  # per reward structure: (guard, value)
+    initial: int
+    dtmc: bool
+    reward_names: list[str]
+
+
+def compile_model(low: Lowered, targets: list[E.Expr], rewards: list[str]) -> Compiled:
+    model = low.model
+    if low.parameters or low.network is not None:
+        raise GiveUp("undefined constants or a composed mission")
+    consts: dict[str, Any] = dict(model.const_values)
+    for gen, (_, value) in low.bounds.items():
+        consts[gen] = value
+    formulas = {f.name: f.value for f in model.formulas}
+    labels = {lb.name: lb.value for lb in model.labels}
+    base = Scope(consts, formulas, labels, low.weights)
+    lay = layout(low)
+    compile_expr = Compiler()
+    structs = [model_reward(model, r) for r in rewards]
+    modes: dict[int, list[CCommand]] = {}
+    for m in model.modes:
+        sc = Scope(consts, formulas, labels, low.weights, m.number)
+        cmds: list[CCommand] = []
+        for i, cmd in enumerate(low.commands):
+            if m.number not in cmd.modes:
+                continue
+            g = fold(cmd.guard, sc)
+            if static(g) is False:
+                continue
+            branches = [CBranch(compile_expr(fold(b.prob, sc)),
+                                [(lay.fields[var], compile_expr(fold(val, sc)),
+                                  _may_leave(val, lay.fields[var], low))
+                                 for var, val in b.updates]) for b in cmd.branches]
+            acts: list[Fn | None] = []
+            for r in structs:
+                items = [] if cmd.silent else [it for it in r.items if it.action == cmd.action]
+                acts.append(_sum_items(items, sc, compile_expr))
+            cmds.append(CCommand(i, compile_expr(g), compile_expr.key(g), branches, acts))
+        modes[m.number] = cmds
+    state = [[(compile_expr(fold(it.guard, base)), compile_expr(fold(it.value, base)))
+              for it in r.items if it.action is None] for r in structs]
+    init = {"mode": model.initial_mode.number} | {v.name: int(v.init) for v in model.variables}
+    key = sum((init[f.name] - f.lo) * f.stride for f in lay.fields.values())
+    return Compiled(lay, modes, [compile_expr(fold(t, base)) for t in targets], state,
+                    int(key), low.kind == "dtmc", list(rewards))
+
+
+def _may_leave(value: E.Expr, f: Field, low: Lowered) -> bool:
+    """Whether an update may leave its variable's range (interval bounds cannot rule it
+    out): checked as it is explored."""
+    if f.name == "mode":
+        return False  # a mode number the lowering wrote
+    try:
+        lo, hi = bounds(value, low.model, generated=low.bounds)
+    except Exception:  # an expression bounds() does not know: check each value
+        return True
+    return not (f.lo <= lo and hi < f.lo + f.size)
+
+
+def model_reward(model: ir.Model, name: str) -> ir.RewardStruct:
+    for r in model.rewards:
+        if r.name == name:
+            return r
+    raise GiveUp(f"no reward structure {name}")
+
+
+def _sum_items(items: list[ir.RewardItem], sc: Scope, compile_expr: Compiler) -> Fn | None:
+    if not items:
+        return None
+    total: E.Expr = E.Ite(items[0].guard, items[0].value, E.Lit(0, E.Type.INT), items[0].value.type)
+    for it in items[1:]:
+        total = E.Binary("+", total, E.Ite(it.guard, it.value, E.Lit(0, E.Type.INT),
+                                           it.value.type), E.Type.DOUBLE)
+    return compile_expr(fold(total, sc))
+
+
+def _full(v: Any, n: int, dtype: Any) -> Any:
+    """`v` (an array or a scalar) as an array of `n`."""
+    a = np.asarray(v, dtype=dtype)
+    return np.full(n, a, dtype) if a.ndim == 0 else a
+
+
+@dataclass
+class Expansion:
+    """The choices of some states (each state's contiguous, in command order)."""
+
+    state: I64  # choice -> the state (index into the expanded keys)
+    first: I64  # choice -> its first branch (len = choices + 1)
+    target: I64  # branch -> successor key
+    prob: F64
+    reward: list[F64]  # per reward structure asked: the action reward per choice
+
+
+def _merge(tk: I64, pr: F64) -> tuple[I64, I64, F64]:
+    """Rows of (successor, probability): zero probabilities dropped, equal successors of
+    a row merged (summed); (row of each branch, successor, probability)."""
+    n, k = tk.shape
+    if k <= 4 and (pr != 0).all() and not any(
+            (tk[:, i] == tk[:, j]).any() for i in range(k) for j in range(i + 1, k)):
+        return np.repeat(np.arange(n, dtype=np.int64), k), tk.ravel(), pr.ravel()
+    order = np.argsort(tk, axis=1, kind="stable")
+    tk = np.take_along_axis(tk, order, axis=1)
+    pr = np.take_along_axis(pr, order, axis=1)
+    keep = (pr != 0).ravel()
+    row = np.repeat(np.arange(n, dtype=np.int64), k)[keep]
+    tkf, prf = tk.ravel()[keep], pr.ravel()[keep]
+    if tkf.size == 0:
+        return row, tkf, prf
+    start = np.ones(tkf.size, bool)
+    start[1:] = (tkf[1:] != tkf[:-1]) | (row[1:] != row[:-1])
+    at = np.flatnonzero(start)
+    return row[at], tkf[at], np.add.reduceat(prf, at)
+
+
+def _command(cmd: CCommand, base: I64, sub: dict[str, Any]) -> tuple[I64, I64, F64, list[F64]]:
+    """The command's choices in the states `base` (their frame `sub`): (row, successor,
+    prob) per branch and the action rewards per choice."""
+    n = len(base)
+    tks = np.empty((n, len(cmd.branches)), np.int64)
+    prs = np.empty((n, len(cmd.branches)))
+    for j, b in enumerate(cmd.branches):
+        prs[:, j] = _full(b.prob(sub), n, np.float64)
+        tk = base.copy()
+        for f, fn, check in b.updates:
+            new = _full(fn(sub), n, np.int64)
+            if check and new.size and (new.min() < f.lo or new.max() >= f.lo + f.size):
+                raise GiveUp(f"{f.name} leaves its range")
+            tk += (new - sub[f.name]) * f.stride
+        tks[:, j] = tk
+    if n and np.abs(prs.sum(axis=1) - 1.0).max() > SUM_TOLERANCE:
+        raise GiveUp("a command's probabilities do not sum to 1")
+    rewards = [np.zeros(n) if r is None else _full(r(sub), n, np.float64) for r in cmd.rewards]
+    row, tk, pr = _merge(tks, prs)
+    return row, tk, pr, rewards
+
+
+def expand(c: Compiled, keys: I64) -> Expansion:
+    """Every choice of the states `keys`."""
+    lay = c.layout
+    mf = lay.fields["mode"]
+    mode = (keys // mf.stride) % mf.size + mf.lo
+    order = np.argsort(mode, kind="stable")
+    bounds = np.flatnonzero(np.diff(mode[order])) + 1
+    states, rows, tks, prs = [], [], [], []
+    rws: list[list[F64]] = [[] for _ in range(len(c.state_rewards))]
+    choices = 0
+    with np.errstate(all="ignore"):
+        for part in np.split(order, bounds):
+            if part.size == 0:
+                continue
+            fr = frame(lay.decode(keys[part]))
+            subs: dict[int | None, tuple[I64, dict[str, Any]]] = {}
+            for cmd in c.modes.get(int(mode[part[0]]), []):
+                hit = subs.get(cmd.guard_key) if cmd.guard_key is not None else None
+                if hit is None:
+                    sel = np.flatnonzero(_full(cmd.guard(fr), len(part), bool))
+                    hit = subs[cmd.guard_key] = (sel, frame({k: v[sel] for k, v in fr.items()
+                                                             if k != MEMO}))
+                sel, sub = hit
+                if sel.size == 0:
+                    continue
+                row, tk, pr, rw = _command(cmd, keys[part][sel], sub)
+                states.append(part[sel])
+                rows.append(row + choices)
+                tks.append(tk)
+                prs.append(pr)
+                for i, r in enumerate(rw):
+                    rws[i].append(r)
+                choices += len(sel)
+    return _ordered(len(keys), states, rows, tks, prs, rws, c.dtmc)
+
+
+def _cat(parts: list[Any], dtype: Any) -> Any:
+    return np.concatenate(parts) if parts else np.zeros(0, dtype)
+
+
+def _ordered(n: int, states: list[I64], rows: list[I64], tks: list[I64], prs: list[F64],
+             rws: list[list[F64]], dtmc: bool) -> Expansion:
+    """The choices sorted by state (command order kept within a state)."""
+    state = _cat(states, np.int64)
+    per_state = np.bincount(state, minlength=n)
+    if n and (per_state.min() == 0 or (dtmc and per_state.max() > 1)):
+        raise GiveUp("a state without a command" if per_state.min() == 0
+                     else "a DTMC state with two commands")
+    row = _cat(rows, np.int64)
+    counts = np.bincount(row, minlength=len(state))
+    order = np.argsort(state, kind="stable")
+    old_first = np.zeros(len(state) + 1, np.int64)
+    np.cumsum(counts, out=old_first[1:])
+    branch = acyclic._ranges(old_first[order], old_first[order + 1])
+    first = np.zeros(len(state) + 1, np.int64)
+    np.cumsum(counts[order], out=first[1:])
+    return Expansion(state[order], first, _cat(tks, np.int64)[branch],
+                     _cat(prs, np.float64)[branch], [_cat(r, np.float64)[order] for r in rws])
+
+
+@dataclass
+class Block:
+    """The states of one bucket (or the late ones) in backward order: every successor in
+    the block lies in an earlier layer of it."""
+
+    keys: I64
+    nchoice: I64  # per state
+    nbranch: I64  # per choice
+    target: I64  # per branch: the successor's key
+    prob: F64
+    reward: list[F64]  # per reward structure asked: per choice, state reward included
+    labels: list[Bools]  # per target: per state
+    layers: list[int]  # the layers' sizes
+
+
+def _found(sorted_keys: I64, keys: I64) -> Bools:
+    pos = np.searchsorted(sorted_keys, keys)
+    pos[pos == len(sorted_keys)] = 0
+    out: Bools = sorted_keys[pos] == keys if len(sorted_keys) else np.zeros(len(keys), bool)
+    return out
+
+
+@dataclass
+class Frontiers:
+    """What waits to be explored: keys by bucket, and the late ones."""
+
+    pending: dict[int, list[I64]] = field(default_factory=dict)
+    late: list[I64] = field(default_factory=list)
+
+    def add(self, buckets: I64, keys: I64) -> None:
+        order = np.argsort(buckets, kind="stable")
+        buckets, keys = buckets[order], keys[order]
+        cuts = np.flatnonzero(np.diff(buckets)) + 1
+        for part, b in zip(np.split(keys, cuts), buckets[np.r_[0, cuts]].tolist(), strict=True):
+            self.pending.setdefault(int(b), []).append(np.unique(part))
+
+
+def explore_bucket(c: Compiled, start: I64, b: int | None, waiting: Frontiers,
+                   exclude: I64 | None = None) -> tuple[Block, I64]:
+    """The states of bucket `b` reachable from `start` (None: the late states, whose
+    successors all stay late, but for those in `exclude`, explored already); successors
+    in other buckets go to `waiting`. The block and its sorted keys."""
+    none = np.zeros(0, np.int64)
+    skip = none if exclude is None else exclude
+    known = np.unique(start)
+    known = known[~_found(skip, known)]
+    frontier = known
+    parts: list[tuple[I64, Expansion]] = []
+    while frontier.size:
+        x = expand(c, frontier)
+        parts.append((frontier, x))
+        same = np.ones(len(x.target), bool)
+        if b is not None:
+            tb = c.layout.bucket_of(x.target)
+            same = tb == b
+            later = tb > b
+            if later.any():
+                waiting.add(tb[later], x.target[later])
+            earlier = tb < b
+            if earlier.any():
+                waiting.late.append(np.unique(x.target[earlier]))
+        cand = np.unique(x.target[same])
+        frontier = cand[~_found(known, cand) & ~_found(skip, cand)]
+        known = np.union1d(known, frontier)
+    return _block(c, known, parts), known
+
+
+def _offsets(counts: I64) -> I64:
+    out = np.zeros(len(counts) + 1, np.int64)
+    np.cumsum(counts, out=out[1:])
+    return out
+
+
+def _subset(blk: Block, idx: I64, layers: list[int]) -> Block:
+    states, choices = _offsets(blk.nchoice), _offsets(blk.nbranch)
+    ch = acyclic._ranges(states[idx], states[idx + 1])
+    br = acyclic._ranges(choices[ch], choices[ch + 1])
+    return Block(blk.keys[idx], blk.nchoice[idx], blk.nbranch[ch], blk.target[br],
+                 blk.prob[br], [r[ch] for r in blk.reward], [x[idx] for x in blk.labels],
+                 [k for k in layers if k])
+
+
+def split_sinks(blk: Block) -> tuple[Block, Block]:
+    """(the block's absorbing states, whose every branch loops, and the others). The
+    absorbing ones are in its first layer: they may come first of all, before the
+    states that reach them by a transition that sets the clock back."""
+    n = len(blk.keys)
+    owner = acyclic._state_of_branches(_offsets(blk.nchoice), _offsets(blk.nbranch))
+    moving = blk.target != blk.keys[owner]
+    sink = np.bincount(owner[moving], minlength=n) == 0
+    del owner, moving
+    idx = np.flatnonzero(sink)
+    if idx.size and idx[-1] >= blk.layers[0]:
+        raise GiveUp("an absorbing state past the first layer")
+    rest = np.flatnonzero(~sink)
+    return (_subset(blk, idx, [len(idx)]),
+            _subset(blk, rest, [blk.layers[0] - len(idx), *blk.layers[1:]]))
+
+
+def _block(c: Compiled, known: I64, parts: list[tuple[I64, Expansion]]) -> Block:
+    """The block of the explored `parts` (states in the order they were expanded), its
+    states sorted topologically (Kahn, backwards) by the edges within it."""
+    if not parts:
+        z = np.zeros(0, np.int64)
+        return Block(z, z, z, z, np.zeros(0), [np.zeros(0) for _ in c.state_rewards],
+                     [np.zeros(0, bool) for _ in c.targets], [])
+    keys = np.concatenate([k for k, _ in parts])
+    n = len(keys)
+    nchoice = np.concatenate([np.bincount(x.state, minlength=len(k)) for k, x in parts])
+    nbranch = np.concatenate([np.diff(x.first) for _, x in parts])
+    target = np.concatenate([x.target for _, x in parts])
+    prob = np.concatenate([x.prob for _, x in parts])
+    rewards = [np.concatenate([x.reward[i] for _, x in parts])
+               for i in range(len(c.state_rewards))]
+    del parts
+    states = np.zeros(n + 1, np.int64)
+    np.cumsum(nchoice, out=states[1:])
+    choices = np.zeros(len(nbranch) + 1, np.int64)
+    np.cumsum(nbranch, out=choices[1:])
+    sorter = np.argsort(keys)
+    inside = _found(known, target)
+    local = acyclic._state_of_branches(states, choices)  # out of the block: as a self-loop
+    local[inside] = sorter[np.searchsorted(known, target[inside])]
+    layers = acyclic.layers_of(states, choices, local)
+    del local, inside, sorter
+    if layers is None:
+        raise GiveUp("a cycle of more than one state")
+    perm = np.concatenate(layers)
+    old_choice = acyclic._ranges(states[perm], states[perm + 1])
+    branch = acyclic._ranges(choices[old_choice], choices[old_choice + 1])
+    keys, nchoice = keys[perm], nchoice[perm]
+    fr = frame(c.layout.decode(keys))
+    labels = [_full(t(fr), n, bool) for t in c.targets]
+    out_rewards = []
+    for r, items in zip(rewards, c.state_rewards, strict=True):
+        per_state = np.zeros(n)
+        for guard, value in items:
+            per_state += np.where(_full(guard(fr), n, bool), _full(value(fr), n, float), 0.0)
+        out_rewards.append(r[old_choice] + np.repeat(per_state, nchoice))
+    return Block(keys, nchoice, nbranch[old_choice], target[branch], prob[branch],
+                 out_rewards, labels, [len(x) for x in layers])
+
+
+@dataclass
+class Explored:
+    arrays: Arrays
+    states: int
+    choices: int
+    transitions: int
+
+
+def explore(c: Compiled, notify: Notify | None = None,
+            max_states: int | None = None) -> Explored:
+    """Every state reachable from the initial one, bucket by bucket; raises GiveUp, or
+    TooManyStates past `max_states`."""
+    waiting = Frontiers()
+    waiting.pending[int(c.layout.bucket_of(np.array([c.initial]))[0])] = [
+        np.array([c.initial], np.int64)]
+    blocks: list[Block] = []
+    sinks: list[Block] = []
+    regular: list[I64] = []
+    count = 0
+    while waiting.pending:
+        b = min(waiting.pending)
+        start = np.unique(np.concatenate(waiting.pending.pop(b)))
+        block, known = explore_bucket(c, start, b, waiting)
+        sink, block = split_sinks(block)
+        blocks.append(block)
+        sinks.append(sink)
+        regular.append(known)
+        count += len(known)
+        if max_states is not None and count > max_states:
+            raise TooManyStates(count)
+        if notify is not None and len(regular) % 100 == 0:
+            notify("explored", (b, count))
+    if waiting.late:
+        absorbing = np.sort(np.concatenate([s.keys for s in sinks]))
+        block, known = explore_bucket(c, np.concatenate(waiting.late), None, Frontiers(),
+                                      absorbing)
+        if _found(np.concatenate(regular), known).any():
+            raise GiveUp("a state reached both before and after its clock went back")
+        blocks.append(block)
+    del regular
+    total = sum(len(s.keys) for s in sinks)
+    sink = Block(*(_cat_free(sinks, name, np.int64 if name != "prob" else np.float64)
+                   for name in ("keys", "nchoice", "nbranch", "target", "prob")),
+                 [np.concatenate([s.reward[i] for s in sinks]) for i in range(len(c.state_rewards))],
+                 [np.concatenate([s.labels[i] for s in sinks]) for i in range(len(c.targets))],
+                 [total] if total else [])
+    blocks.append(sink)
+    return assemble(blocks, c)
+
+
+def _cat_free(blocks: list[Block], name: str, dtype: Any) -> Any:
+    """The blocks' arrays `name` end to end, each freed once copied."""
+    total = sum(len(getattr(b, name)) for b in blocks)
+    out = np.empty(total, dtype)
+    at = 0
+    for b in blocks:
+        a = getattr(b, name)
+        out[at:at + len(a)] = a
+        at += len(a)
+        setattr(b, name, np.zeros(0, dtype))
+    return out
+
+
+def assemble(blocks: list[Block], c: Compiled) -> Explored:
+    """The blocks as one model for the backward pass: the last explored first."""
+    blocks = blocks[::-1]
+    keys = _cat_free(blocks, "keys", np.int64)
+    n = len(keys)
+    states = np.zeros(n + 1, np.int64)
+    np.cumsum(_cat_free(blocks, "nchoice", np.int64), out=states[1:])
+    m = int(states[-1])
+    choices = np.zeros(m + 1, np.int64)
+    np.cumsum(_cat_free(blocks, "nbranch", np.int64), out=choices[1:])
+    prob = _cat_free(blocks, "prob", np.float64)
+    labels = {acyclic.LABEL + str(i): np.concatenate([b.labels[i] for b in blocks])
+              for i in range(len(c.targets))}
+    rewards = [np.concatenate([b.reward[i] for b in blocks]) for i in range(len(c.state_rewards))]
+    sizes = [s for b in blocks for s in b.layers if s]
+    layers = np.zeros(len(sizes) + 1, np.int64)
+    np.cumsum(sizes, out=layers[1:])
+    for b in blocks:
+        b.labels, b.reward = [], []
+    order = np.argsort(keys)
+    sorted_keys = keys[order]
+    del keys
+    target = np.empty(int(choices[-1]), np.int32)
+    at = 0
+    for b in blocks:
+        for i in range(0, len(b.target), acyclic.CHUNK):
+            part = b.target[i:i + acyclic.CHUNK]
+            pos = np.searchsorted(sorted_keys, part)
+            if (sorted_keys[np.minimum(pos, n - 1)] != part).any():
+                raise GiveUp("a successor that was not explored")
+            target[at:at + len(part)] = order[pos]
+            at += len(part)
+        b.target = np.zeros(0, np.int64)
+    initial = int(order[np.searchsorted(sorted_keys, c.initial)])
+    del order, sorted_keys
+    stay = acyclic.self_loops(states, choices, target, prob)
+    arrays = Arrays(states, choices, target, prob, stay, layers, initial, labels,
+                    dict(zip(c.reward_names, rewards, strict=True)))
+    return Explored(arrays, n, m, len(target))
