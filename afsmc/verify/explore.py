@@ -61,14 +61,23 @@ class Field:
     name: str  # a variable's name, or "mode"
     lo: int
     size: int
-    stride: int
+    shift: int  # its bits start here: a value's offset in the range times `stride`
     boolean: bool
+
+    @property
+    def stride(self) -> int:
+        return 1 << self.shift
+
+    @property
+    def mask(self) -> int:
+        return (1 << (self.size - 1).bit_length()) - 1
 
 
 @dataclass
 class Layout:
-    """How a state is packed into an int64: the bucket variable most significant, so that
-    keys sort by bucket first."""
+    """How a state is packed into an int64: each field in its own bits (shifts and masks
+    decode them, far faster than divisions), the bucket variable most significant, so
+    that keys sort by bucket first."""
 
     fields: dict[str, Field]
     bucket: Field | None
@@ -76,14 +85,14 @@ class Layout:
     def decode(self, keys: I64) -> dict[str, Any]:
         out: dict[str, Any] = {}
         for f in self.fields.values():
-            v = (keys // f.stride) % f.size + f.lo
-            out[f.name] = v.astype(bool) if f.boolean else v
+            v = (keys >> f.shift) & f.mask
+            out[f.name] = v.astype(bool) if f.boolean else v + f.lo if f.lo else v
         return out
 
     def bucket_of(self, keys: I64) -> I64:
         if self.bucket is None:
             return np.zeros(len(keys), np.int64)
-        out: I64 = keys // self.bucket.stride
+        out: I64 = keys >> self.bucket.shift
         return out
 
 
@@ -128,12 +137,12 @@ def layout(low: Lowered) -> Layout:
     bucket = bucket_variable(low)
     spans.sort(key=lambda s: s[0] == bucket)  # the bucket variable last: most significant
     fields: dict[str, Field] = {}
-    stride = 1
+    shift = 0
     for name, lo, size, boolean in spans:
-        fields[name] = Field(name, lo, size, stride, boolean)
-        stride *= size
-    if stride >= 2**KEY_BITS:
-        raise GiveUp(f"{stride:,} combinations of values do not fit in a 64-bit key")
+        fields[name] = Field(name, lo, size, shift, boolean)
+        shift += (size - 1).bit_length()
+    if shift > KEY_BITS:
+        raise GiveUp(f"its variables need {shift} bits, more than a 64-bit key holds")
     return Layout(fields, fields[bucket] if bucket is not None else None)
 
 
@@ -141,6 +150,8 @@ def layout(low: Lowered) -> Layout:
 class CBranch:
     prob: Fn
     updates: list[tuple[Field, Fn, bool]]  # (variable, new value, checked against its range)
+    clear: int = 0  # the bits of the variables set to constants ...
+    bits: int = 0  # ... and their new bits
 
 
 @dataclass
@@ -186,10 +197,8 @@ def compile_model(low: Lowered, targets: list[E.Expr], rewards: list[str]) -> Co
             g = fold(cmd.guard, sc)
             if static(g) is False:
                 continue
-            branches = [CBranch(compile_expr(fold(b.prob, sc)),
-                                [(lay.fields[var], compile_expr(fold(val, sc)),
-                                  _may_leave(val, lay.fields[var], low))
-                                 for var, val in b.updates]) for b in cmd.branches]
+            branches = [_branch(b.prob, b.updates, sc, lay, low, compile_expr)
+                        for b in cmd.branches]
             acts: list[Fn | None] = []
             for r in structs:
                 items = [] if cmd.silent else [it for it in r.items if it.action == cmd.action]
@@ -202,6 +211,22 @@ def compile_model(low: Lowered, targets: list[E.Expr], rewards: list[str]) -> Co
     key = sum((init[f.name] - f.lo) * f.stride for f in lay.fields.values())
     return Compiled(lay, modes, [compile_expr(fold(t, base)) for t in targets], state,
                     int(key), low.kind == "dtmc", list(rewards))
+
+
+def _branch(prob: E.Expr, updates: tuple[tuple[str, E.Expr], ...], sc: Scope, lay: Layout,
+            low: Lowered, compile_expr: Compiler) -> CBranch:
+    out = CBranch(compile_expr(fold(prob, sc)), [])
+    for var, val in updates:
+        f, v = lay.fields[var], fold(val, sc)
+        if isinstance(v, E.Lit):
+            k = int(v.value)
+            if not f.lo <= k < f.lo + f.size:
+                raise GiveUp(f"{f.name} set to {k}, out of its range")
+            out.clear |= f.mask << f.shift
+            out.bits |= (k - f.lo) << f.shift
+        else:
+            out.updates.append((f, compile_expr(v), _may_leave(val, f, low)))
+    return out
 
 
 def _may_leave(value: E.Expr, f: Field, low: Lowered) -> bool:
@@ -278,11 +303,11 @@ def _command(cmd: CCommand, base: I64, sub: dict[str, Any]) -> tuple[I64, I64, F
     tks = np.empty((n, len(cmd.branches)), np.int64)
     prs = np.empty((n, len(cmd.branches)))
     for j, b in enumerate(cmd.branches):
-        prs[:, j] = _full(b.prob(sub), n, np.float64)
-        tk = base.copy()
+        prs[:, j] = b.prob(sub)
+        tk = (base & ~b.clear) | b.bits if b.clear else base.copy()
         for f, fn, check in b.updates:
-            new = _full(fn(sub), n, np.int64)
-            if check and new.size and (new.min() < f.lo or new.max() >= f.lo + f.size):
+            new = fn(sub)
+            if check and (np.min(new) < f.lo or np.max(new) >= f.lo + f.size):
                 raise GiveUp(f"{f.name} leaves its range")
             tk += (new - sub[f.name]) * f.stride
         tks[:, j] = tk
@@ -297,7 +322,7 @@ def expand(c: Compiled, keys: I64) -> Expansion:
     """Every choice of the states `keys`."""
     lay = c.layout
     mf = lay.fields["mode"]
-    mode = (keys // mf.stride) % mf.size + mf.lo
+    mode = ((keys >> mf.shift) & mf.mask) + mf.lo
     order = np.argsort(mode, kind="stable")
     bounds = np.flatnonzero(np.diff(mode[order])) + 1
     states, rows, tks, prs = [], [], [], []
