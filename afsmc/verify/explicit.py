@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import time
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any, Literal
 
 from afsmc.backends.prism import property_variants
@@ -20,7 +20,7 @@ from afsmc.lower.lowering import Lowered
 from afsmc.model import expr as E
 from afsmc.model import ir
 from afsmc.sim.compile import SimError
-from afsmc.verify import acyclic, explore
+from afsmc.verify import acyclic, explore, explore_graph
 
 Notify = Callable[[str, Any], None]
 
@@ -106,7 +106,7 @@ def answer(low: Lowered, names: tuple[str, ...], what: str, notify: Notify,
     started = time.perf_counter()
     try:
         compiled = explore.compile_model(low, p.targets, p.rewards)
-        found = explore.explore(compiled, notify, max_states)
+        found = explore_graph.explore(compiled, notify, max_states)
     except (explore.GiveUp, SimError) as exc:
         notify("solver", f"afsmc's own exploration does not apply to the {what} ({exc}): "
                "Storm builds it")
@@ -125,3 +125,24 @@ def answer(low: Lowered, names: tuple[str, ...], what: str, notify: Notify,
         notify("value", (q.name, values[q.name], secs))
     return Answer(values, {q.name: secs for q in p.queries}, found.states, found.choices,
                   found.transitions, built, p.left)
+
+
+def fill(job: Any, res: Any, notify: Notify, too_big: Callable[[Any, int], Any]) -> Any:
+    """Answer what the exploration can of a Storm job (afsmc.verify.storm.Job) into its
+    result `res`; the job of what is left for Storm, or None if nothing is (or the model
+    has too many states: `res.failure` says so)."""
+    try:
+        ans = answer(job.explicit, job.names, job.what, notify, job.max_states)
+    except TooMany as exc:
+        res.states, res.failure = exc.states, too_big(job, exc.states)
+        return None
+    if ans is None:
+        return replace(job, explicit=None)
+    res.states, res.choices, res.transitions = ans.states, ans.choices, ans.transitions
+    res.kind, res.engine, res.solver = job.explicit.kind, "explicit", "acyclic"
+    res.build_time, res.check_time = ans.explore_time, sum(ans.seconds.values())
+    res.values, res.seconds = dict(ans.values), dict(ans.seconds)
+    notify("engine", "explicit")
+    if not ans.left:
+        return None
+    return replace(job, names=tuple(ans.left), explicit=None, hybrid_extra=())

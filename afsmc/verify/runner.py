@@ -24,6 +24,7 @@ from afsmc.lower.reduce import Reductions
 from afsmc.model import ir
 from afsmc.model.semantics import bounded_globally
 from afsmc.verify.deep import refuse_deep
+from afsmc.verify.explicit import applies
 from afsmc.verify.failures import (
     after_failure,
     failure_diagnostic,
@@ -39,7 +40,6 @@ from afsmc.verify.guard import (
     upper_bound,
 )
 from afsmc.verify.jobs import choose_engine, make_job
-from afsmc.verify.explicit import applies
 from afsmc.verify.precision import complement
 from afsmc.verify.queries import (
     REST,

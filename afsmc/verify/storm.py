@@ -14,7 +14,7 @@ import os
 import tempfile
 import time
 from collections.abc import Callable
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 from typing import Any, Literal
 
 from afsmc.verify import acyclic, explicit, precision
@@ -208,7 +208,7 @@ def execute(job: Job, notify: Notify | None = None) -> JobResult:
 def _execute(job: Job, notify: Notify) -> JobResult:
     res = JobResult()
     if job.explicit is not None:
-        left = _explicit(job, res, notify)
+        left = explicit.fill(job, res, notify, too_big)
         if left is None:
             return res
         job = left
@@ -278,26 +278,6 @@ def _execute(job: Job, notify: Notify) -> JobResult:
     if mixed:  # some queries by afsmc's own exploration, the others by Storm
         res.solver = f"acyclic (explicit) and {res.solver}"
     return res
-
-
-def _explicit(job: Job, res: JobResult, notify: Notify) -> Job | None:
-    """Answer what afsmc's own exploration can (afsmc.verify.explicit); the job of what
-    is left for Storm, or None if nothing is (or the model has too many states)."""
-    try:
-        ans = explicit.answer(job.explicit, job.names, job.what, notify, job.max_states)
-    except explicit.TooMany as exc:
-        res.states, res.failure = exc.states, too_big(job, exc.states)
-        return None
-    if ans is None:
-        return replace(job, explicit=None)
-    res.states, res.choices, res.transitions = ans.states, ans.choices, ans.transitions
-    res.kind, res.engine, res.solver = job.explicit.kind, "explicit", "acyclic"
-    res.build_time, res.check_time = ans.explore_time, sum(ans.seconds.values())
-    res.values, res.seconds = dict(ans.values), dict(ans.seconds)
-    notify("engine", "explicit")
-    if not ans.left:
-        return None
-    return replace(job, names=tuple(ans.left), explicit=None, hybrid_extra=())
 
 
 def too_big(job: Job, states: int) -> StormFailure:

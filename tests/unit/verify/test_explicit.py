@@ -16,7 +16,7 @@ import pytest
 
 from afsmc.backends.prism import property_variants
 from afsmc.compiler import load, lowered
-from afsmc.verify import explicit, explore, run
+from afsmc.verify import explicit, explore, explore_graph, run
 from tests.conftest import EXAMPLES
 from tests.unit.backends.test_prism import SMALL
 from tests.unit.verify.models import TEXT
@@ -97,7 +97,7 @@ def test_a_real_cycle_is_left_to_storm() -> None:
 def test_every_successor_comes_first_and_every_choice_sums_to_one() -> None:
     low = lowered(load(str(EXAMPLES / "uav.afsm"), SMALL["uav"]).model, "nondet")
     c = explore.compile_model(low, [], [])
-    a = explore.explore(c).arrays
+    a = explore_graph.explore(c).arrays
     layer = np.repeat(np.arange(len(a.layers) - 1), np.diff(a.layers))
     owner = np.repeat(np.repeat(np.arange(len(a.states) - 1), np.diff(a.states)),
                       np.diff(a.choices))
