@@ -309,7 +309,10 @@ def _command(cmd: CCommand, base: I64, sub: dict[str, Any]) -> tuple[I64, I64, F
             new = fn(sub)
             if check and (np.min(new) < f.lo or np.max(new) >= f.lo + f.size):
                 raise GiveUp(f"{f.name} leaves its range")
-            tk += (new - sub[f.name]) * f.stride
+            if f.boolean:  # numpy has no `-` of booleans
+                tk = (tk & ~(1 << f.shift)) | (np.asarray(new, np.int64) << f.shift)
+            else:
+                tk += (new - sub[f.name]) * f.stride
         tks[:, j] = tk
     if n and np.abs(prs.sum(axis=1) - 1.0).max() > SUM_TOLERANCE:
         raise GiveUp("a command's probabilities do not sum to 1")
