@@ -96,7 +96,7 @@ class TooMany(Exception):
 
 
 def answer(low: Lowered, names: tuple[str, ...], what: str, notify: Notify,
-           max_states: int | None = None) -> Answer | None:
+           max_states: int | None = None, max_bytes: int | None = None) -> Answer | None:
     """The queries' values by exploration and a backward pass; None if the explorer
     gives up (Storm then answers them all). Raises TooMany past `max_states`."""
     p = plan(low, names)
@@ -104,9 +104,14 @@ def answer(low: Lowered, names: tuple[str, ...], what: str, notify: Notify,
         return None
     notify("phase", "explicit")
     started = time.perf_counter()
+
+    def explored(event: str, data: Any) -> None:  # a progress line now and then
+        notify("solver", f"explored {data[1]:,} states of the {what} so far (clock at "
+               f"{data[0]}; {time.perf_counter() - started:.0f} s)")
+
     try:
         compiled = explore.compile_model(low, p.targets, p.rewards)
-        found = explore_graph.explore(compiled, notify, max_states)
+        found = explore_graph.explore(compiled, explored, max_states, max_bytes)
     except (explore.GiveUp, SimError) as exc:
         notify("solver", f"afsmc's own exploration does not apply to the {what} ({exc}): "
                "Storm builds it")
@@ -132,7 +137,8 @@ def fill(job: Any, res: Any, notify: Notify, too_big: Callable[[Any, int], Any])
     result `res`; the job of what is left for Storm, or None if nothing is (or the model
     has too many states: `res.failure` says so)."""
     try:
-        ans = answer(job.explicit, job.names, job.what, notify, job.max_states)
+        ans = answer(job.explicit, job.names, job.what, notify, job.max_states,
+                     job.memory_budget)
     except TooMany as exc:
         res.states, res.failure = exc.states, too_big(job, exc.states)
         return None

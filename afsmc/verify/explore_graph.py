@@ -14,6 +14,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
+import numpy.typing as npt
 
 from afsmc.verify import acyclic
 from afsmc.verify.acyclic import F64, I64, Arrays, Bools
@@ -28,6 +29,8 @@ from afsmc.verify.explore import (
 )
 from afsmc.verify.explore_eval import frame
 
+Counts = npt.NDArray[np.int32]  # choices of a state, branches of a choice
+
 
 @dataclass
 class Block:
@@ -35,8 +38,8 @@ class Block:
     the block lies in an earlier layer of it."""
 
     keys: I64
-    nchoice: I64  # per state
-    nbranch: I64  # per choice
+    nchoice: Counts  # per state
+    nbranch: Counts  # per choice
     target: I64  # per branch: the successor's key
     prob: F64
     reward: list[F64]  # per reward structure asked: per choice, state reward included
@@ -106,7 +109,7 @@ def explore_bucket(c: Compiled, start: I64, b: int | None, waiting: Frontiers,
     return _block(c, known, parts), known
 
 
-def _offsets(counts: I64) -> I64:
+def _offsets(counts: Counts) -> I64:
     out = np.zeros(len(counts) + 1, np.int64)
     np.cumsum(counts, out=out[1:])
     return out
@@ -142,13 +145,14 @@ def _block(c: Compiled, known: I64, parts: list[tuple[I64, Expansion]]) -> Block
     """The block of the explored `parts` (states in the order they were expanded), its
     states sorted topologically (Kahn, backwards) by the edges within it."""
     if not parts:
-        z = np.zeros(0, np.int64)
-        return Block(z, z, z, z, np.zeros(0), [np.zeros(0) for _ in c.state_rewards],
+        z, w = np.zeros(0, np.int64), np.zeros(0, np.int32)
+        return Block(z, w, w, z, np.zeros(0), [np.zeros(0) for _ in c.state_rewards],
                      [np.zeros(0, bool) for _ in c.targets], [])
     keys = np.concatenate([k for k, _ in parts])
     n = len(keys)
-    nchoice = np.concatenate([np.bincount(x.state, minlength=len(k)) for k, x in parts])
-    nbranch = np.concatenate([np.diff(x.first) for _, x in parts])
+    nchoice = np.concatenate([np.bincount(x.state, minlength=len(k)).astype(np.int32)
+                              for k, x in parts])
+    nbranch = np.concatenate([np.diff(x.first).astype(np.int32) for _, x in parts])
     target = np.concatenate([x.target for _, x in parts])
     prob = np.concatenate([x.prob for _, x in parts])
     rewards = [np.concatenate([x.reward[i] for _, x in parts])
@@ -190,17 +194,29 @@ class Explored:
     transitions: int
 
 
-def explore(c: Compiled, notify: Notify | None = None,
-            max_states: int | None = None) -> Explored:
-    """Every state reachable from the initial one, bucket by bucket; raises GiveUp, or
-    TooManyStates past `max_states`."""
+# The explored blocks times this is about the peak of the whole (the arrays assembled and
+# the pass's values besides them); measured on scenario 1, which outgrew 17.9 GB.
+PEAK_FACTOR = 2.5
+
+
+def _nbytes(b: Block) -> int:
+    arrays: list[npt.NDArray[Any]] = [b.keys, b.nchoice, b.nbranch, b.target, b.prob,
+                                      *b.reward, *b.labels]
+    return sum(int(a.nbytes) for a in arrays)
+
+
+def explore(c: Compiled, notify: Notify | None = None, max_states: int | None = None,
+            max_bytes: int | None = None) -> Explored:
+    """Every state reachable from the initial one, bucket by bucket; raises GiveUp (also
+    once the blocks, times PEAK_FACTOR, pass `max_bytes`), or TooManyStates past
+    `max_states`."""
     waiting = Frontiers()
     waiting.pending[int(c.layout.bucket_of(np.array([c.initial]))[0])] = [
         np.array([c.initial], np.int64)]
     blocks: list[Block] = []
     sinks: list[Block] = []
     regular: list[I64] = []
-    count = 0
+    count = held = 0
     while waiting.pending:
         b = min(waiting.pending)
         start = _unique(np.concatenate(waiting.pending.pop(b)))
@@ -210,8 +226,12 @@ def explore(c: Compiled, notify: Notify | None = None,
         sinks.append(sink)
         regular.append(known)
         count += len(known)
+        held += _nbytes(block) + _nbytes(sink) + known.nbytes
         if max_states is not None and count > max_states:
             raise TooManyStates(count)
+        if max_bytes is not None and held * PEAK_FACTOR > max_bytes:
+            raise GiveUp(f"{count:,} states explored so far would need more than the "
+                         f"{max_bytes / 1e9:.1f} GB available")
         if notify is not None and len(regular) % 100 == 0:
             notify("explored", (b, count))
     if waiting.late:
@@ -231,8 +251,8 @@ def _joined(sinks: list[Block], c: Compiled) -> Block:
     total = sum(len(s.keys) for s in sinks)
     rewards = [np.concatenate([s.reward[i] for s in sinks]) for i in range(len(c.state_rewards))]
     labels = [np.concatenate([s.labels[i] for s in sinks]) for i in range(len(c.targets))]
-    return Block(_cat_free(sinks, "keys", np.int64), _cat_free(sinks, "nchoice", np.int64),
-                 _cat_free(sinks, "nbranch", np.int64), _cat_free(sinks, "target", np.int64),
+    return Block(_cat_free(sinks, "keys", np.int64), _cat_free(sinks, "nchoice", np.int32),
+                 _cat_free(sinks, "nbranch", np.int32), _cat_free(sinks, "target", np.int64),
                  _cat_free(sinks, "prob", np.float64), rewards, labels,
                  [total] if total else [])
 
@@ -256,10 +276,10 @@ def assemble(blocks: list[Block], c: Compiled) -> Explored:
     keys = _cat_free(blocks, "keys", np.int64)
     n = len(keys)
     states = np.zeros(n + 1, np.int64)
-    np.cumsum(_cat_free(blocks, "nchoice", np.int64), out=states[1:])
+    np.cumsum(_cat_free(blocks, "nchoice", np.int32), out=states[1:])
     m = int(states[-1])
     choices = np.zeros(m + 1, np.int64)
-    np.cumsum(_cat_free(blocks, "nbranch", np.int64), out=choices[1:])
+    np.cumsum(_cat_free(blocks, "nbranch", np.int32), out=choices[1:])
     prob = _cat_free(blocks, "prob", np.float64)
     labels = {acyclic.LABEL + str(i): np.concatenate([b.labels[i] for b in blocks])
               for i in range(len(c.targets))}

@@ -105,3 +105,27 @@ def test_every_successor_comes_first_and_every_choice_sums_to_one() -> None:
     assert (layer[a.target[moving]] < layer[owner[moving]]).all()
     sums = np.add.reduceat(a.prob, a.choices[:-1])
     assert np.allclose(sums, 1.0, atol=1e-12)
+
+
+def test_the_state_limit_stops_the_exploration_as_it_stops_storm() -> None:
+    from afsmc.diagnostics import CompileError
+
+    path, consts = str(EXAMPLES / "uav.afsm"), SMALL["uav"]
+    with pytest.raises(CompileError) as got:
+        run(path, consts=consts, engine="sparse", isolate=False, max_states=100,
+            uniform=False)
+    with pytest.raises(CompileError) as want:
+        run(path, consts=consts, engine="sparse", isolate=False, max_states=100,
+            uniform=False, solver="topological")
+    assert [d.code for d in got.value.diagnostics] == [d.code for d in want.value.diagnostics]
+    assert "--max-states 100" in got.value.diagnostics[0].message
+
+
+def test_a_model_past_the_memory_budget_is_left_to_storm() -> None:
+    low = lowered(load(str(EXAMPLES / "uav.afsm"), SMALL["uav"]).model, "nondet")
+    names = tuple(n for p in low.model.properties for n, _ in property_variants(low, p))
+    said: list[str] = []
+    assert explicit.answer(low, names, "MDP", lambda _e, d: said.append(str(d)),
+                           max_bytes=1000) is None
+    assert any("GB available" in s for s in said)
+    assert explicit.answer(low, names, "MDP", lambda _e, _d: None) is not None
