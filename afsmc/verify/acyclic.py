@@ -209,14 +209,14 @@ def solve(a: Arrays, q: Query) -> float:
 
 
 def solve_many(a: Arrays, queries: list[Query]) -> dict[str, float]:
-    """Each query's value in the initial state. Queries of the same kind and direction
-    share their passes (the values of each state side by side), as many at a time as
-    GROUP_BYTES allows."""
+    """Each query's value in the initial state. Queries of the same kind share their
+    passes (the values of each state side by side, a min and a max alike), as many at a
+    time as GROUP_BYTES allows."""
     n = len(a.states) - 1
     most = max(1, GROUP_BYTES // (8 * max(n, 1)))
-    groups: dict[tuple[str, str], list[Query]] = {}
+    groups: dict[str, list[Query]] = {}
     for q in queries:
-        groups.setdefault((q.kind, q.opt), []).append(q)
+        groups.setdefault(q.kind, []).append(q)
     out: dict[str, float] = {}
     for group in groups.values():
         for i in range(0, len(group), most):
@@ -227,26 +227,31 @@ def solve_many(a: Arrays, queries: list[Query]) -> dict[str, float]:
 
 def _pass(a: Arrays, qs: list[Query], best: npt.NDArray[np.int64] | None = None,
           value: F64 | None = None) -> list[float]:
-    """One pass over the layers for queries of one kind and direction, from the
-    absorbing states back to the initial one. With `best` (one query): each state's first
-    choice (number within the state) whose value is the optimum, which is the choice
-    Storm's topological solver keeps; with `value` (n x 1): every state's value."""
-    k = len(qs)
+    """One pass over the layers for queries of one kind, from the absorbing states back
+    to the initial one: per layer, the choices' values are one sparse product (its
+    branches' probabilities times their successors' values), then each state's is the
+    min or max over its choices. With `best` (one query): each state's first choice
+    (number within the state) whose value is the optimum, which is the choice Storm's
+    topological solver keeps; with `value` (n x 1): every state's value."""
+    from scipy.sparse import csr_matrix
+
+    k, n = len(qs), len(a.states) - 1
     if value is None:
-        value = np.zeros((len(a.states) - 1, k))
+        value = np.zeros((n, k))
     on_target = np.stack([a.labels[LABEL + str(q.target)] for q in qs], axis=1)
     reward = None
     if qs[0].kind == "R":
         reward = np.stack([a.rewards[q.reward] for q in qs], axis=1)
     stuck = 0.0 if qs[0].kind == "P" else np.inf  # a choice that only loops
     reached = 1.0 if qs[0].kind == "P" else 0.0  # on the target
-    pick = np.minimum if qs[0].opt == "min" else np.maximum
+    low = np.array([q.opt == "min" for q in qs])
+    sign = np.where(low, 1.0, -1.0)  # a max as the min of the negated values
     for lo, hi in itertools.pairwise(a.layers.tolist()):
         c0, c1 = int(a.states[lo]), int(a.states[hi])
         b0, b1 = int(a.choices[c0]), int(a.choices[c1])
-        with np.errstate(invalid="ignore"):
-            contrib = a.prob[b0:b1, None] * value[a.target[b0:b1]]
-        per_choice = np.add.reduceat(contrib, a.choices[c0:c1] - b0, axis=0)
+        rows = (a.choices[c0:c1 + 1] - b0).astype(np.int32 if b1 - b0 < 2**31 else np.int64)
+        step = csr_matrix((a.prob[b0:b1], a.target[b0:b1], rows), shape=(c1 - c0, n))
+        per_choice = np.asarray(step @ value)
         if reward is not None:
             per_choice += reward[c0:c1]
         if a.stay is not None:
@@ -257,7 +262,14 @@ def _pass(a: Arrays, qs: list[Query], best: npt.NDArray[np.int64] | None = None,
         if c1 - c0 == hi - lo:
             per_state = per_choice
         else:
-            per_state = pick.reduceat(per_choice, a.states[lo:hi] - c0, axis=0)
+            # each state's choices side by side, its last repeated up to the most any
+            # state has (numpy's reduceat down the columns is several times slower)
+            first = a.states[lo:hi] - c0
+            last = a.states[lo + 1:hi + 1] - c0 - 1
+            wide = int((last - first).max()) + 1
+            side = per_choice[np.minimum(first[:, None] + np.arange(wide), last[:, None])]
+            per_state = side.min(axis=1) if low.all() else -(-side).min(axis=1) \
+                if not low.any() else sign * (side * sign).min(axis=1)
         if best is not None:
             best[lo:hi] = _first_best(per_choice[:, 0], per_state[:, 0], a.states[lo:hi + 1] - c0)
         value[lo:hi] = np.where(on_target[lo:hi], reached, per_state)

@@ -17,32 +17,26 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any, Literal
 
-from afsmc.verify import acyclic, precision, strategy_arrays
+from afsmc.verify import acyclic, explicit, precision, strategy_arrays
 from afsmc.verify.strategy_storm import Extract, Extracted, analyse, builder_options
 
 Engine = Literal["sparse", "dd", "hybrid", "auto"]
 ENGINES: tuple[Engine, ...] = ("auto", "sparse", "dd", "hybrid")
-# The sparse engine needs about this much per state (model plus one property's vectors):
-# about 90 bytes per transition, 200-260 bytes per state, measured with stormpy 2.0 on a
-# 2-core, 23 GB machine, building and checking hand-written PRISM models of the UAV mission
-# (5.5-11 M states; 11.3 M states took 2.9 GB).
+# The sparse engine's memory per state (model plus one property's vectors): about 90 bytes
+# per transition, 200-260 per state, measured with stormpy 2.0 on the UAV (5.5-11 M states).
 SPARSE_BYTES_PER_STATE = 260
 Via = Literal["prism", "jani"]
 VIAS: tuple[Via, ...] = ("prism", "jani")
-# How Storm solves the equation systems (an MDP's min/max ones, a DTMC's linear ones) on the
-# sparse and hybrid engines. "auto": value iteration on the hybrid engine; on sparse, one
-# exact backward pass where the model is acyclic but for self-loops (afsmc.verify.acyclic;
-# the solver is then reported as "acyclic"), else Storm's default (topological). The topological solver splits the model into strongly connected
-# components first; a mission whose clock only grows is acyclic but for its final modes, so
-# every component is one state, and on scenario 1 (77.5 M states) that decomposition and
-# the state-by-state solution took 137 s of a 394 s query that value iteration answered in
-# 276 s (docs/benchmarks.md).
+# How Storm solves the equation systems on the sparse and hybrid engines. "auto": value
+# iteration on hybrid; on sparse, one exact backward pass where the model is acyclic but for
+# self-loops (afsmc.verify.acyclic, reported as "acyclic"), else Storm's topological solver,
+# which on a mission whose clock only grows finds one component per state (on scenario 1,
+# 137 s of a 394 s query that value iteration answered in 276 s; docs/benchmarks.md).
 Solver = Literal["auto", "topological", "value-iteration"]
 SOLVERS: tuple[Solver, ...] = ("auto", "topological", "value-iteration")
-# Value iteration stops when no value changes by more than this, relative to itself. Storm's
-# default, 1e-6, moved values in the ninth digit; at 1e-10 they equal the topological
-# solver's to about 1e-14 on the UAV, at no measurable extra cost: an acyclic model reaches
-# its fixed point after as many iterations as its longest path has steps.
+# Value iteration stops when no value changes by more than this, relative to itself (Storm's
+# 1e-6 moved values in the ninth digit; 1e-10 equals the topological solver's to ~1e-14 on
+# the UAV at no measurable cost: an acyclic model converges in its longest path's steps).
 VI_PRECISION = "1/10000000000"
 
 # Storm stages a failure can come from; the caller picks the diagnostic code from it.
@@ -91,6 +85,9 @@ class Job:
     exact: bool = False  # build over rationals and solve exactly (sparse engine only)
     # schedulers and most probable paths to extract (sparse engine only; strategy_storm)
     extract: Extract | None = None
+    # the lowered model, for afsmc's own exploration and backward pass first
+    # (afsmc.verify.explicit); None: Storm only
+    explicit: Any = None
 
     @property
     def wanted(self) -> tuple[str, ...]:
@@ -203,10 +200,16 @@ def execute(job: Job, notify: Notify | None = None) -> JobResult:
 
 
 def _execute(job: Job, notify: Notify) -> JobResult:
+    res = JobResult()
+    if job.explicit is not None:
+        left = explicit.fill(job, res, notify, too_big)
+        if left is None:
+            return res
+        job = left
+    mixed = bool(res.values)
     import stormpy
 
     _quiet()
-    res = JobResult()
     t0 = time.perf_counter()
     notify("phase", "parse")
     parsed = _parse(stormpy, job)
@@ -269,6 +272,8 @@ def _execute(job: Job, notify: Notify) -> JobResult:
         return res
     res.check_time = time.perf_counter() - t0
     res.failure = built.deferred
+    if mixed:  # some queries by afsmc's own exploration, the others by Storm
+        res.solver = f"acyclic (explicit) and {res.solver}"
     return res
 
 

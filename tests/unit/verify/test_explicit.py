@@ -1,0 +1,131 @@
+"""afsmc's own exploration and backward pass (afsmc.verify.explore, explicit) give
+Storm's model and Storm's values.
+
+The oracle is Storm: `--solver topological` builds the model with Storm and solves it with
+Storm's own solver. On every example and test machine, the explicit path must report the
+same numbers of states, choices and transitions as Storm's build, and the same values to
+1e-9; a model with a real cycle, and a query of another shape, are left to Storm."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pytest
+
+from afsmc.backends.prism import property_variants
+from afsmc.compiler import load, lowered
+from afsmc.verify import explicit, explore, explore_graph, run
+from tests.conftest import EXAMPLES
+from tests.unit.backends.test_prism import SMALL
+from tests.unit.verify.models import TEXT
+from tests.unit.verify.test_engine_choice import FOREVER, _close, _values
+
+pytestmark = pytest.mark.storm
+
+EXAMPLE_FILES = sorted(EXAMPLES.glob("*.afsm"))
+CYCLIC = {"patrol", "warehouse"}  # examples with a cycle of more than one state
+
+
+def _both(path: str, consts: dict[str, str]) -> tuple[Any, Any]:
+    # Requirements (P>=0.9 [...]) are checked in Storm's sound mode, not by this path.
+    asked = [p.name for p in load(path, consts).model.properties if p.threshold is None]
+    new = run(path, consts=consts, engine="sparse", isolate=False, properties=asked)
+    old = run(path, consts=consts, engine="sparse", isolate=False, solver="topological",
+              properties=asked)
+    return new, old
+
+
+def _same_model(new: Any, old: Any) -> None:
+    assert (new.states, new.choices, new.transitions) == (old.states, old.choices,
+                                                          old.transitions)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("path", EXAMPLE_FILES, ids=[p.stem for p in EXAMPLE_FILES])
+def test_every_example_has_storm_s_model_and_values(path: Path) -> None:
+    new, old = _both(str(path), SMALL.get(path.stem, {}))
+    _close(_values(new), _values(old), 1e-9)
+    _same_model(new.model, old.model)
+    if new.uniform_model is not None:
+        _same_model(new.uniform_model, old.uniform_model)
+    if path.stem in CYCLIC:
+        assert new.model.engine == "sparse" and new.model.solver == "topological"
+    else:
+        assert new.model.engine in ("explicit", "sparse")  # sparse: a bounded query left
+        assert "acyclic" in new.model.solver
+        if new.uniform_model is not None:
+            assert "acyclic" in new.uniform_model.solver
+    assert any(v is not None and 0 < v < 1 for p in new.properties
+               for v in (p.min, p.max, p.uniform, p.value))
+
+
+@pytest.mark.parametrize("text", [TEXT, FOREVER], ids=["tiny", "forever"])
+def test_test_machines_have_storm_s_model_and_values(text: str, tmp_path: Path) -> None:
+    path = tmp_path / "m.afsm"
+    path.write_text(text, encoding="utf-8")
+    new, old = _both(str(path), {})
+    _close(_values(new), _values(old), 1e-9)
+    _same_model(new.model, old.model)
+    # tiny's bounded G properties are left to Storm, on a model Storm builds
+    assert new.model.solver == ("acyclic (explicit) and topological" if text == TEXT
+                                else "acyclic")
+
+
+def test_the_uav_has_storm_s_model_and_values() -> None:
+    path, consts = str(EXAMPLES / "uav.afsm"), SMALL["uav"]
+    new, old = _both(path, consts)
+    _close(_values(new), _values(old), 1e-9)
+    _same_model(new.model, old.model)
+    assert new.uniform_model is not None
+    _same_model(new.uniform_model, old.uniform_model)
+    assert new.model.engine == new.uniform_model.engine == "explicit"
+    assert new.model.solver == "acyclic"
+
+
+def _answer(path: str, consts: dict[str, str]) -> explicit.Answer | None:
+    low = lowered(load(path, consts).model, "nondet")
+    names = tuple(n for p in low.model.properties for n, _ in property_variants(low, p))
+    return explicit.answer(low, names, "MDP", lambda _e, _d: None)
+
+
+def test_a_real_cycle_is_left_to_storm() -> None:
+    assert _answer(str(EXAMPLES / "patrol.afsm"), {}) is None
+
+
+def test_every_successor_comes_first_and_every_choice_sums_to_one() -> None:
+    low = lowered(load(str(EXAMPLES / "uav.afsm"), SMALL["uav"]).model, "nondet")
+    c = explore.compile_model(low, [], [])
+    a = explore_graph.explore(c).arrays
+    layer = np.repeat(np.arange(len(a.layers) - 1), np.diff(a.layers))
+    owner = np.repeat(np.repeat(np.arange(len(a.states) - 1), np.diff(a.states)),
+                      np.diff(a.choices))
+    moving = a.target != owner
+    assert (layer[a.target[moving]] < layer[owner[moving]]).all()
+    sums = np.add.reduceat(a.prob, a.choices[:-1])
+    assert np.allclose(sums, 1.0, atol=1e-12)
+
+
+def test_the_state_limit_stops_the_exploration_as_it_stops_storm() -> None:
+    from afsmc.diagnostics import CompileError
+
+    path, consts = str(EXAMPLES / "uav.afsm"), SMALL["uav"]
+    with pytest.raises(CompileError) as got:
+        run(path, consts=consts, engine="sparse", isolate=False, max_states=100,
+            uniform=False)
+    with pytest.raises(CompileError) as want:
+        run(path, consts=consts, engine="sparse", isolate=False, max_states=100,
+            uniform=False, solver="topological")
+    assert [d.code for d in got.value.diagnostics] == [d.code for d in want.value.diagnostics]
+    assert "--max-states 100" in got.value.diagnostics[0].message
+
+
+def test_a_model_past_the_memory_budget_is_left_to_storm() -> None:
+    low = lowered(load(str(EXAMPLES / "uav.afsm"), SMALL["uav"]).model, "nondet")
+    names = tuple(n for p in low.model.properties for n, _ in property_variants(low, p))
+    said: list[str] = []
+    assert explicit.answer(low, names, "MDP", lambda _e, d: said.append(str(d)),
+                           max_bytes=1000) is None
+    assert any("GB available" in s for s in said)
+    assert explicit.answer(low, names, "MDP", lambda _e, _d: None) is not None
