@@ -1,10 +1,9 @@
 """The only module that talks to Storm: parse a generated model, build it, check properties.
 
 A :class:`Job` is plain picklable data (the model text, the property names to check, the
-engine), so it runs the same in this process, in a watched child process (see
-:mod:`afsmc.verify.guard`), in a process pool or on a Dask worker. Failures come back as
-:class:`StormFailure` data, never as exceptions, and are turned into diagnostics by the
-caller, which knows the .afsm source.
+engine), so it runs the same here, in a watched child (:mod:`afsmc.verify.guard`), a pool
+or a Dask worker. Failures come back as :class:`StormFailure` data, never as exceptions,
+for the caller, which knows the .afsm source, to turn into diagnostics.
 """
 
 from __future__ import annotations
@@ -34,13 +33,12 @@ VIAS: tuple[Via, ...] = ("prism", "jani")
 # 137 s of a 394 s query that value iteration answered in 276 s; docs/benchmarks.md).
 Solver = Literal["auto", "topological", "value-iteration"]
 SOLVERS: tuple[Solver, ...] = ("auto", "topological", "value-iteration")
-# Value iteration stops when no value changes by more than this, relative to itself (Storm's
-# 1e-6 moved values in the ninth digit; 1e-10 equals the topological solver's to ~1e-14 on
-# the UAV at no measurable cost: an acyclic model converges in its longest path's steps).
+# Value iteration's relative stopping bound (Storm's 1e-6 moved values in the ninth digit;
+# 1e-10 equals the topological solver's to ~1e-14 on the UAV at no measurable cost).
 VI_PRECISION = "1/10000000000"
 
-# Storm stages a failure can come from; the caller picks the diagnostic code from it.
-# "stopped": the guard interrupted an explicit build that proved within --max-states
+# Storm stages a failure can come from (the caller picks the diagnostic code from it);
+# "stopped": the guard interrupted an explicit build that proved within --max-states.
 Stage = Literal["parse", "property", "build", "check", "too-big", "memory", "tables",
                 "internal", "stopped"]
 
