@@ -282,6 +282,11 @@ class Memo:
     # used only while the model's tuple is that very object (`replace` may change it).
     lookups: dict[str, tuple[object, Any]] = field(default_factory=dict)
 
+    def __reduce__(self) -> tuple[type[Memo], tuple[()]]:
+        """A model sent to another process (a verify job) goes without what was derived
+        from it: the caches may hold closures, and the other process derives its own."""
+        return (Memo, ())
+
 
 @dataclass(frozen=True)
 class Model:

@@ -10,6 +10,7 @@ ignored) orders the states; a cycle of more than one state gives up.
 
 from __future__ import annotations
 
+import time
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -80,10 +81,10 @@ class Frontiers:
 
 
 def explore_bucket(c: Compiled, start: I64, b: int | None, waiting: Frontiers,
-                   exclude: I64 | None = None) -> tuple[Block, I64]:
+                   exclude: I64 | None = None) -> tuple[Block, I64, int]:
     """The states of bucket `b` reachable from `start` (None: the late states, whose
     successors all stay late, but for those in `exclude`, explored already); successors
-    in other buckets go to `waiting`. The block and its sorted keys."""
+    in other buckets go to `waiting`. The block, its sorted keys and the rounds taken."""
     none = np.zeros(0, np.int64)
     skip = none if exclude is None else exclude
     known = _unique(start)
@@ -106,7 +107,7 @@ def explore_bucket(c: Compiled, start: I64, b: int | None, waiting: Frontiers,
         cand = _unique(x.target[same])
         frontier = cand[~_found(known, cand) & ~_found(skip, cand)]
         known = np.sort(np.concatenate([known, frontier]))  # disjoint
-    return _block(c, known, parts), known
+    return _block(c, known, parts), known, len(parts)
 
 
 def _offsets(counts: Counts) -> I64:
@@ -194,6 +195,13 @@ class Explored:
     transitions: int
 
 
+# A model explored in more rounds than this, with fewer states per round on average than
+# NARROW_STATES, comes a few states at a time (a long chain): each round costs numpy's
+# fixed overheads, and Storm's builder, a state at a time, is far quicker at it.
+NARROW_ROUNDS = 5000
+PROGRESS_EVERY = 2.0  # seconds between two progress lines
+NARROW_STATES = 50
+
 # The explored blocks times this is about the peak of the whole (the arrays assembled and
 # the pass's values besides them); measured on scenario 1, which outgrew 17.9 GB.
 PEAK_FACTOR = 2.5
@@ -216,11 +224,13 @@ def explore(c: Compiled, notify: Notify | None = None, max_states: int | None = 
     blocks: list[Block] = []
     sinks: list[Block] = []
     regular: list[I64] = []
-    count = held = 0
+    count = held = rounds = 0
+    shown = time.monotonic()
     while waiting.pending:
         b = min(waiting.pending)
         start = _unique(np.concatenate(waiting.pending.pop(b)))
-        block, known = explore_bucket(c, start, b, waiting)
+        block, known, took = explore_bucket(c, start, b, waiting)
+        rounds += took
         sink, block = split_sinks(block)
         blocks.append(block)
         sinks.append(sink)
@@ -229,15 +239,18 @@ def explore(c: Compiled, notify: Notify | None = None, max_states: int | None = 
         held += _nbytes(block) + _nbytes(sink) + known.nbytes
         if max_states is not None and count > max_states:
             raise TooManyStates(count)
+        if rounds > NARROW_ROUNDS and count < NARROW_STATES * rounds:
+            raise GiveUp(f"its states come a few at a time ({count:,} in {rounds:,} rounds)")
         if max_bytes is not None and held * PEAK_FACTOR > max_bytes:
             raise GiveUp(f"{count:,} states explored so far would need more than the "
                          f"{max_bytes / 1e9:.1f} GB available")
-        if notify is not None and len(regular) % 100 == 0:
+        if notify is not None and time.monotonic() - shown > PROGRESS_EVERY:
+            shown = time.monotonic()
             notify("explored", (b, count))
     if waiting.late:
         absorbing = np.sort(np.concatenate([s.keys for s in sinks]))
-        block, known = explore_bucket(c, np.concatenate(waiting.late), None, Frontiers(),
-                                      absorbing)
+        block, known, _ = explore_bucket(c, np.concatenate(waiting.late), None, Frontiers(),
+                                         absorbing)
         if _found(np.concatenate(regular), known).any():
             raise GiveUp("a state reached both before and after its clock went back")
         blocks.append(block)

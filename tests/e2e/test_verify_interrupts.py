@@ -94,7 +94,7 @@ def _verify_building(tmp_path: Path) -> subprocess.Popen[str]:
                             preexec_fn=_sigint_as_a_terminal_has_it)
     assert proc.stderr is not None
     for line in proc.stderr:  # the child has started once it reports its build
-        if "building the MDP" in line:
+        if "building the MDP" in line or "states of the MDP so far" in line:
             break
     return proc
 

@@ -129,3 +129,18 @@ def test_a_model_past_the_memory_budget_is_left_to_storm() -> None:
                            max_bytes=1000) is None
     assert any("GB available" in s for s in said)
     assert explicit.answer(low, names, "MDP", lambda _e, _d: None) is not None
+
+
+def test_a_long_chain_of_single_states_is_left_to_storm(tmp_path: Path) -> None:
+    spec = tmp_path / "chain.afsm"
+    spec.write_text("machine chain;\nvar x : [0..100000] init 0;\nmode A = 0 initial;\n"
+                    "mode B = 1 final;\naction Inc in A when x < 100000 { x := x + 1; }\n"
+                    "action Stop in A when x == 100000 { goto B; }\n"
+                    "label done = mode == B;\nproperty reach = P=? [ F \"done\" ];\n",
+                    encoding="utf-8")
+    low = lowered(load(str(spec), {}).model, "nondet")
+    said: list[str] = []
+    assert explicit.answer(low, ("reach",), "DTMC", lambda _e, d: said.append(str(d))) is None
+    assert any("a few at a time" in s for s in said), said
+    r = run(str(spec), engine="sparse", isolate=False, uniform=False)
+    assert r.model.engine == "sparse" and r.properties[0].value == 1.0
