@@ -23,6 +23,8 @@ a choice that loops to its own state with probability s < 1 is solved exactly as
 
 from __future__ import annotations
 
+import contextlib
+import ctypes
 import itertools
 import json
 import os
@@ -30,7 +32,7 @@ import shutil
 import tarfile
 import tempfile
 from dataclasses import dataclass, field
-from typing import Any, Literal
+from typing import Any, Literal, Protocol
 
 import numpy as np
 import numpy.typing as npt
@@ -90,6 +92,67 @@ def plan(names: list[str], props: list[Any], mdp: bool) -> Plan:
     return out
 
 
+class Vec(Protocol):
+    """A float vector read by slices and index arrays: a numpy array, or a compact form."""
+
+    def __getitem__(self, key: Any, /) -> Any: ...
+
+    def __len__(self) -> int: ...
+
+
+@dataclass
+class Coded:
+    """Floats stored as codes into a table of their distinct values (a model's
+    probabilities take few values: 2 or 4 bytes a branch instead of 8, exactly)."""
+
+    table: F64
+    codes: npt.NDArray[np.unsignedinteger[Any]]
+
+    def __getitem__(self, key: Any, /) -> Any:
+        return self.table[self.codes[key]]
+
+    def __len__(self) -> int:
+        return len(self.codes)
+
+    @property
+    def nbytes(self) -> int:
+        return int(self.table.nbytes + self.codes.nbytes)
+
+
+@dataclass
+class Sparse:
+    """A float vector mostly 0: its non-zero entries (`at` sorted), read by slices."""
+
+    size: int
+    at: I64
+    values: F64
+
+    def __getitem__(self, key: Any, /) -> Any:
+        if not isinstance(key, slice) or key.step not in (None, 1):
+            raise TypeError("a Sparse vector is read by contiguous slices")
+        lo, hi, _ = key.indices(self.size)
+        out = np.zeros(max(hi - lo, 0))
+        i, j = np.searchsorted(self.at, [lo, hi])
+        out[self.at[i:j] - lo] = self.values[i:j]
+        return out
+
+    def __len__(self) -> int:
+        return self.size
+
+    @property
+    def nbytes(self) -> int:
+        return int(self.at.nbytes + self.values.nbytes)
+
+
+def sparse_or_dense(size: int, at: I64, values: F64) -> Vec:
+    """The vector of `values` at `at` (sorted), 0 elsewhere, in the smaller form."""
+    if 2 * len(at) < size:
+        return Sparse(size, at, values)
+    out = np.zeros(size)
+    out[at] = values
+    return out
+
+
 @dataclass
 class Arrays:
     """A sparse model as flat arrays, states renumbered layer by layer (`layers[i]` is the
@@ -99,12 +162,12 @@ class Arrays:
     states: I64  # state -> its first choice (n + 1 offsets)
     choices: I64  # choice -> its first branch (m + 1 offsets)
     target: Idx  # branch -> successor state
-    prob: F64  # branch -> probability
-    stay: F64 | None  # choice -> probability of its self-loop (None: no self-loops)
+    prob: Vec  # branch -> probability (a strategy's extraction needs an array)
+    stay: Vec | None  # choice -> probability of its self-loop (None: no self-loops)
     layers: I64  # layer boundaries (len = layers + 1)
     initial: int  # the initial state
     labels: dict[str, Bools]  # label -> states (targets)
-    rewards: dict[str, F64]  # reward model -> its reward per choice (state + action)
+    rewards: dict[str, Vec]  # reward model -> its reward per choice (state + action)
     # for a strategy's extraction (afsmc.verify.strategy_arrays), else None: each state's
     # number in Storm's model, each choice's action (index into `action_names`), and the
     # labels read packed (8 states a byte, in Storm's numbering)
@@ -112,6 +175,12 @@ class Arrays:
     actions: npt.NDArray[np.uint32] | None = None
     action_names: list[str] = field(default_factory=list)
     packed: dict[str, npt.NDArray[np.uint8]] = field(default_factory=dict)
+
+    @property
+    def nbytes(self) -> int:
+        parts: list[Any] = [self.states, self.choices, self.target, self.prob, self.stay,
+                            *self.labels.values(), *self.rewards.values()]
+        return sum(int(getattr(x, "nbytes", 0)) for x in parts)
 
 
 def _ranges(starts: I64, ends: I64) -> I64:
@@ -189,18 +258,33 @@ def renumber(states: I64, choices: I64, target: Idx, prob: F64,
     return new_states, new_choices, old_choice, new_target, new_prob, inv
 
 
-def self_loops(states: I64, choices: I64, target: Idx, prob: F64) -> F64 | None:
-    """Each choice's probability of staying in its state; None if no choice loops."""
-    loops = np.flatnonzero(target == _state_of_branches(states, choices))
-    if loops.size == 0:
+def self_loops(states: I64, choices: I64, target: Idx, prob: Vec) -> Vec | None:
+    """Each choice's probability of staying in its state (sparse where few choices loop);
+    None if no choice loops. A slice of choices at a time."""
+    m = len(choices) - 1
+    at: list[I64] = []
+    sums: list[F64] = []
+    for c in range(0, m, CHUNK):
+        ids = np.arange(c, min(c + CHUNK, m), dtype=np.int64)
+        state = np.searchsorted(states, ids, side="right") - 1
+        b0, b1 = int(choices[ids[0]]), int(choices[ids[-1] + 1])
+        owner = np.repeat(state, np.diff(choices[c:ids[-1] + 2]))
+        loops = np.flatnonzero(target[b0:b1] == owner)
+        del owner, state
+        if loops.size == 0:
+            continue
+        choice = np.searchsorted(choices, loops + b0, side="right") - 1
+        starts = np.flatnonzero(np.concatenate(([True], choice[1:] != choice[:-1])))
+        at.append(choice[starts])
+        sums.append(np.add.reduceat(prob[loops + b0], starts))
+    if not at:
         return None
-    choice = np.searchsorted(choices, loops, side="right") - 1
-    stay: F64 = np.bincount(choice, weights=prob[loops],
-                            minlength=len(choices) - 1).astype(np.float64)
-    return stay
+    return sparse_or_dense(m, np.concatenate(at), np.concatenate(sums))
 
 
-GROUP_BYTES = 1 << 31  # the most the values of one pass's queries take together
+# The most the values of one pass's queries take together: as much as the model's arrays
+# (so that a pass at most doubles the memory), within these bounds.
+GROUP_BYTES = (1 << 28, 1 << 31)
 
 
 def solve(a: Arrays, q: Query) -> float:
@@ -213,7 +297,7 @@ def solve_many(a: Arrays, queries: list[Query]) -> dict[str, float]:
     passes (the values of each state side by side, a min and a max alike), as many at a
     time as GROUP_BYTES allows."""
     n = len(a.states) - 1
-    most = max(1, GROUP_BYTES // (8 * max(n, 1)))
+    most = max(1, min(max(a.nbytes, GROUP_BYTES[0]), GROUP_BYTES[1]) // (8 * max(n, 1)))
     groups: dict[str, list[Query]] = {}
     for q in queries:
         groups.setdefault(q.kind, []).append(q)
@@ -238,24 +322,24 @@ def _pass(a: Arrays, qs: list[Query], best: npt.NDArray[np.int64] | None = None,
     k, n = len(qs), len(a.states) - 1
     if value is None:
         value = np.zeros((n, k))
-    on_target = np.stack([a.labels[LABEL + str(q.target)] for q in qs], axis=1)
-    reward = None
-    if qs[0].kind == "R":
-        reward = np.stack([a.rewards[q.reward] for q in qs], axis=1)
+    on_target = [a.labels[LABEL + str(q.target)] for q in qs]
+    reward = [a.rewards[q.reward] for q in qs] if qs[0].kind == "R" else None
     stuck = 0.0 if qs[0].kind == "P" else np.inf  # a choice that only loops
     reached = 1.0 if qs[0].kind == "P" else 0.0  # on the target
     low = np.array([q.opt == "min" for q in qs])
     sign = np.where(low, 1.0, -1.0)  # a max as the min of the negated values
-    for lo, hi in itertools.pairwise(a.layers.tolist()):
+    for i, (lo, hi) in enumerate(_spans(a.layers)):
+        if i % TRIM_EVERY == TRIM_EVERY - 1:
+            trim_heap()
         c0, c1 = int(a.states[lo]), int(a.states[hi])
         b0, b1 = int(a.choices[c0]), int(a.choices[c1])
         rows = (a.choices[c0:c1 + 1] - b0).astype(np.int32 if b1 - b0 < 2**31 else np.int64)
         step = csr_matrix((a.prob[b0:b1], a.target[b0:b1], rows), shape=(c1 - c0, n))
         per_choice = np.asarray(step @ value)
         if reward is not None:
-            per_choice += reward[c0:c1]
+            per_choice += np.stack([r[c0:c1] for r in reward], axis=1)
         if a.stay is not None:
-            s = a.stay[c0:c1, None]
+            s = a.stay[c0:c1][:, None]
             if s.any():
                 with np.errstate(divide="ignore", invalid="ignore"):
                     per_choice = np.where(s >= 1.0, stuck, per_choice / (1.0 - s))
@@ -272,8 +356,32 @@ def _pass(a: Arrays, qs: list[Query], best: npt.NDArray[np.int64] | None = None,
                 if not low.any() else sign * (side * sign).min(axis=1)
         if best is not None:
             best[lo:hi] = _first_best(per_choice[:, 0], per_state[:, 0], a.states[lo:hi + 1] - c0)
-        value[lo:hi] = np.where(on_target[lo:hi], reached, per_state)
+        value[lo:hi] = np.where(np.stack([t[lo:hi] for t in on_target], axis=1), reached,
+                                per_state)
     return [float(v) for v in value[a.initial]]
+
+
+TRIM_EVERY = 32  # spans solved between two trim_heap()
+
+
+def trim_heap() -> None:
+    """Give the C heap's free memory back to the system. The many mid-sized temporaries
+    of a pass (or of an exploration), freed, leave free memory amid the heap that glibc
+    keeps: 0.7 GB of a pass over scenario 2's 0.6 GB model, 1.2 GB of its exploration."""
+    with contextlib.suppress(OSError, AttributeError):  # not glibc: nothing to do
+        ctypes.CDLL("libc.so.6").malloc_trim(0)
+
+
+SPAN = 1 << 18  # the most states of a layer solved at a time (bounds the temporaries)
+
+
+def _spans(layers: I64) -> list[tuple[int, int]]:
+    """The layers as ranges of states, the large ones cut into ranges of SPAN: the states
+    of a layer do not depend on each other."""
+    out = []
+    for lo, hi in itertools.pairwise(layers.tolist()):
+        out += [(k, min(k + SPAN, hi)) for k in range(lo, hi, SPAN)]
+    return out
 
 
 def _first_best(per_choice: F64, per_state: F64, offsets: I64) -> I64:
@@ -431,7 +539,7 @@ def arrange(raw: Raw) -> Arrays | None:
     states, choices, old_choice, target, prob, inv = renumber(
         raw.states, raw.choices, raw.target, raw.prob, perm)
     raw.target, raw.prob = np.zeros(0, np.int32), np.zeros(0)  # freed
-    rewards = {}
+    rewards: dict[str, Vec] = {}
     for name, parts in raw.state_rewards.items():
         per_choice = np.zeros(len(choices) - 1)
         for where, vals in parts:

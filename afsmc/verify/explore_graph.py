@@ -31,6 +31,46 @@ from afsmc.verify.explore import (
 from afsmc.verify.explore_eval import frame
 
 Counts = npt.NDArray[np.int32]  # choices of a state, branches of a choice
+Codes = npt.NDArray[np.uint32]
+Pairs = tuple[npt.NDArray[np.int32], F64]  # a sparse vector: (positions, values)
+
+
+def _no_pairs() -> Pairs:
+    return np.zeros(0, np.int32), np.zeros(0)
+
+
+class ProbTable:
+    """The distinct probabilities of the explored branches: each branch keeps its
+    probability's code (4 bytes instead of 8; 2 once assembled, if few)."""
+
+    def __init__(self) -> None:
+        self.index: dict[float, int] = {}
+        self.known = np.zeros(0)  # the values met so far, sorted ...
+        self.code = np.zeros(0, np.uint32)  # ... and their codes
+
+    def encode(self, prob: F64) -> Codes:
+        """The codes of `prob`: looked up among the known values (a model's are few),
+        the new ones added first."""
+        pos = np.searchsorted(self.known, prob)
+        hit = self.known[np.minimum(pos, len(self.known) - 1)] == prob \
+            if len(self.known) else np.zeros(len(prob), bool)
+        if not hit.all():
+            for v in np.unique(prob[~hit]).tolist():
+                self.index.setdefault(float(v), len(self.index))
+            self.known = np.array(sorted(self.index))
+            self.code = np.array([self.index[v] for v in self.known.tolist()], np.uint32)
+            pos = np.searchsorted(self.known, prob)
+        out: Codes = self.code[pos]
+        return out
+
+    def table(self) -> F64:
+        out = np.empty(len(self.index))
+        for v, k in self.index.items():
+            out[k] = v
+        return out
+
+    def dtype(self) -> Any:
+        return np.uint16 if len(self.index) <= 1 << 16 else np.uint32
 
 
 @dataclass
@@ -42,8 +82,8 @@ class Block:
     nchoice: Counts  # per state
     nbranch: Counts  # per choice
     target: I64  # per branch: the successor's key
-    prob: F64
-    reward: list[F64]  # per reward structure asked: per choice, state reward included
+    prob: Codes  # per branch: its probability's code in the exploration's ProbTable
+    reward: list[Pairs]  # per reward structure asked: per choice, state reward included
     labels: list[Bools]  # per target: per state
     layers: list[int]  # the layers' sizes
 
@@ -80,8 +120,8 @@ class Frontiers:
             self.pending.setdefault(int(b), []).append(_unique(part))
 
 
-def explore_bucket(c: Compiled, start: I64, b: int | None, waiting: Frontiers,
-                   exclude: I64 | None = None) -> tuple[Block, I64, int]:
+def explore_bucket(c: Compiled, table: ProbTable, start: I64, b: int | None,
+                   waiting: Frontiers, exclude: I64 | None = None) -> tuple[Block, I64, int]:
     """The states of bucket `b` reachable from `start` (None: the late states, whose
     successors all stay late, but for those in `exclude`, explored already); successors
     in other buckets go to `waiting`. The block, its sorted keys and the rounds taken."""
@@ -107,7 +147,7 @@ def explore_bucket(c: Compiled, start: I64, b: int | None, waiting: Frontiers,
         cand = _unique(x.target[same])
         frontier = cand[~_found(known, cand) & ~_found(skip, cand)]
         known = np.sort(np.concatenate([known, frontier]))  # disjoint
-    return _block(c, known, parts), known, len(parts)
+    return _block(c, table, known, parts), known, len(parts)
 
 
 def _offsets(counts: Counts) -> I64:
@@ -121,8 +161,27 @@ def _subset(blk: Block, idx: I64, layers: list[int]) -> Block:
     ch = acyclic._ranges(states[idx], states[idx + 1])
     br = acyclic._ranges(choices[ch], choices[ch + 1])
     return Block(blk.keys[idx], blk.nchoice[idx], blk.nbranch[ch], blk.target[br],
-                 blk.prob[br], [r[ch] for r in blk.reward], [x[idx] for x in blk.labels],
+                 blk.prob[br], [_pairs_at(r, ch) for r in blk.reward], [x[idx] for x in blk.labels],
                  [k for k in layers if k])
+
+
+def _pairs_at(r: Pairs, idx: I64) -> Pairs:
+    """The entries of `r` at the positions `idx` (sorted), renumbered 0, 1, ... along it."""
+    at, values = r
+    keep = _found(idx, at.astype(np.int64))
+    return np.searchsorted(idx, at[keep]).astype(np.int32), values[keep]
+
+
+def _cat_pairs(blocks: list[Block], i: int) -> Pairs:
+    """The blocks' rewards of structure `i` end to end (before their choices are freed)."""
+    at: list[npt.NDArray[np.int32]] = []
+    values: list[F64] = []
+    first = 0
+    for b in blocks:
+        at.append(b.reward[i][0] + np.int32(first))
+        values.append(b.reward[i][1])
+        first += len(b.nbranch)
+    return (np.concatenate(at), np.concatenate(values)) if at else _no_pairs()
 
 
 def split_sinks(blk: Block) -> tuple[Block, Block]:
@@ -142,12 +201,13 @@ def split_sinks(blk: Block) -> tuple[Block, Block]:
             _subset(blk, rest, [blk.layers[0] - len(idx), *blk.layers[1:]]))
 
 
-def _block(c: Compiled, known: I64, parts: list[tuple[I64, Expansion]]) -> Block:
+def _block(c: Compiled, table: ProbTable, known: I64, parts: list[tuple[I64, Expansion]]
+           ) -> Block:
     """The block of the explored `parts` (states in the order they were expanded), its
     states sorted topologically (Kahn, backwards) by the edges within it."""
     if not parts:
         z, w = np.zeros(0, np.int64), np.zeros(0, np.int32)
-        return Block(z, w, w, z, np.zeros(0), [np.zeros(0) for _ in c.state_rewards],
+        return Block(z, w, w, z, np.zeros(0, np.uint32), [_no_pairs() for _ in c.state_rewards],
                      [np.zeros(0, bool) for _ in c.targets], [])
     keys = np.concatenate([k for k, _ in parts])
     n = len(keys)
@@ -182,8 +242,10 @@ def _block(c: Compiled, known: I64, parts: list[tuple[I64, Expansion]]) -> Block
         per_state = np.zeros(n)
         for guard, value in items:
             per_state += np.where(full(guard(fr), n, bool), full(value(fr), n, float), 0.0)
-        out_rewards.append(r[old_choice] + np.repeat(per_state, nchoice))
-    return Block(keys, nchoice, nbranch[old_choice], target[branch], prob[branch],
+        full_reward = r[old_choice] + np.repeat(per_state, nchoice)
+        nz = np.flatnonzero(full_reward)
+        out_rewards.append((nz.astype(np.int32), full_reward[nz]))
+    return Block(keys, nchoice, nbranch[old_choice], target[branch], table.encode(prob[branch]),
                  out_rewards, labels, [len(x) for x in layers])
 
 
@@ -200,6 +262,7 @@ class Explored:
 # fixed overheads, and Storm's builder, a state at a time, is far quicker at it.
 NARROW_ROUNDS = 5000
 PROGRESS_EVERY = 2.0  # seconds between two progress lines
+TRIM_BUCKETS = 32  # buckets explored between two trim_heap()
 NARROW_STATES = 50
 
 # The explored blocks times this is about the peak of the whole (the arrays assembled and
@@ -209,7 +272,7 @@ PEAK_FACTOR = 2.5
 
 def _nbytes(b: Block) -> int:
     arrays: list[npt.NDArray[Any]] = [b.keys, b.nchoice, b.nbranch, b.target, b.prob,
-                                      *b.reward, *b.labels]
+                                      *b.labels, *[x for r in b.reward for x in r]]
     return sum(int(a.nbytes) for a in arrays)
 
 
@@ -218,7 +281,7 @@ def explore(c: Compiled, notify: Notify | None = None, max_states: int | None = 
     """Every state reachable from the initial one, bucket by bucket; raises GiveUp (also
     once the blocks, times PEAK_FACTOR, pass `max_bytes`), or TooManyStates past
     `max_states`."""
-    waiting = Frontiers()
+    waiting, table = Frontiers(), ProbTable()
     waiting.pending[int(c.layout.bucket_of(np.array([c.initial]))[0])] = [
         np.array([c.initial], np.int64)]
     blocks: list[Block] = []
@@ -229,7 +292,7 @@ def explore(c: Compiled, notify: Notify | None = None, max_states: int | None = 
     while waiting.pending:
         b = min(waiting.pending)
         start = _unique(np.concatenate(waiting.pending.pop(b)))
-        block, known, took = explore_bucket(c, start, b, waiting)
+        block, known, took = explore_bucket(c, table, start, b, waiting)
         rounds += took
         sink, block = split_sinks(block)
         blocks.append(block)
@@ -244,29 +307,31 @@ def explore(c: Compiled, notify: Notify | None = None, max_states: int | None = 
         if max_bytes is not None and held * PEAK_FACTOR > max_bytes:
             raise GiveUp(f"{count:,} states explored so far would need more than the "
                          f"{max_bytes / 1e9:.1f} GB available")
+        if len(blocks) % TRIM_BUCKETS == 0:
+            acyclic.trim_heap()
         if notify is not None and time.monotonic() - shown > PROGRESS_EVERY:
             shown = time.monotonic()
             notify("explored", (b, count))
     if waiting.late:
         absorbing = np.sort(np.concatenate([s.keys for s in sinks]))
-        block, known, _ = explore_bucket(c, np.concatenate(waiting.late), None, Frontiers(),
-                                         absorbing)
+        block, known, _ = explore_bucket(c, table, np.concatenate(waiting.late), None,
+                                         Frontiers(), absorbing)
         if _found(np.concatenate(regular), known).any():
             raise GiveUp("a state reached both before and after its clock went back")
         blocks.append(block)
     del regular
     blocks.append(_joined(sinks, c))
-    return assemble(blocks, c)
+    return assemble(blocks, c, table)
 
 
 def _joined(sinks: list[Block], c: Compiled) -> Block:
     """The absorbing states of every bucket as one block of one layer."""
     total = sum(len(s.keys) for s in sinks)
-    rewards = [np.concatenate([s.reward[i] for s in sinks]) for i in range(len(c.state_rewards))]
+    rewards = [_cat_pairs(sinks, i) for i in range(len(c.state_rewards))]
     labels = [np.concatenate([s.labels[i] for s in sinks]) for i in range(len(c.targets))]
     return Block(_cat_free(sinks, "keys", np.int64), _cat_free(sinks, "nchoice", np.int32),
                  _cat_free(sinks, "nbranch", np.int32), _cat_free(sinks, "target", np.int64),
-                 _cat_free(sinks, "prob", np.float64), rewards, labels,
+                 _cat_free(sinks, "prob", np.uint32), rewards, labels,
                  [total] if total else [])
 
 
@@ -280,12 +345,15 @@ def _cat_free(blocks: list[Block], name: str, dtype: Any) -> Any:
         out[at:at + len(a)] = a
         at += len(a)
         setattr(b, name, np.zeros(0, dtype))
+    acyclic.trim_heap()
     return out
 
 
-def assemble(blocks: list[Block], c: Compiled) -> Explored:
-    """The blocks as one model for the backward pass: the last explored first."""
+def assemble(blocks: list[Block], c: Compiled, table: ProbTable) -> Explored:
+    """The blocks as one model for the backward pass: the last explored first. Each
+    block's arrays are freed once copied, the rewards kept sparse where mostly 0."""
     blocks = blocks[::-1]
+    first = np.cumsum([0] + [len(b.nbranch) for b in blocks]).tolist()
     keys = _cat_free(blocks, "keys", np.int64)
     n = len(keys)
     states = np.zeros(n + 1, np.int64)
@@ -293,32 +361,58 @@ def assemble(blocks: list[Block], c: Compiled) -> Explored:
     m = int(states[-1])
     choices = np.zeros(m + 1, np.int64)
     np.cumsum(_cat_free(blocks, "nbranch", np.int32), out=choices[1:])
-    prob = _cat_free(blocks, "prob", np.float64)
+    prob = acyclic.Coded(table.table(), _cat_free(blocks, "prob", table.dtype()))
     labels = {acyclic.LABEL + str(i): np.concatenate([b.labels[i] for b in blocks])
               for i in range(len(c.targets))}
-    rewards = [np.concatenate([b.reward[i] for b in blocks]) for i in range(len(c.state_rewards))]
+    rewards = [_rewards(blocks, i, m, first[:-1]) for i in range(len(c.state_rewards))]
     sizes = [s for b in blocks for s in b.layers if s]
     layers = np.zeros(len(sizes) + 1, np.int64)
     np.cumsum(sizes, out=layers[1:])
     for b in blocks:
-        b.labels, b.reward = [], []
+        b.labels = []
     order = np.argsort(keys)
     sorted_keys = keys[order]
     del keys
-    target = np.empty(int(choices[-1]), np.int32)
-    at = 0
-    for b in blocks:
-        for i in range(0, len(b.target), acyclic.CHUNK):
-            part = b.target[i:i + acyclic.CHUNK]
-            pos = np.searchsorted(sorted_keys, part)
-            if (sorted_keys[np.minimum(pos, n - 1)] != part).any():
-                raise GiveUp("a successor that was not explored")
-            target[at:at + len(part)] = order[pos]
-            at += len(part)
-        b.target = np.zeros(0, np.int64)
-    initial = int(order[np.searchsorted(sorted_keys, c.initial)])
+    target, initial = _targets(blocks, order, sorted_keys, c.initial)
     del order, sorted_keys
+    acyclic.trim_heap()
     stay = acyclic.self_loops(states, choices, target, prob)
     arrays = Arrays(states, choices, target, prob, stay, layers, initial, labels,
                     dict(zip(c.reward_names, rewards, strict=True)))
     return Explored(arrays, n, m, len(target))
+
+
+def _rewards(blocks: list[Block], i: int, m: int, first: list[int]) -> acyclic.Vec:
+    """The blocks' rewards of structure `i` as one vector of the `m` choices (`first`:
+    each block's first choice)."""
+    at = [b.reward[i][0].astype(np.int64) + f for b, f in zip(blocks, first, strict=True)]
+    values = [b.reward[i][1] for b in blocks]
+    for b in blocks:
+        b.reward[i] = _no_pairs()
+    return acyclic.sparse_or_dense(m, np.concatenate(at) if at else np.zeros(0, np.int64),
+                                   np.concatenate(values) if values else np.zeros(0))
+
+
+def _targets(blocks: list[Block], order: I64, sorted_keys: I64, initial_key: int
+             ) -> tuple[acyclic.Idx, int]:
+    """Each branch's successor as a state number (the state of key `sorted_keys[i]` is
+    `order[i]`), a block at a time; and the initial state's number."""
+    target = np.empty(sum(len(b.target) for b in blocks), np.int32)
+    at = 0
+    for k, b in enumerate(blocks):
+        for i in range(0, len(b.target), acyclic.CHUNK):
+            part = b.target[i:i + acyclic.CHUNK]
+            if not len(part):
+                continue
+            # the part's successors lie among a few buckets' keys: searched there, in cache
+            w0, w1 = np.searchsorted(sorted_keys, [part.min(), part.max()])
+            window = sorted_keys[w0:w1 + 1]
+            pos = np.searchsorted(window, part)
+            if (window[np.minimum(pos, len(window) - 1)] != part).any():
+                raise GiveUp("a successor that was not explored")
+            target[at:at + len(part)] = order[pos + w0]
+            at += len(part)
+        b.target = np.zeros(0, np.int64)
+        if k % TRIM_BUCKETS == TRIM_BUCKETS - 1:
+            acyclic.trim_heap()
+    return target, int(order[np.searchsorted(sorted_keys, initial_key)])
