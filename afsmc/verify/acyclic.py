@@ -346,14 +346,16 @@ def _pass(a: Arrays, qs: list[Query], best: npt.NDArray[np.int64] | None = None,
         if c1 - c0 == hi - lo:
             per_state = per_choice
         else:
-            # each state's choices side by side, its last repeated up to the most any
-            # state has (numpy's reduceat down the columns is several times slower)
+            # the optimum of each state's j-th choice (its last, past its count) over j:
+            # elementwise, where numpy's reduceat or a min down a middle axis is slower
             first = a.states[lo:hi] - c0
             last = a.states[lo + 1:hi + 1] - c0 - 1
-            wide = int((last - first).max()) + 1
-            side = per_choice[np.minimum(first[:, None] + np.arange(wide), last[:, None])]
-            per_state = side.min(axis=1) if low.all() else -(-side).min(axis=1) \
-                if not low.any() else sign * (side * sign).min(axis=1)
+            signed = per_choice if low.all() else per_choice * sign
+            per_state = signed[first]
+            for j in range(1, int((last - first).max()) + 1):
+                np.minimum(per_state, signed[np.minimum(first + j, last)], out=per_state)
+            if not low.all():
+                per_state *= sign
         if best is not None:
             best[lo:hi] = _first_best(per_choice[:, 0], per_state[:, 0], a.states[lo:hi + 1] - c0)
         value[lo:hi] = np.where(np.stack([t[lo:hi] for t in on_target], axis=1), reached,
