@@ -99,3 +99,18 @@ def test_the_smt_solver_decides_ties_as_enumeration_does(
     monkeypatch.setattr(search, "ENUMERATION_LIMIT", 0)
     monkeypatch.setattr(search, "SAMPLE_LIMIT", 0)
     assert run() == enumerated
+
+
+def test_a_checked_model_pickles_without_its_caches() -> None:
+    # A verify job sends the lowered model to a Storm child by pickling it: the checks'
+    # shared sites (closures among them) must stay behind, and the child derive its own.
+    import pickle
+
+    from afsmc.compiler import lowered
+
+    model = load(str(Path(__file__).parents[3] / "examples" / "patrol.afsm"), {}).model
+    assert "check.sites" in model.memo.lookups
+    low = lowered(model, "nondet")
+    back = pickle.loads(pickle.dumps(low))
+    assert back.model.memo.lookups == {}
+    assert back.model.properties == model.properties
