@@ -314,7 +314,7 @@ def _command(cmd: CCommand, base: I64, sub: dict[str, Any]) -> tuple[I64, I64, F
             else:
                 tk += (new - sub[f.name]) * f.stride
         tks[:, j] = tk
-    if n and np.abs(prs.sum(axis=1) - 1.0).max() > SUM_TOLERANCE:
+    if n and not np.abs(prs.sum(axis=1) - 1.0).max() <= SUM_TOLERANCE:  # NaN too
         raise GiveUp("a command's probabilities do not sum to 1")
     rewards = [np.zeros(n) if r is None else full(r(sub), n, np.float64) for r in cmd.rewards]
     row, tk, pr = _merge(tks, prs)

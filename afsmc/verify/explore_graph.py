@@ -261,9 +261,9 @@ class Explored:
 # NARROW_STATES, comes a few states at a time (a long chain): each round costs numpy's
 # fixed overheads, and Storm's builder, a state at a time, is far quicker at it.
 NARROW_ROUNDS = 5000
+NARROW_STATES = 50
 PROGRESS_EVERY = 2.0  # seconds between two progress lines
 TRIM_BUCKETS = 32  # buckets explored between two trim_heap()
-NARROW_STATES = 50
 
 # The explored blocks times this is about the peak of the whole (the arrays assembled and
 # the pass's values besides them): 1.19 GB for scenario 2's 0.72 GB of blocks.

@@ -143,3 +143,29 @@ def test_layers_put_every_successor_first() -> None:
     assert [x.tolist() for x in layers] == [[3], [1, 2], [0]]
     target[4] = 0  # 2 -> 0 closes a cycle
     assert acyclic.layers_of(states, choices, target) is None
+
+
+def test_compact_vectors_read_as_the_dense_ones() -> None:
+    rng = np.random.default_rng(7)
+    dense = np.where(rng.random(1000) < 0.1, rng.random(1000), 0.0)
+    at = np.flatnonzero(dense)
+    sparse = acyclic.sparse_or_dense(len(dense), at, dense[at])
+    assert isinstance(sparse, acyclic.Sparse)
+    for lo, hi in [(0, 1000), (3, 17), (999, 1000), (500, 500)]:
+        assert np.array_equal(sparse[lo:hi], dense[lo:hi])
+    table = np.array([0.25, 0.5, 0.125])
+    codes = rng.integers(0, 3, 200).astype(np.uint16)
+    coded = acyclic.Coded(table, codes)
+    assert np.array_equal(coded[10:50], table[codes][10:50])
+    assert acyclic.sparse_or_dense(4, np.array([0, 1, 3]), np.ones(3)).tolist() == [1, 1, 0, 1]
+
+
+def test_self_loops_are_each_choice_s_probability_of_staying() -> None:
+    # 3 states; state 1 has two choices, the second looping with 0.25; state 2 only loops
+    states = np.array([0, 1, 3, 4])
+    choices = np.array([0, 2, 3, 5, 6])
+    target = np.array([1, 2, 0, 1, 0, 2], np.int32)
+    prob = np.array([0.5, 0.5, 1.0, 0.25, 0.75, 1.0])
+    stay = acyclic.self_loops(states, choices, target, prob)
+    assert stay is not None
+    assert np.array_equal(stay[0:4], [0.0, 0.0, 0.25, 1.0])
