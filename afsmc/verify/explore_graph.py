@@ -172,16 +172,20 @@ def _pairs_at(r: Pairs, idx: I64) -> Pairs:
     return np.searchsorted(idx, at[keep]).astype(np.int32), values[keep]
 
 
-def _cat_pairs(blocks: list[Block], i: int) -> Pairs:
-    """The blocks' rewards of structure `i` end to end (before their choices are freed)."""
-    at: list[npt.NDArray[np.int32]] = []
+def _cat_pairs(blocks: list[Block], i: int) -> tuple[I64, F64]:
+    """The blocks' rewards of structure `i` end to end, positions numbered across the
+    blocks' choices (read before those are freed); each block's freed."""
+    at: list[I64] = []
     values: list[F64] = []
     first = 0
     for b in blocks:
-        at.append(b.reward[i][0] + np.int32(first))
+        at.append(b.reward[i][0].astype(np.int64) + first)
         values.append(b.reward[i][1])
         first += len(b.nbranch)
-    return (np.concatenate(at), np.concatenate(values)) if at else _no_pairs()
+        b.reward[i] = _no_pairs()
+    if not at:
+        return np.zeros(0, np.int64), np.zeros(0)
+    return np.concatenate(at), np.concatenate(values)
 
 
 def split_sinks(blk: Block) -> tuple[Block, Block]:
@@ -327,7 +331,10 @@ def explore(c: Compiled, notify: Notify | None = None, max_states: int | None = 
 def _joined(sinks: list[Block], c: Compiled) -> Block:
     """The absorbing states of every bucket as one block of one layer."""
     total = sum(len(s.keys) for s in sinks)
-    rewards = [_cat_pairs(sinks, i) for i in range(len(c.state_rewards))]
+    rewards = []
+    for i in range(len(c.state_rewards)):
+        at, values = _cat_pairs(sinks, i)
+        rewards.append((at.astype(np.int32), values))
     labels = [np.concatenate([s.labels[i] for s in sinks]) for i in range(len(c.targets))]
     return Block(_cat_free(sinks, "keys", np.int64), _cat_free(sinks, "nchoice", np.int32),
                  _cat_free(sinks, "nbranch", np.int32), _cat_free(sinks, "target", np.int64),
@@ -353,18 +360,18 @@ def assemble(blocks: list[Block], c: Compiled, table: ProbTable) -> Explored:
     """The blocks as one model for the backward pass: the last explored first. Each
     block's arrays are freed once copied, the rewards kept sparse where mostly 0."""
     blocks = blocks[::-1]
-    first = np.cumsum([0] + [len(b.nbranch) for b in blocks]).tolist()
+    m = sum(len(b.nbranch) for b in blocks)
+    rewards = [acyclic.sparse_or_dense(m, *_cat_pairs(blocks, i))
+               for i in range(len(c.state_rewards))]
     keys = _cat_free(blocks, "keys", np.int64)
     n = len(keys)
     states = np.zeros(n + 1, np.int64)
     np.cumsum(_cat_free(blocks, "nchoice", np.int32), out=states[1:])
-    m = int(states[-1])
     choices = np.zeros(m + 1, np.int64)
     np.cumsum(_cat_free(blocks, "nbranch", np.int32), out=choices[1:])
     prob = acyclic.Coded(table.table(), _cat_free(blocks, "prob", table.dtype()))
     labels = {acyclic.LABEL + str(i): np.concatenate([b.labels[i] for b in blocks])
               for i in range(len(c.targets))}
-    rewards = [_rewards(blocks, i, m, first[:-1]) for i in range(len(c.state_rewards))]
     sizes = [s for b in blocks for s in b.layers if s]
     layers = np.zeros(len(sizes) + 1, np.int64)
     np.cumsum(sizes, out=layers[1:])
@@ -382,17 +389,6 @@ def assemble(blocks: list[Block], c: Compiled, table: ProbTable) -> Explored:
     return Explored(arrays, n, m, len(target))
 
 
-def _rewards(blocks: list[Block], i: int, m: int, first: list[int]) -> acyclic.Vec:
-    """The blocks' rewards of structure `i` as one vector of the `m` choices (`first`:
-    each block's first choice)."""
-    at = [b.reward[i][0].astype(np.int64) + f for b, f in zip(blocks, first, strict=True)]
-    values = [b.reward[i][1] for b in blocks]
-    for b in blocks:
-        b.reward[i] = _no_pairs()
-    return acyclic.sparse_or_dense(m, np.concatenate(at) if at else np.zeros(0, np.int64),
-                                   np.concatenate(values) if values else np.zeros(0))
-
-
 def _targets(blocks: list[Block], order: I64, sorted_keys: I64, initial_key: int
              ) -> tuple[acyclic.Idx, int]:
     """Each branch's successor as a state number (the state of key `sorted_keys[i]` is
@@ -402,13 +398,11 @@ def _targets(blocks: list[Block], order: I64, sorted_keys: I64, initial_key: int
     for k, b in enumerate(blocks):
         for i in range(0, len(b.target), acyclic.CHUNK):
             part = b.target[i:i + acyclic.CHUNK]
-            if not len(part):
-                continue
             # the part's successors lie among a few buckets' keys: searched there, in cache
             w0, w1 = np.searchsorted(sorted_keys, [part.min(), part.max()])
             window = sorted_keys[w0:w1 + 1]
             pos = np.searchsorted(window, part)
-            if (window[np.minimum(pos, len(window) - 1)] != part).any():
+            if not len(window) or (window[np.minimum(pos, len(window) - 1)] != part).any():
                 raise GiveUp("a successor that was not explored")
             target[at:at + len(part)] = order[pos + w0]
             at += len(part)
