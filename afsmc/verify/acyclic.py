@@ -169,10 +169,11 @@ class Arrays:
     labels: dict[str, Bools]  # label -> states (targets)
     rewards: dict[str, Vec]  # reward model -> its reward per choice (state + action)
     # for a strategy's extraction (afsmc.verify.strategy_arrays), else None: each state's
-    # number in Storm's model, each choice's action (index into `action_names`), and the
-    # labels read packed (8 states a byte, in Storm's numbering)
+    # number in Storm's model (explored by afsmc: its key), each choice's action (index
+    # into `action_names`) or lowered command, the labels read packed (8 states a byte)
     order: I64 | None = None
     actions: npt.NDArray[np.uint32] | None = None
+    commands: npt.NDArray[np.int32] | None = None
     action_names: list[str] = field(default_factory=list)
     packed: dict[str, npt.NDArray[np.uint8]] = field(default_factory=dict)
 

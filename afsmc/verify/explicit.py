@@ -15,12 +15,15 @@ from collections.abc import Callable
 from dataclasses import dataclass, replace
 from typing import Any, Literal
 
+import numpy as np
+
 from afsmc.backends.prism import property_variants
 from afsmc.lower.lowering import Lowered
 from afsmc.model import expr as E
 from afsmc.model import ir
 from afsmc.sim.compile import SimError
-from afsmc.verify import acyclic, explore, explore_graph
+from afsmc.verify import acyclic, explore, explore_graph, strategy_arrays
+from afsmc.verify.strategy_storm import Extract, Extracted
 
 Notify = Callable[[str, Any], None]
 
@@ -28,8 +31,9 @@ Notify = Callable[[str, Any], None]
 def applies(low: Lowered, engine: str, solver: str, other: bool) -> bool:
     """Whether a job tries afsmc's own exploration first: on the sparse engine (or "auto"
     before it picks one) with the default solver, nothing else asked of Storm (`other`:
-    bisimulation, exact or sound mode, schedulers, paths), a single machine without
-    undefined constants."""
+    bisimulation, exact or sound mode), a single machine without undefined constants.
+    Schedulers and paths come from its arrays where the backward pass gives them
+    (:func:`afsmc.verify.strategy_arrays.covers`), else from Storm."""
     return (engine in ("sparse", "auto") and solver == "auto" and not other
             and low.network is None and not low.parameters)
 
@@ -87,6 +91,7 @@ class Answer:
     transitions: int
     explore_time: float
     left: list[str]
+    extracted: Extracted | None = None
 
 
 class TooMany(Exception):
@@ -96,11 +101,13 @@ class TooMany(Exception):
 
 
 def answer(low: Lowered, names: tuple[str, ...], what: str, notify: Notify,
-           max_states: int | None = None, max_bytes: int | None = None) -> Answer | None:
-    """The queries' values by exploration and a backward pass; None if the explorer
-    gives up (Storm then answers them all). Raises TooMany past `max_states`."""
+           max_states: int | None = None, max_bytes: int | None = None,
+           extract: Extract | None = None) -> Answer | None:
+    """The queries' values by exploration and a backward pass, and what `extract` asks;
+    None if the explorer gives up or the pass does not give what `extract` asks (Storm
+    then answers them all). Raises TooMany past `max_states`."""
     p = plan(low, names)
-    if not p.queries:
+    if not p.queries or (extract is not None and not strategy_arrays.covers(extract, p.queries)):
         return None
     notify("phase", "explicit")
     started = time.perf_counter()
@@ -110,7 +117,7 @@ def answer(low: Lowered, names: tuple[str, ...], what: str, notify: Notify,
                f"{data[0]}; {time.perf_counter() - started:.0f} s)")
 
     try:
-        compiled = explore.compile_model(low, p.targets, p.rewards)
+        compiled = explore.compile_model(low, p.targets, p.rewards, extract is not None)
         found = explore_graph.explore(compiled, explored, max_states, max_bytes)
     except (explore.GiveUp, SimError) as exc:
         notify("solver", f"afsmc's own exploration does not apply to the {what} ({exc}): "
@@ -124,12 +131,60 @@ def answer(low: Lowered, names: tuple[str, ...], what: str, notify: Notify,
            f"({len(found.arrays.layers) - 1:,} layers): each query by one exact backward pass")
     notify("phase", "check " + ", ".join(q.name for q in p.queries))
     t0 = time.perf_counter()
-    values = acyclic.solve_many(found.arrays, p.queries)
+    out = None if extract is None else Extracted()
+    values = _solve(found.arrays, p.queries, low, compiled.layout, extract, out, notify)
     secs = (time.perf_counter() - t0) / len(p.queries)
     for q in p.queries:
         notify("value", (q.name, values[q.name], secs))
     return Answer(values, {q.name: secs for q in p.queries}, found.states, found.choices,
-                  found.transitions, built, p.left)
+                  found.transitions, built, p.left, out)
+
+
+def _solve(a: acyclic.Arrays, queries: list[acyclic.Query], low: Lowered,
+           layout: explore.Layout, extract: Extract | None, out: Extracted | None,
+           notify: Notify) -> dict[str, float]:
+    """Each query's value; those `extract` asks of one at a time, with their strategies
+    and paths (into `out`)."""
+    if extract is None or out is None:
+        return acyclic.solve_many(a, queries)
+    view = _view(a, low, layout, extract)
+    out.variables = view.variables
+    plain = [q for q in queries if q.name not in extract.queries]
+    values = acyclic.solve_many(a, plain) if plain else {}
+    for q in queries:
+        if q.name in extract.queries:
+            notify("phase", f"check {q.name}")
+            t0 = time.perf_counter()
+            values[q.name] = strategy_arrays.extract_query(a, q, extract, view, out)
+            out.seconds += time.perf_counter() - t0
+    return values
+
+
+def _view(a: acyclic.Arrays, low: Lowered, layout: explore.Layout,
+          extract: Extract) -> strategy_arrays.View:
+    """The explored states' values from their keys, the choices' commands as explored;
+    the variables in the order of Storm's valuations (the mode, the integers, the
+    booleans), as Storm's route gives them."""
+    keys, commands = a.order, a.commands
+    assert keys is not None and commands is not None
+    variables = ("mode", *[v.name for v in low.model.variables if v.type is not E.Type.BOOL],
+                 *[v.name for v in low.model.variables if v.type is E.Type.BOOL])
+    decisive = np.asarray(extract.decisive, np.int64)
+
+    def values(states: acyclic.I64) -> acyclic.I64:
+        got = layout.decode(keys[states])
+        out: acyclic.I64 = np.zeros((len(states), len(variables)), np.int64)
+        for j, name in enumerate(variables):
+            out[:, j] = got[name]
+        return out
+
+    def variant(choices: acyclic.I64) -> acyclic.I64:
+        c = commands[choices].astype(np.int64)
+        out: acyclic.I64 = np.where(np.isin(c, decisive), c, -1)
+        return out
+
+    return strategy_arrays.View(variables, values, variant,
+                                lambda choice, _row: int(commands[choice]))
 
 
 def fill(job: Any, res: Any, notify: Notify, too_big: Callable[[Any, int], Any]) -> Any:
@@ -138,7 +193,7 @@ def fill(job: Any, res: Any, notify: Notify, too_big: Callable[[Any, int], Any])
     has too many states: `res.failure` says so)."""
     try:
         ans = answer(job.explicit, job.names, job.what, notify, job.max_states,
-                     job.memory_budget)
+                     job.memory_budget, job.extract)
     except TooMany as exc:
         res.states, res.failure = exc.states, too_big(job, exc.states)
         return None
@@ -148,7 +203,8 @@ def fill(job: Any, res: Any, notify: Notify, too_big: Callable[[Any, int], Any])
     res.kind, res.engine, res.solver = job.explicit.kind, "explicit", "acyclic"
     res.build_time, res.check_time = ans.explore_time, sum(ans.seconds.values())
     res.values, res.seconds = dict(ans.values), dict(ans.seconds)
+    res.extracted = ans.extracted
     notify("engine", "explicit")
     if not ans.left:
         return None
-    return replace(job, names=tuple(ans.left), explicit=None, hybrid_extra=())
+    return replace(job, names=tuple(ans.left), explicit=None, hybrid_extra=(), extract=None)

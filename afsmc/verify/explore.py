@@ -29,7 +29,9 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
+import numpy.typing as npt
 
+from afsmc.backends.prism import variant_label
 from afsmc.lower.lowering import Lowered
 from afsmc.lower.reduce import _step
 from afsmc.model import expr as E
@@ -172,9 +174,24 @@ class Compiled:
     initial: int
     dtmc: bool
     reward_names: list[str]
+    keep: bool = False  # keep each state's key and each choice's command (a strategy's)
 
 
-def compile_model(low: Lowered, targets: list[E.Expr], rewards: list[str]) -> Compiled:
+def storm_order(low: Lowered) -> dict[int, tuple[int, int, int]]:
+    """Each command's place among a state's choices in Storm's model of the PRISM text
+    emitted with variant labels (the one a strategy's extraction checks): unlabelled
+    commands first, then the labelled ones by their label's first appearance, each in
+    command order. The first optimal choice of a state is then the one Storm keeps."""
+    first: dict[str, int] = {}
+    out = {}
+    for i, cmd in enumerate(low.commands):
+        label = "" if cmd.silent else variant_label(low, i) if cmd.choice else cmd.action
+        out[i] = (1, first.setdefault(label, len(first)), i) if label else (0, 0, i)
+    return out
+
+
+def compile_model(low: Lowered, targets: list[E.Expr], rewards: list[str],
+                  keep: bool = False) -> Compiled:
     model = low.model
     if low.parameters or low.network is not None:
         raise GiveUp("undefined constants or a composed mission")
@@ -187,6 +204,7 @@ def compile_model(low: Lowered, targets: list[E.Expr], rewards: list[str]) -> Co
     lay = layout(low)
     compile_expr = Compiler()
     structs = [model_reward(model, r) for r in rewards]
+    rank = storm_order(low)
     modes: dict[int, list[CCommand]] = {}
     for m in model.modes:
         sc = Scope(consts, formulas, labels, low.weights, m.number)
@@ -204,13 +222,13 @@ def compile_model(low: Lowered, targets: list[E.Expr], rewards: list[str]) -> Co
                 items = [] if cmd.silent else [it for it in r.items if it.action == cmd.action]
                 acts.append(_sum_items(items, sc, compile_expr))
             cmds.append(CCommand(i, compile_expr(g), compile_expr.key(g), branches, acts))
-        modes[m.number] = cmds
+        modes[m.number] = sorted(cmds, key=lambda c: rank[c.index])
     state = [[(compile_expr(fold(it.guard, base)), compile_expr(fold(it.value, base)))
               for it in r.items if it.action is None] for r in structs]
     init = {"mode": model.initial_mode.number} | {v.name: int(v.init) for v in model.variables}
     key = sum((init[f.name] - f.lo) * f.stride for f in lay.fields.values())
     return Compiled(lay, modes, [compile_expr(fold(t, base)) for t in targets], state,
-                    int(key), low.kind == "dtmc", list(rewards))
+                    int(key), low.kind == "dtmc", list(rewards), keep)
 
 
 def _branch(prob: E.Expr, updates: tuple[tuple[str, E.Expr], ...], sc: Scope, lay: Layout,
@@ -273,6 +291,7 @@ class Expansion:
     target: I64  # branch -> successor key
     prob: F64
     reward: list[F64]  # per reward structure asked: the action reward per choice
+    command: npt.NDArray[np.int32]  # choice -> its lowered command's index
 
 
 def _merge(tk: I64, pr: F64) -> tuple[I64, I64, F64]:
@@ -328,7 +347,7 @@ def expand(c: Compiled, keys: I64) -> Expansion:
     mode = ((keys >> mf.shift) & mf.mask) + mf.lo
     order = np.argsort(mode, kind="stable")
     bounds = np.flatnonzero(np.diff(mode[order])) + 1
-    states, rows, tks, prs = [], [], [], []
+    states, rows, tks, prs, cmds = [], [], [], [], []
     rws: list[list[F64]] = [[] for _ in range(len(c.state_rewards))]
     choices = 0
     with np.errstate(all="ignore"):
@@ -351,10 +370,11 @@ def expand(c: Compiled, keys: I64) -> Expansion:
                 rows.append(row + choices)
                 tks.append(tk)
                 prs.append(pr)
+                cmds.append(np.full(len(sel), cmd.index, np.int32))
                 for i, r in enumerate(rw):
                     rws[i].append(r)
                 choices += len(sel)
-    return _ordered(len(keys), states, rows, tks, prs, rws, c.dtmc)
+    return _ordered(len(keys), states, rows, tks, prs, rws, cmds, c.dtmc)
 
 
 def _cat(parts: list[Any], dtype: Any) -> Any:
@@ -362,7 +382,8 @@ def _cat(parts: list[Any], dtype: Any) -> Any:
 
 
 def _ordered(n: int, states: list[I64], rows: list[I64], tks: list[I64], prs: list[F64],
-             rws: list[list[F64]], dtmc: bool) -> Expansion:
+             rws: list[list[F64]], cmds: list[npt.NDArray[np.int32]], dtmc: bool
+             ) -> Expansion:
     """The choices sorted by state (command order kept within a state)."""
     state = _cat(states, np.int64)
     per_state = np.bincount(state, minlength=n)
@@ -378,4 +399,5 @@ def _ordered(n: int, states: list[I64], rows: list[I64], tks: list[I64], prs: li
     first = np.zeros(len(state) + 1, np.int64)
     np.cumsum(counts[order], out=first[1:])
     return Expansion(state[order], first, _cat(tks, np.int64)[branch],
-                     _cat(prs, np.float64)[branch], [_cat(r, np.float64)[order] for r in rws])
+                     _cat(prs, np.float64)[branch], [_cat(r, np.float64)[order] for r in rws],
+                     _cat(cmds, np.int32)[order])

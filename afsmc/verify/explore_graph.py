@@ -32,6 +32,7 @@ from afsmc.verify.explore_eval import frame
 
 Counts = npt.NDArray[np.int32]  # choices of a state, branches of a choice
 Codes = npt.NDArray[np.uint32]
+Commands = npt.NDArray[np.int32]
 Pairs = tuple[npt.NDArray[np.int32], F64]  # a sparse vector: (positions, values)
 
 
@@ -86,6 +87,7 @@ class Block:
     reward: list[Pairs]  # per reward structure asked: per choice, state reward included
     labels: list[Bools]  # per target: per state
     layers: list[int]  # the layers' sizes
+    command: Commands  # per choice: its lowered command (empty unless Compiled.keep)
 
 
 def _unique(a: I64) -> I64:
@@ -162,7 +164,7 @@ def _subset(blk: Block, idx: I64, layers: list[int]) -> Block:
     br = acyclic._ranges(choices[ch], choices[ch + 1])
     return Block(blk.keys[idx], blk.nchoice[idx], blk.nbranch[ch], blk.target[br],
                  blk.prob[br], [_pairs_at(r, ch) for r in blk.reward], [x[idx] for x in blk.labels],
-                 [k for k in layers if k])
+                 [k for k in layers if k], blk.command[ch] if len(blk.command) else blk.command)
 
 
 def _pairs_at(r: Pairs, idx: I64) -> Pairs:
@@ -212,7 +214,7 @@ def _block(c: Compiled, table: ProbTable, known: I64, parts: list[tuple[I64, Exp
     if not parts:
         z, w = np.zeros(0, np.int64), np.zeros(0, np.int32)
         return Block(z, w, w, z, np.zeros(0, np.uint32), [_no_pairs() for _ in c.state_rewards],
-                     [np.zeros(0, bool) for _ in c.targets], [])
+                     [np.zeros(0, bool) for _ in c.targets], [], w)
     keys = np.concatenate([k for k, _ in parts])
     n = len(keys)
     nchoice = np.concatenate([np.bincount(x.state, minlength=len(k)).astype(np.int32)
@@ -220,6 +222,7 @@ def _block(c: Compiled, table: ProbTable, known: I64, parts: list[tuple[I64, Exp
     nbranch = np.concatenate([np.diff(x.first).astype(np.int32) for _, x in parts])
     target = np.concatenate([x.target for _, x in parts])
     prob = np.concatenate([x.prob for _, x in parts])
+    command = np.concatenate([x.command for _, x in parts]) if c.keep else np.zeros(0, np.int32)
     rewards = [np.concatenate([x.reward[i] for _, x in parts])
                for i in range(len(c.state_rewards))]
     del parts
@@ -250,7 +253,8 @@ def _block(c: Compiled, table: ProbTable, known: I64, parts: list[tuple[I64, Exp
         nz = np.flatnonzero(full_reward)
         out_rewards.append((nz.astype(np.int32), full_reward[nz]))
     return Block(keys, nchoice, nbranch[old_choice], target[branch], table.encode(prob[branch]),
-                 out_rewards, labels, [len(x) for x in layers])
+                 out_rewards, labels, [len(x) for x in layers],
+                 command[old_choice] if c.keep else command)
 
 
 @dataclass
@@ -276,7 +280,7 @@ PEAK_FACTOR = 1.8
 
 def _nbytes(b: Block) -> int:
     arrays: list[npt.NDArray[Any]] = [b.keys, b.nchoice, b.nbranch, b.target, b.prob,
-                                      *b.labels, *[x for r in b.reward for x in r]]
+                                      b.command, *b.labels, *[x for r in b.reward for x in r]]
     return sum(int(a.nbytes) for a in arrays)
 
 
@@ -339,7 +343,7 @@ def _joined(sinks: list[Block], c: Compiled) -> Block:
     return Block(_cat_free(sinks, "keys", np.int64), _cat_free(sinks, "nchoice", np.int32),
                  _cat_free(sinks, "nbranch", np.int32), _cat_free(sinks, "target", np.int64),
                  _cat_free(sinks, "prob", np.uint32), rewards, labels,
-                 [total] if total else [])
+                 [total] if total else [], _cat_free(sinks, "command", np.int32))
 
 
 def _cat_free(blocks: list[Block], name: str, dtype: Any) -> Any:
@@ -370,6 +374,7 @@ def assemble(blocks: list[Block], c: Compiled, table: ProbTable) -> Explored:
     choices = np.zeros(m + 1, np.int64)
     np.cumsum(_cat_free(blocks, "nbranch", np.int32), out=choices[1:])
     prob = acyclic.Coded(table.table(), _cat_free(blocks, "prob", table.dtype()))
+    command = _cat_free(blocks, "command", np.int32)
     labels = {acyclic.LABEL + str(i): np.concatenate([b.labels[i] for b in blocks])
               for i in range(len(c.targets))}
     sizes = [s for b in blocks for s in b.layers if s]
@@ -379,13 +384,15 @@ def assemble(blocks: list[Block], c: Compiled, table: ProbTable) -> Explored:
         b.labels = []
     order = np.argsort(keys)
     sorted_keys = keys[order]
+    kept = keys if c.keep else None  # a strategy's: the states' values and ranks
     del keys
     target, initial = _targets(blocks, order, sorted_keys, c.initial)
     del order, sorted_keys
     acyclic.trim_heap()
     stay = acyclic.self_loops(states, choices, target, prob)
     arrays = Arrays(states, choices, target, prob, stay, layers, initial, labels,
-                    dict(zip(c.reward_names, rewards, strict=True)))
+                    dict(zip(c.reward_names, rewards, strict=True)), order=kept,
+                    commands=command if c.keep else None)
     return Explored(arrays, n, m, len(target))
 
 

@@ -17,6 +17,7 @@ from afsmc.lower.lowering import lower
 from afsmc.model import ir
 from afsmc.model.names import did_you_mean
 from afsmc.model.semantics import bounded_globally
+from afsmc.verify.explicit import applies
 from afsmc.verify.guard import Progress, default_max_states, run_job, upper_bound
 from afsmc.verify.jobs import make_job
 from afsmc.verify.queries import dual
@@ -79,7 +80,8 @@ def extract(model: ir.Model, text: str, *, max_states: int | None = None,
     limit = default_max_states() if max_states is None else max_states
     job = make_job(low, [asked], "prism", "sparse", limit, "MDP", only=(query,))
     job = dataclasses.replace(job, extract=extract_for(low, (), query, None),
-                              model_text=emit(low, variant_labels=True).model)
+                              model_text=emit(low, variant_labels=True).model,
+                              explicit=low if applies(low, "sparse", "auto", False) else None)
     res = run_job(job, upper_bound(model), isolate=None, progress=progress)
     if res.failure is not None or res.extracted is None or query not in res.values:
         why = res.failure.message if res.failure is not None else "Storm returned no scheduler"

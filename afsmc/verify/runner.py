@@ -415,8 +415,8 @@ class ModelLoop:
                        hybrid_skip=tuple(n for n in mine if n not in first), hybrid_extra=extra)
         job = dataclasses.replace(job, solver=o.solver, all_states=o.all_states,
                                   precision=o.precision, exact=o.exact)
-        if applies(self.low, self.job_engine, o.solver, o.bisimulation or o.exact or o.strategy
-                   or o.precision is not None or o.witness is not None):
+        if applies(self.low, self.job_engine, o.solver,
+                   o.bisimulation or o.exact or o.precision is not None):
             job = dataclasses.replace(job, explicit=self.low)  # afsmc's own exploration first
         ex = request(self.low, o.strategy, o.witness, mine, self.run.asked_as,
                      skip={n for p, n in unit if stepped(p)})

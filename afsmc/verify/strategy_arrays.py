@@ -24,6 +24,7 @@ from __future__ import annotations
 import itertools
 import time
 from collections.abc import Callable
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -39,8 +40,12 @@ BIT = "__afsmc_bit_"  # the labels of the variables' bits
 def fits(extract: Extract, names: list[str], props: list[Any]) -> bool:
     """Whether every query `extract` asks of is a P [F T] with min or max that the
     backward pass answers, and the witness (if any) goes into that T."""
-    p = acyclic.plan(names, props, True)
-    kinds = {q.name: q.kind for q in p.queries}
+    return covers(extract, acyclic.plan(names, props, True).queries)
+
+
+def covers(extract: Extract, queries: list[acyclic.Query]) -> bool:
+    """Whether the backward pass of `queries` gives all that `extract` asks."""
+    kinds = {q.name: q.kind for q in queries}
     w = extract.witness
     if w is not None and (w.target is not None or w.avoid):
         return False
@@ -127,6 +132,43 @@ def valuations(a: acyclic.Arrays, program: Any, states: I64) -> I64:
     return out
 
 
+@dataclass
+class View:
+    """How an extraction reads its arrays: the variables' names ("mode" among them), the
+    values of some states (states x variables), each choice's floor/ceil variant (its
+    lowered command; -1: not a variant) and a choice's lowered command (given the values
+    of its state)."""
+
+    variables: tuple[str, ...]
+    values: Callable[[I64], I64]
+    variant: Callable[[I64], I64]
+    command: Callable[[int, Any], int]
+
+
+def storm_view(a: acyclic.Arrays, program: Any, extract: Extract) -> View:
+    """The view of arrays from Storm's export: the choices' action labels name the
+    commands, the bit labels give the values."""
+    assert a.actions is not None
+    actions = a.actions
+    index = {x: i for i, x in enumerate(a.action_names)}
+    table = np.full(len(a.action_names), -1, np.int64)
+    for c, label in zip(extract.decisive, extract.labels, strict=True):
+        if label in index:
+            table[index[label]] = c
+    variables = tuple(v[0] for v in _bit_vars(program) or [])
+
+    def command(choice: int, row: Any) -> int:
+        label = a.action_names[int(actions[choice])]
+        mode = int(row[variables.index("mode")]) if "mode" in variables else 0
+        for i, (name, modes) in enumerate(extract.commands):
+            if mode in modes and name == label:
+                return i
+        return -1
+
+    return View(variables, lambda states: valuations(a, program, states),
+                lambda choices: table[actions[choices]], command)
+
+
 Rebuild = Callable[[], Any]
 
 
@@ -154,14 +196,15 @@ def run(stormpy: Any, built: Any, res: Any, notify: Callable[[str, Any], None], 
     notify("solver", f"the {job.what} is acyclic but for self-loops "
            f"({len(arrays.layers) - 1:,} layers): each query by one exact backward pass")
     out = res.extracted = res.extracted or Extracted()
-    out.variables = tuple(v[0] for v in _bit_vars(program) or [])
+    view = storm_view(arrays, program, extract)
+    out.variables = view.variables
     plain = [q for q in p.queries if q.name not in extract.queries]
     values = acyclic.solve_many(arrays, plain) if plain else {}
     for q in p.queries:
         if q.name in extract.queries:
             notify("phase", f"check {q.name}")
             t0 = time.perf_counter()
-            values[q.name] = _extract(arrays, q, extract, program, out)
+            values[q.name] = extract_query(arrays, q, extract, view, out)
             out.seconds += time.perf_counter() - t0
     secs = (time.perf_counter() - started) / max(1, len(p.queries))
     for q in p.queries:
@@ -183,8 +226,8 @@ def _give_back() -> None:
     storm._give_back()
 
 
-def _extract(a: acyclic.Arrays, q: acyclic.Query, extract: Extract, program: Any,
-             out: Extracted) -> float:
+def extract_query(a: acyclic.Arrays, q: acyclic.Query, extract: Extract, view: View,
+                  out: Extracted) -> float:
     """Query `q`'s value, and its strategy and paths as `extract` asks, into `out`."""
     n = len(a.states) - 1
     best = np.zeros(n, np.int64)
@@ -195,20 +238,15 @@ def _extract(a: acyclic.Arrays, q: acyclic.Query, extract: Extract, program: Any
     reached = _reached(a, chosen)
     name = q.name
     if name in extract.strategies or name == extract.policy:
-        index = {x: i for i, x in enumerate(a.action_names)}
-        command = np.full(len(a.action_names), -1, np.int64)
-        for c, label in zip(extract.decisive, extract.labels, strict=True):
-            if label in index:
-                command[index[label]] = c
-        assert a.actions is not None and a.order is not None
-        states = reached[command[a.actions[chosen[reached]]] >= 0]
+        assert a.order is not None
+        states = reached[view.variant(chosen[reached]) >= 0]
         states = states[np.argsort(a.order[states], kind="stable")]  # Storm's order
-        commands = command[a.actions[chosen[states]]]
-        vals = valuations(a, program, states)
+        commands = view.variant(chosen[states])
+        vals = view.values(states)
         out.reached[name] = len(states)
         if name in extract.strategies:
             out.groups[name] = _groups(commands, vals, _matters(a, value[:, 0], states),
-                                       out.variables)
+                                       view.variables)
         if name == extract.policy:
             out.policy_states = [tuple(int(x) for x in row) for row in vals]
             out.policy_commands = [int(c) for c in commands]
@@ -216,7 +254,7 @@ def _extract(a: acyclic.Arrays, q: acyclic.Query, extract: Extract, program: Any
     if w is not None and w.query == name:
         out.witness_query = name
         target = a.labels[acyclic.LABEL + str(q.target)]
-        _Paths(a, chosen, reached, target).collect(w.k, extract, program, out)
+        _Paths(a, chosen, reached, target, view).collect(w.k, out)
     return result
 
 
@@ -264,9 +302,10 @@ class _Paths:
 
     META = -1  # the meta-target: every target state leads to it with probability 1
 
-    def __init__(self, a: acyclic.Arrays, chosen: I64, reached: I64, target: Any) -> None:
+    def __init__(self, a: acyclic.Arrays, chosen: I64, reached: I64, target: Any,
+                 view: View) -> None:
         assert a.order is not None
-        self.a, self.chosen, self.target = a, chosen, target
+        self.a, self.chosen, self.target, self.view = a, chosen, target, view
         self.old = a.order  # Storm's number of each state, for the ties
         # the strategy's transitions out of the reached states that are not targets
         src_states = reached[~target[reached]]
@@ -396,7 +435,7 @@ class _Paths:
         states.reverse()
         return prob, states
 
-    def collect(self, k: int, extract: Extract, program: Any, out: Extracted) -> None:
+    def collect(self, k: int, out: Extracted) -> None:
         if not self.targets.size:
             out.witness_note = "no state the strategy reaches is a target state"
             return
@@ -406,22 +445,12 @@ class _Paths:
             if got is None or got[0] <= 0.0:
                 break
             p, states = got
-            vals = valuations(self.a, program, np.asarray(states, np.int64))
+            vals = self.view.values(np.asarray(states, np.int64))
             steps = [self._edge(x, y) for x, y in itertools.pairwise(states)]
-            commands = [self._command(s, row, extract, out.variables)
+            commands = [self.view.command(int(self.chosen[s]), row)
                         for s, row in zip(states[:-1], vals, strict=False)] + [-1]
             found.append(RawPath(p, [tuple(int(x) for x in row) for row in vals], commands,
                                  steps))
         if len(found) < k:
             out.witness_note = f"there are only {len(found)} paths into the target states"
         out.paths = found
-
-    def _command(self, s: int, row: Any, extract: Extract, variables: tuple[str, ...]) -> int:
-        """The lowered command of state `s`'s choice: by its action label, and the mode."""
-        assert self.a.actions is not None
-        label = self.a.action_names[int(self.a.actions[self.chosen[s]])]
-        mode = int(row[variables.index("mode")]) if "mode" in variables else 0
-        for i, (name, modes) in enumerate(extract.commands):
-            if mode in modes and name == label:
-                return i
-        return -1
