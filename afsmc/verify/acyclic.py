@@ -13,7 +13,8 @@ semantics of labels and expressions); the model goes to numpy through Storm's bi
 (every successor of a state lies in an earlier layer), renumbered so that each layer's
 states, choices and branches are contiguous, and each query is then one loop over the
 layers, vectorised within each. A model with any other cycle, or a query of another shape
-(bounded, until, cumulative), is left to Storm (:func:`plan`, :func:`load`).
+(bounded, until, cumulative), is left to Storm (:func:`plan`, :func:`load`). afsmc's own
+exploration (afsmc.verify.explicit) gives the same arrays without Storm.
 
 Semantics follow Storm's: P [F T] is 1 on T; R [F T] is 0 on T and infinite where T is
 missed with positive probability (under every scheduler for a min, under some for a max);
@@ -168,9 +169,8 @@ class Arrays:
     initial: int  # the initial state
     labels: dict[str, Bools]  # label -> states (targets)
     rewards: dict[str, Vec]  # reward model -> its reward per choice (state + action)
-    # for a strategy's extraction (afsmc.verify.strategy_arrays), else None: each state's
-    # number in Storm's model (explored by afsmc: its key), each choice's action (index
-    # into `action_names`) or lowered command, the labels read packed (8 states a byte)
+    # a strategy's (strategy_arrays), else None: each state's number in Storm's model (or
+    # its key), each choice's action (into `action_names`) or command, packed labels
     order: I64 | None = None
     actions: npt.NDArray[np.uint32] | None = None
     commands: npt.NDArray[np.int32] | None = None
@@ -440,8 +440,7 @@ class Raw:
     initial: int
     labels: dict[str, Bools]
     state_rewards: dict[str, list[tuple[str, F64]]]  # name -> (applies-to, values)
-    # what Arrays keeps for a strategy's extraction (None: nothing)
-    actions: npt.NDArray[np.uint32] | None = None
+    actions: npt.NDArray[np.uint32] | None = None  # these three: a strategy's, as in Arrays
     action_names: list[str] = field(default_factory=list)
     packed: dict[str, npt.NDArray[np.uint8]] | None = None
 

@@ -6,15 +6,22 @@ computes a query's values also gives each state's optimal choice: the first choi
 value is the state's optimum, which is the choice Storm's topological solver keeps (its
 trivial components are solved row by row, a later row replacing the best only if strictly
 better). From those choices come the states the strategy reaches, their floor/ceil variants
-(each choice's action, from Storm's export) and whether the choice matters there (the
-one-step values of the state's choices differ, as Storm's `Rmin`/`Rmax [I=1]` with the
-values as state rewards). The variables' values of a state are read from one label per bit
-of each variable, which Storm builds at a byte per 8 states, instead of its state
-valuations (a vector per state: 1.7 GB more on scenario 2). The K most probable paths are
-found by the recursive enumeration algorithm with the choices of Storm's generator
-(:func:`_Paths`), on the strategy's transitions only.
+and whether the choice matters there (the one-step values of the state's choices differ,
+as Storm's `Rmin`/`Rmax [I=1]` with the values as state rewards). The K most probable
+paths are found by the recursive enumeration algorithm with the choices of Storm's
+generator (:func:`_Paths`), on the strategy's transitions only.
 
-Only what this route covers is sent here (:func:`fits`): probabilities of `F target`
+The arrays come from one of two places, each read through a :class:`View`:
+
+* afsmc's own exploration (:mod:`afsmc.verify.explicit`, the default): each state's key
+  gives its variables' values, each choice's lowered command is kept as explored, and the
+  choices of a state are in Storm's order, so the same choice is the first optimal one;
+* Storm's export (:func:`run`, where the exploration gives up): each choice's action
+  label names its variant, and the variables' values are read from one label per bit of
+  each variable, which Storm builds at a byte per 8 states, instead of its state
+  valuations (a vector per state: 1.7 GB more on scenario 2).
+
+Only what this route covers is sent here (:func:`covers`): probabilities of `F target`
 without a bound, no witness into other target states. The rest, and a model with cycles,
 stays on Storm's route (:mod:`afsmc.verify.strategy_storm`).
 """
@@ -235,27 +242,34 @@ def extract_query(a: acyclic.Arrays, q: acyclic.Query, extract: Extract, view: V
     result = acyclic._pass(a, [q], best, value)[0]
     chosen = a.states[:-1] + best  # each state's choice (the pass's numbering)
     del best
-    reached = _reached(a, chosen)
     name = q.name
     if name in extract.strategies or name == extract.policy:
-        assert a.order is not None
-        states = reached[view.variant(chosen[reached]) >= 0]
-        states = states[np.argsort(a.order[states], kind="stable")]  # Storm's order
-        commands = view.variant(chosen[states])
-        vals = view.values(states)
-        out.reached[name] = len(states)
-        if name in extract.strategies:
-            out.groups[name] = _groups(commands, vals, _matters(a, value[:, 0], states),
-                                       view.variables)
-        if name == extract.policy:
-            out.policy_states = [tuple(int(x) for x in row) for row in vals]
-            out.policy_commands = [int(c) for c in commands]
+        _tables(a, name, chosen, value[:, 0], extract, view, out)
     w = extract.witness
     if w is not None and w.query == name:
         out.witness_query = name
         target = a.labels[acyclic.LABEL + str(q.target)]
-        _Paths(a, chosen, reached, target, view).collect(w.k, out)
+        _Paths(a, chosen, value[:, 0] > 0, target, view).collect(w.k, out)
     return result
+
+
+def _tables(a: acyclic.Arrays, name: str, chosen: I64, value: npt.NDArray[np.float64],
+            extract: Extract, view: View, out: Extracted) -> None:
+    """The strategy's decisions in the states it reaches: summarised (groups) or whole
+    (the policy)."""
+    assert a.order is not None
+    reached = _reached(a, chosen)
+    states = reached[view.variant(chosen[reached]) >= 0]
+    del reached
+    states = states[np.argsort(a.order[states], kind="stable")]  # Storm's order
+    commands = view.variant(chosen[states])
+    vals = view.values(states)
+    out.reached[name] = len(states)
+    if name in extract.strategies:
+        out.groups[name] = _groups(commands, vals, _matters(a, value, states), view.variables)
+    if name == extract.policy:
+        out.policy_states = [tuple(int(x) for x in row) for row in vals]
+        out.policy_commands = [int(c) for c in commands]
 
 
 def _reached(a: acyclic.Arrays, chosen: I64) -> I64:
@@ -277,6 +291,13 @@ def _matters(a: acyclic.Arrays, value: npt.NDArray[np.float64], states: I64) -> 
     """Whether the choices of `states` differ in value: their one-step values (sum of
     probability x successor's value) differ by more than SAME."""
     w = np.where(np.isfinite(value), value, 1e300)
+    out = np.zeros(len(states), bool)
+    for i in range(0, len(states), acyclic.SPAN):  # a span at a time: bounded temporaries
+        out[i:i + acyclic.SPAN] = _differ(a, w, states[i:i + acyclic.SPAN])
+    return out
+
+
+def _differ(a: acyclic.Arrays, w: npt.NDArray[np.float64], states: I64) -> Any:
     c0, c1 = a.states[states], a.states[states + 1]
     choices = acyclic._ranges(c0, c1)
     b0, b1 = a.choices[choices], a.choices[choices + 1]
@@ -298,76 +319,88 @@ class _Paths:
     number (Storm's Dijkstra queue); the next paths from candidates, the most probable
     first, then the smallest predecessor and rank. A path stops at its first target state
     and may loop on a self-loop. States are numbered as in Storm's model, so ties fall as
-    they do there."""
+    they do there. Only the states from which the strategy reaches a target (`alive`)
+    take part: no path into a target passes through another."""
 
     META = -1  # the meta-target: every target state leads to it with probability 1
+    LOW = np.uint64(0xFFFFFFFF)
 
-    def __init__(self, a: acyclic.Arrays, chosen: I64, reached: I64, target: Any,
-                 view: View) -> None:
+    def __init__(self, a: acyclic.Arrays, chosen: I64, alive: npt.NDArray[np.bool_],
+                 target: Any, view: View) -> None:
         assert a.order is not None
         self.a, self.chosen, self.target, self.view = a, chosen, target, view
         self.old = a.order  # Storm's number of each state, for the ties
-        # the strategy's transitions out of the reached states that are not targets
-        src_states = reached[~target[reached]]
-        c = chosen[src_states]
-        counts = a.choices[c + 1] - a.choices[c]
-        branches = acyclic._ranges(a.choices[c], a.choices[c + 1])
-        src = np.repeat(src_states, counts)
-        dst = a.target[branches].astype(np.int64)
-        prob = a.prob[branches]
-        self.dist, self.pred = self._dijkstra(src, dst, prob)
-        order = np.argsort(dst, kind="stable")
-        self.in_dst, self.in_src, self.in_prob = dst[order], src[order], prob[order]
-        self.targets = reached[target[reached]]
+        self.dist, self.pred, self.into = self._dijkstra(alive)
+        self.targets = np.flatnonzero(target & (self.dist > 0))
+        self.meta: tuple[int | None, float] = (None, 0.0)
+        if self.targets.size:
+            t = self.targets
+            best = t[np.lexsort((self.old[t], self.dist[t]))[-1]]
+            self.meta = (int(best), float(self.dist[best]))
         self.ksp: dict[int, list[tuple[int | None, int, float]]] = {}
         self.cand: dict[int, dict[tuple[int, int], float]] = {}
 
-    def _dijkstra(self, src: I64, dst: I64, prob: Any) -> tuple[dict[int, float],
-                                                                 dict[int, int | None]]:
+    def _bound(self, sources: npt.NDArray[np.bool_]) -> int:
+        """How many branches the chosen choices of `sources` have (a SPAN at a time)."""
+        a, total = self.a, 0
+        for lo in range(0, len(sources), acyclic.SPAN):
+            c = self.chosen[lo:lo + acyclic.SPAN][sources[lo:lo + acyclic.SPAN]]
+            total += int((a.choices[c + 1] - a.choices[c]).sum())
+        return total
+
+    def _dijkstra(self, alive: npt.NDArray[np.bool_]) -> tuple[Any, Any, Any]:
         """The largest product of probabilities from the initial state to each state,
-        layer by layer (the model is acyclic but for self-loops, which never improve
-        it), and the predecessor Storm's Dijkstra keeps."""
+        layer by layer from the initial one (the model is acyclic but for self-loops,
+        which never improve it), and the predecessor Storm's Dijkstra keeps; and the
+        strategy's transitions as (successor << 32 | source), sorted: who leads where."""
         a = self.a
         n = len(a.states) - 1
         dist = np.zeros(n)
-        dist[a.initial] = 1.0
-        best_src = np.full(n, -1, np.int64)
-        moving = src != dst
-        src, dst, prob = src[moving], dst[moving], prob[moving]
-        layer_of_src = np.searchsorted(a.layers, src, side="right") - 1
-        order = np.argsort(-layer_of_src, kind="stable")
-        src, dst, prob, layer_of_src = src[order], dst[order], prob[order], layer_of_src[order]
-        cuts = np.flatnonzero(np.diff(layer_of_src)) + 1
-        for s, d, p in zip(np.split(src, cuts), np.split(dst, cuts), np.split(prob, cuts),
-                           strict=True):
-            prod = dist[s] * p
-            keep = prod > 0
-            s, d, prod = s[keep], d[keep], prod[keep]
+        dist[a.initial] = 1.0 if alive[a.initial] else 0.0
+        pred = np.full(n, -1, np.int32)
+        sources = alive & ~self.target
+        into = np.empty(self._bound(sources), np.uint64)
+        used = 0
+        for lo, hi in reversed(acyclic._spans(a.layers)):  # a span's states: one layer's
+            s = np.flatnonzero((dist[lo:hi] > 0) & sources[lo:hi]) + lo
             if not s.size:
                 continue
-            # per successor, the largest (product, probability, Storm's number) of the source
-            o = np.lexsort((self.old[s], dist[s], prod, d))
-            s, d, prod = s[o], d[o], prod[o]
-            last = np.concatenate((d[1:] != d[:-1], [True]))
-            s, d, prod = s[last], d[last], prod[last]
-            cur = best_src[d]
-            cur_prod = np.where(cur >= 0, dist[d], 0.0)
-            cs = np.where(cur >= 0, cur, 0)
-            better = (prod > cur_prod) | ((prod == cur_prod) & (
-                (dist[s] > dist[cs]) | ((dist[s] == dist[cs]) & (self.old[s] > self.old[cs]))))
-            better &= prod > 0
-            dist[d[better]] = prod[better]
-            best_src[d[better]] = s[better]
-        touched = np.flatnonzero(dist > 0)
-        dists = {int(x): float(dist[x]) for x in touched}
-        preds: dict[int, int | None] = {int(x): (None if best_src[x] < 0 else int(best_src[x]))
-                                        for x in touched}
-        tgt = self.target[touched]
-        if tgt.any():
-            t = touched[tgt]
-            o = np.lexsort((self.old[t], dist[t]))
-            dists[self.META], preds[self.META] = float(dist[t[o[-1]]]), int(t[o[-1]])
-        return dists, preds
+            c = self.chosen[s]
+            b0, b1 = a.choices[c], a.choices[c + 1]
+            br = acyclic._ranges(b0, b1)
+            src = np.repeat(s, b1 - b0)
+            dst = a.target[br].astype(np.int64)
+            keep = alive[dst]
+            src, dst, prob = src[keep], dst[keep], a.prob[br][keep]
+            into[used:used + len(src)] = (dst.astype(np.uint64) << np.uint64(32)) | \
+                src.astype(np.uint64)
+            used += len(src)
+            moving = src != dst
+            self._relax(dist, pred, src[moving], dst[moving], prob[moving])
+        into = into[:used]
+        into.sort()
+        return dist, pred, into
+
+    def _relax(self, dist: Any, pred: Any, s: I64, d: I64, p: Any) -> None:
+        """Improve the successors `d` of one layer's sources `s` (branch probabilities
+        `p`): per successor, the largest (product, probability, Storm's number) wins."""
+        prod = dist[s] * p
+        keep = prod > 0
+        s, d, prod = s[keep], d[keep], prod[keep]
+        if not s.size:
+            return
+        o = np.lexsort((self.old[s], dist[s], prod, d))
+        s, d, prod = s[o], d[o], prod[o]
+        last = np.concatenate((d[1:] != d[:-1], [True]))
+        s, d, prod = s[last], d[last], prod[last]
+        cur = pred[d].astype(np.int64)
+        cur_prod = np.where(cur >= 0, dist[d], 0.0)
+        cs = np.where(cur >= 0, cur, 0)
+        better = (prod > cur_prod) | ((prod == cur_prod) & (
+            (dist[s] > dist[cs]) | ((dist[s] == dist[cs]) & (self.old[s] > self.old[cs]))))
+        better &= prod > 0
+        dist[d[better]] = prod[better]
+        pred[d[better]] = s[better]
 
     def _edge(self, u: int, v: int) -> float:
         if v == self.META:
@@ -380,13 +413,19 @@ class _Paths:
     def _preds(self, v: int) -> list[int]:
         if v == self.META:
             return [int(x) for x in self.targets]
-        lo, hi = np.searchsorted(self.in_dst, [v, v + 1])
-        return [int(x) for x in self.in_src[lo:hi]]
+        lo, hi = np.searchsorted(self.into, np.array([v, v + 1], np.uint64) << np.uint64(32))
+        return [int(x) for x in self.into[lo:hi] & self.LOW]
+
+    def _dist(self, v: int) -> float:
+        return self.meta[1] if v == self.META else float(self.dist[v])
 
     def _paths_of(self, v: int) -> list[tuple[int | None, int, float]]:
         got = self.ksp.get(v)
         if got is None:
-            got = self.ksp[v] = [(self.pred.get(v), 1, self.dist[v])] if v in self.dist else []
+            d = self._dist(v)
+            pred = self.meta[0] if v == self.META else int(self.pred[v])
+            got = self.ksp[v] = [(None if pred is None or pred < 0 else pred, 1, d)] \
+                if d > 0 else []
         return got
 
     def _key(self, u: int) -> int:
@@ -399,7 +438,7 @@ class _Paths:
         if k == 2:
             first = paths[0]
             for u in self._preds(v):
-                cand.setdefault((u, 1), self.dist.get(u, 0.0) * self._edge(u, v))
+                cand.setdefault((u, 1), self._dist(u) * self._edge(u, v))
                 if first[0] is not None:
                     cand.pop((first[0], 1), None)
         if not (k == 2 and v == self.a.initial):

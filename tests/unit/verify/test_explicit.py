@@ -107,6 +107,27 @@ def test_every_successor_comes_first_and_every_choice_sums_to_one() -> None:
     assert np.allclose(sums, 1.0, atol=1e-12)
 
 
+def test_only_a_strategy_keeps_the_states_keys_and_choices_commands_in_storm_s_order(
+) -> None:
+    low = lowered(load(str(EXAMPLES / "uav.afsm"), SMALL["uav"]).model, "nondet")
+    plain = explore_graph.explore(explore.compile_model(low, [], [])).arrays
+    assert plain.order is None and plain.commands is None
+    c = explore.compile_model(low, [], [], keep=True)
+    a = explore_graph.explore(c).arrays
+    assert a.order is not None and a.commands is not None
+    n = len(a.states) - 1
+    assert len(np.unique(a.order)) == n and a.order[a.initial] == c.initial
+    assert len(a.commands) == len(a.choices) - 1 == plain.choices.size - 1
+    mode = c.layout.decode(a.order)["mode"]
+    owner = np.repeat(np.arange(n), np.diff(a.states))
+    assert all(int(mode[s]) in low.commands[k].modes for s, k in zip(owner, a.commands))
+    # within a state: unlabelled commands first, then by label, as Storm orders choices
+    assert (np.diff(a.states) > 1).any()
+    rank = explore.storm_order(low)
+    keys = [rank[int(k)] for k in a.commands]
+    assert all(keys[i] < keys[i + 1] for i in range(len(keys) - 1) if owner[i] == owner[i + 1])
+
+
 def test_the_state_limit_stops_the_exploration_as_it_stops_storm() -> None:
     from afsmc.diagnostics import CompileError
 

@@ -1,0 +1,126 @@
+"""What `--strategy --witness 10` add to `afsmc verify -p success` (issue 32's target: at
+most +50% time and memory on scenario 2), each run under `/usr/bin/time -v`.
+
+    .venv/bin/python benchmarks/strategy.py [--instances 4x4-t300,scenario2]
+        [--routes default,storm] [--reference 4x4-obj2-t300] [--out benchmarks/strategy.csv]
+
+Per instance and route, two commands one after the other: `verify ... -p success --json`
+(base) and the same with `--strategy --witness 10`. Route `default` is what a user gets
+(afsmc's own exploration and backward pass); `storm` adds `--solver topological`: Storm's
+build, solver, scheduler and path generator, the oracle. The reference instance runs
+first (the whole file, default route): its time tells how busy the machine was. Rows go
+to the CSV (the values, the strategy tables' sizes and the paths' mass included) and are
+printed as a markdown table with each extraction's CPU and memory against its base.
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import os
+import sys
+import time
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+sys.path.insert(0, ROOT)
+
+from benchmarks.explicit import run_one, timed  # noqa: E402
+from benchmarks.run import INSTANCES, UAV  # noqa: E402
+
+LOCAL: dict[str, list[str]] = {
+    "4x4-t300": ["--const", "WIDTH=4", "--const", "HEIGHT=4", "--const", "T_LIMIT=300",
+                 "--const", "DEADLINE=300"],
+}
+ROUTES: dict[str, list[str]] = {"default": [], "storm": ["--solver", "topological"]}
+RUNS: dict[str, list[str]] = {"base": [], "extract": ["--strategy", "--witness", "10"]}
+FIELDS = ["measured", "load", "instance", "route", "run", "status", "wall_s", "cpu_s",
+          "peak_gb", "states", "engine", "solver", "min", "max", "strategy_rows",
+          "witnesses", "witness_mass"]
+
+
+def measure(instance: str, route: str, run: str, timeout: float) -> dict[str, object]:
+    args = ["verify", UAV, *(LOCAL.get(instance) or INSTANCES[instance]), "-p", "success",
+            "--json", *ROUTES[route], *RUNS[run]]
+    load = os.getloadavg()[0]
+    out, t, status = timed(args, timeout)
+    row: dict[str, object] = {
+        "measured": time.strftime("%Y-%m-%d %H:%M"), "load": round(load, 1),
+        "instance": instance, "route": route, "run": run, "status": status,
+        "wall_s": round(t["wall"], 1), "cpu_s": round(t["cpu"], 1),
+        "peak_gb": round(t["peak"], 3)}
+    if out is not None:
+        m = out["model"]
+        props = out["properties"]
+        assert isinstance(m, dict) and isinstance(props, list)
+        p = props[0]
+        ws = p.get("witnesses") or []
+        row |= {"states": m.get("states"), "engine": m.get("engine", ""),
+                "solver": m.get("solver", ""), "min": p.get("min"), "max": p.get("max"),
+                "strategy_rows": sum(len(v) for v in (p.get("strategy") or {}).values()),
+                "witnesses": len(ws), "witness_mass": sum(w["probability"] for w in ws)}
+    return row
+
+
+def table(rows: list[dict[str, object]]) -> str:
+    """Markdown, each extraction against the base of its instance and route."""
+    base: dict[tuple[object, object], dict[str, object]] = {}
+    lines = ["| instance | route | run | engine, solver | wall s | CPU s | peak GB | "
+             "CPU vs base | peak vs base | strategy rows | paths (mass) | load |",
+             "|---|---|---|---|---|---|---|---|---|---|---|---|"]
+    for r in rows:
+        def num(key: str, r: dict[str, object] = r) -> float:
+            return float(str(r.get(key) or 0))
+
+        if r["run"] == "base":
+            base[(r["instance"], r["route"])] = r
+        b = base.get((r["instance"], r["route"]))
+        vs = ("", "")
+        if r["run"] != "base" and b is not None and float(str(b["cpu_s"])) > 0:
+            vs = (f"{100 * (num('cpu_s') / float(str(b['cpu_s'])) - 1):+.1f}%",
+                  f"{100 * (num('peak_gb') / float(str(b['peak_gb'])) - 1):+.1f}%")
+        lines.append(
+            f"| {r['instance']} | {r['route']} | {r['run']} | {r.get('engine', '')}, "
+            f"{r.get('solver', '')} | {num('wall_s'):.1f} | {num('cpu_s'):.1f} | "
+            f"{num('peak_gb'):.3f} | {vs[0]} | {vs[1]} | {int(num('strategy_rows'))} | "
+            f"{int(num('witnesses'))} ({num('witness_mass'):.4f}) | {r['load']} |")
+    return "\n".join(lines)
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--instances", default="4x4-t300,scenario2")
+    ap.add_argument("--routes", default="default")
+    ap.add_argument("--reference", default="4x4-obj2-t300",
+                    help="instance run first, the whole file ('' for none)")
+    ap.add_argument("--timeout", type=float, default=2 * 3600)
+    ap.add_argument("--out", default=os.path.join(ROOT, "benchmarks", "strategy.csv"))
+    ap.add_argument("--table", action="store_true", help="print the CSV's table, run nothing")
+    args = ap.parse_args()
+    if args.table:
+        with open(args.out, encoding="utf-8") as f:
+            print(table(list(csv.DictReader(f))))
+        return
+    if args.reference:
+        ref = run_one(args.reference, "whole", "explicit", [], args.timeout)
+        print(f"reference {args.reference}: {ref['wall_s']} s wall, {ref['cpu_s']} s CPU",
+              file=sys.stderr)
+    rows = []
+    new = not os.path.exists(args.out)
+    with open(args.out, "a", newline="", encoding="utf-8") as f:
+        w = csv.DictWriter(f, fieldnames=FIELDS)
+        if new:
+            w.writeheader()
+        for instance in args.instances.split(","):
+            for route in args.routes.split(","):
+                for run in RUNS:
+                    row = measure(instance, route, run, args.timeout)
+                    rows.append(row)
+                    w.writerow(row)
+                    f.flush()
+                    print(f"{instance} {route} {run}: {row['status']}, {row['wall_s']} s, "
+                          f"{row['cpu_s']} s CPU, {row['peak_gb']} GB", file=sys.stderr)
+    print(table(rows))
+
+
+if __name__ == "__main__":
+    main()
