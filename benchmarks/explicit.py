@@ -31,6 +31,7 @@ import re
 import subprocess
 import sys
 import time
+from collections.abc import Callable
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 sys.path.insert(0, ROOT)
@@ -134,13 +135,9 @@ def main() -> None:
     ap.add_argument("--max-states", default="", help="a --max-states for verify")
     ap.add_argument("--reference", default="4x4-obj2-t300",
                     help="instance run first, explicit path, whole file ('' for none)")
-    ap.add_argument("--timeout", type=float, default=2 * 3600)
-    ap.add_argument("--out", default=os.path.join(ROOT, "benchmarks", "explicit.csv"))
-    ap.add_argument("--table", action="store_true", help="print the CSV's table, run nothing")
+    csv_options(ap, "explicit.csv")
     args = ap.parse_args()
-    if args.table:
-        with open(args.out, encoding="utf-8") as f:
-            print(table(list(csv.DictReader(f))))
+    if shown(args, table):
         return
     extra = (["--engine", args.engine] if args.engine else []) + (
         ["--max-states", args.max_states] if args.max_states else [])
@@ -148,20 +145,47 @@ def main() -> None:
             for p in args.paths.split(",")]
     if args.reference:
         plan.insert(0, (args.reference, "explicit", "whole", []))
+    rows = append_rows(args.out, FIELDS, [
+        (f"{i} {workload} {path}",
+         lambda i=i, path=path, workload=workload, more=more: run_one(  # type: ignore[misc]
+             i, workload, path, more, args.timeout))
+        for i, path, workload, more in plan])
+    print(table(rows))
+
+
+def csv_options(ap: argparse.ArgumentParser, name: str) -> None:
+    """--timeout, --out (benchmarks/`name`) and --table."""
+    ap.add_argument("--timeout", type=float, default=2 * 3600)
+    ap.add_argument("--out", default=os.path.join(ROOT, "benchmarks", name))
+    ap.add_argument("--table", action="store_true", help="print the CSV's table, run nothing")
+
+
+def shown(args: argparse.Namespace, table: Callable[[list[dict[str, object]]], str]) -> bool:
+    """With --table: the CSV's rows printed as `table` makes them."""
+    if args.table:
+        with open(args.out, encoding="utf-8") as f:
+            print(table(list(csv.DictReader(f))))
+    return bool(args.table)
+
+
+def append_rows(out: str, fields: list[str],
+                runs: list[tuple[str, Callable[[], dict[str, object]]]]) -> list[dict[str, object]]:
+    """Each run's row, appended to the CSV `out` as it comes (a header if it is new) and
+    reported on stderr."""
     rows = []
-    new = not os.path.exists(args.out)
-    with open(args.out, "a", newline="", encoding="utf-8") as f:
-        w = csv.DictWriter(f, fieldnames=FIELDS)
+    new = not os.path.exists(out)
+    with open(out, "a", newline="", encoding="utf-8") as f:
+        w = csv.DictWriter(f, fieldnames=fields)
         if new:
             w.writeheader()
-        for instance, path, workload, more in plan:
-            row = run_one(instance, workload, path, more, args.timeout)
+        for label, run in runs:
+            row = run()
             rows.append(row)
             w.writerow(row)
             f.flush()
-            print(f"{instance} {workload} {path}: {row['status']}, {row['wall_s']} s, "
-                  f"{row['cpu_s']} s CPU, {row['peak_gb']} GB", file=sys.stderr)
-    print(table(rows))
+            print(f"{label}: {row['status']}, {row['wall_s']} s, {row['cpu_s']} s CPU, "
+                  f"{row['peak_gb']} GB", file=sys.stderr)
+    return rows
 
 
 if __name__ == "__main__":

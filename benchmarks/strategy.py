@@ -16,7 +16,6 @@ printed as a markdown table with each extraction's CPU and memory against its ba
 from __future__ import annotations
 
 import argparse
-import csv
 import os
 import sys
 import time
@@ -24,7 +23,7 @@ import time
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 sys.path.insert(0, ROOT)
 
-from benchmarks.explicit import run_one, timed  # noqa: E402
+from benchmarks.explicit import append_rows, csv_options, run_one, shown, timed  # noqa: E402
 from benchmarks.run import INSTANCES, UAV  # noqa: E402
 
 LOCAL: dict[str, list[str]] = {
@@ -61,6 +60,18 @@ def measure(instance: str, route: str, run: str, timeout: float) -> dict[str, ob
     return row
 
 
+def _num(r: dict[str, object], key: str) -> float:
+    return float(str(r.get(key) or 0))
+
+
+def _versus(r: dict[str, object], b: dict[str, object] | None) -> tuple[str, str]:
+    """The run's CPU and peak memory against its base's, in per cent."""
+    if r["run"] == "base" or b is None or not _num(b, "cpu_s") or not _num(b, "peak_gb"):
+        return "", ""
+    return (f"{100 * (_num(r, 'cpu_s') / _num(b, 'cpu_s') - 1):+.1f}%",
+            f"{100 * (_num(r, 'peak_gb') / _num(b, 'peak_gb') - 1):+.1f}%")
+
+
 def table(rows: list[dict[str, object]]) -> str:
     """Markdown, each extraction against the base of its instance and route."""
     base: dict[tuple[object, object], dict[str, object]] = {}
@@ -68,21 +79,14 @@ def table(rows: list[dict[str, object]]) -> str:
              "CPU vs base | peak vs base | strategy rows | paths (mass) | load |",
              "|---|---|---|---|---|---|---|---|---|---|---|---|"]
     for r in rows:
-        def num(key: str, r: dict[str, object] = r) -> float:
-            return float(str(r.get(key) or 0))
-
         if r["run"] == "base":
             base[(r["instance"], r["route"])] = r
-        b = base.get((r["instance"], r["route"]))
-        vs = ("", "")
-        if r["run"] != "base" and b is not None and float(str(b["cpu_s"])) > 0:
-            vs = (f"{100 * (num('cpu_s') / float(str(b['cpu_s'])) - 1):+.1f}%",
-                  f"{100 * (num('peak_gb') / float(str(b['peak_gb'])) - 1):+.1f}%")
-        lines.append(
-            f"| {r['instance']} | {r['route']} | {r['run']} | {r.get('engine', '')}, "
-            f"{r.get('solver', '')} | {num('wall_s'):.1f} | {num('cpu_s'):.1f} | "
-            f"{num('peak_gb'):.3f} | {vs[0]} | {vs[1]} | {int(num('strategy_rows'))} | "
-            f"{int(num('witnesses'))} ({num('witness_mass'):.4f}) | {r['load']} |")
+        cpu, peak = _versus(r, base.get((r["instance"], r["route"])))
+        cells = [r["instance"], r["route"], r["run"], f"{r.get('engine', '')}, "
+                 f"{r.get('solver', '')}", f"{_num(r, 'wall_s'):.1f}", f"{_num(r, 'cpu_s'):.1f}",
+                 f"{_num(r, 'peak_gb'):.3f}", cpu, peak, int(_num(r, "strategy_rows")),
+                 f"{int(_num(r, 'witnesses'))} ({_num(r, 'witness_mass'):.4f})", r["load"]]
+        lines.append("| " + " | ".join(str(c) for c in cells) + " |")
     return "\n".join(lines)
 
 
@@ -92,33 +96,18 @@ def main() -> None:
     ap.add_argument("--routes", default="default")
     ap.add_argument("--reference", default="4x4-obj2-t300",
                     help="instance run first, the whole file ('' for none)")
-    ap.add_argument("--timeout", type=float, default=2 * 3600)
-    ap.add_argument("--out", default=os.path.join(ROOT, "benchmarks", "strategy.csv"))
-    ap.add_argument("--table", action="store_true", help="print the CSV's table, run nothing")
+    csv_options(ap, "strategy.csv")
     args = ap.parse_args()
-    if args.table:
-        with open(args.out, encoding="utf-8") as f:
-            print(table(list(csv.DictReader(f))))
+    if shown(args, table):
         return
     if args.reference:
         ref = run_one(args.reference, "whole", "explicit", [], args.timeout)
         print(f"reference {args.reference}: {ref['wall_s']} s wall, {ref['cpu_s']} s CPU",
               file=sys.stderr)
-    rows = []
-    new = not os.path.exists(args.out)
-    with open(args.out, "a", newline="", encoding="utf-8") as f:
-        w = csv.DictWriter(f, fieldnames=FIELDS)
-        if new:
-            w.writeheader()
-        for instance in args.instances.split(","):
-            for route in args.routes.split(","):
-                for run in RUNS:
-                    row = measure(instance, route, run, args.timeout)
-                    rows.append(row)
-                    w.writerow(row)
-                    f.flush()
-                    print(f"{instance} {route} {run}: {row['status']}, {row['wall_s']} s, "
-                          f"{row['cpu_s']} s CPU, {row['peak_gb']} GB", file=sys.stderr)
+    rows = append_rows(args.out, FIELDS, [
+        (f"{i} {route} {run}",
+         lambda i=i, route=route, run=run: measure(i, route, run, args.timeout))  # type: ignore[misc]
+        for i in args.instances.split(",") for route in args.routes.split(",") for run in RUNS])
     print(table(rows))
 
 
