@@ -44,11 +44,11 @@ def render(res: VerifyResult) -> str:
     for p in res.properties:
         if p.strategy is not None:
             lines += ["", *strategy_lines(p)]
-        if p.turns is not None:
-            lines += ["", *turn_lines(p)]
         elif asked:
             lines += ["", f"strategies of {p.name} ({p.formula}): none, as it is step-bounded "
                       "(its strategies count the steps; Storm gives no scheduler for them)"]
+        if p.turns is not None:
+            lines += ["", *turn_lines(p)]
         if p.witnesses is not None:
             lines += ["", *witness_lines(p)]
     return "\n".join(lines)

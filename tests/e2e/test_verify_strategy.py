@@ -71,6 +71,10 @@ def test_text_shows_the_table_and_the_paths() -> None:
     assert "MOVE_COST" in r.out and "(ceil)" in r.out and "Patrol" in r.out
     assert "the 2 most probable paths of finish" in r.out and "following the min" in r.out
     assert "% of min 0.810218" in r.out
+    assert "step-bounded" not in r.out  # finish is not: its table is all there is
+    r = run_cli("verify", PATROL, "-p", "finish_soon", "-p", "finish", "--strategy")
+    assert r.code == 0, r.err
+    assert r.out.count("step-bounded") == 1 and "strategies of finish_soon" in r.out
 
 
 @pytest.mark.parametrize(("argv", "code"), [
