@@ -120,7 +120,7 @@ def test_only_a_strategy_keeps_the_states_keys_and_choices_commands_in_storm_s_o
     assert len(a.commands) == len(a.choices) - 1 == plain.choices.size - 1
     mode = c.layout.decode(a.order)["mode"]
     owner = np.repeat(np.arange(n), np.diff(a.states))
-    assert all(int(mode[s]) in low.commands[k].modes for s, k in zip(owner, a.commands))
+    assert all(int(mode[s]) in low.commands[k].modes for s, k in zip(owner, a.commands, strict=True))
     # within a state: unlabelled commands first, then by label, as Storm orders choices
     assert (np.diff(a.states) > 1).any()
     rank = explore.storm_order(low)
