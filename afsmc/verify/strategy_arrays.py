@@ -318,8 +318,8 @@ class _Paths:
     the one with the largest product, then the largest probability, then the largest
     number (Storm's Dijkstra queue); the next paths from candidates, the most probable
     first, then the smallest predecessor and rank. A path stops at its first target state
-    and may loop on a self-loop. States are numbered as in Storm's model, so ties fall as
-    they do there. Only the states from which the strategy reaches a target (`alive`)
+    and may loop on a self-loop. Ties fall by the states' numbers in Storm's model, as
+    they do there (explored by afsmc: by their keys). Only the states from which the strategy reaches a target (`alive`)
     take part: no path into a target passes through another."""
 
     META = -1  # the meta-target: every target state leads to it with probability 1
