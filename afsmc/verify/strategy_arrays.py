@@ -38,7 +38,7 @@ import numpy as np
 import numpy.typing as npt
 
 from afsmc.verify import acyclic
-from afsmc.verify.strategy_storm import SAME, Extract, Extracted, RawPath, _groups
+from afsmc.verify.strategy_storm import SAME, Extract, Extracted, Group, RawPath, _groups
 
 I64 = npt.NDArray[np.int64]
 BIT = "__afsmc_bit_"  # the labels of the variables' bits
@@ -261,15 +261,33 @@ def _tables(a: acyclic.Arrays, name: str, chosen: I64, value: npt.NDArray[np.flo
     reached = _reached(a, chosen)
     states = reached[view.variant(chosen[reached]) >= 0]
     del reached
-    states = states[np.argsort(a.order[states], kind="stable")]  # Storm's order
-    commands = view.variant(chosen[states])
-    vals = view.values(states)
     out.reached[name] = len(states)
-    if name in extract.strategies:
-        out.groups[name] = _groups(commands, vals, _matters(a, value, states), view.variables)
+    if name in extract.strategies:  # a chunk at a time: the values of 60 M states are 6 GB
+        merged: dict[tuple[int, int, bool], Group] = {}
+        for i in range(0, len(states), CHUNK):
+            part = states[i:i + CHUNK]
+            for g in _groups(view.variant(chosen[part]), view.values(part),
+                             _matters(a, value, part), view.variables):
+                _merge(merged, g)
+        out.groups[name] = [merged[k] for k in sorted(merged)]
     if name == extract.policy:
-        out.policy_states = [tuple(int(x) for x in row) for row in vals]
-        out.policy_commands = [int(c) for c in commands]
+        states = states[np.argsort(a.order[states], kind="stable")]  # Storm's order
+        out.policy_states = [tuple(int(x) for x in row) for row in view.values(states)]
+        out.policy_commands = [int(c) for c in view.variant(chosen[states])]
+
+
+CHUNK = 1 << 20  # the most states whose values are read at a time
+
+
+def _merge(groups: dict[tuple[int, int, bool], Group], g: Group) -> None:
+    """Add group `g` (of one chunk of states) to those of the chunks before."""
+    old = groups.get((g.command, g.mode, g.matters))
+    if old is None:
+        groups[(g.command, g.mode, g.matters)] = g
+        return
+    old.states += g.states
+    old.low = tuple(min(x, y) for x, y in zip(old.low, g.low, strict=True))
+    old.high = tuple(max(x, y) for x, y in zip(old.high, g.high, strict=True))
 
 
 def _reached(a: acyclic.Arrays, chosen: I64) -> I64:
