@@ -77,17 +77,25 @@ def timed(args: list[str], timeout: float) -> tuple[dict[str, object] | None, di
     return out, times, "ok" if p.returncode == 0 else f"exit {p.returncode}"
 
 
+def timed_row(args: list[str], timeout: float, labels: dict[str, object],
+              peak_digits: int = 2) -> tuple[dict[str, object] | None, dict[str, object]]:
+    """Run `args` under /usr/bin/time -v: its JSON output, and a CSV row of when, the load
+    before, `labels`, the status, wall and CPU seconds and peak GB."""
+    load = os.getloadavg()[0]
+    out, t, status = timed(args, timeout)
+    row: dict[str, object] = {
+        "measured": time.strftime("%Y-%m-%d %H:%M"), "load": round(load, 1), **labels,
+        "status": status, "wall_s": round(t["wall"], 1), "cpu_s": round(t["cpu"], 1),
+        "peak_gb": round(t["peak"], peak_digits)}
+    return out, row
+
+
 def run_one(instance: str, workload: str, path: str, extra: list[str],
             timeout: float) -> dict[str, object]:
     args = ["verify", UAV, *INSTANCES[instance], *WORKLOADS[workload], "--json",
             *PATHS[path], *extra]
-    load = os.getloadavg()[0]
-    out, t, status = timed(args, timeout)
-    row: dict[str, object] = {
-        "measured": time.strftime("%Y-%m-%d %H:%M"), "load": round(load, 1),
-        "instance": instance, "workload": workload, "path": path, "status": status,
-        "wall_s": round(t["wall"], 1), "cpu_s": round(t["cpu"], 1),
-        "peak_gb": round(t["peak"], 2)}
+    out, row = timed_row(args, timeout, {"instance": instance, "workload": workload,
+                                         "path": path})
     if out is not None:
         m, tm = out["model"], out["timings"]
         assert isinstance(m, dict) and isinstance(tm, dict)

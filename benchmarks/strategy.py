@@ -18,12 +18,11 @@ from __future__ import annotations
 import argparse
 import os
 import sys
-import time
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 sys.path.insert(0, ROOT)
 
-from benchmarks.explicit import append_rows, csv_options, run_one, shown, timed  # noqa: E402
+from benchmarks.explicit import append_rows, csv_options, run_one, shown, timed_row  # noqa: E402
 from benchmarks.run import INSTANCES, UAV  # noqa: E402
 
 LOCAL: dict[str, list[str]] = {
@@ -40,13 +39,8 @@ FIELDS = ["measured", "load", "instance", "route", "run", "status", "wall_s", "c
 def measure(instance: str, route: str, run: str, timeout: float) -> dict[str, object]:
     args = ["verify", UAV, *(LOCAL.get(instance) or INSTANCES[instance]), "-p", "success",
             "--json", *ROUTES[route], *RUNS[run]]
-    load = os.getloadavg()[0]
-    out, t, status = timed(args, timeout)
-    row: dict[str, object] = {
-        "measured": time.strftime("%Y-%m-%d %H:%M"), "load": round(load, 1),
-        "instance": instance, "route": route, "run": run, "status": status,
-        "wall_s": round(t["wall"], 1), "cpu_s": round(t["cpu"], 1),
-        "peak_gb": round(t["peak"], 3)}
+    out, row = timed_row(args, timeout, {"instance": instance, "route": route, "run": run},
+                         peak_digits=3)
     if out is not None:
         m = out["model"]
         props = out["properties"]
