@@ -131,33 +131,19 @@ def answer(low: Lowered, names: tuple[str, ...], what: str, notify: Notify,
            f"({len(found.arrays.layers) - 1:,} layers): each query by one exact backward pass")
     notify("phase", "check " + ", ".join(q.name for q in p.queries))
     t0 = time.perf_counter()
-    out = None if extract is None else Extracted()
-    values = _solve(found.arrays, p.queries, low, compiled.layout, extract, out, notify)
+    out: Extracted | None = None
+    if extract is None:
+        values = acyclic.solve_many(found.arrays, p.queries)
+    else:  # one query at a time, with its strategies and paths
+        out = Extracted()
+        values = strategy_arrays.solve(found.arrays, p.queries, extract,
+                                       _view(found.arrays, low, compiled.layout, extract), out,
+                                       notify)
     secs = (time.perf_counter() - t0) / len(p.queries)
     for q in p.queries:
         notify("value", (q.name, values[q.name], secs))
     return Answer(values, {q.name: secs for q in p.queries}, found.states, found.choices,
                   found.transitions, built, p.left, out)
-
-
-def _solve(a: acyclic.Arrays, queries: list[acyclic.Query], low: Lowered,
-           layout: explore.Layout, extract: Extract | None, out: Extracted | None,
-           notify: Notify) -> dict[str, float]:
-    """Each query's value; those `extract` asks of one at a time, with their strategies
-    and paths (into `out`)."""
-    if extract is None or out is None:
-        return acyclic.solve_many(a, queries)
-    view = _view(a, low, layout, extract)
-    out.variables = view.variables
-    plain = [q for q in queries if q.name not in extract.queries]
-    values = acyclic.solve_many(a, plain) if plain else {}
-    for q in queries:
-        if q.name in extract.queries:
-            notify("phase", f"check {q.name}")
-            t0 = time.perf_counter()
-            values[q.name] = strategy_arrays.extract_query(a, q, extract, view, out)
-            out.seconds += time.perf_counter() - t0
-    return values
 
 
 def _view(a: acyclic.Arrays, low: Lowered, layout: explore.Layout,

@@ -203,16 +203,8 @@ def run(stormpy: Any, built: Any, res: Any, notify: Callable[[str, Any], None], 
     notify("solver", f"the {job.what} is acyclic but for self-loops "
            f"({len(arrays.layers) - 1:,} layers): each query by one exact backward pass")
     out = res.extracted = res.extracted or Extracted()
-    view = storm_view(arrays, program, extract)
-    out.variables = view.variables
-    plain = [q for q in p.queries if q.name not in extract.queries]
-    values = acyclic.solve_many(arrays, plain) if plain else {}
-    for q in p.queries:
-        if q.name in extract.queries:
-            notify("phase", f"check {q.name}")
-            t0 = time.perf_counter()
-            values[q.name] = extract_query(arrays, q, extract, view, out)
-            out.seconds += time.perf_counter() - t0
+    values = solve(arrays, p.queries, extract, storm_view(arrays, program, extract), out,
+                   notify)
     secs = (time.perf_counter() - started) / max(1, len(p.queries))
     for q in p.queries:
         res.values[q.name], res.seconds[q.name] = values[q.name], secs
@@ -231,6 +223,22 @@ def _give_back() -> None:
     from afsmc.verify import storm
 
     storm._give_back()
+
+
+def solve(a: acyclic.Arrays, queries: list[acyclic.Query], extract: Extract, view: View,
+          out: Extracted, notify: Callable[[str, Any], None]) -> dict[str, float]:
+    """Each query's value: those `extract` asks of one at a time, with their strategies
+    and paths (into `out`), the others together."""
+    out.variables = view.variables
+    plain = [q for q in queries if q.name not in extract.queries]
+    values = acyclic.solve_many(a, plain) if plain else {}
+    for q in queries:
+        if q.name in extract.queries:
+            notify("phase", f"check {q.name}")
+            t0 = time.perf_counter()
+            values[q.name] = extract_query(a, q, extract, view, out)
+            out.seconds += time.perf_counter() - t0
+    return values
 
 
 def extract_query(a: acyclic.Arrays, q: acyclic.Query, extract: Extract, view: View,
