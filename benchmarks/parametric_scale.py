@@ -44,6 +44,7 @@ def main() -> int:
     from afsmc.compiler import lowered
     from afsmc.verify import parametric
     from afsmc.verify.api import load_with_formulas, select
+    from afsmc.verify.precision import PARAMETER_PRECISION
 
     text = (ROOT / "examples" / "uav.afsm").read_text(encoding="utf-8")
     for item in args.intervals.split(","):
@@ -73,7 +74,7 @@ def main() -> int:
         parametric.check_box(low, built, box)
         t = step("check the box is well defined", t)
         for q in qs:
-            v, at = built.extremal(q, box, parametric.DEFAULT_PRECISION)
+            v, at = built.extremal(q, box, PARAMETER_PRECISION)
             t = step(f"{q.end} of {props[0].name}{' (complement)' if q.complement else ''}: "
                      f"{1 - v if q.complement else v:.6f} at {at}", t)
         print(f"total {time.perf_counter() - t0:.1f} s, peak RSS {peak_mb():,.0f} MB")

@@ -2,7 +2,10 @@
 
 ``to_pandas()`` is the table (columns ``formula``, ``kind``, ``min``, ``max``, ``uniform``,
 ``value``, and ``verdict`` when the results carry verdicts), ``_repr_html_`` shows it in
-Jupyter, ``to_json()`` is the object `afsmc verify --json` prints.
+Jupyter, ``to_json()`` is the object `afsmc verify --json` prints. Every one renders the
+answer of :func:`afsmc.verify.run` as it is: ``min`` and ``max`` are the bounds over
+everything uncertain and the verdicts those the run gave (docs/verification.md, "What a
+result means"); nothing here computes or judges again.
 """
 
 from __future__ import annotations
@@ -18,10 +21,9 @@ from afsmc.api.errors import AfsmError
 from afsmc.diagnostics import CompileError, Diagnostic
 from afsmc.lifetime import without_main
 from afsmc.text import num
-from afsmc.verify import parametric
 from afsmc.verify.parametric import Extreme
 from afsmc.verify.results import PropertyResult, VerifyResult
-from afsmc.verify.verdicts import judge_over
+from afsmc.verify.uncertainty import described
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -32,8 +34,10 @@ if TYPE_CHECKING:
 # against the command's parser).
 VERIFY_DEFAULTS: dict[str, Any] = {"engine": "auto"}
 VALUES = ("min", "max", "uniform", "value")
-EXTRA = ("verdict",)  # fields of a property's JSON that become columns when present
-SPAN = ("interval_min", "interval_max")  # over interval probabilities, when there are any
+EXTRA = ("verdict", "decided_by")  # fields of a property's JSON that become columns
+# interval probabilities: the values at their midpoint (PropertyResult.reference), columns
+# when there are any; reference points, never judged
+MIDPOINT = ("midpoint_min", "midpoint_max", "midpoint_value", "midpoint_uniform")
 
 
 def names(properties: Sequence[str] | str | None) -> list[str]:
@@ -66,30 +70,20 @@ def verify_file(path: str, properties: Sequence[str] | str | None = None, *,
         with without_main():
             res = lib.run(path, text=text, consts=dict(consts or {}),
                           properties=names(properties), **kwargs)
-            # interval probabilities (const prob P = [lo, hi]): min/max over every fixed
-            # value, from Storm's parametric engine, as `afsmc verify` prints them
-            box, bounds = parametric.for_file(
-                path, consts, names(properties), kwargs.get("formulas", ()),
-                via=kwargs.get("via", "prism"), reductions=kwargs.get("reductions"),
-                text=text)
     except CompileError as exc:
         raise AfsmError.of(exc) from None
-    if not bounds:
-        return Results(res)
-    # a requirement holds only if it holds at every fixed interval probability
-    judge_over(res.properties, {e.name: (e.min_attained, e.max_attained) for e in bounds},
-               parametric.DEFAULT_PRECISION + 1e-6,
-               "over every fixed value of the interval probabilities")
-    return Results(res, Intervals(box, bounds))
+    box = res.probability
+    return Results(res, None if box is None else Intervals(dict(box.box), list(box.extremes)))
 
 
 @dataclass(frozen=True)
 class Intervals:
-    """The properties' bounds over the mission's interval probabilities (`const prob P =
-    [lo, hi]`): ``box`` (each one's interval) and one
-    :class:`afsmc.verify.parametric.Extreme` per property: ``min`` and ``max`` (sound
-    bounds over every fixed value in the box), ``min_at`` and ``max_at`` (where Storm
-    found them). The main table's values are at the intervals' midpoints."""
+    """Where the properties' bounds over the mission's interval probabilities (`const prob
+    P = [lo, hi]`) lie: ``box`` (each one's interval) and one
+    :class:`afsmc.verify.parametric.Extreme` per property: ``min_attained`` and
+    ``max_attained`` (the properties' ``min`` and ``max``), ``min`` and ``max`` (the outer
+    ends: attained minus or plus the precision), ``min_at`` and ``max_at`` (where Storm
+    found them)."""
 
     box: dict[str, tuple[float, float]]
     bounds: list[Extreme]
@@ -102,10 +96,9 @@ class Intervals:
 
     def to_json(self) -> dict[str, object]:
         """The ``probability_intervals`` object of `afsmc verify --json`."""
-        return parametric.to_json(self.box, self.bounds)
+        from afsmc.verify import parametric
 
-    def __str__(self) -> str:
-        return parametric.render(self.box, self.bounds)
+        return parametric.to_json(self.box, self.bounds)
 
 
 @dataclass(frozen=True)
@@ -145,14 +138,12 @@ class Results:
     def to_json(self) -> dict[str, object]:
         """The object `afsmc verify --json` prints for the same file, constants and options
         (with ``probability_intervals`` when the mission has interval probabilities)."""
-        out = self.raw.to_json()
-        if self.intervals is not None:
-            out["probability_intervals"] = self.intervals.to_json()
-        return out
+        return self.raw.to_json()
 
     def rows(self) -> list[dict[str, object]]:
         """One dict per property: name, formula, kind, min, max, uniform, value (an infinite
-        expected reward as inf), then the extra fields of the JSON (a verdict)."""
+        expected reward as inf), then the extra fields of the JSON (a verdict and the bound
+        that decides it), then the values at the interval probabilities' midpoint."""
         entries = self.to_json()["properties"]
         assert isinstance(entries, list)
         extras = [k for k in EXTRA if any(k in e for e in entries)]
@@ -162,25 +153,28 @@ class Results:
             row |= {k: getattr(p, k) for k in VALUES}
             row |= {k: entry.get(k) for k in extras}
             if self.intervals is not None:
-                bound = self.intervals[p.name]
-                row |= {"interval_min": bound.min, "interval_max": bound.max}
+                ref = p.reference
+                row |= {f"midpoint_{k}": None if ref is None else getattr(ref, k)
+                        for k in ("min", "max", "value", "uniform")}
             out.append(row)
         return out
 
     def to_pandas(self) -> pd.DataFrame:
         """One row per property, indexed by its name: ``formula``, ``kind`` ("P" or "R"),
         ``min``, ``max``, ``uniform``, ``value`` (NaN where not asked: a DTMC has only a
-        value, an MDP min, max and uniform), and ``verdict`` if the results have one. A
-        mission with interval probabilities (`const prob P = [lo, hi]`) has two more,
-        ``interval_min`` and ``interval_max``: the bounds over every fixed value of them
-        (``intervals``), while the other values are at their midpoints."""
+        value, an MDP min, max and uniform), and ``verdict`` and ``decided_by`` if the
+        results have verdicts. ``min`` and ``max`` are the bounds over everything
+        uncertain. A mission with interval probabilities (`const prob P = [lo, hi]`) has
+        four more, ``midpoint_min``, ``midpoint_max``, ``midpoint_value`` and
+        ``midpoint_uniform``: the values with each of them at the middle of its interval,
+        a reference point that no verdict rests on."""
         import pandas as pd
 
         rows = self.rows()
         columns = ["property", "formula", "kind", *VALUES,
-                   *[k for k in (*EXTRA, *SPAN) if rows and k in rows[0]]]
+                   *[k for k in (*EXTRA, *MIDPOINT) if rows and k in rows[0]]]
         df = pd.DataFrame(rows, columns=columns).set_index("property")
-        for k in (*VALUES, *[k for k in SPAN if k in df.columns]):
+        for k in (*VALUES, *[k for k in MIDPOINT if k in df.columns]):
             df[k] = df[k].astype(float)
         return df
 
@@ -195,15 +189,13 @@ class Results:
         body = "".join("<tr>" + "".join(f"<td>{html.escape(_cell(r[k]))}</td>" for k in shown)
                        + "</tr>" for r in rows)
         m = self.raw.model
-        what = ("an MDP (min and max over the interval constants' floor/ceil choices)"
-                if self.kind == "mdp" else "a DTMC")
+        over = described(self.raw.uncertainty, self.raw.probability)
+        what = (f"min and max bound each property over {html.escape(over)}" if over
+                else "one value per property")
         caption = (f"{html.escape(self.raw.path)}: {what}; {m.states:,} states, "
                    f"{m.transitions:,} transitions, engine {html.escape(m.engine)}")
         if self.intervals is not None:
-            over = ", ".join(f"{html.escape(n)} in [{lo:g}, {hi:g}]"
-                             for n, (lo, hi) in self.intervals.box.items())
-            caption += (f"; interval_min and interval_max: over every fixed {over} (the "
-                        "other values at the midpoints)")
+            caption += "; midpoint_*: at the interval probabilities' midpoint, never judged"
         return (f'<table class="afsmc-results"><caption>{caption}</caption>'
                 f"<thead><tr>{head}</tr></thead><tbody>{body}</tbody></table>")
 

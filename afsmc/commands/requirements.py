@@ -11,7 +11,7 @@ from afsmc.commands.common import fail, usage_error
 from afsmc.diagnostics import CompileError
 from afsmc.files import check_writable
 from afsmc.text import num
-from afsmc.verify.precision import DEFAULT_PRECISION, EXACT_ENGINES
+from afsmc.verify.precision import DEFAULT_PRECISION, EXACT_ENGINES, PARAMETER_PRECISION
 from afsmc.verify.results import PropertyResult
 
 
@@ -70,13 +70,34 @@ def verdict_lines(results: Sequence[PropertyResult]) -> list[str]:
     """Under the table: how sure the values are, and why each requirement has its verdict."""
     if not results:
         return []
-    error = results[0].error
     lines = []
-    if error == 0:
-        lines.append("values exact (rational arithmetic)")
-    elif error is not None:
-        lines.append(f"every value within {num(error)} of the true one (sound value iteration)")
+    errors = {p.error for p in results}
+    over_box = any(p.reference is not None for p in results)
+    for error in sorted(errors, key=lambda e: -1.0 if e is None else e):
+        who = "" if len(errors) == 1 else " (" + ", ".join(
+            p.name for p in results if p.error == error) + ")"
+        if error == 0:
+            lines.append(f"values exact (rational arithmetic){who}")
+        elif error is not None and over_box:
+            lines.append(f"min and max within {num(error)} of the true extremes{who} (Storm's "
+                         f"parametric engine refines to {PARAMETER_PRECISION:g}, sound value "
+                         "iteration)")
+        elif error is not None:
+            lines.append(f"every value within {num(error)} of the true one{who} (sound value "
+                         "iteration)")
     for p in results:
         if p.verdict is not None:
             lines.append(f"{p.name}: {p.verdict.kind}: {p.verdict.reason}")
     return ["", *lines] if lines else []
+
+
+def attained_lines(results: Sequence[PropertyResult]) -> list[str]:
+    """Where in the interval probabilities' box each property's min and max were found."""
+    out = []
+    for p in results:
+        if p.attained_at is None:
+            continue
+        at = {k: ", ".join(f"{n}={v:.6g}" for n, v in sorted(where.items()))
+              for k, where in p.attained_at.items()}
+        out.append(f"{p.name}: min at {at['min']}, max at {at['max']}")
+    return ["", *out] if out else []

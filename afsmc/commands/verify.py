@@ -21,6 +21,7 @@ from afsmc.commands.common import (
 )
 from afsmc.commands.requirements import (
     add_requirement_options,
+    attained_lines,
     refuse_requirement_options,
     verdict_lines,
     with_verdicts,
@@ -29,7 +30,9 @@ from afsmc.diagnostics import CompileError
 from afsmc.text import literal, num
 from afsmc.verify import VerifyResult
 from afsmc.verify.junit import write_junit
+from afsmc.verify.results import ModelStats, PropertyResult
 from afsmc.verify.storm import ENGINES, SOLVERS, VIAS
+from afsmc.verify.uncertainty import INTERVAL_CONSTANTS, described
 from afsmc.verify.verdicts import failing
 
 
@@ -116,39 +119,71 @@ def table(rows: list[list[str]], right: set[int]) -> list[str]:
     return out
 
 
-def _choices(res: VerifyResult) -> str:
-    """What the MDP's choices are: the interval constants' ends, and for agents that
-    interleave (or tie with no rule), which agent moves next."""
-    if res.composition == "interleaving":
-        return "which agent moves next, and interval constants as floor/ceil choices"
-    if res.composition == "timed, ties nondet":
-        return "which of the agents due together moves first, and interval constants as " \
-               "floor/ceil choices"
-    return "interval constants as floor/ceil choices"
+def _header(res: VerifyResult) -> str:
+    """What the table's values are: the bounds over what is uncertain, or one value each."""
+    over = described(res.uncertainty, res.probability)
+    if not over:
+        return f"{res.path}: a DTMC: one value per property"
+    refs = []
+    if any(_uniform(p) is not None for p in res.properties):
+        refs.append("uniform picks floor or ceil at random")
+    if res.probability is not None:
+        refs.append("midpoint has every interval probability at the middle of its interval")
+    return (f"{res.path}: min and max bound every property over {over}"
+            + (f"; reference points, never judged: {'; '.join(refs)}" if refs else ""))
+
+
+def _uniform(p: PropertyResult) -> float | None:
+    return p.uniform if p.reference is None else p.reference.uniform
+
+
+def _midpoint(p: PropertyResult) -> str:
+    """The answer at the interval probabilities' midpoint: min – max, or the value."""
+    ref = p.reference
+    if ref is None:
+        return "-"
+    if ref.value is not None:
+        return num(ref.value)
+    return f"{num(ref.min)} – {num(ref.max)}"
+
+
+def _values_table(res: VerifyResult) -> list[list[str]]:
+    if all(p.value is not None or p.min is None for p in res.properties) and \
+            not res.uncertainty:
+        return [["property", "formula", "value"]] + [
+            [p.name, p.formula, num(p.value)] for p in res.properties]
+    uniform = any(_uniform(p) is not None for p in res.properties)
+    mid = res.probability is not None
+    head = (["property", "formula", "min", "max"] + (["uniform"] if uniform else [])
+            + (["midpoint"] if mid else []))
+    return [head] + [[p.name, p.formula, num(p.min), num(p.max)]
+                     + ([num(_uniform(p))] if uniform else [])
+                     + ([_midpoint(p)] if mid else []) for p in res.properties]
+
+
+def _model_name(res: VerifyResult, m: ModelStats) -> str:
+    if m.resolution == "uniform":
+        name = "uniform DTMC"
+    elif m.type == "mdp":
+        name = "floor/ceil MDP" if INTERVAL_CONSTANTS in res.uncertainty else "MDP"
+    else:
+        name = "DTMC"
+    return name + (" (midpoint)" if res.probability is not None else "")
 
 
 def render(res: VerifyResult) -> str:
-    lines = []
+    lines = [_header(res)]
     u = res.uniform_model
-    if res.kind == "mdp":
-        lines.append(f"{res.path}: an MDP ({_choices(res)}): min and max "
-                     "bound every property" + ("; uniform picks floor or ceil at random"
-                                              if u is not None else ""))
-        head = ["property", "formula", "min", "max"] + (["uniform"] if u is not None else [])
-        rows = [head] + [[p.name, p.formula, num(p.min), num(p.max)]
-                         + ([num(p.uniform)] if u is not None else []) for p in res.properties]
-    else:
-        lines.append(f"{res.path}: a DTMC")
-        rows = [["property", "formula", "value"]] + [
-            [p.name, p.formula, num(p.value)] for p in res.properties]
-    rows = with_verdicts(rows, res.properties)
+    rows = with_verdicts(_values_table(res), res.properties)
     lines.append("")
     lines += table(rows, set(range(2, len(rows[0]) - (rows[0][-1] == "verdict"))))
     lines += verdict_lines(res.properties)
+    if res.probability is not None:
+        lines += attained_lines(res.properties)
     lines.append("")
-    models = [("floor/ceil MDP" if res.kind == "mdp" else "DTMC", res.model)]
+    models = [(_model_name(res, res.model), res.model)]
     if u is not None:
-        models.append(("uniform DTMC", u))
+        models.append((_model_name(res, u), u))
     bisim = any(m.quotient_states is not None for _, m in models)
     mrows = [["model", "states", "transitions", "choices"] + (["quotient"] if bisim else [])
              + ["build", "check", "engine", "solver"]]
@@ -165,6 +200,8 @@ def render(res: VerifyResult) -> str:
     for name, m in models:
         if m.engine_reason and res.engine == "auto":
             lines.append(f"{name}: engine {m.engine} ({m.engine_reason})")
+    if res.probability is not None:
+        lines.append("the bounds over the interval probabilities: Storm's parametric engine")
     consts = ", ".join(f"{k}={literal(v)}" for k, v in res.constants.items())
     lines.append("")
     lines.append(f"engine {res.engine}, via {res.via}"
@@ -209,7 +246,5 @@ def run(args: argparse.Namespace) -> int:
         report(res.warnings)
         more = extras.render(res)
         print(render(res) + ("\n" + more if more else ""))
-        if done.intervals is not None:  # interval probabilities: min/max over them
-            print("\n" + str(done.intervals))
     return 1 if failing(res.properties) else 0
 

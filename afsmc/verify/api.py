@@ -31,6 +31,7 @@ from afsmc.verify.runner import CheckRun, ModelLoop, Options
 from afsmc.verify.storm import Engine, Job, Solver, StormFailure, Via
 from afsmc.verify.strategy import extras, witness_request
 from afsmc.verify.strategy_storm import WitnessRequest
+from afsmc.verify.uncertainty import over_probabilities, sources
 from afsmc.verify.verdicts import judge_all
 
 
@@ -185,8 +186,11 @@ def check(model: ir.Model, props: Sequence[ir.Property], *, via: Via = "prism",
     for resolution, low, what in checking.lows:
         ModelLoop(checking, resolution, low, what).check_all()
     checks = checking.finish()
-    judge_all(checks.properties, 0.0 if exact else precision)
-    return checks
+    box, errors = over_probabilities(checks, model, props, via=via, reductions=reductions,
+                                     precision=None if exact else precision,
+                                     preserve=preserve)
+    judge_all(checks.properties, 0.0 if exact else precision, errors)
+    return dataclasses.replace(checks, uncertainty=sources(model), probability=box)
 
 
 def sound_mode(props: Sequence[ir.Property], precision: float | None, exact: bool,
@@ -264,7 +268,8 @@ def run(path: str, *, consts: Mapping[str, str | bool | int | float] | None = No
     return VerifyResult(path, model.name, consts_used, via, engine, bound, limit, checks.model,
                         checks.uniform_model, checks.properties, load_time,
                         time.perf_counter() - t0, loaded.warnings,
-                        None if model.composition is None else model.composition.text)
+                        None if model.composition is None else model.composition.text,
+                        checks.uncertainty, checks.probability)
 
 
 @dataclass

@@ -187,6 +187,8 @@ def fill(job: Any, res: Any, notify: Notify, too_big: Callable[[Any, int], Any])
         return replace(job, explicit=None)
     res.states, res.choices, res.transitions = ans.states, ans.choices, ans.transitions
     res.kind, res.engine, res.solver = job.explicit.kind, "explicit", "acyclic"
+    res.engine_reason = ("afsmc's own exploration: the model's clock only grows, so one "
+                         "exact backward pass answers its reachability queries")
     res.build_time, res.check_time = ans.explore_time, sum(ans.seconds.values())
     res.values, res.seconds = dict(ans.values), dict(ans.seconds)
     res.extracted = ans.extracted

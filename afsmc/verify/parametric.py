@@ -38,11 +38,9 @@ from afsmc.lower.lowering import Lowered
 from afsmc.model import expr as E
 from afsmc.model import ir
 from afsmc.model.semantics import bounded_globally, globally_dual
+from afsmc.verify.precision import PARAMETER_PRECISION
 
 Box = Mapping[str, tuple[float, float]]
-DEFAULT_PRECISION = 1e-4
-# how an interval probability is declared (a match in a comment costs one more load only)
-_MAY_HAVE_INTERVAL = re.compile(r"\bprob\s+[A-Za-z_][A-Za-z0-9_]*\s*=\s*\[")
 
 
 def _fail(code: Any, message: str, span: Any = None, hint: str | None = None) -> CompileError:
@@ -368,7 +366,7 @@ def _open(x: float, end: str) -> str:
 
 
 def extremes(low: Lowered, props: Sequence[ir.Property], *, via: str = "prism",
-             precision: float = DEFAULT_PRECISION) -> list[Extreme]:
+             precision: float = PARAMETER_PRECISION) -> list[Extreme]:
     """Each property's min and max over every p in the interval probabilities' box,
     jointly with the floor/ceil choices of `low` (the nondet lowering)."""
     box = interval_box(low.model)
@@ -392,56 +390,8 @@ def extremes(low: Lowered, props: Sequence[ir.Property], *, via: str = "prism",
     return out
 
 
-def for_file(path: str, consts: Mapping[str, str] | None, properties: Sequence[str],
-             formulas: Sequence[str], *, via: str = "prism", reductions: Any = None,
-             precision: float = DEFAULT_PRECISION, text: str | None = None
-             ) -> tuple[dict[str, tuple[float, float]], list[Extreme]]:
-    """`afsmc verify`'s bounds over the file's interval probabilities: their box and one
-    `Extreme` per property checked (nothing when the file has none). `text`: the file's
-    text, if already read (or a mission given as text)."""
-    from afsmc.compiler import lowered
-    from afsmc.files import read_source
-    from afsmc.verify.api import load_with_formulas, select
-
-    if text is None:
-        text = read_source(path)
-    if not _MAY_HAVE_INTERVAL.search(text):
-        return {}, []  # not loaded a second time: most files have none
-    loaded = load_with_formulas(path, consts, formulas, text=text)
-    box = interval_box(loaded.model)
-    if not box:
-        return {}, []
-    props = select(loaded.model, properties, loaded.adhoc)
-    try:
-        return box, extremes(lowered(loaded.model, "nondet", reductions), props, via=via,
-                             precision=precision)
-    except CompileError as exc:
-        raise loaded.remap_error(exc) from None
-
-
-def render(box: Mapping[str, tuple[float, float]], found: Sequence[Extreme],
-           precision: float = DEFAULT_PRECISION) -> str:
-    from afsmc.text import num
-
-    over = ", ".join(f"{n} in [{lo:g}, {hi:g}]" for n, (lo, hi) in box.items())
-    lines = [f"over every fixed {over} (Storm's parametric engine; the table above is at "
-             f"the midpoint{'s' if len(box) > 1 else ''}):",
-             f"min and max are sound bounds, each within {precision:g} of the true extreme "
-             "(plus the solver's relative 1e-6)", ""]
-    rows = [["property", "min", "max", "min at", "max at"]]
-    for e in found:
-        rows.append([e.name, num(e.min), num(e.max),
-                     ", ".join(f"{k}={v:.6g}" for k, v in sorted(e.min_at.items())),
-                     ", ".join(f"{k}={v:.6g}" for k, v in sorted(e.max_at.items()))])
-    widths = [max(len(r[i]) for r in rows) for i in range(len(rows[0]))]
-    for r in rows:
-        lines.append("  ".join(c.rjust(w) if i in (1, 2) else c.ljust(w)
-                               for i, (c, w) in enumerate(zip(r, widths, strict=True))).rstrip())
-    return "\n".join(lines)
-
-
 def to_json(box: Mapping[str, tuple[float, float]], found: Sequence[Extreme],
-            precision: float = DEFAULT_PRECISION) -> dict[str, object]:
+            precision: float = PARAMETER_PRECISION) -> dict[str, object]:
     return {"box": {n: list(b) for n, b in box.items()}, "precision": precision,
             "meaning": "one fixed value in each interval; min/max are sound outer bounds",
             "properties": [e.to_json() for e in found]}

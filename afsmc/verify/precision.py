@@ -17,6 +17,13 @@ from typing import Any
 
 # The guarantee of a requirement's values when the user names none (--precision).
 DEFAULT_PRECISION = 1e-6
+# Over interval probabilities (afsmc.verify.parametric): how close to the true extreme
+# Storm's parameter lifting refines a property's bound (absolute). A different quantity
+# from the above: a refinement over regions of the box, not a solver's stopping rule; the
+# lifted models themselves are solved by sound value iteration to a relative
+# PARAMETER_SOLVER_ERROR, which adds to it.
+PARAMETER_PRECISION = 1e-4
+PARAMETER_SOLVER_ERROR = 1e-6
 # The engines that have a sound method: the dd engine iterates on decision diagrams and
 # ignores Storm's soundness setting (measured: the same values with and without it).
 SOUND_ENGINES = ("auto", "sparse", "hybrid")

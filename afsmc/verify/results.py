@@ -21,6 +21,7 @@ from afsmc.verify.verdicts import Verdict, requirement_json
 
 if TYPE_CHECKING:
     from afsmc.verify.strategy import StrategyEntry, TurnEntry
+    from afsmc.verify.uncertainty import ProbabilityBox, Reference
     from afsmc.verify.witness import Witness
 
 
@@ -61,8 +62,11 @@ class ModelStats:
 
 @dataclass
 class PropertyResult:
-    """min/max (an MDP: the interval constants' floor/ceil chosen adversarially or
-    cooperatively), uniform (chosen at random), or value (a DTMC). None where not asked."""
+    """min/max: the bounds over everything the mission leaves uncertain (the interval
+    constants' floor/ceil, the agents' order, every fixed value of the interval
+    probabilities: afsmc.verify.uncertainty), or value (nothing uncertain: a DTMC);
+    uniform: the interval constants' floor or ceil at random, a reference point. None
+    where not asked."""
 
     name: str
     formula: str  # in .afsm syntax
@@ -91,6 +95,10 @@ class PropertyResult:
     # the paths go where the property can no longer hold (a `P>=` requirement's violations)
     witness_avoids: bool = False
     witness_note: str = ""
+    # interval probabilities: the answer at their midpoint, which the strategies and
+    # witnesses follow, and where in their box each bound was attained
+    reference: Reference | None = None
+    attained_at: dict[str, dict[str, float]] | None = None
 
     def to_json(self) -> dict[str, object]:
         out: dict[str, object] = {"name": self.name, "formula": self.formula}
@@ -104,6 +112,10 @@ class PropertyResult:
             out["infinite"] = infinite  # JSON has no infinity: these are null above
         out["seconds"] = {k: round(v, 3) for k, v in self.seconds.items()}
         out.update(requirement_json(self.threshold, self.verdict, self.error, self.exact))
+        if self.reference is not None:
+            out["reference"] = self.reference.to_json()
+        if self.attained_at is not None:
+            out["attained_at"] = self.attained_at
         if self.strategy is not None:
             out["strategy"] = {k: [e.to_json() for e in v] for k, v in self.strategy.items()}
         if self.turns is not None:
@@ -132,6 +144,10 @@ class Checks:
     model: ModelStats
     uniform_model: ModelStats | None
     properties: list[PropertyResult]
+    # what min and max range over (afsmc.verify.uncertainty.sources), and the interval
+    # probabilities' box with where the bounds were attained, if the mission has any
+    uncertainty: tuple[str, ...] = ()
+    probability: ProbabilityBox | None = None
 
 
 @dataclass
@@ -170,6 +186,8 @@ class VerifyResult:
     total_time: float
     warnings: list[Diagnostic] = field(default_factory=list)
     composition: str | None = None  # agents: "interleaving", "timed, ties order|nondet"
+    uncertainty: tuple[str, ...] = ()  # what min and max range over (Checks.uncertainty)
+    probability: ProbabilityBox | None = None  # interval probabilities (Checks.probability)
 
     @property
     def kind(self) -> str:
@@ -186,7 +204,7 @@ class VerifyResult:
         if u is not None:
             timings |= {"uniform_build": u.build_time, "uniform_check": u.check_time}
         timings["total"] = self.total_time
-        return {
+        out: dict[str, object] = {
             "file": self.path,
             "machine": self.machine,
             "model": self.model.to_json(),
@@ -198,7 +216,11 @@ class VerifyResult:
             "constants": self.constants,
             "state_space": {"upper_bound": self.upper_bound, "max_states": self.max_states},
             "warnings": [d.to_json() for d in self.warnings],
+            "uncertainty": list(self.uncertainty),
         }
+        if self.probability is not None:
+            out["probability_intervals"] = self.probability.to_json()
+        return out
 
 
 def shown(p: ir.Property) -> str:

@@ -1,8 +1,11 @@
-"""Requirements: the verdict of `P>=0.65 [ ... ]` from the values Storm gave and their error.
+"""Requirements: the verdict of `P>=0.65 [ ... ]` from the bounds and their error.
 
-Storm is asked for the values (`=?`: for an MDP the min and the max over every resolution
-of the interval constants); afsmc judges them. With each value known to within `error` (0
-for exact values):
+The engines are asked for the values (`=?`); afsmc judges them here, once, and every
+front-end renders the verdict it gets. The bounds judged are a property's `min` and `max`
+over everything the mission leaves uncertain (docs/verification.md, "What a result
+means"): the interval constants' floor/ceil choices, the order in which agents move, and
+every fixed value of the interval probabilities. With each bound known to within `error`
+(0 for exact values):
 
 - `holds`: the bound that counts meets the threshold for sure, so every resolution does
   (the min for `>=`/`>`, the max for `<=`/`<`; a DTMC's one value);
@@ -12,7 +15,8 @@ for exact values):
 - `undecided`: the threshold lies within the error of a value that decides, so no verdict
   is sure. A finer `--precision` or `--exact` decides it.
 
-The uniform resolution's value is reported, never judged: it is one resolution among many.
+Reference points (the uniform resolution, the interval probabilities' midpoint) are
+reported, never judged: each is one resolution among many.
 """
 
 from __future__ import annotations
@@ -42,9 +46,10 @@ class Verdict:
     kind: Kind
     reason: str  # one sentence for people: the values against the threshold
     broken_by: str | None = None  # "min" | "max" for `depends`: the bound that misses it
-
-    def to_json(self) -> dict[str, object]:
-        return {"verdict": self.kind, "reason": self.reason, "broken_by": self.broken_by}
+    # the bound the verdict rests on: "min" | "max", or "value" (a single value: a DTMC
+    # with nothing uncertain). `holds`: the worst bound; `fails`: the best one;
+    # `depends`: the one that misses (as broken_by); `undecided`: the one too near.
+    decided_by: str | None = None
 
 
 Number = Fraction | float
@@ -90,45 +95,38 @@ def judge(threshold: ir.Threshold, lo: float, hi: float, error: float | None,
     worst_v, best_v = (lo, hi) if upward else (hi, lo)
     if _surely(worst, e, op, t):
         return Verdict("holds", f"{said(worst_v, wname)} is {written}"
-                       + ("" if single else ": every resolution meets it"))
+                       + ("" if single else ": every resolution meets it"),
+                       decided_by="value" if single else wname)
     if _surely_not(best, e, op, t):
         return Verdict("fails", f"{said(best_v, bname)} is not {written}"
-                       + ("" if single else ": no resolution meets it"))
+                       + ("" if single else ": no resolution meets it"),
+                       decided_by="value" if single else bname)
     if not single and _surely_not(worst, e, op, t) and _surely(best, e, op, t):
         return Verdict("depends", f"the {wname} {num(worst_v)}{pm} is not {written}, the "
                        f"{bname} {num(best_v)}{pm} is: it holds in some resolutions only",
-                       broken_by=wname)
-    near = worst_v if not _surely_not(worst, e, op, t) or single else best_v
+                       broken_by=wname, decided_by=wname)
+    near_worst = not _surely_not(worst, e, op, t) or single
+    near = worst_v if near_worst else best_v
     return Verdict("undecided", f"{threshold.exact} lies within the error of "
-                   f"{num(near)}{pm}: ask with a finer --precision or --exact")
+                   f"{num(near)}{pm}: ask with a finer --precision or --exact",
+                   decided_by="value" if single else wname if near_worst else bname)
 
 
-def judge_all(results: Sequence[PropertyResult], error: float | None) -> None:
+def judge_all(results: Sequence[PropertyResult], error: float | None,
+              errors: Mapping[str, float] | None = None) -> None:
     """Set each requirement's `verdict` and every result's `error` (the bound the values
-    were computed to: 0 exact, None without a guarantee)."""
+    were computed to: 0 exact, None without a guarantee; `errors`: a property's own, by
+    name, where its bounds came from another engine, as over interval probabilities)."""
     for r in results:
-        r.error = error
+        r.error = (errors or {}).get(r.name, error)
         t = r.threshold
         if t is None:
             continue
         if r.value is not None:
-            r.verdict = judge(t, r.value, r.value, error, r.exact.get("value"),
+            r.verdict = judge(t, r.value, r.value, r.error, r.exact.get("value"),
                               r.exact.get("value"))
         elif r.min is not None and r.max is not None:
-            r.verdict = judge(t, r.min, r.max, error, r.exact.get("min"), r.exact.get("max"))
-
-
-def judge_over(results: Sequence[PropertyResult], bounds: Mapping[str, tuple[float, float]],
-               error: float, what: str) -> None:
-    """Judge the requirements again over wider bounds, a property's (lo, hi) by name, each
-    within `error`: the min and max over every fixed interval probability, which contain
-    the floor/ceil MDP's at the midpoint. `what` says over what, in the reason."""
-    for r in results:
-        if r.threshold is None or r.name not in bounds:
-            continue
-        lo, hi = bounds[r.name]
-        v = judge(r.threshold, lo, hi, error)
-        r.verdict = Verdict(v.kind, f"{v.reason} ({what})", v.broken_by)
+            r.verdict = judge(t, r.min, r.max, r.error, r.exact.get("min"), r.exact.get("max"))
 
 
 def failing(results: Sequence[PropertyResult]) -> list[PropertyResult]:
@@ -150,6 +148,7 @@ def requirement_json(threshold: ir.Threshold | None, verdict: Verdict | None,
         out["reason"] = verdict.reason
         if verdict.broken_by is not None:
             out["broken_by"] = verdict.broken_by
+        out["decided_by"] = verdict.decided_by
     if exact:
         out["exact"] = dict(sorted(exact.items()))
     return out

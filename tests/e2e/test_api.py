@@ -211,12 +211,17 @@ def test_interval_probabilities_give_the_bounds_of_verify(tmp_path: Path) -> Non
     assert without_times(res.to_json()) == without_times(cli)
     assert res.intervals is not None and res.intervals.box == {"P_SLIP": (0.05, 0.15)}
     df = res.to_pandas()
-    for entry in cli["probability_intervals"]["properties"]:
-        assert (df.loc[entry["name"], "interval_min"], df.loc[entry["name"], "interval_max"]) \
-            == (entry["min"], entry["max"])
-    # the requirement is judged over the interval, as the CLI judges it
+    for entry, prop in zip(cli["probability_intervals"]["properties"], cli["properties"],
+                           strict=True):
+        # min and max are the bounds over the interval; the midpoint is a reference
+        assert (df.loc[entry["name"], "min"], df.loc[entry["name"], "max"]) \
+            == (entry["min_attained"], entry["max_attained"]) == (prop["min"], prop["max"])
+        ref = prop["reference"]
+        assert (df.loc[entry["name"], "midpoint_min"], df.loc[entry["name"], "midpoint_max"]) \
+            == (ref["min"], ref["max"])
+    # the requirement is judged once, over the interval, and rendered as the CLI renders it
     assert df.loc["finish", "verdict"] == cli["properties"][0]["verdict"] == "depends"
-    assert "interval_min" in res._repr_html_()
+    assert "midpoint_min" in res._repr_html_()
     # the same from the mission's text, for one property
     text = afsmc.load(f.read_text(encoding="utf-8")).verify("fault")
     one = json.loads(run_cli("verify", "--json", str(f), "-p", "fault").out)
@@ -226,4 +231,4 @@ def test_interval_probabilities_give_the_bounds_of_verify(tmp_path: Path) -> Non
 def test_a_mission_without_interval_probabilities_has_no_interval_columns() -> None:
     res = afsmc.load(PATROL).verify("finish")
     assert res.intervals is None and "probability_intervals" not in res.to_json()
-    assert "interval_min" not in res.to_pandas().columns
+    assert "midpoint_min" not in res.to_pandas().columns

@@ -199,7 +199,12 @@ def test_a_requirement_is_judged_over_every_fixed_interval_probability(tmp_path:
     assert r.code == 1, r.err
     out = json.loads(r.out)
     prop = out["properties"][0]
-    assert prop["min"] >= 0.6  # the floor/ceil MDP at the midpoint alone would hold
-    low = out["probability_intervals"]
-    assert prop["verdict"] == "depends" and prop["broken_by"] == "min", (prop, low)
-    assert "interval probabilities" in prop["reason"]
+    assert prop["reference"]["point"] == "midpoint"
+    assert prop["reference"]["min"] >= 0.6  # the floor/ceil MDP at the midpoint would hold
+    low = out["probability_intervals"]["properties"][0]
+    # the headline min and max are the bounds over the whole box, and they decide
+    assert (prop["min"], prop["max"]) == (low["min_attained"], low["max_attained"])
+    assert prop["min"] < 0.6 < prop["max"]
+    assert prop["verdict"] == "depends" and prop["broken_by"] == prop["decided_by"] == "min"
+    assert prop["attained_at"]["min"]["P_FAULT"] > prop["attained_at"]["max"]["P_FAULT"]
+    assert out["uncertainty"] == ["interval constants", "interval probabilities"]

@@ -67,5 +67,6 @@ def test_the_heading_says_the_agents_order_is_a_choice() -> None:
     res = run(os.path.join(HERE, "charge_pair.afsm"))
     assert res.composition == "interleaving"
     assert render(res).splitlines()[0].endswith(
-        ": an MDP (which agent moves next, and interval constants as floor/ceil choices): "
-        "min and max bound every property")
+        ": min and max bound every property over the interval constants' floor/ceil choices "
+        "and the order in which the agents move")
+    assert res.uncertainty == ("interval constants", "agent order")

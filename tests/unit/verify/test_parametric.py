@@ -9,7 +9,8 @@ import pytest
 
 from afsmc.compiler import load, lowered
 from afsmc.diagnostics import CompileError
-from afsmc.verify.parametric import DEFAULT_PRECISION, extremes
+from afsmc.verify.parametric import extremes
+from afsmc.verify.precision import PARAMETER_PRECISION as DEFAULT_PRECISION
 from tests.conftest import EXAMPLES
 from tests.unit.verify.points import value
 

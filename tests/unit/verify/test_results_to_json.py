@@ -60,7 +60,8 @@ def test_verify_result_json_has_the_cli_keys_and_round_trips() -> None:
                                        uniform=0.375)], 0.01, 0.7, [warning])
     obj = res.to_json()
     assert list(obj) == ["file", "machine", "model", "uniform_model", "properties", "timings",
-                         "via", "engine", "constants", "state_space", "warnings"]
+                         "via", "engine", "constants", "state_space", "warnings",
+                         "uncertainty"]
     assert obj["timings"] == {"load": 0.01, "parse": 0.1, "build": 0.2, "check": 0.3,
                               "uniform_build": 0.2, "uniform_check": 0.3, "total": 0.7}
     assert obj["state_space"] == {"upper_bound": 1000, "max_states": 50_000_000}

@@ -1,0 +1,15 @@
+#!/usr/bin/env bash
+# Writes the PRISM, JANI and DOT output of every example into DIR, so that two trees'
+# outputs can be compared byte for byte (`diff -r`): a refactoring must not change them.
+# Usage: bash scripts/compare_outputs.sh DIR
+set -euo pipefail
+cd "$(dirname "$0")/.."
+out=${1:?usage: compare_outputs.sh DIR}
+mkdir -p "$out"
+for f in examples/*.afsm; do
+    name=$(basename "$f" .afsm)
+    for t in prism jani dot; do
+        .venv/bin/afsmc compile "$f" -t "$t" -o "$out/$name" >/dev/null 2>"$out/$name.$t.err" || true
+    done
+done
+echo "wrote $(find "$out" -type f | wc -l) files to $out"
