@@ -20,11 +20,13 @@ runs their `__init__` first). Only imports of afsmc's own modules count.
 from __future__ import annotations
 
 import ast
+import re
 from collections.abc import Iterable, Iterator, Mapping
 from dataclasses import dataclass
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[2]
+PAGE = ROOT / "docs" / "architecture.md"
 PACKAGE = "afsmc"
 
 # The stages in pipeline order (docs/architecture.md, "Stages"), each with its packages and
@@ -99,8 +101,8 @@ MAX_MODULES = 15
 # entry that is no longer over the limit fails test_the_allow_list_of_large_folders_shrinks.
 OVER_15_MODULES: dict[str, str] = {
     "afsmc/verify": "split into subpackages per VERIFY_SPLIT",
-    "afsmc/commands": "17 modules: verify's (verify, verify_extras, requirements) and "
-                      "regions' (regions, regions_plot) helpers into subpackages",
+    "afsmc/commands": "the verify command's modules (verify, verify_extras, requirements) "
+                      "as a subpackage",
 }
 
 
@@ -297,7 +299,9 @@ def _run_on_import() -> dict[str, set[str]]:
 
 
 def test_no_import_cycle_inside_a_stage() -> None:
-    assert _cycles(_run_on_import()) == []
+    cycles = _cycles(_run_on_import())
+    assert cycles == [], ("module-level imports that close a cycle (import one of them in a "
+                          f"function, or move what they share down): {cycles}")
 
 
 def test_the_packages_of_a_stage_are_layered() -> None:
@@ -305,7 +309,8 @@ def test_the_packages_of_a_stage_are_layered() -> None:
     for name, targets in _run_on_import().items():
         edges.setdefault(group(name), set()).update(
             group(t) for t in targets if group(t) != group(name))
-    assert _cycles(edges) == []
+    cycles = _cycles(edges)
+    assert cycles == [], f"packages of one stage that import each other at module level: {cycles}"
 
 
 def _packages() -> list[str]:
@@ -323,7 +328,7 @@ def test_every_package_is_in_the_table() -> None:
 def test_the_table_names_nothing_that_does_not_exist() -> None:
     planned_packages = {f"afsmc.verify.{sub}" for sub in VERIFY_SPLIT.values()}
     stale = sorted(set(STAGE_OF) - set(_packages()) - planned_packages)
-    assert stale == []
+    assert stale == [], f"STAGES names what does not exist: {stale}"
 
 
 def test_the_planned_verify_split_is_current() -> None:
@@ -351,6 +356,57 @@ def test_the_allow_list_of_large_folders_shrinks() -> None:
     counts = _module_counts()
     done = [f for f in OVER_15_MODULES if counts.get(f, 0) <= MAX_MODULES]
     assert done == [], f"now within {MAX_MODULES} modules, remove from OVER_15_MODULES: {done}"
+
+
+def _page_stages() -> list[tuple[str, tuple[str, ...]]]:
+    """The rows of the table under "## Stages" on the page: the stage and the dotted names
+    in backticks of its last column."""
+    section = PAGE.read_text(encoding="utf-8").split("## Stages", 1)[1].split("\n## ", 1)[0]
+    rows = []
+    for line in section.splitlines():
+        cells = [c.strip() for c in line.strip().strip("|").split("|")]
+        if len(cells) >= 3 and line.startswith("|") and cells[0] not in ("stage", "---"):
+            rows.append((cells[0], tuple(re.findall(r"`(afsmc[\w.]*)`", cells[-1]))))
+    return rows
+
+
+def test_the_page_lists_the_same_stages() -> None:
+    assert _page_stages() == [(name, keys) for name, keys in STAGES]
+
+
+def _defines(path: Path) -> set[str]:
+    """The names a module binds at top level (and lists in __all__)."""
+    names: set[str] = set()
+    for node in ast.parse(path.read_text(encoding="utf-8")).body:
+        if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef, ast.ClassDef)):
+            names.add(node.name)
+        elif isinstance(node, (ast.Import, ast.ImportFrom)):
+            names |= {(a.asname or a.name).split(".")[0] for a in node.names}
+        elif isinstance(node, (ast.Assign, ast.AnnAssign)):
+            for target in node.targets if isinstance(node, ast.Assign) else [node.target]:
+                names |= {n.id for n in ast.walk(target) if isinstance(n, ast.Name)}
+                if isinstance(target, ast.Name) and target.id == "__all__" and node.value:
+                    names |= {c.value for c in ast.walk(node.value)
+                              if isinstance(c, ast.Constant) and isinstance(c.value, str)}
+    return names
+
+
+def test_the_dotted_names_on_the_page_exist() -> None:
+    # `afsmc.x.y` in backticks: a module or package (or a planned subpackage of
+    # afsmc/verify/), a name a module defines, or an entry-point group of pyproject.toml.
+    found = modules()
+    planned_names = ({planned(m) for m in found}
+                     | {f"afsmc.verify.{sub}" for sub in VERIFY_SPLIT.values()})
+    groups = set(re.findall(r'entry-points\."([\w.]+)"', (ROOT / "pyproject.toml").read_text()))
+    missing = []
+    for name in sorted(set(re.findall(r"`(afsmc(?:\.\w+)*)`", PAGE.read_text(encoding="utf-8")))):
+        owner, _, attr = name.rpartition(".")
+        if name in found or name in planned_names or name in groups:
+            continue
+        if owner in found and attr in _defines(found[owner]):
+            continue
+        missing.append(name)
+    assert missing == [], f"docs/architecture.md names what does not exist: {missing}"
 
 
 def test_the_scan_tells_when_each_import_runs(tmp_path: Path) -> None:
