@@ -58,7 +58,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    help="also find one valuation that meets the requirement "
                         "(Storm's feasibility check) and print it as --const flags")
     p.add_argument("--plot", metavar="FILE.png|.svg",
-                   help="draw the regions of two parameters (see --axes)")
+                   help="draw the regions over two parameters (see --axes); with more "
+                        "parameters, each cell shows the verdict over the others")
     p.add_argument("--axes", metavar="X,Y",
                    help="the two parameters the plot shows (default: the first two)")
     p.add_argument("--summary", action="store_true",

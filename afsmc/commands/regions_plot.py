@@ -9,8 +9,8 @@ then shows the verdict over its slice, in `afsmc verify`'s words: holds (for eve
 of the other parameters), fails (for every one), depends (holds for some, fails for
 others), and, where part of the slice is undecided, the verdict where it is decided, in a
 lighter shade. So every decided part of the box shows, whatever lies over it. Over the
-plotted parameters alone, each cell is one region's: holds, fails or unknown. `fills`
-gives what each cell shows, so that the tests read what the picture shows."""
+plotted parameters alone, the picture draws the regions: holds, fails or unknown. `fills`
+gives the rectangles drawn and what each shows, so that the tests read the picture."""
 
 from __future__ import annotations
 
@@ -53,7 +53,13 @@ def shows(cell: Cell) -> str:
 
 
 def fills(res: RegionResult, axes: list[str]) -> list[Fill]:
-    """The cells the plot fills, each with what it shows."""
+    """The rectangles the plot fills, each with what it shows: over the plotted
+    parameters alone, the regions themselves (the cells of one region show its verdict);
+    with more, the projection's cells."""
+    if all(n in axes for n in res.box):
+        return [Fill(r.bounds[axes[0]],
+                     r.bounds[axes[1]] if len(axes) > 1 else (0.0, 1.0), r.verdict)
+                for r in res.regions]
     return [Fill(c.x, c.y if c.y is not None else (0.0, 1.0), shows(c))
             for c in projection(res, axes)]
 

@@ -12,7 +12,7 @@ import random
 
 import pytest
 
-from afsmc.commands.regions_plot import fills
+from afsmc.commands.regions_plot import Fill, fills
 from afsmc.compiler import load, lowered
 from afsmc.verify import regions as R
 from tests.conftest import EXAMPLES
@@ -80,6 +80,9 @@ def test_over_the_plotted_parameters_alone_each_cell_is_one_region() -> None:
     res = result(random_regions(3, 12, box), box)
     for c in R.projection(res, ["A", "B"]):
         assert sorted(c.share.values()) == [0.0, 0.0, 1.0]
+    # and the picture draws the regions themselves
+    assert sorted(fills(res, ["A", "B"]), key=repr) == sorted(
+        (Fill(r.bounds["A"], r.bounds["B"], r.verdict) for r in res.regions), key=repr)
 
 
 def test_the_picture_shows_every_verdict_lying_over_a_cell() -> None:
