@@ -147,3 +147,14 @@ def test_the_plot_takes_the_axes_asked_for_and_refuses_others(patrol: str, tmp_p
     assert r.code == 2 and "two different parameters" in r.err
     r = run_cli("regions", patrol, "--require", 'P>=0.81 [ F "done" ]', "--coverage", "1.5")
     assert r.code == 2 and "--coverage" in r.err
+
+
+def test_an_interval_probability_named_with_param_is_not_from_the_file(patrol: str) -> None:
+    r = run_cli("regions", patrol, "--param", "P_SLIP=0.05:0.1", "--require",
+                'P>=0.81 [ F "done" ]', "--json", "--max-rounds", "2")
+    assert r.code == 0, r.err
+    out = json.loads(r.out)
+    assert out["box"] == {"P_SLIP": [0.05, 0.1]} and out["from_file"] == []
+    text = run_cli("regions", patrol, "--param", "P_SLIP=0.05:0.1", "--require",
+                   'P>=0.81 [ F "done" ]', "--max-rounds", "2").out
+    assert "from the file" not in text
