@@ -20,7 +20,7 @@ undecided could go either way).
 
 With more than two parameters a plot shows a projection: `projection` gives, for each
 cell of the two axes, the share of the volume over the other parameters that holds,
-fails or is undecided.
+fails or is unknown.
 """
 
 from __future__ import annotations
@@ -135,8 +135,9 @@ class RegionResult:
     # the dimensions not named with --param: the file's interval probabilities, each over
     # its own interval
     from_file: list[str] = field(default_factory=list)
-    # on an MDP with a bare requirement, the whole box's verdict under the choice that
-    # favours the requirement most (see `best_choice_formula`); None elsewhere
+    # on an MDP with a bare requirement where no region holds: whether the choice that
+    # favours the requirement most meets it somewhere in the box (`best_choice`: "holds",
+    # "fails" or "unknown"); None elsewhere
     best_choice: str | None = None
 
     def fraction(self, verdict: str) -> float:
@@ -321,7 +322,7 @@ def point_bounds(values: Mapping[str, float]) -> Bounds:
 class Cell:
     """One cell of the grid of two axes (or one: `y` is None) that the regions' edges
     draw: the share of its volume over the other parameters where the requirement holds,
-    fails or is undecided (the three add up to 1)."""
+    fails or is unknown (the three add up to 1)."""
 
     x: tuple[float, float]
     y: tuple[float, float] | None
@@ -351,7 +352,7 @@ def _covered(cells: list[tuple[float, float]], lo: float, hi: float) -> range:
 def projection(res: RegionResult, axes: Sequence[str]) -> list[Cell]:
     """The regions projected onto `axes`: the grid of the regions' edges along the axes,
     each cell with the share of the volume over the other parameters that holds, fails
-    or is undecided. Over two parameters (or one) every share is 0 or 1: the regions
+    or is unknown. Over two parameters (or one) every share is 0 or 1: the regions
     themselves."""
     x, y = axes[0], (axes[1] if len(axes) > 1 else None)
     others = [n for n in res.box if n not in axes]

@@ -34,8 +34,9 @@ def verdict_of_verify(path: str, req: str) -> str:
     return str(p["verdict"])
 
 
-@pytest.mark.parametrize(("bound", "mdp"), [(0.6, True), (0.9, True), (0.95, True),
-                                            (0.7, False)])
+@pytest.mark.parametrize(("bound", "mdp"), [(0.5, True), (0.6, True), (0.9, True),
+                                            (0.95, True), (0.55, False), (0.7, False),
+                                            (0.95, False)])
 def test_regions_over_the_interval_come_to_verifys_verdict(tmp_path: Path, bound: float,
                                                            mdp: bool) -> None:
     path = patrol(tmp_path, f"[{BOX[0]}, {BOX[1]}]", mdp)
