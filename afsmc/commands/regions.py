@@ -37,7 +37,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--param", action="append", default=[], metavar="NAME=LO:HI",
                    help="a parameter and its range; repeatable. A 'param double', a "
                         "'const prob' or an interval probability, used only in probabilities. "
-                        "Interval probabilities not named here vary over their interval")
+                        "Interval probabilities of the file not named here vary over their "
+                        "interval as further parameters (the output names them)")
     p.add_argument("--require", required=True, metavar="PROPERTY",
                    help="a bounded property in .afsm syntax, e.g. 'P>=0.6 [ F \"success\" ]'")
     p.add_argument("--coverage", type=float, default=0.95,
@@ -57,9 +58,13 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    help="also find one valuation that meets the requirement "
                         "(Storm's feasibility check) and print it as --const flags")
     p.add_argument("--plot", metavar="FILE.png|.svg",
-                   help="draw the regions of two parameters (see --axes)")
+                   help="draw the regions over two parameters (see --axes); with more "
+                        "parameters, each cell shows the verdict over the others")
     p.add_argument("--axes", metavar="X,Y",
                    help="the two parameters the plot shows (default: the first two)")
+    p.add_argument("--summary", action="store_true",
+                   help="print the summary only, not the table of regions (the text "
+                        "output; --json always lists the regions)")
     p.add_argument("--json", action="store_true", help="print the regions as JSON")
 
 
@@ -163,20 +168,24 @@ def run(args: argparse.Namespace) -> int:
         box = parse_params(args.param)
         loaded = load_with_formulas(args.file, overrides(args), [req.query()])
         model = loaded.model
+        from_file = []
         for c in model.prob_intervals:
             if c.prob_interval is not None and c.name not in box:
                 box[c.name] = c.prob_interval
+                from_file.append(c.name)
         if not box:
             raise _error(codes.E441, "no parameters: pass --param NAME=LO:HI",
                          hint="or declare an interval probability, const prob P = [lo, hi]")
         low = lowered(model, "nondet")
         check_params(low, box)
         axes = args.axes.split(",") if args.axes else list(box)[:2]
-        if args.plot and (not 1 <= len(axes) <= 2 or any(a not in box for a in axes)):
-            usage_error(f"--axes {args.axes}: name one or two of the parameters "
+        if args.plot and (not 1 <= len(axes) <= 2 or any(a not in box for a in axes)
+                          or len(set(axes)) < len(axes)):
+            usage_error(f"--axes {args.axes}: name one or two different parameters of "
                         + ", ".join(box))
         prop = next(p for p in model.properties if p.name == loaded.adhoc[0])
         res = solve(args, low, req, prop, box, say)
+        res.from_file = from_file
         res.seconds = time.perf_counter() - t0
         if args.plot:
             from afsmc.commands.regions_plot import plot
@@ -194,7 +203,7 @@ def run(args: argparse.Namespace) -> int:
         print(json.dumps(res.to_json(), indent=2))
     else:
         fixed = [c.name for c in model.constants if c.name in box and not c.is_param]
-        print(render(res, fixed))
+        print(render(res, fixed, summary=args.summary))
     return 0
 
 
@@ -210,6 +219,12 @@ def solve(args: argparse.Namespace, low: Lowered, req: R.Requirement, prop: ir.P
     res = R.RegionResult(req.text, box, regions, 0.0, args.coverage, rounds,
                          states=built.model.nr_states)
     res.coverage = res.fraction("holds") + res.fraction("fails")
+    if all(r.verdict != "holds" for r in regions):
+        # on an MDP, a region that fails may hold under another floor/ceil choice: whether
+        # the most favourable choice meets it somewhere decides between verify's "fails"
+        # and "depends"
+        res.best_choice = R.best_choice(built, req, query, low.kind == "mdp", box,
+                                        args.max_rounds)
     if args.feasible:
         res.feasible, res.feasible_how = feasible(built, formulas[0], res)
     return res
@@ -236,27 +251,27 @@ def feasible(built: object, formula: str, res: R.RegionResult
             "the centre of the largest region where it holds")
 
 
-def render(res: R.RegionResult, fixed: list[str] | None = None) -> str:
-    """The regions as a table; `fixed` names the parameters declared 'const' (not
+LONG = 20  # a table of more regions than this ends with a pointer to --summary
+
+
+def render(res: R.RegionResult, fixed: list[str] | None = None, *,
+           summary: bool = False) -> str:
+    """The regions as a table (not with `summary`), then the shares of the volume and the
+    verdict over the whole box; `fixed` names the parameters declared 'const' (not
     'param'), which a --const flag cannot set."""
-    names = list(res.box)
-    rows = [[*names, "verdict"]]
-    order = {"holds": 0, "fails": 1, "unknown": 2}
-    for r in sorted(res.regions, key=lambda r: (order[r.verdict],
-                                                [r.bounds[n] for n in names])):
-        rows.append([f"[{r.bounds[n][0]:.6g}, {r.bounds[n][1]:.6g}]" for n in names]
-                    + [r.verdict])
-    widths = [max(len(r[i]) for r in rows) for i in range(len(rows[0]))]
     lines = [f"{res.requirement} over " + ", ".join(
-        f"{n} in [{lo:g}, {hi:g}]" for n, (lo, hi) in res.box.items()), ""]
-    lines += ["  ".join(c.ljust(w) for c, w in zip(r, widths, strict=True)).rstrip()
-              for r in rows]
+        f"{n} in [{lo:g}, {hi:g}]" for n, (lo, hi) in res.box.items())]
+    lines += from_file_lines(res)
+    if not summary:
+        lines += ["", *table(res)]
     lines.append("")
     lines.append(f"holds on {res.fraction('holds'):.1%} of the volume, fails on "
                  f"{res.fraction('fails'):.1%}, unknown {res.fraction('unknown'):.1%}: "
                  f"coverage {res.coverage:.1%} (target {res.target:.0%}); "
                  f"{len(res.regions)} regions, {res.rounds} rounds, {res.states:,} states, "
                  f"{res.seconds:.1f} s")
+    verdict, reason = res.verdict()
+    lines.append(f"over the whole box: {verdict} ({reason})")
     if res.feasible == {}:
         lines.append("feasible: Storm found no valuation that meets the requirement")
     elif res.feasible is not None:
@@ -268,4 +283,33 @@ def render(res: R.RegionResult, fixed: list[str] | None = None) -> str:
             lines.append(f"  --const sets only a 'param': {', '.join(shown)} "
                          f"{'is' if len(shown) == 1 else 'are'} declared 'const', so write "
                          "the value in the file, or declare it 'param double'")
+    if not summary and len(res.regions) > LONG:
+        lines.append(f"({len(res.regions)} regions listed above; --summary prints the "
+                     "summary only)")
     return "\n".join(lines)
+
+
+def from_file_lines(res: R.RegionResult) -> list[str]:
+    """Which dimensions of the box no --param named: the file's interval probabilities."""
+    if not res.from_file:
+        return []
+    one = len(res.from_file) == 1
+    names = ", ".join(f"{n} in [{res.box[n][0]:g}, {res.box[n][1]:g}]" for n in res.from_file)
+    what = ("an interval probability that no --param names, varied over its interval"
+            if one else
+            "interval probabilities that no --param names, varied over their intervals")
+    return [f"from the file: {names} ({what}; --param NAME=LO:HI sets a range)"]
+
+
+def table(res: R.RegionResult) -> list[str]:
+    """One row per region: its side along each parameter, and its verdict."""
+    names = list(res.box)
+    rows = [[*names, "verdict"]]
+    order = {"holds": 0, "fails": 1, "unknown": 2}
+    for r in sorted(res.regions, key=lambda r: (order[r.verdict],
+                                                [r.bounds[n] for n in names])):
+        rows.append([f"[{r.bounds[n][0]:.6g}, {r.bounds[n][1]:.6g}]" for n in names]
+                    + [r.verdict])
+    widths = [max(len(r[i]) for r in rows) for i in range(len(rows[0]))]
+    return ["  ".join(c.ljust(w) for c, w in zip(r, widths, strict=True)).rstrip()
+            for r in rows]

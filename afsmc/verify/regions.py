@@ -12,10 +12,22 @@ run on local processes or on a Dask cluster.
 A requirement is `P>=0.6 [ F "success" ]` (also `>`, `<=`, `<`, `Pmin`, `Pmax`, `R{"r"}`).
 On an MDP (integer intervals as floor/ceil choices) a bare `P>=b` must hold under every
 choice: it holds where Pmin >= b and fails where Pmin < b (Pmax for `<=` and `<`).
+
+The verdict over the whole box uses `afsmc verify`'s words (afsmc.verify.verdicts): holds
+(every region holds), fails (every region fails, and on an MDP no choice meets it
+anywhere), depends (some values meet it, others do not), undecided (the regions left
+undecided could go either way).
+
+With more than two parameters a plot shows a projection: `projection` gives, for each
+cell of the two axes, the share of the volume over the other parameters that holds,
+fails or is unknown.
 """
 
 from __future__ import annotations
 
+import bisect
+import itertools
+import math
 import multiprocessing
 import os
 import re
@@ -80,17 +92,27 @@ def storm_formulas(req: Requirement, prism_query: str, mdp: bool) -> tuple[str, 
             f"{op}{opt}{_NEGATE[req.cmp]}{req.bound!r}{rest}")
 
 
+def best_choice_formula(req: Requirement, prism_query: str, mdp: bool) -> str | None:
+    """On an MDP with a bare requirement (`P>=b`, no min/max), the requirement under the
+    choice that favours it most (`Pmax>=b`): where even that fails, the requirement fails
+    for every choice, as `afsmc verify` means "fails". None where the requirement has one
+    value per point (a DTMC, or `Pmin`/`Pmax` written)."""
+    if not mdp or req.opt:
+        return None
+    head = re.match(r"(P|R\{\"[^\"]*\"\})(min|max)?=\?", prism_query)
+    assert head is not None
+    best = "max" if req.cmp in (">=", ">") else "min"
+    return f"{head.group(1)}{best}{req.cmp}{req.bound!r}{prism_query[head.end():]}"
+
+
 @dataclass(frozen=True)
 class Region:
     bounds: Bounds
     verdict: str  # "holds" | "fails" | "unknown"
 
     def volume(self, whole: Bounds) -> float:
-        v = 1.0
-        for n, (lo, hi) in self.bounds.items():
-            wlo, whi = whole[n]
-            v *= (hi - lo) / (whi - wlo) if whi > wlo else 1.0
-        return v
+        """Its share of the volume of `whole`."""
+        return math.prod(_relative(side, whole[n]) for n, side in self.bounds.items())
 
     def to_json(self) -> dict[str, object]:
         return {"bounds": {n: [lo, hi] for n, (lo, hi) in self.bounds.items()},
@@ -110,11 +132,41 @@ class RegionResult:
     feasible: dict[str, float] | None = None
     feasible_how: str = ""
     notes: list[str] = field(default_factory=list)
+    # the dimensions not named with --param: the file's interval probabilities, each over
+    # its own interval
+    from_file: list[str] = field(default_factory=list)
+    # on an MDP with a bare requirement where no region holds: whether the choice that
+    # favours the requirement most meets it somewhere in the box (`best_choice`: "holds",
+    # "fails" or "unknown"); None elsewhere
+    best_choice: str | None = None
 
     def fraction(self, verdict: str) -> float:
         return sum(r.volume(self.box) for r in self.regions if r.verdict == verdict)
 
+    def verdict(self) -> tuple[str, str]:
+        """The verdict over the whole box, in `afsmc verify`'s words, and why."""
+        holds, fails = self.fraction("holds"), self.fraction("fails")
+        shares = (f"it holds on {holds:.1%} of the volume, fails on {fails:.1%}, "
+                  f"unknown on {self.fraction('unknown'):.1%}")
+        has = {r.verdict for r in self.regions}
+        if has == {"holds"}:
+            return "holds", "it holds for every value of the box"
+        if "holds" in has and "fails" in has:
+            return "depends", f"{shares}: some values meet it, others do not"
+        if has == {"fails"} and self.best_choice is None:
+            return "fails", "it fails for every value of the box"
+        if self.best_choice == "fails":  # so every region fails, the unknown ones too
+            return "fails", ("it fails for every value of the box under every floor/ceil "
+                             "choice, even the most favourable")
+        if self.best_choice == "holds" and "fails" in has:
+            return "depends", (f"it fails under some floor/ceil choice on {fails:.1%} of "
+                               "the volume, and the most favourable choice meets it for "
+                               "some values")
+        return "undecided", (f"{shares}: the unknown part could go either way "
+                             "(raise --coverage or --max-rounds)")
+
     def to_json(self) -> dict[str, object]:
+        verdict, reason = self.verdict()
         out: dict[str, object] = {
             "requirement": self.requirement,
             "box": {n: [lo, hi] for n, (lo, hi) in self.box.items()},
@@ -122,6 +174,7 @@ class RegionResult:
             "holds": self.fraction("holds"), "fails": self.fraction("fails"),
             "unknown": self.fraction("unknown"), "rounds": self.rounds,
             "states": self.states, "seconds": round(self.seconds, 3),
+            "verdict": verdict, "reason": reason, "from_file": list(self.from_file),
             "regions": [r.to_json() for r in self.regions]}
         if self.feasible is not None:
             out["feasible"] = self.feasible or None
@@ -170,7 +223,37 @@ def prepare(low: Lowered, params: Sequence[str], req: Requirement, prism_query: 
     plow = with_parameters(low, params)
     src = source(plow, via)
     formulas = storm_formulas(req, prism_query, low.kind == "mdp")
-    return src, formulas, Parametric(src, list(formulas))
+    best = best_choice_formula(req, prism_query, low.kind == "mdp")
+    return src, formulas, Parametric(src, [*formulas, *([best] if best else [])])
+
+
+BEST_CHOICE_BOXES = 256  # the sub-boxes `best_choice` checks in one round, at most
+
+
+def best_choice(built: Parametric, req: Requirement, prism_query: str, mdp: bool,
+                box: Bounds, max_rounds: int) -> str | None:
+    """Whether the choice that favours the requirement most (`best_choice_formula`) meets
+    it somewhere in `box`: "holds" (on some sub-box), "fails" (nowhere), "unknown" (not
+    decided in `max_rounds` rounds of halving), or None where there are no choices.
+    The sub-boxes are checked in this process, and stop at the first that holds."""
+    best = best_choice_formula(req, prism_query, mdp)
+    if best is None:
+        return None
+    todo = [dict(box)]
+    for _ in range(max_rounds):
+        unknown = []
+        for b in todo:
+            verdict = built.analyze(best, b)
+            if verdict == "holds":
+                return "holds"
+            if verdict == "unknown":
+                unknown.append(b)
+        if not unknown:
+            return "fails"
+        todo = [h for b in unknown for h in split(b, box)]
+        if len(todo) > BEST_CHOICE_BOXES:
+            break
+    return "unknown"
 
 
 def refine(low: Lowered, src: Source, formulas: tuple[str, str], built: Parametric,
@@ -230,3 +313,56 @@ def _round(todo: list[Bounds], src: Source, formulas: tuple[str, str], built: Pa
 
 def point_bounds(values: Mapping[str, float]) -> Bounds:
     return {n: (v, v) for n, v in values.items()}
+
+
+# ---- the projection a plot draws ------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class Cell:
+    """One cell of the grid of two axes (or one: `y` is None) that the regions' edges
+    draw: the share of its volume over the other parameters where the requirement holds,
+    fails or is unknown (the three add up to 1)."""
+
+    x: tuple[float, float]
+    y: tuple[float, float] | None
+    share: dict[str, float]
+
+
+def _relative(side: tuple[float, float], whole: tuple[float, float]) -> float:
+    """A side's length relative to the whole box's side (1 where the box has no width)."""
+    (lo, hi), (wlo, whi) = side, whole
+    return (hi - lo) / (whi - wlo) if whi > wlo else 1.0
+
+
+def _cells(edges: set[float]) -> list[tuple[float, float]]:
+    """The intervals between consecutive edges; one point if the axis has no width."""
+    e = sorted(edges)
+    return [(e[0], e[0])] if len(e) == 1 else list(itertools.pairwise(e))
+
+
+def _covered(cells: list[tuple[float, float]], lo: float, hi: float) -> range:
+    """The indices of the cells inside [lo, hi] (each region's edges are cell edges)."""
+    if len(cells) == 1:
+        return range(1)
+    starts = [c[0] for c in cells]
+    return range(bisect.bisect_left(starts, lo), bisect.bisect_left(starts, hi))
+
+
+def projection(res: RegionResult, axes: Sequence[str]) -> list[Cell]:
+    """The regions projected onto `axes`: the grid of the regions' edges along the axes,
+    each cell with the share of the volume over the other parameters that holds, fails
+    or is unknown. Over two parameters (or one) every share is 0 or 1: the regions
+    themselves."""
+    x, y = axes[0], (axes[1] if len(axes) > 1 else None)
+    others = [n for n in res.box if n not in axes]
+    xs = _cells({e for r in res.regions for e in r.bounds[x]})
+    ys = _cells({e for r in res.regions for e in r.bounds[y]}) if y is not None else [(0.0, 0.0)]
+    shares = [[dict.fromkeys(("holds", "fails", "unknown"), 0.0) for _ in ys] for _ in xs]
+    for r in res.regions:
+        rest = math.prod(_relative(r.bounds[n], res.box[n]) for n in others)
+        for i in _covered(xs, *r.bounds[x]):
+            for j in (_covered(ys, *r.bounds[y]) if y is not None else range(1)):
+                shares[i][j][r.verdict] += rest
+    return [Cell(xs[i], ys[j] if y is not None else None, shares[i][j])
+            for i in range(len(xs)) for j in range(len(ys))]

@@ -1,5 +1,6 @@
-"""`afsmc regions`: the JSON and table forms, the plot, --feasible, and the diagnostics
-of bad parameters (E440, E441, E442)."""
+"""`afsmc regions`: the JSON and table forms, --summary, the dimensions that come from
+the file, the plot, --feasible, and the diagnostics of bad parameters (E440, E441,
+E442)."""
 
 from __future__ import annotations
 
@@ -32,6 +33,9 @@ def test_json_lists_regions_with_bounds_verdicts_and_coverage(patrol: str) -> No
     assert {reg["verdict"] for reg in out["regions"]} <= {"holds", "fails", "unknown"}
     assert all(set(reg["bounds"]) == {"P_SLIP"} for reg in out["regions"])
     assert 0.05 <= out["feasible"]["P_SLIP"] <= 0.15
+    # no --param: the one dimension is the file's interval probability, and says so
+    assert out["from_file"] == ["P_SLIP"]
+    assert out["verdict"] in ("holds", "fails", "depends", "undecided") and out["reason"]
 
 
 def test_the_table_the_plot_and_the_feasible_flags(patrol: str, tmp_path: Path) -> None:
@@ -45,6 +49,33 @@ def test_the_table_the_plot_and_the_feasible_flags(patrol: str, tmp_path: Path) 
     assert "feasible: --const P_FAULT=" in r.out
     # P_FAULT is a 'const prob', which --const cannot set: the output says so
     assert "P_FAULT, P_SLIP are declared 'const'" in r.out
+    # one --param named: P_SLIP, the file's interval probability, is a further dimension
+    assert "from the file: P_SLIP in [0.05, 0.15] (an interval probability" in r.out
+    assert "over the whole box: " in r.out
+
+
+@pytest.mark.slow
+def test_a_long_table_points_to_summary_which_prints_the_summary_only(patrol: str) -> None:
+    argv = ["regions", patrol, "--param", "P_FAULT=0.005:0.02", "--require",
+            'P>=0.81 [ F "done" ]', "-j", "1"]
+    full = run_cli(*argv)
+    assert full.code == 0, full.err
+    rows = [line for line in full.out.splitlines()
+            if line.endswith(("holds", "fails", "unknown"))]
+    assert len(rows) > 20
+    assert f"({len(rows)} regions listed above; --summary prints the summary only)" in full.out
+    short = run_cli(*argv, "--summary")
+    assert short.code == 0, short.err
+    assert not [line for line in short.out.splitlines()
+                if line.endswith(("holds", "fails", "unknown"))]
+    assert "--summary prints" not in short.out
+    # the same run: each summary line is one of the full output's, timing aside
+    def untimed(out: str) -> list[str]:
+        return [line.rsplit(",", 1)[0] if line.startswith("holds on") else line
+                for line in out.splitlines() if line]
+
+    assert set(untimed(short.out)) <= set(untimed(full.out))
+    assert any(line.startswith("over the whole box: ") for line in untimed(short.out))
 
 
 @pytest.mark.parametrize(("param", "words"), [
@@ -113,5 +144,19 @@ def test_the_plot_takes_the_axes_asked_for_and_refuses_others(patrol: str, tmp_p
     r = run_cli("regions", patrol, "--require", 'P>=0.81 [ F "done" ]', "--plot", str(png),
                 "--axes", "P_SLIP,NOPE")
     assert r.code == 2 and "--axes P_SLIP,NOPE" in r.err
+    r = run_cli("regions", patrol, "--require", 'P>=0.81 [ F "done" ]', "--plot", str(png),
+                "--axes", "P_SLIP,P_SLIP")
+    assert r.code == 2 and "two different parameters" in r.err
     r = run_cli("regions", patrol, "--require", 'P>=0.81 [ F "done" ]', "--coverage", "1.5")
     assert r.code == 2 and "--coverage" in r.err
+
+
+def test_an_interval_probability_named_with_param_is_not_from_the_file(patrol: str) -> None:
+    r = run_cli("regions", patrol, "--param", "P_SLIP=0.05:0.1", "--require",
+                'P>=0.81 [ F "done" ]', "--json", "--max-rounds", "2")
+    assert r.code == 0, r.err
+    out = json.loads(r.out)
+    assert out["box"] == {"P_SLIP": [0.05, 0.1]} and out["from_file"] == []
+    text = run_cli("regions", patrol, "--param", "P_SLIP=0.05:0.1", "--require",
+                   'P>=0.81 [ F "done" ]', "--max-rounds", "2").out
+    assert "from the file" not in text

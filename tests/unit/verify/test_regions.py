@@ -94,3 +94,33 @@ def test_local_processes_and_dask_give_the_regions_of_one_process(patrol: object
     with distributed.LocalCluster(n_workers=1, threads_per_worker=1, processes=False,
                                   dashboard_address=None) as cluster:
         assert run(dask=cluster.scheduler_address) == one
+
+
+def _whole(verdicts: list[str], best_choice: str | None = None) -> tuple[str, str]:
+    """The verdict over [0, 1] cut into equal regions with these verdicts."""
+    n = len(verdicts)
+    regions = [R.Region({"P": (i / n, (i + 1) / n)}, v) for i, v in enumerate(verdicts)]
+    res = R.RegionResult("P>=0.5 [ F \"done\" ]", {"P": (0.0, 1.0)}, regions, 0.0, 0.95, 1,
+                         best_choice=best_choice)
+    return res.verdict()
+
+
+@pytest.mark.parametrize(("verdicts", "best", "kind"), [
+    (["holds", "holds"], None, "holds"),
+    (["holds", "fails"], None, "depends"),
+    (["holds", "fails", "unknown"], None, "depends"),
+    (["fails", "fails"], None, "fails"),         # one value per point: fails everywhere
+    (["fails", "unknown"], None, "undecided"),
+    (["holds", "unknown"], None, "undecided"),   # the unknown part may fail
+    (["unknown"], None, "undecided"),
+    # an MDP: a region fails where some floor/ceil choice misses the bound
+    (["fails", "fails"], "fails", "fails"),      # the most favourable choice misses it too
+    (["fails", "unknown"], "fails", "fails"),    # ... so the unknown part fails as well
+    (["fails", "fails"], "holds", "depends"),    # the most favourable choice meets it
+    (["fails", "fails"], "unknown", "undecided"),
+    (["unknown"], "holds", "undecided"),         # no region fails for some choice: may hold
+])
+def test_the_verdict_over_the_box_in_verifys_words(verdicts: list[str], best: str | None,
+                                                   kind: str) -> None:
+    got, reason = _whole(verdicts, best)
+    assert got == kind, reason
