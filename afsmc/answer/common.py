@@ -52,14 +52,15 @@ Bound = Literal["min", "max"]
 
 
 class Answer(BaseModel):
-    """An object of afsmc's JSON: immutable, and no key but those declared.
+    """An object of afsmc's JSON: immutable, no key but those declared, no infinite number.
 
     Validating JSON refuses a null where the key is `Absent`, as the schema does. Dumping
     (`model_dump(mode="json", by_alias=True)`, `model_dump_json(by_alias=True)`) leaves out
     an `Absent` key that is None, and an optional nullable key (`X | None = None`) that was
     not given: the object afsmc prints, with its keys in the order of the fields."""
 
-    model_config = ConfigDict(frozen=True, extra="forbid")
+    # JSON has no infinity or NaN: a value that is one is refused, not written as null
+    model_config = ConfigDict(frozen=True, extra="forbid", allow_inf_nan=False)
     # keys dumped before the others (a partial result's diagnostics come before the answer
     # it extends, as afsmc prints them)
     FIRST: ClassVar[tuple[str, ...]] = ()

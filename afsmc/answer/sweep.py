@@ -70,7 +70,8 @@ class SweepPoint(Answer):
 class VerdictRange(Answer):
     """A run of consecutive points with the same verdict."""
 
-    model_config = ConfigDict(frozen=True, extra="forbid", populate_by_name=True)
+    model_config = ConfigDict(frozen=True, extra="forbid", allow_inf_nan=False,
+                              populate_by_name=True)
 
     verdict: PointVerdict = Field(description="their verdict")
     from_: ConstValue = Field(alias="from", description="the first point's x")

@@ -17,6 +17,7 @@ import pytest
 
 from afsmc.answer.schema import MODELS, schema
 from tests.conftest import EXAMPLES, run_cli
+from tests.specs import BOOL_PARAM
 
 pytestmark = pytest.mark.storm
 
@@ -25,6 +26,28 @@ TWO_UAV = str(EXAMPLES / "two_uav.afsm")
 SMALL = "CELLS=2,ROUNDS=1"
 SMALL_UAV = "OBJECTS=1,T_LIMIT=25"
 DONE = 'P>=0.6 [ F "done" ]'
+# a DTMC with warnings (W302, W304), one path into "done" and none into "nowhere"
+FEW_PATHS = """machine few;
+var x : [0..3] init 0;
+mode A = 0 initial;
+mode B = 1 final;
+mode C = 2 final;
+action Go in A when x < 2 { 0.5: x := x + 1; 0.5: goto C; }
+action Fin in A when x == 2 { goto B; }
+const int UNUSED = 3;
+label done = mode == B;
+label nowhere = false;
+property p = P=? [ F "done" ];
+property q = P=? [ F "nowhere" ];
+"""
+# a name declared twice: a diagnostic with a related place
+TWICE = """machine twice;
+const int K = 1;
+const int K = 2;
+mode A = 0 initial;
+mode B = 1 final;
+action Go in A { goto B; }
+"""
 
 
 @pytest.fixture(scope="module")
@@ -46,6 +69,9 @@ def files(tmp_path_factory: pytest.TempPathFactory) -> dict[str, str]:
     }
     variants["iv_forever"] = variants["iv"] + 'property forever = R{"steps"}=? [ F "done" ];\n'
     out = {"patrol": PATROL, "two_uav": TWO_UAV}
+    for name, text in (("few", FEW_PATHS), ("twice", TWICE), ("windy", BOOL_PARAM)):
+        (tmp / f"{name}.afsm").write_text(text, encoding="utf-8")
+        out[name] = str(tmp / f"{name}.afsm")
     for name, text in variants.items():
         assert text not in (patrol, uav), name  # the replacement took
         path = tmp / f"{name}.afsm"
@@ -118,6 +144,13 @@ CASES: list[tuple[str, list[str], tuple[int, ...], tuple[str, ...]]] = [
     ("verify-requirement-fails-witness", ["verify", "{patrol}", "-c", SMALL, "-f",
                                           'P<=0.01 [ F "done" ]', "--witness", "1"], (1,),
      ("properties.0.witnesses.0", "properties.0.witness_violates")),
+    ("verify-warnings-fewer-paths", ["verify", "{few}", "-p", "p", "--witness", "5"], (0,),
+     ("warnings.1.line", "properties.0.witness_note", "properties.0.witnesses.0")),
+    ("verify-no-path", ["verify", "{few}", "-p", "q", "--witness", "2"], (0,),
+     ("properties.0.witness_note",)),
+    ("verify-jani", ["verify", "{patrol}", "-c", SMALL, "-p", "finish", "--via", "jani"], (0,),
+     ("via",)),
+    ("verify-related-place", ["verify", "{twice}"], (1,), ("diagnostics.0.related.0.line",)),
     ("verify-infinite-reward", ["verify", "{patrol}", "-c", SMALL, "-f",
                                 'R{"steps"}=? [ F "done" ]'], (0,), ("properties.0.infinite",)),
     ("verify-bisim", ["verify", "{patrol}", "-c", SMALL, "-p", "finish", "--bisim"], (0,),
@@ -148,6 +181,8 @@ CASES: list[tuple[str, list[str], tuple[int, ...], tuple[str, ...]]] = [
      ("rows.3.point.ROUNDS", "requirements.0.points")),
     ("sweep-dtmc", ["sweep", "{dtmc}", "-c", "CELLS=2:3,ROUNDS=1", "-p", "finish", "-j", "1"],
      (0,), ("points.0.properties.0.value",)),
+    ("sweep-bool", ["sweep", "{windy}", "-c", "WINDY=false,true", "-j", "1"], (0,),
+     ("points.1.x",)),
     ("sweep-interval-probabilities", ["sweep", "{iv}", "-c", "CELLS=2:3,ROUNDS=1", "-f", DONE,
                                       "-j", "1"], (0,), ("requirements",)),
     ("sweep-infinite-reward", ["sweep", "{forever}", "-c", "CELLS=2:3,ROUNDS=1", "-p",
@@ -183,6 +218,7 @@ CASES: list[tuple[str, list[str], tuple[int, ...], tuple[str, ...]]] = [
      (0,), ("properties.5.high",)),
     ("simulate-dtmc-floor", ["simulate", "{dtmc}", "-c", SMALL, "--runs", "300", "--resolve",
                              "floor"], (0,), ("resolve",)),
+    ("simulate-warnings", ["simulate", "{few}", "--runs", "100"], (0,), ("warnings.0.code",)),
     ("simulate-no-such-strategy", ["simulate", "{patrol}", "--runs", "10", "--strategy",
                                    "min:nope"], (1,), ("diagnostics.0",)),
 ]
@@ -272,6 +308,28 @@ def test_an_interrupted_verify_is_valid(files: dict[str, str],
     assert r.code == 130, r.err
     obj = validate("verify", r.out)
     assert obj["interrupted"] is True and obj["properties"][0]["max"] is None
+
+
+def test_an_interrupted_region_check_is_valid(files: dict[str, str],
+                                              stop_second: Any) -> None:
+    from afsmc.verify import regions
+
+    stop_second(regions, "_round")
+    r = run_cli("regions", files["iv"], "-c", SMALL, "--require", 'P>=0.9 [ F "done" ]',
+                "--json")
+    assert r.code == 130, r.err
+    assert validate("regions", r.out) == {"interrupted": True, "diagnostics": []}
+
+
+@pytest.mark.parametrize("command", list(MODELS))
+def test_an_internal_error_is_valid(command: str, capsys: pytest.CaptureFixture[str]) -> None:
+    # the report of a bug in afsmc, as the CLI prints it under --json
+    from afsmc.cli import _internal_error
+
+    assert _internal_error(RuntimeError("a bug"), as_json=True) == 3
+    out, err = capsys.readouterr()
+    Path(err.split("the traceback is in ", 1)[1].split(";", 1)[0]).unlink()
+    assert validate(command, out)["diagnostics"][0]["code"] == "E009"
 
 
 # Outputs that are not what the schemas publish today: each is a bug to fix in the command

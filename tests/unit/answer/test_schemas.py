@@ -138,3 +138,9 @@ def test_the_docs_link_the_schemas() -> None:
     for name in NAMES:
         assert f"schemas/{name}.schema.json" in page, name
     assert Path(ROOT / "scripts" / "gen_schemas.py").exists()
+
+
+def test_an_infinite_number_is_refused() -> None:
+    # JSON has none: a model never dumps Infinity (or null in its place) silently
+    with pytest.raises(ValueError, match="finite"):
+        common.Threshold(op=">=", bound=float("inf"))
