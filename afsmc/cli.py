@@ -40,6 +40,7 @@ COMMANDS: dict[str, str] = {
     "sim-check": "re-run the simulations behind `from sim` constants and judge them",
     "simulate": "Monte Carlo simulation of the machine: estimate its properties",
     "explain": "explain a diagnostic code (e.g. E301) with a wrong and a right example, or list all",
+    "schema": "print the JSON Schema of a command's --json output (verify, sweep, regions, simulate)",
 }
 
 
