@@ -22,6 +22,7 @@ if TYPE_CHECKING:
 RC: Any = {"svg.hashsalt": "afsmc", "font.size": 9}  # byte-identical SVGs; small print
 
 REQUIREMENT_KEYS = ("threshold", "verdict", "error")
+VALUES = ("min", "max", "uniform", "value")  # a property's values, as columns
 
 
 @dataclass
@@ -74,24 +75,36 @@ class SweepResult:
     def xs(self) -> list[Number]:
         return [pt.x for pt in self.points]
 
+    def columns(self) -> list[str]:
+        """The CSV's columns (and `Sweep.to_pandas()`'s): the swept constants, the property,
+        its values, the model's size, and `verdict` if a swept property is a requirement."""
+        verdicts = bool(sweep_verdicts.requirements(self))
+        return [*self.swept, "property", *VALUES, "states", "transitions", "uniform_states",
+                "uniform_transitions"] + (["verdict"] if verdicts else [])
+
+    def rows(self) -> list[list[Number | str | None]]:
+        """The CSV's rows as values, one per point and property: a missing value is None,
+        a verdict its kind as the core judged it (`PropertyResult.verdict`), None for a
+        requirement without one and for a property that is no requirement."""
+        verdicts = self.columns()[-1] == "verdict"
+        return [[*self.coords(pt), r.name, *(getattr(r, k) for k in VALUES), pt.states,
+                 pt.transitions, pt.uniform_states, pt.uniform_transitions]
+                + ([r.verdict.kind if r.verdict is not None else None] if verdicts else [])
+                for pt in self.points for r in pt.properties]
+
     def to_csv(self) -> str:
         buf = io.StringIO()
         w = csv.writer(buf, lineterminator="\n")
-        verdicts = bool(sweep_verdicts.requirements(self))
-        w.writerow([*self.swept, "property", "min", "max", "uniform", "value", "states",
-                    "transitions", "uniform_states", "uniform_transitions"]
-                   + (["verdict"] if verdicts else []))
+        w.writerow(self.columns())
+        swept = len(self.swept)
 
-        def cell(v: float | int | None) -> str:
-            return "" if v is None else str(v) if isinstance(v, int) else repr(float(v))
+        def cell(v: Number | str | None) -> str:
+            return ("" if v is None else v if isinstance(v, str) else
+                    str(v) if isinstance(v, int) else repr(float(v)))
 
-        for pt in self.points:
-            for r in pt.properties:
-                w.writerow([*(literal(v) for v in self.coords(pt)), r.name, cell(r.min), cell(r.max), cell(r.uniform),
-                            cell(r.value), pt.states, pt.transitions, cell(pt.uniform_states),
-                            cell(pt.uniform_transitions)]
-                           + ([r.verdict.kind if r.verdict is not None else ""]
-                              if verdicts else []))
+        for row in self.rows():
+            w.writerow([*(literal(v) for v in row[:swept]),
+                        *(cell(v) for v in row[swept:])])
         return buf.getvalue()
 
     def to_json(self) -> dict[str, object]:
