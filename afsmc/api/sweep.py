@@ -86,14 +86,17 @@ class Sweep:
         asked), ``states``, ``transitions``, ``uniform_states``, ``uniform_transitions``,
         and, if a swept property is a requirement, ``verdict``: the verdict the
         verification core judged at that point ("holds", "fails", "depends",
-        "undecided"; None for a property that is no requirement or a value that failed).
+        "undecided"; None for a property that is no requirement or a value that failed),
+        and, if the core gives a reference point (interval probabilities: their midpoint),
+        ``reference`` (its name) and ``reference_min``, ... (the values there).
         ``df.pivot(index=variable, columns="property", values="value")`` gives a curve
         per column."""
         import pandas as pd
 
         df = pd.DataFrame(self.raw.rows(), columns=self.raw.columns())
-        for k in VALUES:
-            df[k] = df[k].astype(float)
+        for k in (*VALUES, *(f"reference_{v}" for v in VALUES)):
+            if k in df.columns:
+                df[k] = df[k].astype(float)
         return df
 
     def to_json(self) -> dict[str, object]:

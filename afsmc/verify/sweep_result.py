@@ -77,20 +77,37 @@ class SweepResult:
 
     def columns(self) -> list[str]:
         """The CSV's columns (and `Sweep.to_pandas()`'s): the swept constants, the property,
-        its values, the model's size, and `verdict` if a swept property is a requirement."""
-        verdicts = bool(sweep_verdicts.requirements(self))
+        its values, the model's size, `verdict` if a swept property is a requirement, and
+        the values at the core's reference point if a property has one (`reference`: its
+        name, such as "midpoint"; `reference_min`, ...)."""
+        verdicts, references = self._extras()
         return [*self.swept, "property", *VALUES, "states", "transitions", "uniform_states",
-                "uniform_transitions"] + (["verdict"] if verdicts else [])
+                "uniform_transitions"] + (["verdict"] if verdicts else []) \
+            + (["reference", *(f"reference_{k}" for k in VALUES)] if references else [])
 
     def rows(self) -> list[list[Number | str | None]]:
         """The CSV's rows as values, one per point and property: a missing value is None,
         a verdict its kind as the core judged it (`PropertyResult.verdict`), None for a
         requirement without one and for a property that is no requirement."""
-        verdicts = self.columns()[-1] == "verdict"
-        return [[*self.coords(pt), r.name, *(getattr(r, k) for k in VALUES), pt.states,
-                 pt.transitions, pt.uniform_states, pt.uniform_transitions]
-                + ([r.verdict.kind if r.verdict is not None else None] if verdicts else [])
-                for pt in self.points for r in pt.properties]
+        verdicts, references = self._extras()
+        out: list[list[Number | str | None]] = []
+        for pt in self.points:
+            for r in pt.properties:
+                row: list[Number | str | None] = [
+                    *self.coords(pt), r.name, *(getattr(r, k) for k in VALUES), pt.states,
+                    pt.transitions, pt.uniform_states, pt.uniform_transitions]
+                if verdicts:
+                    row.append(r.verdict.kind if r.verdict is not None else None)
+                if references:
+                    ref = reference(r) or {}
+                    row += [ref.get("point"), *(ref.get(k) for k in VALUES)]
+                out.append(row)
+        return out
+
+    def _extras(self) -> tuple[bool, bool]:
+        """Whether the CSV has a verdict column, and reference columns."""
+        return (bool(sweep_verdicts.requirements(self)),
+                any(reference(r) is not None for pt in self.points for r in pt.properties))
 
     def to_csv(self) -> str:
         buf = io.StringIO()
@@ -178,10 +195,15 @@ class SweepResult:
                     ax.fill_between(xs, lo, hi, color="tab:blue", alpha=0.12, linewidth=0)
                     ax.plot(xs, hi, color="tab:blue", label="max", linewidth=1.6)
                     ax.plot(xs, lo, color="tab:red", label="min", linewidth=1.6)
-                    un = self.curve(name, "uniform")
+                    un, label = self.curve(name, "uniform"), "uniform"
+                    if all(v is None for v in un):  # the core's reference point's, if any
+                        refs = [reference(pt.property(name)) or {} for pt in self.points]
+                        un = [ref.get("uniform") for ref in refs]
+                        point = next((ref["point"] for ref in refs if "point" in ref), "")
+                        label = f"uniform at the {point}"
                     if any(v is not None for v in un):
                         ax.plot(xs, [_nan(v) for v in un], color="black", linestyle="--",
-                                label="uniform", linewidth=1.2)
+                                label=label, linewidth=1.2)
                 else:
                     ax.plot(xs, [_nan(v) for v in self.curve(name, "value")],
                             color="tab:blue", label="value", linewidth=1.6)
@@ -201,6 +223,14 @@ class SweepResult:
                 ax.grid(True, alpha=0.3)
                 ax.legend(loc="best")
         return fig
+
+
+def reference(r: PropertyResult) -> dict[str, Any] | None:
+    """The property's values at the core's reference point (with interval probabilities:
+    their midpoint), as the core writes them in its JSON; None if it has none. Rendered as
+    the core gives them, never judged."""
+    ref = r.to_json().get("reference")
+    return ref if isinstance(ref, dict) else None
 
 
 def _nan(v: float | None) -> float:

@@ -217,6 +217,20 @@ def test_with_interval_probabilities_each_point_is_the_cores_answer(patrol_box: 
         (want,) = run(patrol_box, consts={"CELLS": str(pt.x)}, formulas=[need]).properties
         assert (got.min, got.max, got.verdict, got.error) == \
             (want.min, want.max, want.verdict, want.error), pt.x
+        assert got.to_json().get("reference") == want.to_json().get("reference"), pt.x
+    # the CSV carries the core's reference values (its midpoint's), if it gives any, as
+    # the JSON does
+    out: dict[str, Any] = res.to_json()
+    refs = [p.get("reference") for pt in out["points"] for p in pt["properties"]]
+    rows = list(csv.DictReader(io.StringIO(res.to_csv())))
+    assert len(rows) == len(refs) == 2
+    for row, ref in zip(rows, refs, strict=True):
+        if ref is None:
+            assert "reference" not in row
+            continue
+        assert row["reference"] == ref["point"]
+        for key in ("min", "max", "uniform", "value"):
+            assert row[f"reference_{key}"] == ("" if ref[key] is None else repr(ref[key]))
 
 
 @pytest.mark.xfail(strict=True, reason="check() judges interval probabilities at their "
