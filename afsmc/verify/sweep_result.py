@@ -197,10 +197,7 @@ class SweepResult:
                     ax.plot(xs, lo, color="tab:red", label="min", linewidth=1.6)
                     un, label = self.curve(name, "uniform"), "uniform"
                     if all(v is None for v in un):  # the core's reference point's, if any
-                        refs = [reference(pt.property(name)) or {} for pt in self.points]
-                        un = [ref.get("uniform") for ref in refs]
-                        point = next((ref["point"] for ref in refs if "point" in ref), "")
-                        label = f"uniform at the {point}"
+                        un, label = _reference_curve(self, name)
                     if any(v is not None for v in un):
                         ax.plot(xs, [_nan(v) for v in un], color="black", linestyle="--",
                                 label=label, linewidth=1.2)
@@ -231,6 +228,19 @@ def reference(r: PropertyResult) -> dict[str, Any] | None:
     the core gives them, never judged."""
     ref = r.to_json().get("reference")
     return ref if isinstance(ref, dict) else None
+
+
+def _reference_curve(res: SweepResult, name: str) -> tuple[list[float | None], str]:
+    """The uniform resolution's curve at the core's reference point (with interval
+    probabilities: their midpoint), or a DTMC's value there, and its label; no values if
+    the core gives no reference point."""
+    refs = [reference(pt.property(name)) or {} for pt in res.points]
+    point = next((ref["point"] for ref in refs if "point" in ref), "")
+    for key in ("uniform", "value"):
+        curve = [ref.get(key) for ref in refs]
+        if any(v is not None for v in curve):
+            return curve, f"{key} at the {point}"
+    return [None] * len(refs), ""
 
 
 def _nan(v: float | None) -> float:
