@@ -137,7 +137,7 @@ def _core(path: str, consts: dict[str, str]) -> dict[str, afsmc.verify.PropertyR
 def test_each_point_renders_the_cores_answer(labelled: str) -> None:
     """A sweep over a constant the model reads (a build per point): every point's values,
     verdict and reason are `run`'s at that point, and the CSV, the JSON, the sub-ranges
-    and the DataFrame say that verdict."""
+    and the plot say that verdict."""
     fails = [0.1, 0.3, 0.5, 0.7]
     res = sweep(labelled, "P_FAIL", fails, consts={"D": "6"}, jobs=1)
     core = {x: _core(labelled, {"D": "6", "P_FAIL": str(x)}) for x in fails}
