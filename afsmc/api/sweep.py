@@ -13,7 +13,7 @@ from afsmc.api.errors import AfsmError
 from afsmc.api.results import VERIFY_DEFAULTS, names
 from afsmc.diagnostics import CompileError
 from afsmc.lifetime import without_main
-from afsmc.verify.sweep_result import SweepResult
+from afsmc.verify.sweep_result import VALUES, SweepResult
 from afsmc.verify.sweep_values import Number, parse_values
 
 if TYPE_CHECKING:
@@ -21,8 +21,6 @@ if TYPE_CHECKING:
     from matplotlib.figure import Figure
 
     from afsmc.api.mission import Mission
-
-COLUMNS = ("min", "max", "uniform", "value")
 
 
 def sweep(mission: Mission, variable: str | Mapping[str, Sequence[Number] | str],
@@ -82,23 +80,23 @@ class Sweep:
         return self.raw.xs
 
     def to_pandas(self) -> pd.DataFrame:
-        """One row per point and property, as `afsmc sweep` writes its CSV: the swept
-        value (a column named after the constant, or "bound"; a column per constant for
-        a grid), ``property``, ``min``,
-        ``max``, ``uniform``, ``value`` (NaN where not asked), ``states``, ``transitions``.
+        """One row per point and property, the rows and columns of `afsmc sweep`'s CSV: the
+        swept value (a column named after the constant, or "bound"; a column per constant
+        for a grid), ``property``, ``min``, ``max``, ``uniform``, ``value`` (NaN where not
+        asked), ``states``, ``transitions``, ``uniform_states``, ``uniform_transitions``,
+        and, if a swept property is a requirement, ``verdict``: the verdict the
+        verification core judged at that point ("holds", "fails", "depends",
+        "undecided"; None for a property that is no requirement or a value that failed),
+        and, if the core gives a reference point (interval probabilities: their midpoint),
+        ``reference`` (its name) and ``reference_min``, ... (the values there).
         ``df.pivot(index=variable, columns="property", values="value")`` gives a curve
         per column."""
         import pandas as pd
 
-        swept = self.raw.swept
-        rows = [{**dict(zip(swept, self.raw.coords(pt), strict=True)), "property": r.name,
-                 **{k: getattr(r, k) for k in COLUMNS},
-                 "states": pt.states, "transitions": pt.transitions}
-                for pt in self.raw.points for r in pt.properties]
-        df = pd.DataFrame(rows, columns=[*swept, "property", *COLUMNS, "states",
-                                         "transitions"])
-        for k in COLUMNS:
-            df[k] = df[k].astype(float)
+        df = pd.DataFrame(self.raw.rows(), columns=self.raw.columns())
+        for k in (*VALUES, *(f"reference_{v}" for v in VALUES)):
+            if k in df.columns:
+                df[k] = df[k].astype(float)
         return df
 
     def to_json(self) -> dict[str, object]:

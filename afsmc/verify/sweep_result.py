@@ -22,6 +22,7 @@ if TYPE_CHECKING:
 RC: Any = {"svg.hashsalt": "afsmc", "font.size": 9}  # byte-identical SVGs; small print
 
 REQUIREMENT_KEYS = ("threshold", "verdict", "error")
+VALUES = ("min", "max", "uniform", "value")  # a property's values, as columns
 
 
 @dataclass
@@ -74,24 +75,53 @@ class SweepResult:
     def xs(self) -> list[Number]:
         return [pt.x for pt in self.points]
 
+    def columns(self) -> list[str]:
+        """The CSV's columns (and `Sweep.to_pandas()`'s): the swept constants, the property,
+        its values, the model's size, `verdict` if a swept property is a requirement, and
+        the values at the core's reference point if a property has one (`reference`: its
+        name, such as "midpoint"; `reference_min`, ...)."""
+        verdicts, references = self._extras()
+        return [*self.swept, "property", *VALUES, "states", "transitions", "uniform_states",
+                "uniform_transitions"] + (["verdict"] if verdicts else []) \
+            + (["reference", *(f"reference_{k}" for k in VALUES)] if references else [])
+
+    def rows(self) -> list[list[Number | str | None]]:
+        """The CSV's rows as values, one per point and property: a missing value is None,
+        a verdict its kind as the core judged it (`PropertyResult.verdict`), None for a
+        requirement without one and for a property that is no requirement."""
+        verdicts, references = self._extras()
+        out: list[list[Number | str | None]] = []
+        for pt in self.points:
+            for r in pt.properties:
+                row: list[Number | str | None] = [
+                    *self.coords(pt), r.name, *(getattr(r, k) for k in VALUES), pt.states,
+                    pt.transitions, pt.uniform_states, pt.uniform_transitions]
+                if verdicts:
+                    row.append(r.verdict.kind if r.verdict is not None else None)
+                if references:
+                    ref = reference(r) or {}
+                    row += [ref.get("point"), *(ref.get(k) for k in VALUES)]
+                out.append(row)
+        return out
+
+    def _extras(self) -> tuple[bool, bool]:
+        """Whether the CSV has a verdict column, and reference columns."""
+        return (bool(sweep_verdicts.requirements(self)),
+                any(reference(r) is not None for pt in self.points for r in pt.properties))
+
     def to_csv(self) -> str:
         buf = io.StringIO()
         w = csv.writer(buf, lineterminator="\n")
-        verdicts = bool(sweep_verdicts.requirements(self))
-        w.writerow([*self.swept, "property", "min", "max", "uniform", "value", "states",
-                    "transitions", "uniform_states", "uniform_transitions"]
-                   + (["verdict"] if verdicts else []))
+        w.writerow(self.columns())
+        swept = len(self.swept)
 
-        def cell(v: float | int | None) -> str:
-            return "" if v is None else str(v) if isinstance(v, int) else repr(float(v))
+        def cell(v: Number | str | None) -> str:
+            return ("" if v is None else v if isinstance(v, str) else
+                    str(v) if isinstance(v, int) else repr(float(v)))
 
-        for pt in self.points:
-            for r in pt.properties:
-                w.writerow([*(literal(v) for v in self.coords(pt)), r.name, cell(r.min), cell(r.max), cell(r.uniform),
-                            cell(r.value), pt.states, pt.transitions, cell(pt.uniform_states),
-                            cell(pt.uniform_transitions)]
-                           + ([r.verdict.kind if r.verdict is not None else ""]
-                              if verdicts else []))
+        for row in self.rows():
+            w.writerow([*(literal(v) for v in row[:swept]),
+                        *(cell(v) for v in row[swept:])])
         return buf.getvalue()
 
     def to_json(self) -> dict[str, object]:
@@ -165,10 +195,12 @@ class SweepResult:
                     ax.fill_between(xs, lo, hi, color="tab:blue", alpha=0.12, linewidth=0)
                     ax.plot(xs, hi, color="tab:blue", label="max", linewidth=1.6)
                     ax.plot(xs, lo, color="tab:red", label="min", linewidth=1.6)
-                    un = self.curve(name, "uniform")
+                    un, label = self.curve(name, "uniform"), "uniform"
+                    if all(v is None for v in un):  # the core's reference point's, if any
+                        un, label = _reference_curve(self, name)
                     if any(v is not None for v in un):
                         ax.plot(xs, [_nan(v) for v in un], color="black", linestyle="--",
-                                label="uniform", linewidth=1.2)
+                                label=label, linewidth=1.2)
                 else:
                     ax.plot(xs, [_nan(v) for v in self.curve(name, "value")],
                             color="tab:blue", label="value", linewidth=1.6)
@@ -188,6 +220,27 @@ class SweepResult:
                 ax.grid(True, alpha=0.3)
                 ax.legend(loc="best")
         return fig
+
+
+def reference(r: PropertyResult) -> dict[str, Any] | None:
+    """The property's values at the core's reference point (with interval probabilities:
+    their midpoint), as the core writes them in its JSON; None if it has none. Rendered as
+    the core gives them, never judged."""
+    ref = r.to_json().get("reference")
+    return ref if isinstance(ref, dict) else None
+
+
+def _reference_curve(res: SweepResult, name: str) -> tuple[list[float | None], str]:
+    """The uniform resolution's curve at the core's reference point (with interval
+    probabilities: their midpoint), or a DTMC's value there, and its label; no values if
+    the core gives no reference point."""
+    refs = [reference(pt.property(name)) or {} for pt in res.points]
+    point = next((ref["point"] for ref in refs if "point" in ref), "")
+    for key in ("uniform", "value"):
+        curve = [ref.get(key) for ref in refs]
+        if any(v is not None for v in curve):
+            return curve, f"{key} at the {point}"
+    return [None] * len(refs), ""
 
 
 def _nan(v: float | None) -> float:

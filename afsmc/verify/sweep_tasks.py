@@ -2,9 +2,11 @@
 
 A task is plain data (the source text included), so it runs the same in this process, in
 a local process pool or on a Dask cluster. A const sweep whose constant only the properties
-read (a deadline) shares one model between its points (see :func:`independent`): each task
-then checks a chunk of points on one build, with the constant inlined into each point's
-properties. A bound sweep checks a chunk of step bounds on one build.
+and the labels read (a deadline) shares one model between its points (see
+:func:`independent`): each task then checks a chunk of points on one build, with the
+constant inlined into each point's properties, and the labels that read a constant written
+out in them (labels are state predicates: `F "on_time"` at DEADLINE=200 is `F (... && t <=
+200)`). A bound sweep checks a chunk of step bounds on one build.
 """
 
 from __future__ import annotations
@@ -12,6 +14,7 @@ from __future__ import annotations
 import dataclasses
 import re
 import time
+from collections import Counter
 from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
@@ -22,6 +25,7 @@ from afsmc.lower.lowering import lower
 from afsmc.lower.reduce import Reductions
 from afsmc.model import expr as E
 from afsmc.model import ir
+from afsmc.model.semantics import inline
 from afsmc.stack import deep
 from afsmc.text import literal
 from afsmc.verify.api import check, load_with_formulas, select
@@ -199,15 +203,36 @@ def _point(x: Number, properties: list[PropertyResult], c: Checks | Partial,
                       u.states if u else None, u.transitions if u else None, secs)
 
 
+def inlined(model: ir.Model, ref: E.LabelRef | E.FormulaRef) -> E.Expr | None:
+    """What a label or formula stands for (formulas, labels and weights inlined), if a
+    shared sweep writes it out in the properties: if it reads a constant, and only constants
+    with one value (an interval constant's or an interval probability's is no number to
+    write in; the checks refuse both in labels and properties, so this only guards). None:
+    the reference stays, and its declaration stays in the model text that
+    :func:`independent` compares."""
+    body = inline(ref, model)
+    reads = E.consts_read(body)
+    if not reads or any(model.constant(n).is_interval or model.constant(n).is_prob_interval
+                        for n in reads):
+        return None
+    return body
+
+
 def _inline_consts(p: ir.Property, model: ir.Model, name: str) -> ir.Property:
-    """The property with every constant replaced by its value in `model`."""
+    """The property with every constant replaced by its value in `model`, and every label
+    or formula that reads one by what it stands for there (:func:`inlined`)."""
+    def written_out(n: E.Expr) -> E.Expr | None:
+        if isinstance(n, (E.LabelRef, E.FormulaRef)):
+            return inlined(model, n)
+        return None
+
     def lit(n: E.Expr) -> E.Expr | None:
         if isinstance(n, E.ConstRef):
             return E.Lit(model.constant(n.name).value, n.type)
         return None
 
     def sub(e: E.Expr | None) -> E.Expr | None:
-        return None if e is None else E.transform(e, lit)
+        return None if e is None else E.transform(E.transform(e, written_out), lit)
 
     path = p.path
     if isinstance(path, ir.Path):
@@ -250,13 +275,35 @@ def _shared_points(task: Task, t0: float) -> list[SweepPoint]:
 
 
 def model_text(path: str, text: str, consts: dict[str, str]) -> str:
-    """The PRISM model without properties and without unused constants' declarations."""
+    """The PRISM model as a shared sweep builds it: without properties, without the labels
+    and formulas it writes out in the properties (:func:`inlined`), and without the
+    declarations of the formulas and constants nothing else then reads."""
     model = load_with_formulas(path, consts, text=text, run_checks=False).model
-    lines = prism_emit(lower(model, "nondet")).model.splitlines()
-    body = "\n".join(line.split("//")[0] for line in lines if not line.startswith("const "))
-    used = set(re.findall(r"[A-Za-z_][A-Za-z0-9_]*", body))
-    return "\n".join(line for line in lines if not line.startswith("const ")
-                     or line.split()[2] in used)
+    gone = {f'label "{lb.name}"' for lb in model.labels
+            if inlined(model, E.LabelRef(lb.name)) is not None}
+    droppable = {f.name for f in model.formulas
+                 if inlined(model, E.FormulaRef(f.name, f.value.type)) is not None}
+    lines = [line for line in prism_emit(lower(model, "nondet")).model.splitlines()
+             if line.split(" = ")[0] not in gone]
+    while True:  # again: a formula that only a dropped one read is dropped in turn
+        uses: Counter[str] = Counter()
+        for line in lines:
+            uses.update(_NAME.findall(line.split("//")[0]))
+        unused = [line for line in lines if (d := _declared(line)) is not None
+                  and uses[d[1]] == 1 and (d[0] == "const" or d[1] in droppable)]
+        if not unused:
+            return "\n".join(lines)
+        lines = [line for line in lines if line not in unused]
+
+
+_NAME = re.compile(r"[A-Za-z_][A-Za-z0-9_]*")
+_DECLARATION = re.compile(r"(const|formula) (?:(?:int|double|bool) )?([A-Za-z_][A-Za-z0-9_]*)")
+
+
+def _declared(line: str) -> tuple[str, str] | None:
+    """("const" or "formula", the name) if the line declares one, else None."""
+    m = _DECLARATION.match(line)
+    return None if m is None else (m.group(1), m.group(2))
 
 
 def independent(path: str, text: str, consts: dict[str, str], variable: str,

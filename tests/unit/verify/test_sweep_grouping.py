@@ -4,7 +4,7 @@ one task per value; step bounds go in chunks."""
 
 from __future__ import annotations
 
-from afsmc.verify.sweep_tasks import Task, independent, make_tasks
+from afsmc.verify.sweep_tasks import Task, independent, make_tasks, model_text
 from afsmc.verify.sweep_values import Kind
 
 # D is read by a property only; P_FAIL by the model.
@@ -39,6 +39,26 @@ label done = mode == B;
 property p = P=? [ F "done" ];
 """
 
+# D is read by labels only, directly and through a formula no action reads; EARLY by a label
+# that an action's guard reads through a formula (labels: properties only; formulas: both).
+LABELS = """
+machine labels;
+param int D = 5;
+param int EARLY = 1;
+var t : [0..20] init 0 clamp;
+mode Work = 0 initial;
+mode Done = 1 final;
+formula late = t > D;
+formula busy = t < EARLY;
+action Step in Work when t < 6 { t += 2; }
+action Finish in Work when t >= 6 || busy { goto Done; }
+label on_time = mode == Done && !late;
+label early = mode == Done && t <= D - 2;
+label quick = mode == Done && busy;
+property by_deadline = P=? [ F "on_time" ];
+property early = P=? [ F "early" ];
+property quick = P=? [ F "quick" ];
+"""
 
 def _base(variable: str, kind: Kind = "const") -> Task:
     return Task(path="m.afsm", text=MODEL, consts=(), properties=(), formulas=(),
@@ -93,3 +113,23 @@ def test_many_values_say_that_the_model_is_compared_first() -> None:
     said: list[str] = []
     make_tasks(_base("D"), list(range(101)), jobs=1, dask=None, progress=said.append)
     assert said == ["sweep: comparing the model at the 101 values of D"]
+
+
+def test_a_constant_only_labels_read_leaves_the_model_unchanged() -> None:
+    """Labels are state predicates that only properties read: a shared sweep writes them
+    out in each point's properties, so the model it builds has no use for them."""
+    assert independent("m.afsm", LABELS, {}, "D", [0, 3, 7, 20])
+
+
+def test_a_constant_a_guard_reads_through_a_formula_changes_the_model() -> None:
+    assert not independent("m.afsm", LABELS, {}, "EARLY", [0, 1, 2])
+
+
+def test_the_model_text_keeps_what_the_model_reads_and_drops_what_only_labels_read() -> None:
+    text = model_text("m.afsm", LABELS, {"D": "3"})
+    assert 'label "on_time"' not in text and 'label "early"' not in text
+    assert "formula late" not in text and "const int D" not in text
+    # `quick` reads E through a formula the model reads too: written out in the properties,
+    # its declaration goes; the formula and EARLY stay
+    assert 'label "quick"' not in text
+    assert "formula busy" in text and "const int EARLY = 1;" in text
