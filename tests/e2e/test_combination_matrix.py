@@ -2,20 +2,25 @@
 with `--strategy`, `--witness 2`, a requirement, `--exact` and their pairs.
 
 Each cell is one front-end (a row: `verify` as text, `--json` and `--junit`, `sweep` CSV
-and JSON at one point, `regions` over the mission's own box, the Python API's `Results`,
-`to_pandas` and `_repr_html_`, `diagram --results/--strategy/--witness/--reach`,
-`simulate --strategy`) on one mission (a column: tests/e2e/matrix/*.afsm) with one set of
-options. Its id reads `MISSION-ROW[-OPTION...]`, e.g. `interleaving-verify-json-strategy`.
-Each cell asserts:
+and JSON at one point (the mission's own value), `regions` over the mission's own box, the
+Python API's `Results`, `to_pandas` and `_repr_html_` and `Sweep.to_pandas`, `diagram
+--results/--strategy/--witness/--reach`, `simulate --strategy`) on one mission (a column:
+tests/e2e/matrix/*.afsm, 41 to 152 states) with one set of options. Its id reads
+`MISSION-ROW[-OPTION...]`, e.g. `interleaving-verify-json-strategy`. Each cell asserts:
 
-- no internal error (exit code 3, a traceback);
+- no internal error (exit code 3, a traceback: the cells run with AFSMC_TRACEBACK=1, so
+  the exception itself fails the cell);
 - no refusal the docs do not state: a refusal passes only if its code is in
   `DOCUMENTED_REFUSALS` for that row, mission and option, which names the doc section;
 - the same bounds and verdict as `verify --json` for the same mission and options (the
   headline `min`/`max`, a DTMC's `value` as both, and `verdict`; see `Reference`): to
   1e-9 where the front-end gives full floats, to its digits where it rounds (a table's 6,
   a diagram's 4). `--strategy` and `--witness` only add to the output, so the reference
-  leaves them out; a requirement and `--exact` change the values, so it has them.
+  leaves them out; a requirement and `--exact` change the values, so it has them. A
+  front-end that shows a verdict-less view of a requirement fails; `regions` shows no
+  bounds, only regions, whose verdict is read as `fe.regions_verdict` says;
+- what `--strategy` and `--witness` add is there: a strategy table (or the turns), and
+  paths or the reason there are none.
 
 A cell that fails today is listed in `XFAIL` (strict), keyed by its id, with what breaks:
 when a fix lands, the cell XPASSes and its entry goes.
@@ -76,7 +81,8 @@ MISSIONS = {
                      "Finished", "P_FAULT=0.005:0.03"),
     "both": Mission("both.afsm", 'P>=0.75 [ F "done" ]', PATROL_ZERO, "CELLS=2:2",
                     "Finished", "P_FAULT=0.005:0.03"),
-    # who moves next is the only choice (no interval constant): 0.961926, holds
+    # who moves next is the only choice (no interval constant): min 0.961926, max 0.961985,
+    # holds
     "interleaving": Mission("interleaving.afsm", 'P>=0.95 [ F "done" ]', PAIR_ZERO,
                             "JOBS=2:2", "Done"),
     # min 0.79546, max 0.961926: depends
@@ -144,6 +150,7 @@ ROWS: dict[str, tuple[str, ...]] = {
     "verify-junit": REQUIREMENT_SETS,
     "sweep-csv": ("", "req"),
     "sweep-json": ("", "req"),
+    "api-sweep": ("", "req"),
     "regions": ("req",),  # missions with an interval probability: over its box
     "api": OPTION_SETS,
     "api-pandas": OPTION_SETS,
@@ -241,6 +248,12 @@ XFAIL: dict[str, str] = {
     **known("sweep judges an interval-probability requirement at the midpoint: holds, where "
             "verify says depends over the box", ("iprob", "both"), ("sweep-csv", "sweep-json"),
             ("req",)),
+    **known("Sweep.to_pandas() has no verdict column (the CLI's CSV has one)",
+            ("dtmc", "intervals", "interleaving", "timed-order", "timed-nondet", "data"),
+            ("api-sweep",), ("req",)),
+    **known("Sweep.to_pandas() has no verdict column (the CLI's CSV has one), and the sweep "
+            "judges an interval-probability requirement at the midpoint (holds; verify: "
+            "depends)", ("iprob", "both"), ("api-sweep",), ("req",)),
     **known("diagram --results shows a requirement's values without its verdict", SINGLE,
             ("diagram-results",), ("req",)),
     **known("diagram --results on a composed mission draws no note of the properties",
@@ -359,10 +372,13 @@ def test_cell(mission: str, row: str, options: str, references: References,
     elif row in ("sweep-csv", "sweep-json"):
         sweep = [m.path, "--const", m.point, *selection(m, options)]
         answer = fe.sweep_csv(sweep) if row == "sweep-csv" else fe.sweep_json(sweep)
+    elif row == "api-sweep":
+        properties, kwargs = api_options(m, options)
+        answer = fe.api_sweep(m.path, m.point, properties, kwargs)
     elif row == "regions":
         assert m.box is not None
         answer = fe.regions([m.path, "--param", m.box, "--require", m.requirement], "adhoc")
-    elif row.startswith("api"):
+    elif row in ("api", "api-pandas", "api-html"):
         key = (mission, options)
         if key not in api_cache:
             properties, kwargs = api_options(m, options)

@@ -327,6 +327,28 @@ def api_html(res: Any) -> Answer:
     return answer
 
 
+def api_sweep(path: str, point: str, properties: Sequence[str],
+              options: Mapping[str, Any]) -> Answer:
+    """`afsmc.load(path).sweep(NAME, "v:v").to_pandas()` of one point: a row per property,
+    columns min/max/value and (a requirement's) verdict, as the CLI's CSV."""
+    import afsmc
+
+    name, values = point.split("=")
+    try:
+        sw = afsmc.load(path).sweep(name, values, properties=list(properties) or None,
+                                    jobs=1, **options)
+    except afsmc.AfsmError as exc:
+        return api_refusal(exc) or Answer()
+    answer = Answer()
+    for row in sw.to_pandas().to_dict("records"):
+        cell = {k: None if isinstance(v, float) and math.isnan(v) else v
+                for k, v in row.items()}
+        lo = cell["min"] if cell["min"] is not None else cell["value"]
+        hi = cell["max"] if cell["max"] is not None else cell["value"]
+        answer.shown[str(cell["property"])] = Shown(lo, hi, cell.get("verdict") or None)
+    return answer
+
+
 # -- diagram and simulate ------------------------------------------------------------
 
 def svg_texts(path: Path) -> list[list[str]]:
