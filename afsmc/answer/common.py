@@ -25,7 +25,7 @@ from pydantic.json_schema import SkipJsonSchema
 
 # One version for the four schemas, in each one's "$id" (urn:afsmc:schema:<name>:<version>).
 # Raise it whenever any schema changes: a key added, removed, renamed or retyped.
-SCHEMA_VERSION = 1
+SCHEMA_VERSION = 2
 
 
 def _never_null_in_json(value: None, info: ValidationInfo) -> None:
@@ -146,6 +146,8 @@ class Reference(Answer):
     uniform: float | None = Field(
         description="the value there with the interval constants' floor or ceil drawn "
                     "uniformly at random (null: not asked)")
+    exact: dict[Literal["min", "max", "uniform", "value"], str] | Absent = Field(
+        None, description="--exact: the values there as fractions `num/den`")
 
 
 class AttainedAt(Answer):
@@ -179,8 +181,11 @@ ERROR = ("every value is within this of the true one (0: exact, with --exact); n
          "guarantee (Storm's default precision, for a query)")
 REASON = "the verdict in one sentence for people: the bound that decides it against the threshold"
 BROKEN_BY = "for `depends`: the bound that misses the threshold"
-DECIDED_BY = ("the bound that decides the verdict: min (for >= and >), max (for <= and <), or "
-              "value (a DTMC); null for a query")
+DECIDED_BY = ("the bound the verdict rests on: for holds the worst bound (min for >= and >, "
+              "max for <= and <), for fails the best one, for depends the one that misses, "
+              "for undecided the one too near the threshold; value for a DTMC's one value; "
+              "absent for a query (=?)")
+DecidedBy = Literal["min", "max", "value"]
 REFERENCE = ("the values at the interval probabilities' midpoint, never judged; absent "
              "without interval probabilities")
 ATTAINED_AT = ("where min and max are attained over the interval probabilities; absent "

@@ -34,6 +34,12 @@ class Regions(Answer):
     rounds: int = Field(ge=0, description="rounds of halving run")
     states: int = Field(ge=0, description="states of the parametric model")
     seconds: float = Field(ge=0, description="the run's time, s, rounded to 1e-3")
+    verdict: Literal["holds", "fails", "depends", "undecided"] = Field(
+        description="the verdict over the whole box, in verify's words (docs/verification.md, "
+                    "\"What a result means\")")
+    reason: str = Field(description="one sentence: why the box has that verdict")
+    from_file: list[str] = Field(
+        description="the dimensions no --param named: the file's interval probabilities")
     regions: list[Region] = Field(description="the regions, decided ones first")
     feasible: dict[str, float] | None = Field(
         None, description="--feasible: one valuation of the parameters that meets the "

@@ -51,7 +51,7 @@ class PointValue(Answer):
     error: float | Absent = Field(None, description=c.ERROR.replace("null", "absent"))
     reason: str | Absent = Field(None, description=c.REASON)
     broken_by: c.Bound | Absent = Field(None, description=c.BROKEN_BY)
-    decided_by: Literal["min", "max", "value"] | None = Field(None, description=c.DECIDED_BY)
+    decided_by: c.DecidedBy | Absent = Field(None, description=c.DECIDED_BY)
     reference: c.Reference | Absent = Field(None, description=c.REFERENCE)
     attained_at: c.AttainedAt | Absent = Field(None, description=c.ATTAINED_AT)
 
@@ -115,7 +115,7 @@ class GridRow(Answer):
     error: float | Absent = Field(None, description=c.ERROR.replace("null", "absent"))
     reason: str | Absent = Field(None, description=c.REASON)
     broken_by: c.Bound | Absent = Field(None, description=c.BROKEN_BY)
-    decided_by: Literal["min", "max", "value"] | None = Field(None, description=c.DECIDED_BY)
+    decided_by: c.DecidedBy | Absent = Field(None, description=c.DECIDED_BY)
     reference: c.Reference | Absent = Field(None, description=c.REFERENCE)
     attained_at: c.AttainedAt | Absent = Field(None, description=c.ATTAINED_AT)
     states: int | None = Field(description=STATES)

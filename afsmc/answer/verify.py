@@ -112,8 +112,11 @@ class PropertyResult(Answer):
     error: float | None = Field(description=c.ERROR)
     reason: str | Absent = Field(None, description=c.REASON)
     broken_by: c.Bound | Absent = Field(None, description=c.BROKEN_BY)
+    decided_by: c.DecidedBy | Absent = Field(None, description=c.DECIDED_BY)
     exact: dict[Literal["min", "max", "uniform", "value"], str] | Absent = Field(
         None, description="--exact: each value as the fraction 'num/den'")
+    reference: c.Reference | Absent = Field(None, description=c.REFERENCE)
+    attained_at: c.AttainedAt | Absent = Field(None, description=c.ATTAINED_AT)
     strategy: dict[c.Bound, list[StrategyEntry]] | Absent = Field(
         None, description="--strategy: the min and max strategies in mission terms")
     turns: dict[c.Bound, list[TurnEntry]] | Absent = Field(
@@ -128,9 +131,6 @@ class PropertyResult(Answer):
                           "(a P>= requirement's violations)")
     witness_note: str | Absent = Field(
         None, description="with witnesses: why there are fewer than asked")
-    decided_by: Literal["min", "max", "value"] | None = Field(None, description=c.DECIDED_BY)
-    reference: c.Reference | Absent = Field(None, description=c.REFERENCE)
-    attained_at: c.AttainedAt | Absent = Field(None, description=c.ATTAINED_AT)
 
 
 class Timings(Answer):
@@ -190,11 +190,12 @@ class Verification(Answer):
     constants: dict[str, ConstValue] = Field(description="the open constants' values used")
     state_space: StateSpace = Field(description="size before building, and the limit")
     warnings: list[Diagnostic] = Field(description="afsmc's warnings, as in `afsmc check --json`")
+    uncertainty: list[Literal["interval constants", "agent order",
+                              "interval probabilities"]] = Field(
+        description="what min and max range over (docs/verification.md, \"What a result "
+                    "means\"); empty: nothing is uncertain, a DTMC's one value per property")
     probability_intervals: ProbabilityIntervals | Absent = Field(
         None, description="bounds over the interval probabilities; absent without them")
-    uncertainty: list[str] | Absent = Field(
-        None, description="what min and max range over, in words, e.g. 'interval "
-                          "constants', 'agent order', 'interval probabilities'")
 
 
 class VerifyFailure(Answer):

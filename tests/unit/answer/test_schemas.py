@@ -16,7 +16,7 @@ from pydantic import BaseModel
 from afsmc.answer import NAMES, common, regions, simulate, sweep, verify
 from afsmc.answer.schema import DOC_DIR, MODELS, REGENERATE, identifier, schema, text
 from tests.conftest import ROOT, run_cli
-from tests.unit.test_layers import imported
+from tests.unit.test_architecture import imports, modules
 
 
 @pytest.mark.parametrize("name", NAMES)
@@ -93,11 +93,13 @@ def test_every_model_is_frozen_and_closed(model: type[BaseModel]) -> None:
 def test_the_answers_import_nothing_else_of_afsmc() -> None:
     # any stage may use them; afsmc/answer/__init__.py imports nothing, for the CLI
     package = ROOT / "afsmc" / "answer"
+    known = modules()
     for path in sorted(package.glob("*.py")):
-        outside = sorted(m for m in imported(path) if m.startswith("afsmc")
-                         and not m.startswith("afsmc.answer"))
+        outside = sorted(i.target for i in imports(path, known)
+                         if not i.target.startswith("afsmc.answer"))
         assert not outside, f"{path.name} imports {outside}"
-    assert not [m for m in imported(package / "__init__.py") if m != "afsmc.answer"]
+    assert not [i for i in imports(package / "__init__.py", known)
+                if i.target != "afsmc.answer"]
 
 
 def test_an_absent_key_is_left_out_and_never_null() -> None:
@@ -113,7 +115,7 @@ def test_an_absent_key_is_left_out_and_never_null() -> None:
                                               '"message": "m", "hint": null}')
     box: dict[str, Any] = dict(requirement="r", box={}, coverage=1, target_coverage=0.9,
                                holds=1, fails=0, unknown=0, rounds=1, states=1, seconds=0,
-                               regions=[])
+                               verdict="holds", reason="r", from_file=[], regions=[])
     assert "feasible" not in regions.Regions(**box).model_dump(mode="json")
     none = regions.Regions(**box, feasible=None, feasible_method=None)
     assert none.model_dump(mode="json")["feasible"] is None
