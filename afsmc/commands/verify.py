@@ -144,7 +144,7 @@ def _midpoint(p: PropertyResult) -> str:
         return "-"
     if ref.value is not None:
         return num(ref.value)
-    return f"{num(ref.min)} – {num(ref.max)}"
+    return f"{num(ref.min)}–{num(ref.max)}"
 
 
 def _values_table(res: VerifyResult) -> list[list[str]]:
