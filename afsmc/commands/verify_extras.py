@@ -43,10 +43,11 @@ def render(res: VerifyResult) -> str:
     asked = any(p.strategy is not None for p in res.properties)
     for p in res.properties:
         ends = p.strategy is not None and any(p.strategy.values())
-        if p.strategy is not None and (ends or p.turns is None):
-            # a composed mission whose strategies resolve no interval constant: its turns
-            # below are all they choose
-            lines += ["", *strategy_lines(p)]
+        if p.strategy is not None:
+            if ends or p.turns is None:
+                # else a composed mission whose strategies resolve no interval constant:
+                # its turns below are all they choose
+                lines += ["", *strategy_lines(p)]
         elif asked:
             lines += ["", f"strategies of {p.name} ({p.formula}): none, as it is step-bounded "
                       "(its strategies count the steps; Storm gives no scheduler for them)"]

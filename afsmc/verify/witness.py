@@ -10,9 +10,11 @@ add up to Storm's, or the path is reported as not confirmed.
 A step shows what the mission did: the variables its action or hazard wrote. The exact
 reductions (afsmc.lower.reduce) reset a variable that is dead in the mode entered to its
 initial value, so that states differing only in it merge; those resets are the
-reductions', not the mission's, and the step leaves them out: the variable keeps, in the
-path, the value the mission last gave it (found by lowering the model again without the
-reductions, whose commands and branches are those of the reduced one, one for one).
+reductions', not the mission's, and the step leaves them out: each step's values are the
+mission's, its branch's updates evaluated on the mission's values before it, in the model
+lowered again without the reductions (whose commands and branches are those of the
+reduced one, one for one). A dead variable is never read before it is written, so the
+updates read the same values in both.
 """
 
 from __future__ import annotations
@@ -144,11 +146,16 @@ def _unreduced(low: Lowered) -> Lowered | None:
     return plain
 
 
-def _written(plain: Lowered | None, command: int, branch: int | None) -> set[str] | None:
-    """The variables (and "mode") the mission's own branch writes; None: unknown."""
+def _mission(plain: Lowered | None, command: int, branch: int | None,
+             real: dict[str, int], there: dict[str, int]) -> dict[str, int]:
+    """The mission's values after a step from `real` (its values before): the unreduced
+    branch's updates evaluated there, every other variable as it was. Where it is not
+    known (no reductions, a step not replayed): the state's values, `there`."""
     if plain is None or branch is None or command < 0:
-        return None
-    return {v for v, _ in plain.commands[command].branches[branch].updates}
+        return dict(there)
+    env = _env(plain, real)
+    b = plain.commands[command].branches[branch]
+    return real | {var: int(evaluate(expr, env)) for var, expr in b.updates}
 
 
 def _moved(low: Lowered, cmd: Command | None, hazard: str | None) -> tuple[tuple[str, str], ...]:
@@ -187,9 +194,7 @@ def describe(paths: Sequence[RawPath], variables: Sequence[str], low: Lowered) -
             action = "(no enabled action)" if cmd is None or cmd.kind == "deadlock" else (
                 "(final)" if cmd.kind == "final" else
                 action_text(low, cmd) if composed else cmd.action)
-            written = _written(plain, p.commands[i], branch)
-            before = dict(real)
-            real |= {k: there[k] for k in names if written is None or k in written}
+            before, real = real, _mission(plain, p.commands[i], branch, real, there)
             changes: dict[str, int | bool | str] = {
                 display.get(k, k) if k != "mode" else "mode": _value(low, k, real[k], booleans)
                 for k in names if real[k] != before[k]}
