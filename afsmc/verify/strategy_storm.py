@@ -258,15 +258,25 @@ def _matters(stormpy: Any, model: Any, prop: Any, result: Any,
 
     if _action_rewards(model, prop):
         return np.ones(len(reached), dtype=bool)
-    values = [float(v) if math.isfinite(v) else 1e300 for v in result.get_value_vector()]
-    rm = models.SparseRewardModel(optional_state_reward_vector=values)
+    raw = list(result.get_value_vector())
+    # an exact model's values are rationals, compared exactly (rewards: finite here, as
+    # an infinite expected reward has no rational)
+    exact = bool(getattr(model, "is_exact", False))
+    values = raw if exact else [float(v) if math.isfinite(v) else 1e300 for v in raw]
+    rm = (models.SparseRewardModel[stormpy.Rational] if exact else models.SparseRewardModel)(
+        optional_state_reward_vector=values)
     comp = models.SparseModelComponents(transition_matrix=model.transition_matrix,
                                         state_labeling=model.labeling, reward_models={"v": rm})
     one = models.SparseMdp(comp)
-    lo_q, hi_q = (np.asarray(stormpy.model_checking(one, q).get_value_vector())
+    lo_q, hi_q = ([x for x in stormpy.model_checking(one, q).get_value_vector()]
                   for q in stormpy.parse_properties("Rmin=? [I=1]; Rmax=? [I=1]"))
     del one, comp, rm
-    gap = np.abs(hi_q - lo_q) > SAME * np.maximum(1.0, np.maximum(np.abs(hi_q), np.abs(lo_q)))
+    if exact:
+        gap = np.fromiter((a != b for a, b in zip(lo_q, hi_q, strict=True)), dtype=bool,
+                          count=len(lo_q))
+    else:
+        lo, hi = np.asarray(lo_q, dtype=float), np.asarray(hi_q, dtype=float)
+        gap = np.abs(hi - lo) > SAME * np.maximum(1.0, np.maximum(np.abs(hi), np.abs(lo)))
     # the reached states among the MDP's, by their values
     keys_all = _keys(np.vstack([_valuations(model, variables), reached]))
     n = int(model.nr_states)
@@ -316,7 +326,8 @@ def _paths(stormpy: Any, program: Any, dtmc: Any, prop: Any, w: WitnessRequest,
 
     target, left, bound = _target(stormpy, program, dtmc, prop, w)
     what, under = _under(dtmc, prop)
-    reach = "satisfies the until" if left is not None else "reaches a target state"
+    reach = ("satisfies the until" if left is not None else "reaches a target state") + (
+        f" within {bound} steps" if bound is not None else "")
     if target is None:
         out.witness_note = "the property has no target states to reach"
         return
@@ -406,10 +417,11 @@ def _target(stormpy: Any, program: Any, dtmc: Any, prop: Any,
     else:
         return None, None, None
     if w.avoid and bound is None:
-        # prob0 states come out of Storm's graph analysis as exact zeros
+        # prob0 states come out of Storm's graph analysis as exact zeros (an exact
+        # model's are rationals, which equal 0 but not 0.0)
         whole = stormpy.parse_properties(f"P=? [ {path} ]", program)[0]
         values = stormpy.model_checking(dtmc, whole).get_value_vector()
-        return {s for s in range(dtmc.nr_states) if values[s] == 0.0}, None, None
+        return {s for s in range(dtmc.nr_states) if float(values[s]) == 0.0}, None, None
     if w.target is not None:
         right = stormpy.parse_properties(f"P=? [ F ({w.target}) ]", program)[0] \
             .get_raw_formula().subformula.subformula

@@ -389,3 +389,37 @@ def test_detour_steps_into_goal_keep_n(tmp_path: Path) -> None:
     steps = p.witnesses[1].steps
     assert [dict(s.changes) for s in steps] == [{"n": 1}, {"mode": "Goal"}]
     assert [s.probability for s in steps] == pytest.approx([0.3, 0.1])
+
+
+# ---- over rationals ---------------------------------------------------------------------
+
+
+def test_exact_strategies_and_paths_keep_the_exact_values() -> None:
+    """`--exact` built the model without state valuations: Storm's "bad optional access"
+    lost the MDP's values."""
+    plain = run(PATROL, properties=["finish"], exact=True, uniform=False).property("finish")
+    got = run(PATROL, properties=["finish"], exact=True, uniform=False, strategy=True,
+              witness=("finish", 2)).property("finish")
+    assert got.exact == plain.exact and set(got.exact) == {"min", "max"}
+    assert (got.min, got.max) == (plain.min, plain.max)
+    assert got.strategy is not None and got.strategy["max"]
+    assert got.witnesses is not None and len(got.witnesses) == 2
+    for w in got.witnesses:
+        assert w.confirmed
+        assert w.probability == pytest.approx(math.prod(s.probability for s in w.steps),
+                                              rel=1e-12)
+    # the float run's paths: the same probabilities (the max strategy ties nowhere here)
+    floats = run(PATROL, properties=["finish"], uniform=False,
+                 witness=("finish", 2)).property("finish")
+    assert floats.witnesses is not None
+    assert [w.probability for w in got.witnesses] == pytest.approx(
+        [w.probability for w in floats.witnesses], rel=1e-12)
+
+
+def test_exact_until_witness_finds_the_initial_state_missed() -> None:
+    formula = 'P>=0.5 ["halted" U "done"]'
+    got = run(PATROL, formulas=[formula], exact=True, witness=(None, 2),
+              uniform=False).properties[0]
+    assert (got.min, got.max) == (0.0, 0.0)
+    assert got.witnesses is not None and got.witnesses[0].steps == ()
+    assert "min is 0" in got.witness_note
