@@ -319,10 +319,11 @@ def _paths(stormpy: Any, program: Any, dtmc: Any, prop: Any, w: WitnessRequest,
 
     The generator is never handed what it cannot take: with the initial state among its
     targets it crashes (signal 11) at the second path, so the only path, the empty one,
-    is given here; an until's states where neither side holds are targets of the
+    is given here; and it crashes asking for a path beyond the last where a target is
+    reached only through another, so its targets are those a path reaches first
+    (`_frontier`). An until's states where neither side holds are targets of the
     generator too, as its paths end there, and such paths are dropped."""
     from stormpy.analysis import _utility
-    from stormpy.datastructures import BitVector
 
     target, left, bound = _target(stormpy, program, dtmc, prop, w)
     what, under = _under(dtmc, prop)
@@ -349,7 +350,7 @@ def _paths(stormpy: Any, program: Any, dtmc: Any, prop: Any, w: WitnessRequest,
             "empty one")
         return
     dead = set() if left is None else set(range(dtmc.nr_states)) - left - target
-    bits = BitVector(dtmc.nr_states, sorted(target | dead))
+    bits = _frontier(stormpy, dtmc, init, target | dead)
     gen = _utility.ShortestPathsGenerator(dtmc, bits)
     tm = dtmc.transition_matrix
     k = 0
@@ -382,6 +383,19 @@ def _paths(stormpy: Any, program: Any, dtmc: Any, prop: Any, w: WitnessRequest,
     elif len(found) < w.k and not out.witness_note:
         out.witness_note = f"there are only {len(found)} paths into the target states"
     out.paths = found
+
+
+def _frontier(stormpy: Any, dtmc: Any, init: int, stops: set[int]) -> Any:
+    """The states of `stops` that a path from `init` reaches before any other of them
+    (Storm's graph search, which does not go on from a stop), as a BitVector."""
+    from stormpy import developer
+    from stormpy.datastructures import BitVector
+
+    n = int(dtmc.nr_states)
+    go_on = BitVector(n, sorted(set(range(n)) - stops))
+    reached = developer.get_reachable_states(dtmc.transition_matrix, BitVector(n, [init]),
+                                             go_on, BitVector(n, sorted(stops)))
+    return BitVector(n, sorted({int(s) for s in reached} & stops))
 
 
 def _command(dtmc: Any, s: int, row: Any, extract: Extract, variables: tuple[str, ...]) -> int:

@@ -14,6 +14,7 @@ import json
 import math
 from collections.abc import Callable
 from pathlib import Path
+from typing import Any
 
 import pytest
 
@@ -423,3 +424,18 @@ def test_exact_until_witness_finds_the_initial_state_missed() -> None:
     assert (got.min, got.max) == (0.0, 0.0)
     assert got.witnesses is not None and got.witnesses[0].steps == ()
     assert "min is 0" in got.witness_note
+
+
+@pytest.mark.parametrize("options", [{"solver": "topological"}, {"exact": True}])
+def test_no_crash_asking_for_more_paths_than_there_are(tmp_path: Path,
+                                                       options: dict[str, Any]) -> None:
+    """On Storm's route, its paths generator crashed (signal 11) asking for a path beyond
+    the last where a target state (here `first == 1` with b still to move) leads on to
+    another: its targets are now those a path reaches first."""
+    spec = _file(tmp_path, "race", RACE)
+    plain = run(spec, **options).property("a_first")
+    got = run(spec, witness=("a_first", 3), **options).property("a_first")
+    assert (got.min, got.max) == (plain.min, plain.max) == (0.0, 1.0)
+    assert got.witnesses is not None and len(got.witnesses) == 1
+    assert [s.action for s in got.witnesses[0].steps] == ["a: Go"]
+    assert got.witness_note == "there are only 1 paths into the target states"
