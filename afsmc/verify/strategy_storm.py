@@ -324,6 +324,7 @@ def _paths(stormpy: Any, program: Any, dtmc: Any, prop: Any, w: WitnessRequest,
     (`_frontier`). An until's states where neither side holds are targets of the
     generator too, as its paths end there, and such paths are dropped."""
     from stormpy.analysis import _utility
+    from stormpy.datastructures import BitVector
 
     target, left, bound = _target(stormpy, program, dtmc, prop, w)
     what, under = _under(dtmc, prop)
@@ -350,8 +351,11 @@ def _paths(stormpy: Any, program: Any, dtmc: Any, prop: Any, w: WitnessRequest,
             "empty one")
         return
     dead = set() if left is None else set(range(dtmc.nr_states)) - left - target
-    bits = _frontier(stormpy, dtmc, init, target | dead)
-    gen = _utility.ShortestPathsGenerator(dtmc, bits)
+    first = _frontier(dtmc, init, target | dead)
+    if not first - dead:  # nothing to enumerate: the generator is not asked
+        out.witness_note = f"no path {reach}{under}"
+        return
+    gen = _utility.ShortestPathsGenerator(dtmc, BitVector(dtmc.nr_states, sorted(first)))
     tm = dtmc.transition_matrix
     k = 0
     found: list[RawPath] = []
@@ -385,9 +389,9 @@ def _paths(stormpy: Any, program: Any, dtmc: Any, prop: Any, w: WitnessRequest,
     out.paths = found
 
 
-def _frontier(stormpy: Any, dtmc: Any, init: int, stops: set[int]) -> Any:
+def _frontier(dtmc: Any, init: int, stops: set[int]) -> set[int]:
     """The states of `stops` that a path from `init` reaches before any other of them
-    (Storm's graph search, which does not go on from a stop), as a BitVector."""
+    (Storm's graph search, which does not go on from a stop)."""
     from stormpy import developer
     from stormpy.datastructures import BitVector
 
@@ -395,7 +399,7 @@ def _frontier(stormpy: Any, dtmc: Any, init: int, stops: set[int]) -> Any:
     go_on = BitVector(n, sorted(set(range(n)) - stops))
     reached = developer.get_reachable_states(dtmc.transition_matrix, BitVector(n, [init]),
                                              go_on, BitVector(n, sorted(stops)))
-    return BitVector(n, sorted({int(s) for s in reached} & stops))
+    return {int(s) for s in reached} & stops
 
 
 def _command(dtmc: Any, s: int, row: Any, extract: Extract, variables: tuple[str, ...]) -> int:
