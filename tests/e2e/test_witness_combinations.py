@@ -283,6 +283,10 @@ def test_interleaving_without_intervals_has_strategies_of_turns(tmp_path: Path) 
     assert r.code == 0, r.err
     assert "turns of a_first" in r.out and "step-bounded" not in r.out
     assert "no choice" not in r.out  # no floor/ceil table: there is no interval constant
+    js = json.loads(run_cli("verify", spec, "--strategy", "--json").out)["properties"][0]
+    assert js["turns"] == {"min": [{"action": "b: Go", "mode": "b: Idle", "states": 1}],
+                           "max": [{"action": "a: Go", "mode": "a: Idle", "states": 1}]}
+    assert js["strategy"] == {"min": [], "max": []}
     w = run(spec, witness=("a_first", 2)).property("a_first")
     assert w.witnesses is not None and len(w.witnesses) == 1
     (step,) = w.witnesses[0].steps
@@ -439,3 +443,14 @@ def test_no_crash_asking_for_more_paths_than_there_are(tmp_path: Path,
     assert got.witnesses is not None and len(got.witnesses) == 1
     assert [s.action for s in got.witnesses[0].steps] == ["a: Go"]
     assert got.witness_note == "there are only 1 paths into the target states"
+
+
+def test_mission_diagram_with_reach_on_a_composed_mission(tmp_path: Path) -> None:
+    """The Python API's `Mission.diagram(reach=True)`, as `diagram --reach`."""
+    import afsmc
+
+    spec = _file(tmp_path, "race", RACE)
+    dot = afsmc.load(spec).diagram(reach=True).source
+    # each agent reaches Done surely; whoever moves first is the scheduler's choice
+    assert dot.count("P(reach) 1") == 4  # a's and b's Idle and Done
+    assert "min – max over the agents' turns" in dot
