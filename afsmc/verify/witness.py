@@ -26,7 +26,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from afsmc.lower.lowering import Command, Lowered, lower
-from afsmc.model.evaluate import Env, evaluate
+from afsmc.model.evaluate import Env, EvalError, evaluate
 from afsmc.verify.strategy_compose import (
     action_text,
     agents,
@@ -155,7 +155,10 @@ def _mission(plain: Lowered | None, command: int, branch: int | None,
         return dict(there)
     env = _env(plain, real)
     b = plain.commands[command].branches[branch]
-    return real | {var: int(evaluate(expr, env)) for var, expr in b.updates}
+    try:
+        return real | {var: int(evaluate(expr, env)) for var, expr in b.updates}
+    except EvalError:  # not expected (the updates read live values only): as the state has it
+        return dict(there)
 
 
 def _moved(low: Lowered, cmd: Command | None, hazard: str | None) -> tuple[tuple[str, str], ...]:
