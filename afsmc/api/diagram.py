@@ -30,6 +30,7 @@ from afsmc.verify.api import ask
 from afsmc.verify.guard import Progress
 from afsmc.verify.stopping import large_variables
 from afsmc.verify.storm import StormFailure
+from afsmc.verify.strategy import turns_chosen
 
 if TYPE_CHECKING:
     from afsmc.api.mission import Mission
@@ -98,31 +99,62 @@ def diagram(mission: Mission, *, reach: bool = False, resolve: Resolution = "non
     if reach:
         try:
             with without_main():
-                overlay = reach_overlay(*mode_reachability(mission.model, resolve,
-                                                           max_states=max_states,
-                                                           progress=progress))
+                overlay = reach_modes(mission.model, resolve, max_states=max_states,
+                                      progress=progress)
         except CompileError as exc:
             raise AfsmError.of(exc) from None
     return Diagram(dot_diagram(mission.model, overlay), mission.name)
 
 
+def reach_modes(model: ir.Model, resolution: Resolution, *, max_states: int | None = None,
+                progress: Progress | None = None) -> Overlay:
+    """The overlay of `--reach`: each mode's probability of ever being reached; in a
+    composed mission, each agent's modes, in the agent's cluster."""
+    if model.composition is None:
+        return reach_overlay(*mode_reachability(model, resolution, max_states=max_states,
+                                                progress=progress))
+    reach, mdp = _reachability(model, resolution, max_states, progress)
+    agents = {name: Overlay(modes={n: f"P(reach) {span_text(lo, hi)}"
+                                   for n, (lo, hi) in sorted(modes.items())})
+              for name, modes in reach.items()}
+    over = [w for w, on in (("interval choices", model.is_nondeterministic),
+                            ("the agents' turns", turns_chosen(model))) if on]
+    caption = ("P(reach): probability of ever reaching the agent's mode" +
+               (", min – max over " + " and ".join(over) if mdp and over else ""))
+    return Overlay(caption=caption, agents=agents)
+
+
 def mode_reachability(model: ir.Model, resolution: Resolution, *,
                       max_states: int | None = None, progress: Progress | None = None
                       ) -> tuple[dict[int, tuple[float, float]], bool]:
-    """Storm: (min, max) probability of ever reaching each mode (equal for a DTMC), and
-    whether the model is an MDP. Built once for all modes, with verify's guard: a model
-    that may be large is built in a watched process and stopped at `max_states` (default:
-    what the free memory holds) or when the memory runs short, with E405/E406."""
+    """Storm: (min, max) probability of ever reaching each mode of a machine (equal for
+    a DTMC), and whether the model is an MDP. Built once for all modes, with verify's
+    guard: a model that may be large is built in a watched process and stopped at
+    `max_states` (default: what the free memory holds) or when the memory runs short,
+    with E405/E406. (A composed mission's agents' modes: `reach_modes`.)"""
+    reach, mdp = _reachability(model, resolution, max_states, progress)
+    return reach[""], mdp
+
+
+def _reachability(model: ir.Model, resolution: Resolution, max_states: int | None,
+                  progress: Progress | None
+                  ) -> tuple[dict[str, dict[int, tuple[float, float]]], bool]:
+    """(min, max) of reaching each mode, per agent ("": a machine's own modes)."""
     low = lowered(model, resolution)  # the reductions keep every mode's reachability
     mdp = low.kind == "mdp"
-    unreachable = set(analyse(model).unreachable)
-    numbers = [m.number for m in sorted(model.modes, key=lambda m: m.number)
-               if m.number not in unreachable]
+    comp = model.composition
+    unreachable: set[int] = set() if comp is not None else set(analyse(model).unreachable)
+    # (agent, its mode variable in the generated model, mode number)
+    targets = [("", "mode", m.number) for m in sorted(model.modes, key=lambda m: m.number)
+               if m.number not in unreachable] if comp is None else [
+        (a.name, a.mode_var, m.number) for a in comp.agents
+        for m in sorted(a.model.modes, key=lambda m: m.number)]
     ops = ("min", "max") if mdp else ("",)
 
-    def query(n: int, op: str) -> str:
-        return f"reach_{n}_{op}" if op else f"reach_{n}"
-    queries = {query(n, op): f"P{op}=? [ F mode={n} ]" for n in numbers for op in ops}
+    def query(i: int, op: str) -> str:
+        return f"reach_{i}_{op}" if op else f"reach_{i}"
+    queries = {query(i, op): f"P{op}=? [ F {var}={n} ]"
+               for i, (_, var, n) in enumerate(targets) for op in ops}
     say = progress or (lambda text: None)
 
     def relay(text: str) -> None:
@@ -130,7 +162,7 @@ def mode_reachability(model: ir.Model, resolution: Resolution, *,
         # ("checking ...: 15 s") still show a slow one.
         if not text.startswith("checked "):
             say("reach: " + text)
-    say(f"reach: building the {low.kind.upper()} with Storm and checking {len(numbers)} "
+    say(f"reach: building the {low.kind.upper()} with Storm and checking {len(targets)} "
         f"modes ...")
     t0 = time.monotonic()
     got = ask(low, queries, bound=upper_bound(model), what=f"{low.kind.upper()} (--reach)",
@@ -139,10 +171,12 @@ def mode_reachability(model: ir.Model, resolution: Resolution, *,
         raise _reach_error(got.failure, model)
     say(f"reach: {got.states:,} states, {got.transitions:,} transitions, "
         f"{len(queries)} checks in {time.monotonic() - t0:.1f} s")
-    out: dict[int, tuple[float, float]] = {n: (0.0, 0.0) for n in unreachable}
-    for n in numbers:
-        vs = [got.values[query(n, op)] for op in ops]
-        out[n] = (min(vs), max(vs))
+    out: dict[str, dict[int, tuple[float, float]]] = {}
+    if comp is None:
+        out[""] = {n: (0.0, 0.0) for n in unreachable}
+    for i, (agent, _, n) in enumerate(targets):
+        vs = [got.values[query(i, op)] for op in ops]
+        out.setdefault(agent, {})[n] = (min(vs), max(vs))
     return out, mdp
 
 

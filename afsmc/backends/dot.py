@@ -43,6 +43,7 @@ DEAD = "#a0a0a0"  # what the mode graph says never happens
 COLORS = {"action": INK, "preemptive": PREEMPT, "hazard": HAZARD}
 GROUP_FILL = {"action": "#f4f6f8", "preemptive": "#fcf3e3", "hazard": "#fbeae8"}
 ENDS = {"floor": "#1f6fb2", "ceil": "#c0392b", "floor+ceil": "#7d3c98"}  # --strategy
+MOVED = "#117a65"  # --strategy: an action a composed mission's strategy moves first
 PATH = "#1e8449"  # --witness
 
 
@@ -59,6 +60,12 @@ class Overlay:
     # a path (`diagram --witness`): its steps as (source mode, target mode, action or
     # hazard), drawn bold with their step numbers
     path: Sequence[tuple[int, int, str]] = ()
+    # a composed mission's strategy that chooses the agents' turns (`diagram --strategy`):
+    # action -> in how many states the strategy moves it where the choice matters
+    moved: Mapping[str, int] = field(default_factory=dict)
+    # a composed mission: each agent's own overlay, drawn in its cluster (the path's steps
+    # numbered over the whole mission: a step that moves another agent is (-1, -1, ""))
+    agents: Mapping[str, Overlay] = field(default_factory=dict)
 
 
 @dataclass(frozen=True)
@@ -120,7 +127,7 @@ def diagram(model: ir.Model, overlay: Overlay | None = None) -> graphviz.Digraph
     if model.composition is not None:
         from afsmc.backends.dot_network import network
 
-        return network(model, diagram)
+        return network(model, diagram, overlay or Overlay())
     mg = analyse(model)
     overlay = overlay or Overlay()
     g = _graph(model, overlay)
@@ -264,6 +271,10 @@ def _overlaid(attrs: dict[str, str], items: list[_Arc], overlay: Overlay) -> Non
         end = ends[0] if len(ends) == 1 else "floor+ceil"
         attrs.update(color=ENDS[end], fontcolor=ENDS[end], penwidth="2.0",
                      label=attrs["label"] + f"\\n[{end}]")
+    moved = sum(overlay.moved.get(via, 0) for via in {a.via for a in items})
+    if moved:
+        attrs.update(color=MOVED, fontcolor=MOVED, penwidth="2.0",
+                     label=attrs["label"] + f"\\n[moved: {moved:,} states]")
     steps = [str(i) for i, (a, b, via) in enumerate(overlay.path, 1)
              if any((x.source, x.target, x.via) == (a, b, via) for x in items)]
     if steps:

@@ -9,6 +9,7 @@ writes it into the mode's box. `--results` draws the numbers of `afsmc verify --
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import json
 import math
 import os
@@ -19,7 +20,7 @@ from afsmc.api.diagram import (  # noqa: F401  (mode_reachability, _reach_error:
     FORMATS,
     _reach_error,
     mode_reachability,
-    reach_overlay,
+    reach_modes,
     render,
 )
 from afsmc.backends.dot import Overlay, diagram
@@ -232,18 +233,24 @@ def run(args: argparse.Namespace) -> int:
         modes: dict[int, str] = {}
         notes: list[str] = []
         caption = ""
+        agents: dict[str, Overlay] = {}
         if args.results:
             ov = read_results(args.results, model)
             modes.update(ov.modes)
             notes += ov.notes
         if args.reach:
-            ov = reach_overlay(*mode_reachability(model, args.resolve or "nondet",
-                                                  max_states=args.max_states, progress=_say))
+            ov = reach_modes(model, args.resolve or "nondet", max_states=args.max_states,
+                             progress=_say)
             modes.update(ov.modes)
+            agents.update(ov.agents)
             caption = ov.caption
         drawn, more = diagram_strategy.overlay(args, model)
+        for name, mine in drawn.agents.items():
+            # a composed mission's agent: its modes' numbers (--reach) and its strategy or path
+            agents[name] = dataclasses.replace(mine, modes=agents[name].modes) \
+                if name in agents else mine
         data = render(diagram(model, Overlay(modes, notes + more, caption, drawn.ends,
-                                             drawn.path)), fmt)
+                                             drawn.path, drawn.moved, agents)), fmt)
         write_atomic(path, data, protect=(args.file,))
         print(f"wrote {path}", file=sys.stderr)
     except CompileError as exc:

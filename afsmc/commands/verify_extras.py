@@ -42,8 +42,12 @@ def render(res: VerifyResult) -> str:
     lines: list[str] = []
     asked = any(p.strategy is not None for p in res.properties)
     for p in res.properties:
+        ends = p.strategy is not None and any(p.strategy.values())
         if p.strategy is not None:
-            lines += ["", *strategy_lines(p)]
+            if ends or p.turns is None:
+                # else a composed mission whose strategies resolve no interval constant:
+                # its turns below are all they choose
+                lines += ["", *strategy_lines(p)]
         elif asked:
             lines += ["", f"strategies of {p.name} ({p.formula}): none, as it is step-bounded "
                       "(its strategies count the steps; Storm gives no scheduler for them)"]
@@ -100,6 +104,9 @@ def witness_lines(p: PropertyResult) -> list[str]:
         value, of = 1.0 - value, f"1 - {of} = {num(1.0 - value)}"
     share = f", {100 * mass / value:.1f}% of {of}" if value else ""
     what = "ways to miss" if p.witness_avoids else "paths of"
+    if not ws:
+        return [f"no {what} {p.name} ({p.formula}){follow}"
+                + (f": {p.witness_note}" if p.witness_note else "")]
     out = [f"the {len(ws)} most probable {what} {p.name} ({p.formula}){follow}: "
            f"total {num(mass)}{share}"]
     if p.witness_note:

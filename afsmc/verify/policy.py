@@ -21,7 +21,7 @@ from afsmc.verify.explicit import applies
 from afsmc.verify.guard import Progress, default_max_states, run_job, upper_bound
 from afsmc.verify.jobs import make_job
 from afsmc.verify.queries import dual
-from afsmc.verify.strategy import DIRECTIONS, extract_for, refuse, stepped
+from afsmc.verify.strategy import DIRECTIONS, extract_for, has_choices, refuse, stepped
 
 
 @dataclass(frozen=True)
@@ -51,10 +51,7 @@ def extract(model: ir.Model, text: str, *, max_states: int | None = None,
             progress: Progress | None = None) -> Policy:
     """The scheduler `text` (min:NAME or max:NAME) of the loaded model, from Storm."""
     direction, name = parse(text)
-    comp = model.composition
-    turns = comp is not None and ((comp.kind == "interleaving" and len(comp.agents) > 1)
-                                  or (comp.kind == "timed" and comp.ties == "nondet"))
-    if not model.is_nondeterministic and not turns:
+    if not has_choices(model):
         raise refuse(f"--strategy {text}: {model.source.path} has no interval constants: its "
                      "model is a DTMC, which has no choices for a strategy to make",
                      hint="simulate it without --strategy")

@@ -80,9 +80,16 @@ def exact_environment(stormpy: Any) -> Any:
     return env
 
 
-def build_exact(stormpy: Any, program: Any, props: list[Any]) -> Any:
-    """The sparse model over rationals: every probability exactly as written (0.1 is 1/10)."""
-    return stormpy.build_model[stormpy.Rational](program, props)
+def build_exact(stormpy: Any, program: Any, props: list[Any], extract: Any = None) -> Any:
+    """The sparse model over rationals: every probability exactly as written (0.1 is 1/10);
+    with the state valuations and choice labels that `extract` (a strategy_storm.Extract,
+    or None) reads."""
+    if extract is None:
+        return stormpy.build_model[stormpy.Rational](program, props)
+    from afsmc.verify.strategy_storm import builder_options
+
+    return stormpy.build_model[stormpy.Rational](
+        program, options=builder_options(stormpy, props, program, extract))
 
 
 def exact_text(value: Any) -> str | None:

@@ -380,7 +380,7 @@ def _sparse(stormpy: Any, program: Any, props: list[Any], job: Job, lean: bool =
     labels and either state valuations (Storm's route) or, where the backward pass may
     answer (`lean`), one label per bit of each variable (strategy_arrays)."""
     if job.exact:
-        return precision.build_exact(stormpy, program, _for_builder(props, job))
+        return precision.build_exact(stormpy, program, _for_builder(props, job), job.extract)
     if job.extract is not None:
         opts = strategy_arrays.options(stormpy, [p.get_raw_formula() for p in _for_builder(
             props, job)], program) if lean and _lean(job, props) else None

@@ -43,6 +43,9 @@ class StrategyEntry:
     # further states of this action and mode that the strategy reaches, where both ends
     # give the same value (Storm's choice there is arbitrary and not counted in `states`)
     indifferent: int = 0
+    # a composed mission: the agents the action moves, `action` their own name of it (for
+    # the diagram's clusters; not in the JSON, where `mode` names them)
+    agents: tuple[str, ...] = ()
 
     def to_json(self) -> dict[str, object]:
         return {"constant": self.constant, "end": self.end, "value": self.value,
@@ -63,6 +66,10 @@ class TurnEntry:
     action: str
     mode: str
     states: int
+    # the agents it moves and their own name of the action ("uav1", "Look"; for the
+    # diagram's clusters; not in the JSON, where `action` names them)
+    agents: tuple[str, ...] = ()
+    local: str = ""
 
     def to_json(self) -> dict[str, object]:
         return {"action": self.action, "mode": self.mode, "states": self.states}
@@ -85,12 +92,16 @@ def decisive(low: Lowered) -> tuple[int, ...]:
 def turns(groups: Sequence[Group], variables: Sequence[str], low: Lowered) -> list[TurnEntry]:
     """Which agent the scheduler moves, where the choice matters, per action and modes."""
     count: dict[tuple[str, str], int] = {}
+    moves: dict[str, tuple[tuple[str, ...], str]] = {}
     for g in groups:
         if g.matters:
+            cmd = low.commands[g.command]
             _, mode = _where(low, g, variables)
-            key = (action_text(low, low.commands[g.command]), str(mode))
+            key = (action_text(low, cmd), str(mode))
             count[key] = count.get(key, 0) + g.states
-    return [TurnEntry(a, m, n) for (a, m), n in sorted(count.items())]
+            who, local = mover(low, cmd)
+            moves[key[0]] = (tuple(a.name for a in who), local)
+    return [TurnEntry(a, m, n, *moves[a]) for (a, m), n in sorted(count.items())]
 
 
 @dataclass
@@ -107,9 +118,13 @@ def summarise(groups: Sequence[Group], variables: Sequence[str],
     mode_i = list(variables).index("mode") if "mode" in variables else -1
     ranges: dict[tuple[str, str, int | str], dict[str, _Range]] = {}
     same: dict[tuple[str, str, int | str], int] = {}
+    who: dict[tuple[str, str, int | str], tuple[str, ...]] = {}
     for g in groups:
         cmd = low.commands[g.command]
         action, mode = _where(low, g, variables)
+        if model.composition is not None:
+            for const, _ in cmd.choice:
+                who[(const, action, mode)] = tuple(a.name for a in mover(low, cmd)[0])
         for const, end in cmd.choice:
             if not g.matters:
                 same[(const, action, mode)] = same.get((const, action, mode), 0) + g.states
@@ -143,7 +158,8 @@ def summarise(groups: Sequence[Group], variables: Sequence[str],
             out.append(StrategyEntry(const, END[end], value, action,
                                      mode if isinstance(mode, str) else
                                      model.mode_by_number(mode).name, r.states, conds.get(end),
-                                     same.get((const, action, mode), 0)))
+                                     same.get((const, action, mode), 0),
+                                     who.get((const, action, mode), ())))
     return out
 
 
@@ -235,6 +251,20 @@ def attach(results: Sequence[PropertyResult], props: Sequence[ir.Property], low:
                 r.witness_of = opt or "value"
 
 
+def turns_chosen(model: ir.Model) -> bool:
+    """Whether a composed mission leaves its agents' turns to the scheduler (interleaving
+    of two or more agents, timed with `ties nondet`), as `Lowered.kind` decides."""
+    comp = model.composition
+    return comp is not None and ((comp.kind == "interleaving" and len(comp.agents) > 1)
+                                 or (comp.kind == "timed" and comp.ties == "nondet"))
+
+
+def has_choices(model: ir.Model) -> bool:
+    """Whether the model is an MDP, whose min and max strategies choose: interval
+    constants (floor or ceil), or the agents' turns (`turns_chosen`)."""
+    return model.is_nondeterministic or turns_chosen(model)
+
+
 def refuse(message: str, hint: str | None = None) -> CompileError:
     return CompileError([Diagnostic(codes.E415, Severity.ERROR, message, None, hint=hint)])
 
@@ -242,7 +272,7 @@ def refuse(message: str, hint: str | None = None) -> CompileError:
 def check_request(model: ir.Model, props: Sequence[ir.Property], strategy: bool,
                   witness: tuple[str | None, int] | None) -> None:
     """Refuse what has no strategy or no witness (E415), before Storm is started."""
-    if strategy and not model.is_nondeterministic:
+    if strategy and not has_choices(model):
         raise refuse(f"--strategy: {model.source.path} has no interval constants: its model "
                      "is a DTMC, which has no choices for a strategy to make",
                      hint="a strategy resolves interval constants such as "
@@ -291,13 +321,13 @@ def witness_request(model: ir.Model, props: Sequence[ir.Property], strategy: boo
         # longer hold; for `<=`/`<` the max's paths into its target.
         lower = prop.threshold.op in (">=", ">")
         avoid = lower and not stepped(prop)
-        direction = ("min" if lower else "max") if model.is_nondeterministic else None
+        direction = ("min" if lower else "max") if has_choices(model) else None
     return _request(model, prop, name, k, direction, target, avoid)
 
 
 def _request(model: ir.Model, prop: ir.Property, name: str, k: int, direction: str | None,
              target: str | None, avoid: bool) -> WitnessRequest:
-    if not model.is_nondeterministic:
+    if not has_choices(model):
         if direction is not None:
             raise refuse(f"--witness-dir {direction}: {model.source.path} has no interval "
                          "constants: its model is a DTMC, whose paths follow no strategy")

@@ -256,6 +256,11 @@ def extract_query(a: acyclic.Arrays, q: acyclic.Query, extract: Extract, view: V
     w = extract.witness
     if w is not None and w.query == name:
         out.witness_query = name
+        if result == 0.0:  # exact: the pass is; nothing reaches the target
+            what, under = (q.opt, f" under the {q.opt} strategy") if q.opt else (
+                "probability", "")
+            out.witness_note = f"the {what} is 0: no path reaches a target state{under}"
+            return result
         target = a.labels[acyclic.LABEL + str(q.target)]
         _Paths(a, chosen, value[:, 0] > 0, target, view).collect(w.k, out)
     return result

@@ -155,38 +155,70 @@ def _chosen(model: Any, extract: Extract) -> Any:
     return out
 
 
-def induced(stormpy: Any, model: Any, result: Any) -> Any:
-    """The DTMC a query's scheduler induces on the states it reaches (a DTMC: itself)."""
+def induced(stormpy: Any, model: Any, result: Any) -> tuple[Any, Any]:
+    """The DTMC a query's scheduler induces on the states it reaches (a DTMC: itself), and
+    the MDP's states where Storm's scheduler left the choice open (None: none).
+
+    Storm leaves a choice undefined where the path formula is decided whatever is chosen
+    (an until's states where neither side holds), and applying such a partial scheduler
+    fails ("Cannot insert value at illegal column"): those states take their first
+    choice, which changes no value."""
+    import numpy as np
+
     if not str(model.model_type).upper().endswith("MDP"):
-        return model
-    return model.apply_scheduler(result.get_scheduler(), True)
+        return model, None
+    scheduler = result.get_scheduler()
+    free = None
+    if scheduler.partial:
+        free = np.zeros(int(model.nr_states), dtype=bool)
+        for s in range(int(model.nr_states)):
+            choice = scheduler.get_choice(s)
+            if not choice.defined:
+                scheduler.set_choice(type(choice)(0), s)
+                free[s] = True
+    return model.apply_scheduler(scheduler, True), free
 
 
 def analyse(stormpy: Any, program: Any, model: Any, name: str, prop: Any, result: Any,
             extract: Extract, out: Extracted) -> None:
-    """Add what `extract` asks of query `name` (checked: `result`) to `out`."""
+    """Add what `extract` asks of query `name` (checked: `result`) to `out`. A failure to
+    find the witness paths is their note: the query's value stands."""
     import time
 
     t0 = time.perf_counter()
     variables = _variables(stormpy, program)
     out.variables = tuple(n for n, _, _ in variables)
-    dtmc = induced(stormpy, model, result)
-    vals = _valuations(dtmc, variables)
+    w = extract.witness
+    paths = w is not None and w.query == name
     mdp = str(model.model_type).upper().endswith("MDP")
-    if mdp and (name in extract.strategies or name == extract.policy):
+    strategy = mdp and (name in extract.strategies or name == extract.policy)
+    try:
+        dtmc, free = induced(stormpy, model, result)
+    except RuntimeError as exc:
+        if strategy or not paths:
+            raise
+        out.witness_query = name
+        out.witness_note = f"Storm could not apply the strategy to find paths: {exc}"
+        return
+    vals = _valuations(dtmc, variables)
+    if strategy:
         chosen = _chosen(dtmc, extract)
         states = (chosen >= 0).nonzero()[0]
         out.reached[name] = len(states)
         if name in extract.strategies:
-            matters = _matters(stormpy, model, prop, result, variables, vals[states])
+            matters = _matters(stormpy, model, prop, result, variables, vals[states], free)
             out.groups[name] = _groups(chosen[states], vals[states], matters, out.variables)
         if name == extract.policy:
             out.policy_states = [tuple(int(x) for x in row) for row in vals[states]]
             out.policy_commands = [int(c) for c in chosen[states]]
-    w = extract.witness
-    if w is not None and w.query == name:
+    if w is not None and paths:
         out.witness_query = name
-        _paths(stormpy, program, dtmc, prop, w, vals, extract, out)
+        value = float(result.get_value(model.initial_states[0]))
+        try:
+            _paths(stormpy, program, dtmc, prop, w, vals, extract, out, value)
+        except RuntimeError as exc:
+            out.paths = []
+            out.witness_note = f"Storm could not find the paths: {exc}"
     out.seconds += time.perf_counter() - t0
 
 
@@ -215,31 +247,43 @@ SAME = 1e-9
 
 
 def _matters(stormpy: Any, model: Any, prop: Any, result: Any,
-             variables: list[tuple[str, Any, bool]], reached: Any) -> Any:
+             variables: list[tuple[str, Any, bool]], reached: Any, free: Any = None) -> Any:
     """For each of the `reached` states (values): whether its choices differ in value,
     i.e. min and max over the choices of (sum of probability x successor's value) differ,
     computed by Storm as the instantaneous reward after one step with the values as state
-    rewards. An expected reward with action rewards: True (not compared)."""
+    rewards. An expected reward with action rewards: True (not compared). `free`: the
+    MDP's states whose choice Storm left open (`induced`), where it never matters."""
     import numpy as np
     import stormpy.models as models
 
     if _action_rewards(model, prop):
         return np.ones(len(reached), dtype=bool)
-    values = [float(v) if math.isfinite(v) else 1e300 for v in result.get_value_vector()]
-    rm = models.SparseRewardModel(optional_state_reward_vector=values)
+    raw = list(result.get_value_vector())
+    # an exact model's values are rationals, compared exactly (rewards: finite here, as
+    # an infinite expected reward has no rational)
+    exact = bool(getattr(model, "is_exact", False))
+    values = raw if exact else [float(v) if math.isfinite(v) else 1e300 for v in raw]
+    rm = (models.SparseRewardModel[stormpy.Rational] if exact else models.SparseRewardModel)(
+        optional_state_reward_vector=values)
     comp = models.SparseModelComponents(transition_matrix=model.transition_matrix,
                                         state_labeling=model.labeling, reward_models={"v": rm})
     one = models.SparseMdp(comp)
-    lo_q, hi_q = (np.asarray(stormpy.model_checking(one, q).get_value_vector())
+    lo_q, hi_q = ([x for x in stormpy.model_checking(one, q).get_value_vector()]
                   for q in stormpy.parse_properties("Rmin=? [I=1]; Rmax=? [I=1]"))
     del one, comp, rm
-    gap = np.abs(hi_q - lo_q) > SAME * np.maximum(1.0, np.maximum(np.abs(hi_q), np.abs(lo_q)))
+    if exact:
+        gap = np.fromiter((a != b for a, b in zip(lo_q, hi_q, strict=True)), dtype=bool,
+                          count=len(lo_q))
+    else:
+        lo, hi = np.asarray(lo_q, dtype=float), np.asarray(hi_q, dtype=float)
+        gap = np.abs(hi - lo) > SAME * np.maximum(1.0, np.maximum(np.abs(hi), np.abs(lo)))
     # the reached states among the MDP's, by their values
     keys_all = _keys(np.vstack([_valuations(model, variables), reached]))
     n = int(model.nr_states)
     order = np.argsort(keys_all[:n], kind="stable")
     pos = np.searchsorted(keys_all[:n][order], keys_all[n:])
-    return gap[order[pos]]
+    at = order[pos]
+    return gap[at] if free is None else gap[at] & ~free[at]
 
 
 def _action_rewards(model: Any, prop: Any) -> bool:
@@ -253,27 +297,65 @@ def _action_rewards(model: Any, prop: Any) -> bool:
 
 
 # Paths the search may enumerate, per path asked, before it gives up on finding more that
-# respect a step bound or an until's left side (the others are skipped).
+# respect a step bound (the others are skipped).
 SEARCH_FACTOR = 50
 
 
+def _under(dtmc: Any, prop: Any) -> tuple[str, str]:
+    """How the value is named ("min", "max"; a DTMC's: "probability") and the strategy the
+    paths follow (" under the min strategy"; a DTMC's: "")."""
+    formula = prop.get_raw_formula()
+    if not getattr(formula, "has_optimality_type", False):
+        return "probability", ""
+    opt = "min" if "min" in str(formula.optimality_type).lower() else "max"
+    return opt, f" under the {opt} strategy"
+
+
 def _paths(stormpy: Any, program: Any, dtmc: Any, prop: Any, w: WitnessRequest,
-           vals: Any, extract: Extract, out: Extracted) -> None:
+           vals: Any, extract: Extract, out: Extracted, value: float) -> None:
     """The `w.k` most probable paths of the induced DTMC into the target states, by
     Storm's k-shortest-paths generator (recursive enumeration; paths stop at their first
-    target state and may loop)."""
+    target state and may loop). `value`: the query's value from the initial state.
+
+    The generator is never handed what it cannot take: with the initial state among its
+    targets it crashes (signal 11) at the second path, so the only path, the empty one,
+    is given here; and it crashes asking for a path beyond the last where a target is
+    reached only through another, so its targets are those a path reaches first
+    (`_frontier`). An until's states where neither side holds are targets of the
+    generator too, as its paths end there, and such paths are dropped."""
     from stormpy.analysis import _utility
     from stormpy.datastructures import BitVector
 
     target, left, bound = _target(stormpy, program, dtmc, prop, w)
+    what, under = _under(dtmc, prop)
+    reach = ("satisfies the until" if left is not None else "reaches a target state") + (
+        f" within {bound} steps" if bound is not None else "")
     if target is None:
         out.witness_note = "the property has no target states to reach"
         return
-    if not target:
-        out.witness_note = "no state the strategy reaches is a target state"
+    if not w.avoid and value == 0.0:  # Storm's graph analysis gives exact zeros
+        out.witness_note = f"the {what} is 0: no path {reach}{under}"
         return
-    bits = BitVector(dtmc.nr_states, sorted(target))
-    gen = _utility.ShortestPathsGenerator(dtmc, bits)
+    if not target:
+        out.witness_note = (f"no state reachable{under} is one from which the property can "
+                            "no longer hold" if w.avoid else
+                            f"no state reachable{under} is a target state")
+        return
+    init = int(dtmc.initial_states[0])
+    if init in target:
+        out.paths = [RawPath(1.0, [tuple(int(x) for x in vals[init])], [-1], [])]
+        out.witness_note = (
+            f"the {what} is 0: the property can no longer hold from the initial state"
+            f"{under}, so every path misses it; the only path is the empty one"
+            if w.avoid else "the initial state is a target state: the only path is the "
+            "empty one")
+        return
+    dead = set() if left is None else set(range(dtmc.nr_states)) - left - target
+    first = _frontier(dtmc, init, target | dead)
+    if not first - dead:  # nothing to enumerate: the generator is not asked
+        out.witness_note = f"no path {reach}{under}"
+        return
+    gen = _utility.ShortestPathsGenerator(dtmc, BitVector(dtmc.nr_states, sorted(first)))
     tm = dtmc.transition_matrix
     k = 0
     found: list[RawPath] = []
@@ -291,9 +373,7 @@ def _paths(stormpy: Any, program: Any, dtmc: Any, prop: Any, w: WitnessRequest,
         if p <= 0.0 or not states:
             break
         states.reverse()
-        if bound is not None and len(states) - 1 > bound:
-            continue
-        if left is not None and not all(s in left for s in states[:-1]):
+        if states[-1] in dead or (bound is not None and len(states) - 1 > bound):
             continue
         steps = []
         for a, b in itertools.pairwise(states):
@@ -302,9 +382,24 @@ def _paths(stormpy: Any, program: Any, dtmc: Any, prop: Any, w: WitnessRequest,
         found.append(RawPath(p, [tuple(int(x) for x in vals[s]) for s in states],
                              [_command(dtmc, s, vals[s], extract, out.variables)
                               for s in states[:-1]] + [-1], steps))
-    if len(found) < w.k and not out.witness_note:
+    if not found and not out.witness_note:
+        out.witness_note = f"no path {reach}{under}"
+    elif len(found) < w.k and not out.witness_note:
         out.witness_note = f"there are only {len(found)} paths into the target states"
     out.paths = found
+
+
+def _frontier(dtmc: Any, init: int, stops: set[int]) -> set[int]:
+    """The states of `stops` that a path from `init` reaches before any other of them
+    (Storm's graph search, which does not go on from a stop)."""
+    from stormpy import developer
+    from stormpy.datastructures import BitVector
+
+    n = int(dtmc.nr_states)
+    go_on = BitVector(n, sorted(set(range(n)) - stops))
+    reached = developer.get_reachable_states(dtmc.transition_matrix, BitVector(n, [init]),
+                                             go_on, BitVector(n, sorted(stops)))
+    return {int(s) for s in reached} & stops
 
 
 def _command(dtmc: Any, s: int, row: Any, extract: Extract, variables: tuple[str, ...]) -> int:
@@ -340,10 +435,11 @@ def _target(stormpy: Any, program: Any, dtmc: Any, prop: Any,
     else:
         return None, None, None
     if w.avoid and bound is None:
-        # prob0 states come out of Storm's graph analysis as exact zeros
+        # prob0 states come out of Storm's graph analysis as exact zeros (an exact
+        # model's are rationals, which equal 0 but not 0.0)
         whole = stormpy.parse_properties(f"P=? [ {path} ]", program)[0]
         values = stormpy.model_checking(dtmc, whole).get_value_vector()
-        return {s for s in range(dtmc.nr_states) if values[s] == 0.0}, None, None
+        return {s for s in range(dtmc.nr_states) if float(values[s]) == 0.0}, None, None
     if w.target is not None:
         right = stormpy.parse_properties(f"P=? [ F ({w.target}) ]", program)[0] \
             .get_raw_formula().subformula.subformula

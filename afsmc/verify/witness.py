@@ -6,6 +6,15 @@ Storm finds the paths as state sequences of the induced DTMC
 model's commands (the floor/ceil variant the scheduler chose): the branches that lead
 from one valuation to the next name the action or hazard, and their probabilities must
 add up to Storm's, or the path is reported as not confirmed.
+
+A step shows what the mission did: the variables its action or hazard wrote. The exact
+reductions (afsmc.lower.reduce) reset a variable that is dead in the mode entered to its
+initial value, so that states differing only in it merge; those resets are the
+reductions', not the mission's, and the step leaves them out: each step's values are the
+mission's, its branch's updates evaluated on the mission's values before it, in the model
+lowered again without the reductions (whose commands and branches are those of the
+reduced one, one for one). A dead variable is never read before it is written, so the
+updates read the same values in both.
 """
 
 from __future__ import annotations
@@ -16,8 +25,8 @@ from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
-from afsmc.lower.lowering import Command, Lowered
-from afsmc.model.evaluate import Env, evaluate
+from afsmc.lower.lowering import Command, Lowered, lower
+from afsmc.model.evaluate import Env, EvalError, evaluate
 from afsmc.verify.strategy_compose import (
     action_text,
     agents,
@@ -25,6 +34,7 @@ from afsmc.verify.strategy_compose import (
     displays,
     mode_name,
     modes_text,
+    mover,
 )
 from afsmc.verify.strategy_storm import RawPath
 
@@ -40,6 +50,9 @@ class Step:
     changes: dict[str, int | bool | str]  # variable (display name, "mode") -> new value
     choice: tuple[tuple[str, str], ...] = ()  # (interval constant, "floor"|"ceil") taken
     hazard: str | None = None  # the probabilistic hazard that happened instead
+    # a composed mission: each agent the step moved, with its own action or hazard
+    # ("uav1", "Look"), for the diagram's path (not in the JSON: `action` names them)
+    moved: tuple[tuple[str, str], ...] = ()
 
     def to_json(self) -> dict[str, object]:
         out: dict[str, object] = {"mode": self.mode, "action": self.action,
@@ -96,21 +109,65 @@ def _env(low: Lowered, valuation: dict[str, int]) -> Env:
 
 
 def _replay(low: Lowered, cmd: Command, here: dict[str, int],
-            there: dict[str, int]) -> tuple[float, str | None]:
-    """The probability of going from `here` to `there` by `cmd`, and the hazard of the
-    branches that do (None: the action's own)."""
+            there: dict[str, int]) -> tuple[float, str | None, int | None]:
+    """The probability of going from `here` to `there` by `cmd`, the hazard of the
+    branches that do (None: the action's own), and the most probable of those branches
+    (None: none does)."""
     env = _env(low, here)
     total, hazards = 0.0, set()
-    for b in cmd.branches:
+    best: tuple[float, int] | None = None
+    for i, b in enumerate(cmd.branches):
         new = dict(here)
         for var, expr in b.updates:
             v = evaluate(expr, env)
             new[var] = int(v)
         if new == there:
-            total += float(evaluate(b.prob, env))
+            p = float(evaluate(b.prob, env))
+            total += p
             hazards.add(b.hazard)
+            if best is None or p > best[0]:
+                best = (p, i)
     named = {h for h in hazards if h is not None}
-    return total, (named.pop() if len(named) == 1 and None not in hazards else None)
+    return (total, (named.pop() if len(named) == 1 and None not in hazards else None),
+            None if best is None else best[1])
+
+
+def _unreduced(low: Lowered) -> Lowered | None:
+    """The model lowered again without the reductions, if they reset dead variables and
+    its commands and branches are the reduced model's one for one (else None: every
+    change shows, as the states have it)."""
+    if not any("dead-variable reset" in r for r in low.reductions):
+        return None
+    plain = lower(low.model, low.resolution)
+    if len(plain.commands) != len(low.commands) or any(
+            a.action != b.action or len(a.branches) != len(b.branches)
+            for a, b in zip(plain.commands, low.commands, strict=True)):
+        return None
+    return plain
+
+
+def _mission(plain: Lowered | None, command: int, branch: int | None,
+             real: dict[str, int], there: dict[str, int]) -> dict[str, int]:
+    """The mission's values after a step from `real` (its values before): the unreduced
+    branch's updates evaluated there, every other variable as it was. Where it is not
+    known (no reductions, a step not replayed): the state's values, `there`."""
+    if plain is None or branch is None or command < 0:
+        return dict(there)
+    env = _env(plain, real)
+    b = plain.commands[command].branches[branch]
+    try:
+        return real | {var: int(evaluate(expr, env)) for var, expr in b.updates}
+    except EvalError:  # not expected (the updates read live values only): as the state has it
+        return dict(there)
+
+
+def _moved(low: Lowered, cmd: Command | None, hazard: str | None) -> tuple[tuple[str, str], ...]:
+    """A composed mission's step: each agent it moved, by its own action or hazard."""
+    if cmd is None or cmd.silent or low.model.composition is None:
+        return ()
+    who, action = mover(low, cmd)
+    return tuple((a.name, hazard if hazard is not None and any(
+        h.name == hazard for h in a.model.hazards) else action) for a in who)
 
 
 def describe(paths: Sequence[RawPath], variables: Sequence[str], low: Lowered) -> list[Witness]:
@@ -122,15 +179,17 @@ def describe(paths: Sequence[RawPath], variables: Sequence[str], low: Lowered) -
         display |= displays(low)
     booleans = {v.name for v in model.variables if v.type.name == "BOOL"}
     names = list(variables)
+    plain = _unreduced(low) if paths else None
     out = []
     for p in paths:
         vals = [dict(zip(names, s, strict=True)) for s in p.states]
         steps, ok = [], True
+        real = dict(vals[0])  # the mission's values: without the reductions' resets
         for i, (here, there) in enumerate(itertools.pairwise(vals)):
             cmd = low.commands[p.commands[i]] if p.commands[i] >= 0 else None
-            hazard = None
+            hazard, branch = None, None
             if cmd is not None:
-                replayed, hazard = _replay(low, cmd, here, there)
+                replayed, hazard, branch = _replay(low, cmd, here, there)
                 ok = ok and math.isclose(replayed, p.steps[i], rel_tol=TOLERANCE,
                                          abs_tol=TOLERANCE)
             else:
@@ -138,17 +197,17 @@ def describe(paths: Sequence[RawPath], variables: Sequence[str], low: Lowered) -
             action = "(no enabled action)" if cmd is None or cmd.kind == "deadlock" else (
                 "(final)" if cmd.kind == "final" else
                 action_text(low, cmd) if composed else cmd.action)
-            changes: dict[str, int | bool | str] = {}
-            for k in names:
-                if there[k] != here[k]:
-                    changes[display.get(k, k) if k != "mode" else "mode"] = _value(
-                        low, k, there[k], booleans)
+            before, real = real, _mission(plain, p.commands[i], branch, real, there)
+            changes: dict[str, int | bool | str] = {
+                display.get(k, k) if k != "mode" else "mode": _value(low, k, real[k], booleans)
+                for k in names if real[k] != before[k]}
             owners = choice_owners(low, cmd) if composed and cmd is not None else ()
             # a synchronised action's ends by the partner that took each: "T_TAKEOFF[uav1]"
             choice = tuple((f"{c}[{owners[j]}]" if owners else c,
                             "floor" if e == "lo" else "ceil")
                            for j, (c, e) in enumerate(cmd.choice if cmd is not None else ()))
-            steps.append(Step(_mode(low, here), action, p.steps[i], changes, choice, hazard))
+            steps.append(Step(_mode(low, here), action, p.steps[i], changes, choice, hazard,
+                              _moved(low, cmd, hazard)))
         start: dict[str, int | bool] = {display.get(k, k): (bool(v) if k in booleans else v)
                                         for k, v in vals[0].items() if k != "mode"}
         ok = ok and math.isclose(math.prod(p.steps), p.probability, rel_tol=1e-6)
