@@ -23,6 +23,7 @@ from afsmc.diagnostics import CompileError, Diagnostic, Severity, codes
 from afsmc.files import write_atomic
 from afsmc.lifetime import without_main
 from afsmc.lower.lowering import Resolution
+from afsmc.model import expr as E
 from afsmc.model import ir
 from afsmc.text import short
 from afsmc.verify import upper_bound
@@ -31,6 +32,7 @@ from afsmc.verify.guard import Progress
 from afsmc.verify.stopping import large_variables
 from afsmc.verify.storm import StormFailure
 from afsmc.verify.strategy import turns_chosen
+from afsmc.verify.uncertainty import reach_bounds
 
 if TYPE_CHECKING:
     from afsmc.api.mission import Mission
@@ -177,6 +179,16 @@ def _reachability(model: ir.Model, resolution: Resolution, max_states: int | Non
     for i, (agent, _, n) in enumerate(targets):
         vs = [got.values[query(i, op)] for op in ops]
         out.setdefault(agent, {})[n] = (min(vs), max(vs))
+    if model.prob_intervals:
+        # the bounds over every fixed value of the interval probabilities, as verify's
+        # min and max (docs/verification.md, "What a result means"), not the midpoint's
+        say("reach: the bounds over the interval probabilities (Storm's parametric engine)")
+        over = reach_bounds(model, [(query(i, ""), E.Binary(
+            "==", E.VarRef(var, E.Type.INT), E.lit(n), E.Type.BOOL))
+            for i, (_, var, n) in enumerate(targets)])
+        for i, (agent, _, n) in enumerate(targets):
+            out[agent][n] = over[query(i, "")]
+        mdp = True
     return out, mdp
 
 

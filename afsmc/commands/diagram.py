@@ -167,7 +167,9 @@ def read_results(path: str, model: ir.Model) -> Overlay:
                          hint="give each property one entry")
         seen.add(entry["name"])
         _check_numbers(path, entry, f"property {entry['name']}")
-        notes.append(f"{entry['name']}: {_value(entry)}")
+        verdict = entry.get("verdict")
+        notes.append(f"{entry['name']}: {_value(entry)}"
+                     + (f": {verdict}" if isinstance(verdict, str) else ""))
     by_name = {m.name: m.number for m in model.modes}
     modes: dict[int, str] = {}
     listed = data.get("modes", []) or []

@@ -23,7 +23,9 @@ from collections.abc import Sequence
 from dataclasses import dataclass, field
 
 from afsmc.compiler import lowered
+from afsmc.diagnostics import Span
 from afsmc.lower.reduce import Reductions
+from afsmc.model import expr as E
 from afsmc.model import ir
 from afsmc.verify import parametric
 from afsmc.verify.precision import PARAMETER_PRECISION, PARAMETER_SOLVER_ERROR
@@ -122,6 +124,21 @@ def over_probabilities(checks: Checks, model: ir.Model, props: Sequence[ir.Prope
         _widen(r, e)
         errors[r.name] = error
     return ProbabilityBox(box, tuple(found), PARAMETER_PRECISION), errors
+
+
+def reach_bounds(model: ir.Model, targets: Sequence[tuple[str, E.Expr]], *,
+                 via: str = "prism") -> dict[str, tuple[float, float]]:
+    """The min and max probability of ever reaching each target (name, state predicate)
+    over everything uncertain, interval probabilities included (the diagram's --reach on
+    a mission with interval probabilities): the same bounds as `verify -f 'P=? [ F ... ]'`
+    gives."""
+    span = Span.at_offset(model.source, 0, 0)
+    props = [ir.Property(name, "P", "", ir.Path("F", target), None, span)
+             for name, target in targets]
+    kept = dataclasses.replace(model, properties=tuple(props))
+    found = parametric.extremes(lowered(kept, "nondet"), props, via=via,
+                                precision=PARAMETER_PRECISION)
+    return {e.name: (e.min_attained, e.max_attained) for e in found}
 
 
 def _widen(r: PropertyResult, e: parametric.Extreme) -> None:

@@ -189,14 +189,14 @@ DOCUMENTED_REFUSALS = (
     # An interval probability is no interval constant: `iprob` is a DTMC too.
     Refusal(VERIFY_ROWS, ("dtmc", "iprob"), "strategy", "E415", "docs/verification.md",
             "Strategies and failure paths (--witness K)",
-            "`--strategy` or `--witness-dir` on a machine without interval constants (a DTMC "
-            "has no choices) are E415"),
+            "`--strategy` or `--witness-dir` on a "
+            "model without choices (a machine without interval constants"),
     # docs/diagrams.md ("--strategy and --witness") sends `diagram --strategy` to `afsmc
     # verify --strategy`, whose refusal this is.
     Refusal(("diagram-strategy",), ("dtmc", "iprob"), None, "E415", "docs/verification.md",
             "Strategies and failure paths (--witness K)",
-            "`--strategy` or `--witness-dir` on a machine without interval constants (a DTMC "
-            "has no choices) are E415"),
+            "`--strategy` or `--witness-dir` on a "
+            "model without choices (a machine without interval constants"),
     Refusal(("simulate-strategy",), ("dtmc", "iprob"), None, "E415", "docs/monte-carlo.md",
             "Following Storm's strategy",
             "A machine without interval constants (E415)"),
@@ -239,48 +239,12 @@ def table(*groups: dict[str, str]) -> dict[str, str]:
 
 
 XFAIL = table(
-    known("--strategy/--witness with --exact: E404 from Storm, 'bad optional access', the "
-          "value lost", MDPS, TABLES, ("strategy-exact", "witness-exact")),
-    known("--witness with --exact: E404 from Storm, 'bad optional access', the value lost",
-          ("dtmc", "iprob"), TABLES, ("witness-exact",)),
-    known("--witness on a requirement whose min is 0: E404 'Cannot insert value at illegal "
-          "column 18446744073709551615', both MDP values lost", MDPS,
-          (*TABLES, "verify-junit"), ("witness-req0",)),
-    known("--strategy on an interleaving without interval constants: E415 'its model is a "
-          "DTMC', though it is an MDP (who moves next)", ("interleaving",), VERIFY_ROWS,
-          WITH_STRATEGY),
-    known("diagram --strategy on an interleaving without interval constants: E415 'its "
-          "model is a DTMC', though it is an MDP (who moves next)", ("interleaving",),
-          ("diagram-strategy",), ("",)),
-    known("--witness on an interleaving: no path and no reason (witness_note)",
-          ("interleaving",), ("verify-text", "verify-json", "api"), WITH_WITNESS),
     known("--strategy's min differs from verify's by 2e-8: Storm's scheduler route solves "
           "again, more precisely (exact 0.885759363638229 on `intervals`); one question, two "
-          "answers", ("intervals", "both", "data"), FLOATS, ("strategy", "strategy-witness")),
+          "answers", ("intervals", "data"), FLOATS, ("strategy", "strategy-witness")),
     known("simulate --strategy's 'Storm's min' (its own Storm run on the unreduced model) "
           "differs from verify's by 2e-8", ("intervals", "both", "data"),
           ("simulate-strategy",), ("",)),
-    known("sweep judges an interval-probability requirement at the midpoint: holds, where "
-          "verify says depends over the box", ("iprob", "both"), ("sweep-csv", "sweep-json"),
-          ("req",)),
-    known("Sweep.to_pandas() has no verdict column (the CLI's CSV has one)",
-          ("dtmc", "intervals", "interleaving", "timed-order", "timed-nondet", "data"),
-          ("api-sweep",), ("req",)),
-    known("Sweep.to_pandas() has no verdict column (the CLI's CSV has one), and the sweep "
-          "judges an interval-probability requirement at the midpoint (holds; verify: "
-          "depends)", ("iprob", "both"), ("api-sweep",), ("req",)),
-    known("diagram --results shows a requirement's values without its verdict", SINGLE,
-          ("diagram-results",), ("req",)),
-    known("diagram --results on a composed mission draws no note of the properties",
-          COMPOSED, ("diagram-results",), ("", "req")),
-    known("diagram --strategy on a composed mission draws no 'min strategy of done' note",
-          ("timed-order", "timed-nondet"), ("diagram-strategy",), ("",)),
-    known("diagram --witness on a composed mission: internal error, KeyError 'robot: Work, "
-          "station: Idle'", ("timed-order", "timed-nondet"), ("diagram-witness",), ("",)),
-    known("diagram --witness on an interleaving: E415 'no path into the target of done', "
-          "whose probability is 0.96", ("interleaving",), ("diagram-witness",), ("",)),
-    known("diagram --reach on a composed mission: E612, Storm cannot parse 'F mode=0' (a "
-          "composed mission has no variable mode)", COMPOSED, ("diagram-reach",), ("",)),
 )
 
 
