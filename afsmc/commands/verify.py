@@ -31,7 +31,8 @@ from afsmc.text import literal, num
 from afsmc.verify import VerifyResult
 from afsmc.verify.junit import write_junit
 from afsmc.verify.results import ModelStats, PropertyResult
-from afsmc.verify.storm import ENGINES, SOLVERS, VIAS
+from afsmc.verify.storm import ENGINES, VIAS
+from afsmc.verify.storm_solvers import SOLVERS
 from afsmc.verify.uncertainty import INTERVAL_CONSTANTS, described
 from afsmc.verify.verdicts import failing
 

@@ -28,7 +28,8 @@ from afsmc.verify.guard import Progress, default_max_states, run_job, upper_boun
 from afsmc.verify.precision import DEFAULT_PRECISION, check_options, rational_text
 from afsmc.verify.results import Checks, VerifyResult
 from afsmc.verify.runner import CheckRun, ModelLoop, Options
-from afsmc.verify.storm import Engine, Job, Solver, StormFailure, Via
+from afsmc.verify.storm import Engine, Job, StormFailure, Via
+from afsmc.verify.storm_solvers import Solver
 from afsmc.verify.strategy import extras, witness_request
 from afsmc.verify.strategy_storm import WitnessRequest
 from afsmc.verify.uncertainty import over_probabilities, sources
@@ -158,7 +159,7 @@ def check(model: ir.Model, props: Sequence[ir.Property], *, via: Via = "prism",
     (a sweep's other points, so that every chunk of it builds the same model).
     `all_states`: Storm builds every reachable state even for one property (Job.all_states),
     so that the state counts do not depend on how the properties are split over processes.
-    `solver`: how Storm solves the equation systems (storm.Solver).
+    `solver`: how Storm solves the equation systems (storm_solvers.Solver).
     `max_states`: None is the default limit, which the sparse engine only has: there the
     state count predicts the memory. The symbolic engines' memory is held by the guard
     instead (85% of the free memory), and "auto" picks hybrid only for a model whose

@@ -43,7 +43,7 @@ class ModelStats:
     quotient_transitions: int | None = None
     bisimulation_time: float = 0.0
     processes: int = 1  # Storm runs that built this model (--split: one per query)
-    solver: str = ""  # "topological", "value-iteration" (storm.solver_for), "acyclic"
+    solver: str = ""  # "topological", "value-iteration" (storm_solvers.solver_for), "acyclic"
 
     def to_json(self) -> dict[str, object]:
         out: dict[str, object] = {

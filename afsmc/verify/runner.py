@@ -71,10 +71,10 @@ from afsmc.verify.storm import (
     Engine,
     Job,
     JobResult,
-    Solver,
     StormFailure,
     Via,
 )
+from afsmc.verify.storm_solvers import Solver
 from afsmc.verify.strategy import attach, request, stepped
 from afsmc.verify.strategy_storm import Extracted, WitnessRequest
 

@@ -17,6 +17,7 @@ from dataclasses import dataclass, field
 from typing import Any, Literal
 
 from afsmc.verify import acyclic, explicit, precision, strategy_arrays
+from afsmc.verify.storm_solvers import Solver, solver_for, value_iteration
 from afsmc.verify.strategy_storm import Extract, Extracted, analyse, builder_options
 
 Engine = Literal["sparse", "dd", "hybrid", "auto"]
@@ -26,16 +27,6 @@ ENGINES: tuple[Engine, ...] = ("auto", "sparse", "dd", "hybrid")
 SPARSE_BYTES_PER_STATE = 260
 Via = Literal["prism", "jani"]
 VIAS: tuple[Via, ...] = ("prism", "jani")
-# How Storm solves the equation systems on the sparse and hybrid engines. "auto": value
-# iteration on hybrid; on sparse, one exact backward pass where the model is acyclic but for
-# self-loops (afsmc.verify.acyclic, reported as "acyclic"), else Storm's topological solver,
-# which on a mission whose clock only grows finds one component per state (on scenario 1,
-# 137 s of a 394 s query that value iteration answered in 276 s; docs/benchmarks.md).
-Solver = Literal["auto", "topological", "value-iteration"]
-SOLVERS: tuple[Solver, ...] = ("auto", "topological", "value-iteration")
-# Value iteration's relative stopping bound (Storm's 1e-6 moved values in the ninth digit;
-# 1e-10 equals the topological solver's to ~1e-14 on the UAV at no measurable cost).
-VI_PRECISION = "1/10000000000"
 
 # Storm stages a failure can come from (the caller picks the diagnostic code from it);
 # "stopped": the guard interrupted an explicit build that proved within --max-states.
@@ -230,7 +221,8 @@ def _execute(job: Job, notify: Notify) -> JobResult:
         return res
     res.engine = built.engine
     res.solver = solver_for(job.solver, built.engine)
-    check_env = _value_iteration(stormpy, job) if res.solver == "value-iteration" else None
+    check_env = (value_iteration(stormpy, job.dd_memory_mb)
+                 if res.solver == "value-iteration" else None)
     if job.exact:
         res.solver, check_env = "exact", precision.exact_environment(stormpy)
     elif job.precision is not None:
@@ -465,9 +457,14 @@ def _check_each(stormpy: Any, built: _Built, check_env: Any, res: JobResult,
                 value = None if r is None else stormpy.filter_initial_states(r, model).average()
             else:
                 wanted = job.extract is not None and name in job.extract.queries
-                r = stormpy.model_checking(model, prop, environment=check_env,
-                                           extract_scheduler=wanted and res.kind == "mdp")
+                r = stormpy.model_checking(model, prop, environment=check_env)
                 value = r.get_value(model.initial_states[0])
+                if wanted and res.kind == "mdp":
+                    # Storm solves again to give a scheduler, by another method whose
+                    # value differs in the last digits: the value stays the one asked
+                    # without it, as every other front-end gets it (one answer)
+                    r = stormpy.model_checking(model, prop, environment=check_env,
+                                               extract_scheduler=True)
                 if wanted:
                     assert job.extract is not None
                     res.extracted = res.extracted or Extracted()
@@ -526,38 +523,6 @@ def _acyclic(stormpy: Any, built: _Built, res: JobResult, notify: Notify, job: J
     left = [(n, prop) for n, prop in zip(built.names, built.props, strict=True) if n in p.left]
     built.names, built.props = [n for n, _ in left], [prop for _, prop in left]
     res.solver = "acyclic" if not left else "acyclic and topological"
-
-
-def solver_for(solver: Solver, engine: str) -> str:
-    """The method `solver` means on `engine` (after "auto" has picked one); "" for the dd
-    engine, which always iterates on decision diagrams, to Storm's own precision."""
-    if engine == "dd":
-        return ""
-    if solver == "auto":
-        return "value-iteration" if engine == "hybrid" else "topological"
-    return solver
-
-
-def _value_iteration(stormpy: Any, job: Job) -> Any:
-    """Storm's environment for checks by value iteration (Storm's default, None, is the
-    topological solver)."""
-    from stormpy import developer
-
-    env = stormpy.Environment()
-    env.dd().sylvan().maximal_memory = job.dd_memory_mb  # as built (Sylvan is set up once)
-    min_max = env.solver().min_max()  # an MDP's
-    min_max.method = developer.MinMaxMethod.VALUE_ITERATION
-    min_max.precision = stormpy.Rational(VI_PRECISION)
-    min_max.relative_termination_criterion = True
-    # a DTMC's: Storm's own iterative solver, by plain iteration of x = Ax + b (its "power"
-    # method), which is value iteration without the choice (the 5x5 UAV's uniform DTMC:
-    # 2.4-4.8 s against 4.0-10.4 s per query with the topological solver)
-    env.solver().set_linear_equation_solver_type(developer.EquationSolverType.NATIVE)
-    native = env.solver().native()
-    native.method = developer.NativeLinearEquationSolverMethod.POWER
-    native.precision = stormpy.Rational(VI_PRECISION)
-    native.relative_termination_criterion = True
-    return env
 
 
 def _for_builder(props: list[Any], job: Job) -> list[Any]:

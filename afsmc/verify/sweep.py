@@ -30,7 +30,8 @@ from afsmc.stack import deep
 from afsmc.text import literal, plural
 from afsmc.verify.api import check_choice, load_with_formulas, select
 from afsmc.verify.guard import Progress
-from afsmc.verify.storm import Engine, Solver, Via
+from afsmc.verify.storm import Engine, Via
+from afsmc.verify.storm_solvers import Solver
 from afsmc.verify.sweep_result import SweepPoint, SweepResult
 from afsmc.verify.sweep_tasks import (
     Task,

@@ -31,7 +31,8 @@ from afsmc.text import literal
 from afsmc.verify.api import check, load_with_formulas, select
 from afsmc.verify.guard import Progress
 from afsmc.verify.results import Checks, Partial, PropertyResult, shown
-from afsmc.verify.storm import Engine, Solver, Via
+from afsmc.verify.storm import Engine, Via
+from afsmc.verify.storm_solvers import Solver
 from afsmc.verify.sweep_result import SweepPoint
 from afsmc.verify.sweep_values import Kind, Number
 

@@ -239,9 +239,6 @@ def table(*groups: dict[str, str]) -> dict[str, str]:
 
 
 XFAIL = table(
-    known("--strategy's min differs from verify's by 2e-8: Storm's scheduler route solves "
-          "again, more precisely (exact 0.885759363638229 on `intervals`); one question, two "
-          "answers", ("intervals", "data"), FLOATS, ("strategy", "strategy-witness")),
     known("simulate --strategy's 'Storm's min' (its own Storm run on the unreduced model) "
           "differs from verify's by 2e-8", ("intervals", "both", "data"),
           ("simulate-strategy",), ("",)),

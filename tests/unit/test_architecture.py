@@ -69,7 +69,7 @@ VERIFY_SPLIT: dict[str, str] = {
     # what to ask
     "queries": "plan", "precision": "plan", "deep": "plan",
     # build and solve
-    "storm": "engines", "acyclic": "engines", "explicit": "engines", "explore": "engines",
+    "storm": "engines", "storm_solvers": "engines", "acyclic": "engines", "explicit": "engines", "explore": "engines",
     "explore_eval": "engines", "explore_graph": "engines", "strategy_storm": "engines",
     "strategy_arrays": "engines", "stopping": "engines", "guard": "engines", "jobs": "engines",
     "failures": "engines", "parametric": "engines",
