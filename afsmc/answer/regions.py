@@ -7,6 +7,7 @@ from typing import Literal
 
 from pydantic import ConfigDict, Field, RootModel
 
+from afsmc.answer import common as c
 from afsmc.answer.common import Absent, Answer, Diagnostic
 
 
@@ -40,6 +41,13 @@ class Regions(Answer):
     reason: str = Field(description="one sentence: why the box has that verdict")
     from_file: list[str] = Field(
         description="the dimensions no --param named: the file's interval probabilities")
+    min: float | None = Field(
+        description="the requirement's value's min over the whole box, as `afsmc verify` "
+                    "bounds it (Storm's parametric engine); null if not computed")
+    max: float | None = Field(description="its max over the whole box, likewise")
+    error: float | None = Field(description="each bound's error: the true extreme lies "
+                                            "within it")
+    decided_by: c.DecidedBy | None = Field(description=c.DECIDED_BY)
     regions: list[Region] = Field(description="the regions, decided ones first")
     feasible: dict[str, float] | None = Field(
         None, description="--feasible: one valuation of the parameters that meets the "

@@ -10,6 +10,7 @@ import os
 import re
 import sys
 import time
+from typing import Literal
 
 from afsmc.commands.common import (
     add_consts,
@@ -26,9 +27,14 @@ from afsmc.files import check_writable, write_atomic
 from afsmc.lower.lowering import Lowered
 from afsmc.model import expr as E
 from afsmc.model import ir
+from afsmc.text import num
 from afsmc.verify import regions as R
 from afsmc.verify.api import load_with_formulas
+from afsmc.verify.parametric import extremes
+from afsmc.verify.precision import PARAMETER_PRECISION
 from afsmc.verify.storm import VIAS
+from afsmc.verify.uncertainty import bound_error
+from afsmc.verify.verdicts import judge
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
@@ -219,15 +225,22 @@ def solve(args: argparse.Namespace, low: Lowered, req: R.Requirement, prop: ir.P
     res = R.RegionResult(req.text, box, regions, 0.0, args.coverage, rounds,
                          states=built.model.nr_states)
     res.coverage = res.fraction("holds") + res.fraction("fails")
-    if all(r.verdict != "holds" for r in regions):
-        # on an MDP, a region that fails may hold under another floor/ceil choice: whether
-        # the most favourable choice meets it somewhere decides between verify's "fails"
-        # and "depends"
-        res.best_choice = R.best_choice(built, req, query, low.kind == "mdp", box,
-                                        args.max_rounds)
+    # the verdict over the whole box: the requirement's bounds over it, judged as verify
+    # judges (docs/verification.md, "What a result means")
+    (e,) = extremes(low, [prop], via=args.via, precision=PARAMETER_PRECISION, box=box)
+    error = bound_error(None)
+    res.bounds = (e.min_attained, e.max_attained, error)
+    res.judged = judge(threshold_of(req), e.min_attained, e.max_attained, error)
     if args.feasible:
         res.feasible, res.feasible_how = feasible(built, formulas[0], res)
     return res
+
+
+def threshold_of(req: R.Requirement) -> ir.Threshold:
+    """The requirement's comparison as verify's IR holds it (the bound as written)."""
+    ops: dict[str, Literal["<=", ">=", "<", ">"]] = {">=": ">=", ">": ">", "<=": "<=",
+                                                     "<": "<"}
+    return ir.Threshold(ops[req.cmp], req.bound, repr(req.bound))
 
 
 def feasible(built: object, formula: str, res: R.RegionResult
@@ -271,6 +284,10 @@ def render(res: R.RegionResult, fixed: list[str] | None = None, *,
                  f"{len(res.regions)} regions, {res.rounds} rounds, {res.states:,} states, "
                  f"{res.seconds:.1f} s")
     verdict, reason = res.verdict()
+    if res.bounds is not None:
+        lo, hi, error = res.bounds
+        lines.append(f"over the whole box: min {num(lo)}, max {num(hi)}, each within "
+                     f"{num(error)} (Storm's parametric engine, as `afsmc verify`)")
     lines.append(f"over the whole box: {verdict} ({reason})")
     if res.feasible == {}:
         lines.append("feasible: Storm found no valuation that meets the requirement")

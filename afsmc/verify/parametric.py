@@ -366,10 +366,12 @@ def _open(x: float, end: str) -> str:
 
 
 def extremes(low: Lowered, props: Sequence[ir.Property], *, via: str = "prism",
-             precision: float = PARAMETER_PRECISION) -> list[Extreme]:
-    """Each property's min and max over every p in the interval probabilities' box,
-    jointly with the floor/ceil choices of `low` (the nondet lowering)."""
-    box = interval_box(low.model)
+             precision: float = PARAMETER_PRECISION, box: Box | None = None
+             ) -> list[Extreme]:
+    """Each property's min and max over every p in `box` (default: the interval
+    probabilities' box), jointly with the floor/ceil choices of `low` (the nondet
+    lowering)."""
+    box = interval_box(low.model) if box is None else box
     plow = with_parameters(low, box)
     qs = {p.name: queries(plow, p) for p in props}
     built = Parametric(source(plow, via), sorted({q.text for v in qs.values() for q in v}))

@@ -13,10 +13,10 @@ A requirement is `P>=0.6 [ F "success" ]` (also `>`, `<=`, `<`, `Pmin`, `Pmax`, 
 On an MDP (integer intervals as floor/ceil choices) a bare `P>=b` must hold under every
 choice: it holds where Pmin >= b and fails where Pmin < b (Pmax for `<=` and `<`).
 
-The verdict over the whole box uses `afsmc verify`'s words (afsmc.verify.verdicts): holds
-(every region holds), fails (every region fails, and on an MDP no choice meets it
-anywhere), depends (some values meet it, others do not), undecided (the regions left
-undecided could go either way).
+The verdict over the whole box is `afsmc verify`'s, judged once by afsmc.verify.verdicts on
+the requirement's bounds over the box (Storm's parametric engine, as verify bounds a
+property over interval probabilities: docs/verification.md, "What a result means"); the
+regions are the map of where it holds and fails.
 
 With more than two parameters a plot shows a projection: `projection` gives, for each
 cell of the two axes, the share of the volume over the other parameters that holds,
@@ -40,6 +40,7 @@ from afsmc.diagnostics import CompileError, Diagnostic, Severity, codes
 from afsmc.lifetime import die_with_parent
 from afsmc.lower.lowering import Lowered
 from afsmc.verify.parametric import Parametric, Source, check_box, source, with_parameters
+from afsmc.verify.verdicts import Verdict
 
 Bounds = dict[str, tuple[float, float]]
 _NEGATE = {">=": "<", ">": "<=", "<=": ">", "<": ">="}
@@ -92,19 +93,6 @@ def storm_formulas(req: Requirement, prism_query: str, mdp: bool) -> tuple[str, 
             f"{op}{opt}{_NEGATE[req.cmp]}{req.bound!r}{rest}")
 
 
-def best_choice_formula(req: Requirement, prism_query: str, mdp: bool) -> str | None:
-    """On an MDP with a bare requirement (`P>=b`, no min/max), the requirement under the
-    choice that favours it most (`Pmax>=b`): where even that fails, the requirement fails
-    for every choice, as `afsmc verify` means "fails". None where the requirement has one
-    value per point (a DTMC, or `Pmin`/`Pmax` written)."""
-    if not mdp or req.opt:
-        return None
-    head = re.match(r"(P|R\{\"[^\"]*\"\})(min|max)?=\?", prism_query)
-    assert head is not None
-    best = "max" if req.cmp in (">=", ">") else "min"
-    return f"{head.group(1)}{best}{req.cmp}{req.bound!r}{prism_query[head.end():]}"
-
-
 @dataclass(frozen=True)
 class Region:
     bounds: Bounds
@@ -135,35 +123,27 @@ class RegionResult:
     # the dimensions not named with --param: the file's interval probabilities, each over
     # its own interval
     from_file: list[str] = field(default_factory=list)
-    # on an MDP with a bare requirement where no region holds: whether the choice that
-    # favours the requirement most meets it somewhere in the box (`best_choice`: "holds",
-    # "fails" or "unknown"); None elsewhere
-    best_choice: str | None = None
+    # the requirement's min and max over the whole box and their error, and the verdict
+    # judged on them (afsmc.verify.verdicts.judge, as verify judges); None before they are
+    # computed
+    bounds: tuple[float, float, float] | None = None
+    judged: Verdict | None = None
 
     def fraction(self, verdict: str) -> float:
         return sum(r.volume(self.box) for r in self.regions if r.verdict == verdict)
 
     def verdict(self) -> tuple[str, str]:
-        """The verdict over the whole box, in `afsmc verify`'s words, and why."""
-        holds, fails = self.fraction("holds"), self.fraction("fails")
-        shares = (f"it holds on {holds:.1%} of the volume, fails on {fails:.1%}, "
-                  f"unknown on {self.fraction('unknown'):.1%}")
+        """The verdict over the whole box, as `afsmc verify` judges it, and why; before the
+        bounds are known, what the regions alone decide (holds or depends, else
+        undecided)."""
+        if self.judged is not None:
+            return self.judged.kind, self.judged.reason
         has = {r.verdict for r in self.regions}
         if has == {"holds"}:
             return "holds", "it holds for every value of the box"
         if "holds" in has and "fails" in has:
-            return "depends", f"{shares}: some values meet it, others do not"
-        if has == {"fails"} and self.best_choice is None:
-            return "fails", "it fails for every value of the box"
-        if self.best_choice == "fails":  # so every region fails, the unknown ones too
-            return "fails", ("it fails for every value of the box under every floor/ceil "
-                             "choice, even the most favourable")
-        if self.best_choice == "holds" and "fails" in has:
-            return "depends", (f"it fails under some floor/ceil choice on {fails:.1%} of "
-                               "the volume, and the most favourable choice meets it for "
-                               "some values")
-        return "undecided", (f"{shares}: the unknown part could go either way "
-                             "(raise --coverage or --max-rounds)")
+            return "depends", "some values meet it, others do not"
+        return "undecided", "the regions alone do not decide it"
 
     def to_json(self) -> dict[str, object]:
         verdict, reason = self.verdict()
@@ -175,6 +155,10 @@ class RegionResult:
             "unknown": self.fraction("unknown"), "rounds": self.rounds,
             "states": self.states, "seconds": round(self.seconds, 3),
             "verdict": verdict, "reason": reason, "from_file": list(self.from_file),
+            "min": None if self.bounds is None else self.bounds[0],
+            "max": None if self.bounds is None else self.bounds[1],
+            "error": None if self.bounds is None else self.bounds[2],
+            "decided_by": None if self.judged is None else self.judged.decided_by,
             "regions": [r.to_json() for r in self.regions]}
         if self.feasible is not None:
             out["feasible"] = self.feasible or None
@@ -223,37 +207,7 @@ def prepare(low: Lowered, params: Sequence[str], req: Requirement, prism_query: 
     plow = with_parameters(low, params)
     src = source(plow, via)
     formulas = storm_formulas(req, prism_query, low.kind == "mdp")
-    best = best_choice_formula(req, prism_query, low.kind == "mdp")
-    return src, formulas, Parametric(src, [*formulas, *([best] if best else [])])
-
-
-BEST_CHOICE_BOXES = 256  # the sub-boxes `best_choice` checks in one round, at most
-
-
-def best_choice(built: Parametric, req: Requirement, prism_query: str, mdp: bool,
-                box: Bounds, max_rounds: int) -> str | None:
-    """Whether the choice that favours the requirement most (`best_choice_formula`) meets
-    it somewhere in `box`: "holds" (on some sub-box), "fails" (nowhere), "unknown" (not
-    decided in `max_rounds` rounds of halving), or None where there are no choices.
-    The sub-boxes are checked in this process, and stop at the first that holds."""
-    best = best_choice_formula(req, prism_query, mdp)
-    if best is None:
-        return None
-    todo = [dict(box)]
-    for _ in range(max_rounds):
-        unknown = []
-        for b in todo:
-            verdict = built.analyze(best, b)
-            if verdict == "holds":
-                return "holds"
-            if verdict == "unknown":
-                unknown.append(b)
-        if not unknown:
-            return "fails"
-        todo = [h for b in unknown for h in split(b, box)]
-        if len(todo) > BEST_CHOICE_BOXES:
-            break
-    return "unknown"
+    return src, formulas, Parametric(src, list(formulas))
 
 
 def refine(low: Lowered, src: Source, formulas: tuple[str, str], built: Parametric,

@@ -9,7 +9,9 @@ import pytest
 
 from afsmc.compiler import load, lowered
 from afsmc.diagnostics import CompileError
+from afsmc.model.ir import Threshold
 from afsmc.verify import regions as R
+from afsmc.verify.verdicts import Verdict, judge
 from tests.conftest import EXAMPLES
 from tests.unit.verify.points import value
 
@@ -96,31 +98,30 @@ def test_local_processes_and_dask_give_the_regions_of_one_process(patrol: object
         assert run(dask=cluster.scheduler_address) == one
 
 
-def _whole(verdicts: list[str], best_choice: str | None = None) -> tuple[str, str]:
+def _whole(verdicts: list[str], judged: Verdict | None = None) -> tuple[str, str]:
     """The verdict over [0, 1] cut into equal regions with these verdicts."""
     n = len(verdicts)
     regions = [R.Region({"P": (i / n, (i + 1) / n)}, v) for i, v in enumerate(verdicts)]
     res = R.RegionResult("P>=0.5 [ F \"done\" ]", {"P": (0.0, 1.0)}, regions, 0.0, 0.95, 1,
-                         best_choice=best_choice)
+                         judged=judged)
     return res.verdict()
 
 
-@pytest.mark.parametrize(("verdicts", "best", "kind"), [
-    (["holds", "holds"], None, "holds"),
-    (["holds", "fails"], None, "depends"),
-    (["holds", "fails", "unknown"], None, "depends"),
-    (["fails", "fails"], None, "fails"),         # one value per point: fails everywhere
-    (["fails", "unknown"], None, "undecided"),
-    (["holds", "unknown"], None, "undecided"),   # the unknown part may fail
-    (["unknown"], None, "undecided"),
-    # an MDP: a region fails where some floor/ceil choice misses the bound
-    (["fails", "fails"], "fails", "fails"),      # the most favourable choice misses it too
-    (["fails", "unknown"], "fails", "fails"),    # ... so the unknown part fails as well
-    (["fails", "fails"], "holds", "depends"),    # the most favourable choice meets it
-    (["fails", "fails"], "unknown", "undecided"),
-    (["unknown"], "holds", "undecided"),         # no region fails for some choice: may hold
+@pytest.mark.parametrize(("verdicts", "kind"), [
+    (["holds", "holds"], "holds"),
+    (["holds", "fails"], "depends"),
+    (["holds", "fails", "unknown"], "depends"),
+    (["fails", "fails"], "undecided"),   # an MDP's region fails for some choice only
+    (["fails", "unknown"], "undecided"),
+    (["unknown"], "undecided"),
 ])
-def test_the_verdict_over_the_box_in_verifys_words(verdicts: list[str], best: str | None,
-                                                   kind: str) -> None:
-    got, reason = _whole(verdicts, best)
+def test_before_the_bounds_the_regions_decide_only_what_they_prove(verdicts: list[str],
+                                                                   kind: str) -> None:
+    got, reason = _whole(verdicts)
     assert got == kind, reason
+
+
+def test_the_verdict_over_the_box_is_verifys_judgement_of_the_bounds() -> None:
+    judged = judge(Threshold(">=", 0.5, "0.5"), 0.3, 0.7, 1e-4)
+    assert _whole(["holds", "fails"], judged) == (judged.kind, judged.reason)
+    assert judged.kind == "depends" and judged.decided_by == "min"
