@@ -82,6 +82,18 @@ class Reference:
         return self.prop(name).get("verdict")
 
 
+def at_midpoint(data: Mapping[str, Any]) -> dict[str, Any]:
+    """`verify --json`'s answer at the interval probabilities' midpoint: each property's
+    `reference` values in place of its bounds, with no verdict (a reference is never
+    judged)."""
+    props = []
+    for p in data["properties"]:
+        ref = p.get("reference") or {}
+        props.append({**p, "min": ref.get("min"), "max": ref.get("max"),
+                      "value": ref.get("value"), "verdict": None})
+    return {**data, "properties": props}
+
+
 class Crashed(AssertionError):
     """A front-end's internal error: exit code 3 or a Python traceback."""
 
