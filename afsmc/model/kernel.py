@@ -16,12 +16,13 @@ else.
 The semantics are PRISM's as Storm computes them (checked against Storm's model builder
 by the differential test tests/unit/model/test_kernel_storm.py):
 
-- `+ - *` of integers give integers, `/` is real division (`7 / 2` is 3.5);
+- `+ - *` of integers give integers, `/` is real division (`7 / 2` is 3.5; the language
+  has no integer division and no `round`: `floor(a / b)` and `floor(x + 0.5)` say them);
 - `floor` and `ceil` give integers; `min` and `max` of integers an integer, with a
   double among the arguments a double;
 - `pow` of integers with an exponent >= 0 is an integer; with a negative exponent a
   fraction (`pow(2, -1)` is 0.5: the checks refuse assigning it to an integer, E308);
-  with a double argument a double (`pow(-8.0, 1/3)` is NaN);
+  with a double argument a double, the C library's `pow` (`pow(-8.0, 1/3)` is NaN);
 - `mod(a, b)` is Storm's (see :func:`storm_mod`): not numpy's, not Python's;
 - `==` and `!=` of doubles treat values within `TOLERANCE` as equal (`0.1 + 0.2 == 0.3`
   holds, as it does where Storm folds constants, in exact rationals); integers compare

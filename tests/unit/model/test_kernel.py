@@ -173,7 +173,7 @@ def evaluators(e: E.Expr, states: list[dict[str, int]]) -> dict[str, list[Any]]:
     return out
 
 
-@settings(max_examples=150, deadline=None,
+@settings(max_examples=300, deadline=None,
           suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large])
 @given(any_expression, st.lists(assignments, min_size=1, max_size=4))
 def test_afsmcs_evaluators_agree_on_random_expressions(e: E.Expr, states: list[dict[str, int]]) -> None:

@@ -174,7 +174,7 @@ batches = st.tuples(st.lists(st.one_of(expressions(Type.INT), expressions(Type.D
 
 
 @pytest.mark.storm
-@settings(max_examples=30, deadline=None,
+@settings(max_examples=100, deadline=None,
           suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large,
                                  HealthCheck.function_scoped_fixture])
 @given(batches)
