@@ -12,6 +12,7 @@ from afsmc.model import expr as E
 from afsmc.model import ir
 from afsmc.model.evaluate import EvalError, scalar
 from afsmc.model.expr import Type
+from afsmc.model.kernel import TOLERANCE
 
 
 def enabled(model: ir.Model, action: ir.Action, mode: int) -> E.Expr:
@@ -96,10 +97,10 @@ def static_value(e: E.Expr, model: ir.Model) -> float | None:
     return float(v)
 
 
-# Weights closer than this tie, as evaluate's `==` on doubles has it: 0.1 + 0.2 ties with
+# Weights closer than this tie, as the kernel's `==` on doubles has it: 0.1 + 0.2 ties with
 # 0.3. E301 rejects a tie of enabled competitors; without one, `<` and "smaller by more
 # than TIE" agree in every state, so the lowering keeps plain `<`.
-TIE = 1e-12
+TIE = TOLERANCE
 
 
 def weights_tie(a: E.Expr, b: E.Expr) -> E.Expr:

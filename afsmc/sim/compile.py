@@ -3,9 +3,10 @@
 Before compiling, an expression is folded: constants become literals, formulas, labels
 and `w(a)` are inlined, and inside one mode's partition of the runs the current mode
 is a known number, so mode tests (and most of the priority conditions the lowering put
-into the guards) disappear. What is left is evaluated with the same semantics as
-`afsmc.model.evaluate` (PRISM's: `/` is real division, doubles compare with 1e-12).
-No text is generated or executed: a closure per node.
+into the guards) disappear. What is left becomes a closure per node (no text is generated or executed),
+each calling the vector form of its operator from :mod:`afsmc.model.kernel`, where every
+operator's semantics is stated (a division by zero is NaN in the runs concerned, as in the
+checks' enumeration).
 """
 
 from __future__ import annotations
@@ -17,7 +18,8 @@ from typing import Any
 import numpy as np
 
 from afsmc.model import expr as E
-from afsmc.model.evaluate import Env, EvalError, evaluate, storm_mod
+from afsmc.model import kernel
+from afsmc.model.evaluate import Env, EvalError, evaluate
 from afsmc.model.expr import Type
 
 Frame = Mapping[str, Any]  # flat variable name (and "mode") -> array of the runs
@@ -86,10 +88,13 @@ def fold(e: E.Expr, sc: Scope) -> E.Expr:
 
 
 def _lit(e: E.Expr) -> E.Expr:
+    """`e`'s value as a literal; `e` itself where it is undefined (`1 / 0` under a `?:` that
+    never takes it, which the resolver accepts): its closure computes NaN, as every
+    undefined value is in the runs (afsmc.model.kernel)."""
     try:
         v = evaluate(e, Env())
-    except EvalError as exc:
-        raise SimError(str(exc)) from None
+    except EvalError:
+        return e
     if isinstance(v, np.generic):
         v = v.item()
     if e.type is Type.BOOL:
@@ -116,88 +121,43 @@ def compile_expr(e: E.Expr) -> Fn:
         return lambda fr: fr["mode"]
     if isinstance(e, E.Unary):
         f = compile_expr(e.operand)
-        if e.op == "!":
-            return lambda fr: np.logical_not(f(fr))
-        return lambda fr: -f(fr)
+        h = known_op(lambda: kernel.unary(e.op)).vector
+        return lambda fr: h(f(fr))
     if isinstance(e, E.Binary):
         return _binary(e)
     if isinstance(e, E.Ite):
         c, a, b = compile_expr(e.cond), compile_expr(e.then), compile_expr(e.other)
-        return lambda fr: np.where(c(fr), a(fr), b(fr))
+        ite = kernel.ite_vector
+        return lambda fr: ite(c(fr), a(fr), b(fr))
     if isinstance(e, E.Call):
         return _call(e)
     raise SimError(f"cannot simulate the expression {type(e).__name__}")
 
 
-_SIMPLE: dict[str, Callable[[Any, Any], Any]] = {
-    "+": np.add, "-": np.subtract, "*": np.multiply, "<": np.less, "<=": np.less_equal,
-    ">": np.greater, ">=": np.greater_equal, "&&": np.logical_and, "||": np.logical_or,
-}
-
-
 def _binary(e: E.Binary) -> Fn:
     f, g = compile_expr(e.left), compile_expr(e.right)
-    op = e.op
-    if op in _SIMPLE:
-        h = _SIMPLE[op]
-        return lambda fr: h(f(fr), g(fr))
-    if op == "=>":
-        return lambda fr: np.logical_or(np.logical_not(f(fr)), g(fr))
-    if op == "/":
-        def div(fr: Frame) -> Any:
-            d = g(fr)
-            if np.any(np.asarray(d) == 0):
-                raise SimError("division by zero")
-            return np.true_divide(f(fr), d)
-        return div
-    if op in ("==", "!="):
-        floating = Type.DOUBLE in (e.left.type, e.right.type)
-        if floating:  # doubles compare with a tolerance, as evaluate() and Storm do
-            if op == "==":
-                return lambda fr: np.abs(f(fr) - g(fr)) <= 1e-12
-            return lambda fr: np.abs(f(fr) - g(fr)) > 1e-12
-        return (lambda fr: np.equal(f(fr), g(fr))) if op == "==" else (
-            lambda fr: np.not_equal(f(fr), g(fr)))
-    raise SimError(f"unknown operator {op}")
+    h = known_op(lambda: kernel.binary(e.op)).vector
+    return lambda fr: h(f(fr), g(fr))
 
 
 def _call(e: E.Call) -> Fn:
     fs = [compile_expr(a) for a in e.args]
-    name = e.func
-    if name in ("min", "max"):
-        h = np.minimum if name == "min" else np.maximum
-        first, rest = fs[0], fs[1:]
-
-        def fold_minmax(fr: Frame) -> Any:
-            out = first(fr)
-            for r in rest:
-                out = h(out, r(fr))
-            return out
-        return fold_minmax
-    if name in ("floor", "ceil"):
-        h1 = np.floor if name == "floor" else np.ceil
+    h = known_op(lambda: kernel.call(e.func, e.type)).vector
+    if len(fs) == 1:
         f0 = fs[0]
-        return lambda fr: np.asarray(h1(f0(fr))).astype(np.int64)
-    if name == "pow":
+        return lambda fr: h(f0(fr))
+    if len(fs) == 2:
         a, b = fs
-        if e.type is Type.INT:
-            def ipow(fr: Frame) -> Any:
-                k = np.asarray(b(fr))
-                if np.any(k < 0):  # a fraction, as Storm and evaluate() compute it
-                    return np.power(np.asarray(a(fr), dtype=float), k)
-                return np.power(np.asarray(a(fr), dtype=np.int64), k.astype(np.int64))
-            return ipow
-        return lambda fr: np.power(np.asarray(a(fr), dtype=float), b(fr))
-    if name == "mod":
-        a, b = fs
+        return lambda fr: h(a(fr), b(fr))
+    return lambda fr: h(*(f(fr) for f in fs))
 
-        def mod(fr: Frame) -> Any:
-            d = b(fr)
-            if np.any(np.asarray(d) == 0):
-                raise SimError("mod by zero")
-            return storm_mod(a(fr), d)
-        return mod
-    raise SimError(f"unknown function {name}")
+
+def known_op(find: Callable[[], kernel.Op]) -> kernel.Op:
+    """The kernel's operator, or SimError for one it does not know."""
+    try:
+        return find()
+    except kernel.EvalError as exc:
+        raise SimError(f"cannot simulate: {exc}") from None
 
 
 def reads(e: E.Expr) -> set[str]:

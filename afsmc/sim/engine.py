@@ -568,6 +568,10 @@ def _next_values(c: CCommand, fr: Frame,
     for bi, b in enumerate(c.branches):
         for var, f in b.updates:
             val = f(fr)
+            if isinstance(val, np.ndarray) and val.dtype.kind == "f" and np.isnan(val).any():
+                # (a division or mod by zero: NaN, see afsmc.model.kernel; the checks' E306
+                # refuses a model where one is used)
+                raise SimError(f"the update of {var} is undefined (a division by zero) in a run")
             if choice is None:
                 new[var] = val
             else:

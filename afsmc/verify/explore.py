@@ -326,6 +326,8 @@ def _command(cmd: CCommand, base: I64, sub: dict[str, Any]) -> tuple[I64, I64, F
         tk = (base & ~b.clear) | b.bits if b.clear else base.copy()
         for f, fn, check in b.updates:
             new = fn(sub)
+            if isinstance(new, np.ndarray) and new.dtype.kind == "f":
+                raise GiveUp(f"{f.name} takes an undefined value (a division by zero)")
             if check and (np.min(new) < f.lo or np.max(new) >= f.lo + f.size):
                 raise GiveUp(f"{f.name} leaves its range")
             if f.boolean:  # numpy has no `-` of booleans

@@ -205,3 +205,31 @@ def test_int_pow_with_a_negative_exponent_simulates_as_storm_verifies(tmp_path: 
     r = run_cli("simulate", str(path), "--runs", "100", "--json")
     assert r.code == 0, r.err
     assert {p["name"]: p["estimate"] for p in json.loads(r.out)["properties"]} == {"p": 1.0, "q": 0.0}
+
+
+DIVISION_BEHIND_A_GUARD = """
+machine dg;
+var x : [0..3] init 0;
+mode S = 0 initial;
+mode D = 1 final;
+action Up in S weight 0.5 { x := min(x + 1, 3); }
+action Go in S when x > 0 && 6 / x > 2.5 weight 0.7 { goto D; }
+property p = P=? [ F mode == D ];
+"""
+
+
+@pytest.mark.storm
+def test_a_division_by_zero_behind_a_guard_simulates_as_storm_verifies(tmp_path: Path) -> None:
+    """6 / x is undefined at x = 0, where `x > 0` already decides the guard: check accepts
+    the model and Storm gives p = 1 (Go fires at x = 1 or 2). The simulator stopped with
+    "division by zero" (E506): it computed 6 / x in every run before the `&&`."""
+    path = tmp_path / "dg.afsm"
+    path.write_text(DIVISION_BEHIND_A_GUARD)
+    r = run_cli("check", str(path))
+    assert r.code == 0, r.err
+    r = run_cli("verify", str(path), "--solver", "topological", "--json")  # Storm
+    assert r.code == 0, r.err
+    assert json.loads(r.out)["properties"][0]["value"] == 1.0
+    r = run_cli("simulate", str(path), "--runs", "100", "--json")
+    assert r.code == 0, r.err
+    assert json.loads(r.out)["properties"][0]["estimate"] == 1.0
