@@ -9,7 +9,9 @@ mkdir -p "$out"
 for f in examples/*.afsm; do
     name=$(basename "$f" .afsm)
     for t in prism jani dot; do
-        .venv/bin/afsmc compile "$f" -t "$t" -o "$out/$name" >/dev/null 2>"$out/$name.$t.err" || true
+        # the diagnostics too, without the output folder's name (which differs by run)
+        .venv/bin/afsmc compile "$f" -t "$t" -o "$out/$name" 2>&1 >/dev/null \
+            | sed "s|$out/||g" >"$out/$name.$t.err" || true
     done
 done
 echo "wrote $(find "$out" -type f | wc -l) files to $out"
