@@ -4,7 +4,7 @@
         [--intervals P_INIT_FAIL=0.0202:0.0262,...]
 
 Runs the steps of `afsmc verify`'s bounds over interval probabilities
-(afsmc.verify.parametric.extremes) one by one on examples/uav.afsm, printing each step's
+(afsmc.verify.engines.parametric.extremes) one by one on examples/uav.afsm, printing each step's
 wall time and the process's peak RSS as it finishes (flushed, so a run stopped from outside
 still says how far it got). The point-valued checks are not run: docs/benchmarks.md has
 them. Stop it from outside after a time limit (docs/benchmarks.md used 15 minutes).
@@ -42,9 +42,9 @@ def main() -> int:
     args = ap.parse_args()
     sys.path.insert(0, str(ROOT))
     from afsmc.compiler import lowered
-    from afsmc.verify import parametric
-    from afsmc.verify.api import load_with_formulas, select
-    from afsmc.verify.precision import PARAMETER_PRECISION
+    from afsmc.verify.core.api import load_with_formulas, select
+    from afsmc.verify.engines import parametric
+    from afsmc.verify.plan.precision import PARAMETER_PRECISION
 
     text = (ROOT / "examples" / "uav.afsm").read_text(encoding="utf-8")
     for item in args.intervals.split(","):

@@ -27,12 +27,12 @@ from afsmc.model import expr as E
 from afsmc.model import ir
 from afsmc.text import short
 from afsmc.verify import upper_bound
-from afsmc.verify.api import ask
-from afsmc.verify.guard import Progress
-from afsmc.verify.stopping import large_variables
-from afsmc.verify.storm import StormFailure
-from afsmc.verify.strategy import turns_chosen
-from afsmc.verify.uncertainty import reach_bounds
+from afsmc.verify.core.api import ask
+from afsmc.verify.core.uncertainty import reach_bounds
+from afsmc.verify.engines.guard import Progress
+from afsmc.verify.engines.stopping import large_variables
+from afsmc.verify.engines.storm import StormFailure
+from afsmc.verify.outcome.strategy import turns_chosen
 
 if TYPE_CHECKING:
     from afsmc.api.mission import Mission

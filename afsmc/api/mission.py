@@ -185,7 +185,7 @@ class Mission:
         sweep --bound`). `values`: a list, or a range text ``"0:900:25"`` (stop included) or
         ``"1,2,5"``. A mapping ``{"CELLS": "2:4", "ROUNDS": [1, 2, 3]}`` for `variable`
         sweeps the grid of several constants (`afsmc sweep --const CELLS=2:4 --const
-        ROUNDS=1:3`). `options`: those of :func:`afsmc.verify.sweep` (``jobs``,
+        ROUNDS=1:3`). `options`: those of :func:`afsmc.verify.reports.sweep` (``jobs``,
         ``engine``, ``formulas``, ``dask``, ...). Raises AfsmError."""
         from afsmc.api.sweep import sweep
 

@@ -21,9 +21,9 @@ from afsmc.api.errors import AfsmError
 from afsmc.diagnostics import CompileError, Diagnostic
 from afsmc.lifetime import without_main
 from afsmc.text import num
-from afsmc.verify.parametric import Extreme
-from afsmc.verify.results import PropertyResult, VerifyResult
-from afsmc.verify.uncertainty import described
+from afsmc.verify.core.uncertainty import described
+from afsmc.verify.engines.parametric import Extreme
+from afsmc.verify.outcome.results import PropertyResult, VerifyResult
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -80,7 +80,7 @@ def verify_file(path: str, properties: Sequence[str] | str | None = None, *,
 class Intervals:
     """Where the properties' bounds over the mission's interval probabilities (`const prob
     P = [lo, hi]`) lie: ``box`` (each one's interval) and one
-    :class:`afsmc.verify.parametric.Extreme` per property: ``min_attained`` and
+    :class:`afsmc.verify.engines.parametric.Extreme` per property: ``min_attained`` and
     ``max_attained`` (the properties' ``min`` and ``max``), ``min`` and ``max`` (the outer
     ends: attained minus or plus the precision), ``min_at`` and ``max_at`` (where Storm
     found them)."""
@@ -96,7 +96,7 @@ class Intervals:
 
     def to_json(self) -> dict[str, object]:
         """The ``probability_intervals`` object of `afsmc verify --json`."""
-        from afsmc.verify import parametric
+        from afsmc.verify.engines import parametric
 
         return parametric.to_json(self.box, self.bounds)
 

@@ -23,7 +23,7 @@ from afsmc.sim.policy import Table
 from afsmc.sim.run import BATCH, STRATEGIES, Estimate, Job, Outcome, Strategy, job_for, program
 from afsmc.sim.run import simulate as run_simulation
 from afsmc.sim.scheduler import UNIFORM
-from afsmc.verify.policy import Policy, extract
+from afsmc.verify.core.policy import Policy, extract
 
 if TYPE_CHECKING:
     import pandas as pd

@@ -13,8 +13,8 @@ from afsmc.api.errors import AfsmError
 from afsmc.api.results import VERIFY_DEFAULTS, names
 from afsmc.diagnostics import CompileError
 from afsmc.lifetime import without_main
-from afsmc.verify.sweep_result import VALUES, SweepResult
-from afsmc.verify.sweep_values import Number, parse_values
+from afsmc.verify.reports.sweep_result import VALUES, SweepResult
+from afsmc.verify.reports.sweep_values import Number, parse_values
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -26,7 +26,7 @@ if TYPE_CHECKING:
 def sweep(mission: Mission, variable: str | Mapping[str, Sequence[Number] | str],
           values: Sequence[Number] | str = (), *,
           properties: Sequence[str] | str | None = None, **options: Any) -> Sweep:
-    """:meth:`Mission.sweep`: :func:`afsmc.verify.sweep`, the function `afsmc sweep` calls,
+    """:meth:`Mission.sweep`: :func:`afsmc.verify.reports.sweep`, the function `afsmc sweep` calls,
     with the command's defaults; `variable` "bound" sweeps the step bound, a mapping
     {name: values} the grid of several constants."""
     def parsed(vals: Sequence[Number] | str) -> Sequence[Number]:
@@ -51,7 +51,7 @@ def sweep_file(path: str, variable: str | Mapping[str, Sequence[Number]],
                properties: Sequence[str] | str | None = None, text: str | None = None,
                consts: Mapping[str, str] | None = None, **options: Any) -> Sweep:
     """The one way afsmc sweeps, for `afsmc sweep` and :meth:`Mission.sweep`:
-    :func:`afsmc.verify.sweep` with the command's defaults (every option passed on as
+    :func:`afsmc.verify.reports.sweep` with the command's defaults (every option passed on as
     given), its worker processes started without re-running a user's script. `variable`
     a mapping {name: values} sweeps the grid of several constants."""
     kwargs: dict[str, Any] = {**VERIFY_DEFAULTS, **options}

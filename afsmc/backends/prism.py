@@ -132,7 +132,7 @@ def emit(low: Lowered, variant_labels: bool = False) -> PrismOutput:
         return emit_network(low)
     # A composed mission with its commands labelled apart is one module of the mission's
     # commands (the product its modules form): Storm's choice labels then name the command
-    # and so the agent that moved (afsmc.verify.strategy).
+    # and so the agent that moved (afsmc.verify.outcome.strategy).
     model = low.model
     labels = {i: "" if c.silent else variant_label(low, i)
               if variant_labels and (c.choice or composed) else

@@ -24,7 +24,6 @@ from afsmc.api.diagram import (  # noqa: F401  (mode_reachability, _reach_error:
     render,
 )
 from afsmc.backends.dot import Overlay, diagram
-from afsmc.commands import diagram_strategy
 from afsmc.commands.common import (
     add_consts,
     add_file,
@@ -34,6 +33,7 @@ from afsmc.commands.common import (
     report,
     usage_error,
 )
+from afsmc.commands.render import diagram_strategy
 from afsmc.commands.verify import positive
 from afsmc.compiler import load
 from afsmc.diagnostics import CompileError, Diagnostic, Severity, codes

@@ -1,6 +1,6 @@
 """`afsmc regions FILE --param NAME=LO:HI ... --require 'P>=0.6 [ F "success" ]'`: the
 parameter box split into regions where the requirement holds for every value, fails for
-every value, or is undecided (afsmc.verify.regions)."""
+every value, or is undecided (afsmc.verify.reports.regions)."""
 
 from __future__ import annotations
 
@@ -28,13 +28,13 @@ from afsmc.lower.lowering import Lowered
 from afsmc.model import expr as E
 from afsmc.model import ir
 from afsmc.text import num
-from afsmc.verify import regions as R
-from afsmc.verify.api import load_with_formulas
-from afsmc.verify.parametric import extremes
-from afsmc.verify.precision import PARAMETER_PRECISION
-from afsmc.verify.storm import VIAS
-from afsmc.verify.uncertainty import bound_error
-from afsmc.verify.verdicts import judge
+from afsmc.verify.core.api import load_with_formulas
+from afsmc.verify.core.uncertainty import bound_error
+from afsmc.verify.engines.parametric import extremes
+from afsmc.verify.engines.storm import VIAS
+from afsmc.verify.outcome.verdicts import judge
+from afsmc.verify.plan.precision import PARAMETER_PRECISION
+from afsmc.verify.reports import regions as R
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
@@ -194,7 +194,7 @@ def run(args: argparse.Namespace) -> int:
         res.from_file = from_file
         res.seconds = time.perf_counter() - t0
         if args.plot:
-            from afsmc.commands.regions_plot import plot
+            from afsmc.commands.render.regions_plot import plot
 
             write_atomic(args.plot, plot(res, axes, os.path.splitext(args.plot)[1].lstrip(".")),
                          protect=(args.file,))
@@ -248,7 +248,7 @@ def feasible(built: object, formula: str, res: R.RegionResult
     """One valuation meeting the requirement: Storm's feasibility check, or, where Storm
     refuses the box (its graph-preservation test fails on several parameters), the
     centre of the largest region proven to hold."""
-    from afsmc.verify.parametric import Parametric
+    from afsmc.verify.engines.parametric import Parametric
 
     assert isinstance(built, Parametric)
     try:

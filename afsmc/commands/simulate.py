@@ -24,7 +24,7 @@ from afsmc.commands.common import (
     report,
     usage_error,
 )
-from afsmc.commands.simulate_strategy import followed_text
+from afsmc.commands.render.simulate_strategy import followed_text
 from afsmc.diagnostics import CompileError, codes
 from afsmc.files import check_writable, read_source, write_atomic
 from afsmc.interrupt import Stopped

@@ -25,10 +25,10 @@ from afsmc.commands.verify import (
 )
 from afsmc.diagnostics import CompileError, Diagnostic, Severity, codes
 from afsmc.files import check_writable, write_atomic
-from afsmc.verify import sweep_verdicts
-from afsmc.verify.sweep import without_kept_note
-from afsmc.verify.sweep_result import SweepResult
-from afsmc.verify.sweep_values import MAX_POINTS, Number, parse_values
+from afsmc.verify.reports import sweep_verdicts
+from afsmc.verify.reports.sweep import without_kept_note
+from afsmc.verify.reports.sweep_result import SweepResult
+from afsmc.verify.reports.sweep_values import MAX_POINTS, Number, parse_values
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:

@@ -8,7 +8,6 @@ import sys
 from collections.abc import Callable
 
 from afsmc.api.results import verify_file
-from afsmc.commands import verify_extras as extras
 from afsmc.commands.common import (
     add_consts,
     add_file,
@@ -19,7 +18,8 @@ from afsmc.commands.common import (
     report,
     usage_error,
 )
-from afsmc.commands.requirements import (
+from afsmc.commands.render import verify_extras as extras
+from afsmc.commands.render.requirements import (
     add_requirement_options,
     attained_lines,
     refuse_requirement_options,
@@ -29,12 +29,12 @@ from afsmc.commands.requirements import (
 from afsmc.diagnostics import CompileError
 from afsmc.text import literal, num
 from afsmc.verify import VerifyResult
-from afsmc.verify.junit import write_junit
-from afsmc.verify.results import ModelStats, PropertyResult
-from afsmc.verify.storm import ENGINES, VIAS
-from afsmc.verify.storm_solvers import SOLVERS
-from afsmc.verify.uncertainty import INTERVAL_CONSTANTS, described
-from afsmc.verify.verdicts import failing
+from afsmc.verify.core.uncertainty import INTERVAL_CONSTANTS, described
+from afsmc.verify.engines.storm import ENGINES, VIAS
+from afsmc.verify.engines.storm_solvers import SOLVERS
+from afsmc.verify.outcome.results import ModelStats, PropertyResult
+from afsmc.verify.outcome.verdicts import failing
+from afsmc.verify.reports.junit import write_junit
 
 
 def positive(text: str) -> int:

@@ -66,7 +66,7 @@ class Lowered:
     bounds: dict[str, tuple[str, int]] = field(default_factory=dict)  # generated const -> (interval const, value)
     reductions: tuple[str, ...] = ()  # exact reductions applied (afsmc.lower.reduce)
     # constants the backends leave undefined, for Storm's parametric engine
-    # (afsmc.verify.parametric): interval probabilities and params given as regions
+    # (afsmc.verify.engines.parametric): interval probabilities and params given as regions
     parameters: tuple[str, ...] = ()
     # A composed mission: its agents' commands apart (afsmc.lower.compose.Network), for
     # the backends that write one module per agent; `commands` are then their product.

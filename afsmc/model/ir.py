@@ -48,7 +48,7 @@ class Constant:
     span: Span
     declared_type: str = "int"  # as written: int, double, prob, bool
     # `const prob P = [lo, hi]`: one fixed, unknown p in [lo, hi] (value: the midpoint);
-    # afsmc.verify.parametric bounds every property over it
+    # afsmc.verify.engines.parametric bounds every property over it
     prob_interval: tuple[float, float] | None = None
 
     @property
@@ -202,7 +202,7 @@ class Property:
     # Where in `text` the step bound (`<=k`, `=k`) stands, or would go after F/G/U/C.
     bound_site: tuple[int, int] | None = None
     # A requirement (`P>=0.65 [ ... ]`): Storm is still asked for the values (min and max),
-    # and afsmc.verify.verdicts judges them. None: `=?`.
+    # and afsmc.verify.outcome.verdicts judges them. None: `=?`.
     threshold: Threshold | None = None
 
 

@@ -1,7 +1,7 @@
 """Runs under a given strategy (`afsmc simulate --strategy`): in a state where an
 interval constant is resolved, the run takes the command a table names for that state.
 
-The table (from `afsmc.verify.policy`) lists states as values of variables ("mode" among
+The table (from `afsmc.verify.core.policy`) lists states as values of variables ("mode" among
 them) and a lowered command per state. Each state is encoded as one integer (its values
 over the variables' ranges, mixed radix), so that the runs of a batch look theirs up at
 once with a binary search.

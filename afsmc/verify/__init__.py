@@ -24,10 +24,10 @@ bisimulation=False, split=False, memory_budget=None, solver="auto") -> VerifyRes
     `isolate` forces (True) or forbids (False) the watched child process (default: only
     when the upper bound exceeds 200,000 states). `progress(text)` receives progress lines.
     ``strategy=True``: each MDP property's ``.strategy`` is ``{"min": [...], "max": [...]}``
-    of :class:`afsmc.verify.strategy.StrategyEntry` (constant, end, value, action, mode,
+    of :class:`afsmc.verify.outcome.strategy.StrategyEntry` (constant, end, value, action, mode,
     states, when); ``witness=(name, K)`` (name None: the only property) with
     ``witness_dir="min"|"max"`` (default max) sets that property's ``.witnesses``, the K
-    most probable paths into its target (:class:`afsmc.verify.witness.Witness`: probability,
+    most probable paths into its target (:class:`afsmc.verify.outcome.witness.Witness`: probability,
     steps of mode, action, probability, changes). Both from Storm's sparse engine; E415 for
     a request without an answer (docs/verification.md, "Strategies and failure paths").
 
@@ -35,7 +35,7 @@ bisimulation=False, split=False, memory_budget=None, solver="auto") -> VerifyRes
     the true one); ``exact=True`` builds over rationals and solves exactly (sparse engine).
     A property with a threshold (a requirement, ``P>=0.65 [ ... ]``) makes the check sound
     at ``precision.DEFAULT_PRECISION`` (1e-6) unless one of them is given, and gets a
-    ``verdict`` (:mod:`afsmc.verify.verdicts`: holds, fails, depends, undecided).
+    ``verdict`` (:mod:`afsmc.verify.outcome.verdicts`: holds, fails, depends, undecided).
 
 ``VerifyResult``: ``.model`` / ``.uniform_model`` (:class:`ModelStats`: type, states,
 transitions, choices, parse/build/check times), ``.properties`` (list of
@@ -72,12 +72,12 @@ processes of one check), ``jobs`` (a Storm job for a lowered model), ``failures`
 failures as diagnostics), ``guard`` and ``storm`` (one watched Storm process), ``sweep``.
 """
 
-from afsmc.verify.api import Loaded, check, load_with_formulas, run, select
-from afsmc.verify.guard import default_max_states, upper_bound
-from afsmc.verify.results import Checks, ModelStats, Partial, PropertyResult, VerifyResult
-from afsmc.verify.sweep import sweep
-from afsmc.verify.sweep_result import SweepPoint, SweepResult
-from afsmc.verify.sweep_values import parse_values
+from afsmc.verify.core.api import Loaded, check, load_with_formulas, run, select
+from afsmc.verify.engines.guard import default_max_states, upper_bound
+from afsmc.verify.outcome.results import Checks, ModelStats, Partial, PropertyResult, VerifyResult
+from afsmc.verify.reports.sweep import sweep
+from afsmc.verify.reports.sweep_result import SweepPoint, SweepResult
+from afsmc.verify.reports.sweep_values import parse_values
 
 __all__ = [
     "Checks",

@@ -13,8 +13,8 @@ import pytest
 
 from afsmc.compiler import load, lowered
 from afsmc.diagnostics import CompileError
-from afsmc.verify.deep import refuse_deep
-from afsmc.verify.guard import default_max_states
+from afsmc.verify.engines.guard import default_max_states
+from afsmc.verify.plan.deep import refuse_deep
 from tests.conftest import EXAMPLES, Result
 
 PATROL = str(EXAMPLES / "patrol.afsm")

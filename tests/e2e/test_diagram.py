@@ -439,7 +439,7 @@ def test_a_failing_dot_program_is_e613_and_writes_nothing(tmp_path: Path,
 
 def test_a_storm_failure_at_reach_other_than_size_is_e612() -> None:
     from afsmc.commands.diagram import _reach_error
-    from afsmc.verify.storm import StormFailure
+    from afsmc.verify.engines.storm import StormFailure
 
     err = _reach_error(StormFailure("check", "Storm  could not\n solve it"))
     (d,) = err.diagnostics

@@ -278,7 +278,7 @@ def stop_second(monkeypatch: pytest.MonkeyPatch) -> Iterator[Any]:
 def test_an_interrupted_sweep_is_valid(files: dict[str, str], stop_second: Any) -> None:
     import importlib
 
-    stop_second(importlib.import_module("afsmc.verify.sweep"), "evaluate")
+    stop_second(importlib.import_module("afsmc.verify.reports.sweep"), "evaluate")
     r = run_cli("sweep", files["patrol"], "-c", "CELLS=2:3,ROUNDS=1", "-p", "finish", "-j", "1",
                 "--json")
     assert r.code == 130, r.err
@@ -299,7 +299,7 @@ def test_an_interrupted_simulation_is_valid(files: dict[str, str], stop_second: 
 
 def test_an_interrupted_verify_is_valid(files: dict[str, str],
                                         monkeypatch: pytest.MonkeyPatch) -> None:
-    from afsmc.verify.guard import Interrupted
+    from afsmc.verify.engines.guard import Interrupted
     from tests.unit.verify.test_verify_partial_results import _stop_after_first_answer
 
     _stop_after_first_answer(monkeypatch, lambda v: Interrupted(dict(v)))
@@ -312,7 +312,7 @@ def test_an_interrupted_verify_is_valid(files: dict[str, str],
 
 def test_an_interrupted_region_check_is_valid(files: dict[str, str],
                                               stop_second: Any) -> None:
-    from afsmc.verify import regions
+    from afsmc.verify.reports import regions
 
     stop_second(regions, "_round")
     r = run_cli("regions", files["iv"], "-c", SMALL, "--require", 'P>=0.9 [ F "done" ]',

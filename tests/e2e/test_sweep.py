@@ -1,4 +1,4 @@
-"""`afsmc sweep` and `afsmc.verify.sweep`: deadline curves (Figure 2 of the paper), CSV and
+"""`afsmc sweep` and `afsmc.verify.reports.sweep`: deadline curves (Figure 2 of the paper), CSV and
 plots, closed forms, and local processes / Dask giving the same numbers as one process."""
 
 from __future__ import annotations
@@ -14,7 +14,8 @@ import pytest
 
 from afsmc.commands.sweep import split_consts
 from afsmc.diagnostics import CompileError
-from afsmc.verify import parse_values, sweep
+from afsmc.verify import parse_values
+from afsmc.verify.reports import sweep
 from tests.conftest import EXAMPLES, run_cli
 from tests.specs import BOOL_PARAM
 from tests.unit.verify.test_verify import DEADLINE, GEO, RECORD
@@ -176,7 +177,7 @@ def no_points(monkeypatch: pytest.MonkeyPatch) -> None:
     """Fail the test if the sweep computes any point."""
     import importlib
 
-    sweep_mod = importlib.import_module("afsmc.verify.sweep")  # afsmc.verify.sweep is a function
+    sweep_mod = importlib.import_module("afsmc.verify.reports.sweep")  # afsmc.verify.reports.sweep is a function
 
     def boom(*_a: object, **_k: object) -> None:
         raise AssertionError("a point was computed before the error was reported")
@@ -276,7 +277,8 @@ def test_uav_deadline_sweep(tmp_path: Path) -> None:
 def test_uav_deadline_sweep_equals_verify_at_each_point() -> None:
     """The shared build of a deadline sweep gives exactly what `verify` gives per point
     (the model must not be saturated at the first deadline it was built with)."""
-    from afsmc.verify import run, sweep
+    from afsmc.verify import run
+    from afsmc.verify.reports import sweep
 
     uav = str(Path(__file__).resolve().parents[2] / "examples" / "uav.afsm")
     consts = {"WIDTH": "2", "HEIGHT": "2", "T_LIMIT": "60"}
@@ -323,7 +325,7 @@ def test_ctrl_c_prints_the_points_a_sweep_had(deadline: str, monkeypatch: pytest
 
     from afsmc.cli import main
 
-    sweep_module = importlib.import_module("afsmc.verify.sweep")
+    sweep_module = importlib.import_module("afsmc.verify.reports.sweep")
     real = sweep_module.evaluate
     calls: list[int] = []
 
@@ -478,7 +480,7 @@ def test_a_worker_that_dies_is_a_diagnostic_with_the_points_it_had(
     import importlib
     from concurrent.futures.process import BrokenProcessPool
 
-    sweep_mod = importlib.import_module("afsmc.verify.sweep")
+    sweep_mod = importlib.import_module("afsmc.verify.reports.sweep")
     real_run = sweep_mod._run
 
     def dies_after_the_first(tasks, jobs, dask, progress, total, results):  # type: ignore[no-untyped-def]
@@ -498,7 +500,7 @@ def _stop_after_first_task(monkeypatch: pytest.MonkeyPatch, stop: BaseException)
     """The first task finishes, then the sweep stops with `stop` (a Ctrl-C, a dead worker)."""
     import importlib
 
-    sweep_mod = importlib.import_module("afsmc.verify.sweep")
+    sweep_mod = importlib.import_module("afsmc.verify.reports.sweep")
     real_run = sweep_mod._run
 
     def stops(tasks, jobs, dask, progress, total, results):  # type: ignore[no-untyped-def]

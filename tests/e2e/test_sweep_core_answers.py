@@ -22,9 +22,10 @@ from typing import Any
 import pytest
 
 import afsmc
-from afsmc.verify import run, sweep, sweep_verdicts
-from afsmc.verify.sweep_result import SweepResult
-from afsmc.verify.sweep_tasks import Task, evaluate, make_tasks
+from afsmc.verify import run
+from afsmc.verify.reports import sweep, sweep_verdicts
+from afsmc.verify.reports.sweep_result import SweepResult
+from afsmc.verify.reports.sweep_tasks import Task, evaluate, make_tasks
 from tests.conftest import EXAMPLES, run_cli
 
 TOL = 1e-6  # the requirements make the check sound to 1e-6: two builds agree within that

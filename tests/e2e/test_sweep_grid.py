@@ -10,7 +10,8 @@ from pathlib import Path
 
 import pytest
 
-from afsmc.verify import run, sweep
+from afsmc.verify import run
+from afsmc.verify.reports import sweep
 from tests.conftest import EXAMPLES, run_cli
 from tests.unit.verify.test_verify import DEADLINE
 

@@ -21,7 +21,7 @@ pytestmark = pytest.mark.storm
 def test_ctrl_c_prints_the_values_verify_had(monkeypatch: pytest.MonkeyPatch,
                                              capsys: pytest.CaptureFixture[str]) -> None:
     from afsmc.cli import main
-    from afsmc.verify.guard import Interrupted
+    from afsmc.verify.engines.guard import Interrupted
 
     sparse = run(UAV, consts=SMALL["uav"], properties=["success"], engine="sparse",
                  isolate=False, uniform=False)
@@ -38,7 +38,7 @@ def test_ctrl_c_prints_the_values_verify_had(monkeypatch: pytest.MonkeyPatch,
 def test_ctrl_c_with_json_still_prints_one_json_object(monkeypatch: pytest.MonkeyPatch,
                                                        capsys: pytest.CaptureFixture[str]) -> None:
     from afsmc.cli import main
-    from afsmc.verify.guard import Interrupted
+    from afsmc.verify.engines.guard import Interrupted
 
     sparse = run(UAV, consts=SMALL["uav"], properties=["success"], engine="sparse",
                  isolate=False, uniform=False)

@@ -10,7 +10,7 @@ from pathlib import Path
 
 import pytest
 
-from afsmc.verify.guard import IN_PROCESS_STATES
+from afsmc.verify.engines.guard import IN_PROCESS_STATES
 from tests.conftest import ROOT
 
 # An upper bound of 600,002 states sends the build to the watched child; 3 are reachable.

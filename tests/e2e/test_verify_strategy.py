@@ -13,7 +13,7 @@ import pytest
 
 from afsmc.compiler import load
 from afsmc.diagnostics import CompileError
-from afsmc.verify.policy import extract
+from afsmc.verify.core.policy import extract
 from tests.conftest import EXAMPLES, run_cli
 
 pytestmark = pytest.mark.storm

@@ -20,12 +20,12 @@ import pytest
 
 from afsmc.api.diagram import reach_modes, span_text
 from afsmc.backends.dot import diagram
-from afsmc.commands import diagram_strategy
+from afsmc.commands.render import diagram_strategy
 from afsmc.compiler import load
 from afsmc.lower.reduce import Reductions
-from afsmc.verify.api import run
-from afsmc.verify.results import PropertyResult
-from afsmc.verify.witness import Witness
+from afsmc.verify.core.api import run
+from afsmc.verify.outcome.results import PropertyResult
+from afsmc.verify.outcome.witness import Witness
 from tests.conftest import EXAMPLES, run_cli
 
 pytestmark = pytest.mark.storm

@@ -16,8 +16,8 @@ from afsmc.api.results import VERIFY_DEFAULTS, Results
 from afsmc.commands.simulate import add_arguments as simulate_arguments
 from afsmc.commands.verify import add_storm_options
 from afsmc.model import ir
-from afsmc.verify.results import ModelStats, PropertyResult, VerifyResult
-from afsmc.verify.verdicts import judge
+from afsmc.verify.outcome.results import ModelStats, PropertyResult, VerifyResult
+from afsmc.verify.outcome.verdicts import judge
 from tests.conftest import EXAMPLES, run_cli
 
 PATROL = str(EXAMPLES / "patrol.afsm")

@@ -14,7 +14,7 @@ from afsmc.compiler import load
 from afsmc.lsp.analysis import analyse_fast, analyse_full
 from afsmc.lsp.index import build
 from afsmc.syntax.fmt import format_text
-from afsmc.verify.api import run
+from afsmc.verify.core.api import run
 from tests.conftest import ROOT
 
 EXAMPLES = os.path.join(ROOT, "examples")

@@ -8,7 +8,7 @@ import pytest
 
 from afsmc.compiler import load
 from afsmc.diagnostics import CompileError
-from afsmc.verify.api import run
+from afsmc.verify.core.api import run
 
 MISSION = """machine f;
 compose interleaving;

@@ -9,7 +9,7 @@ import os
 import pytest
 
 from afsmc.lower.reduce import Reductions
-from afsmc.verify.api import run
+from afsmc.verify.core.api import run
 
 HERE = os.path.dirname(__file__)
 QUERIES = {

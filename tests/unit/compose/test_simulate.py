@@ -14,7 +14,7 @@ import pytest
 
 from afsmc.api.simulate import simulate_file
 from afsmc.sim.scheduler import UNIFORM
-from afsmc.verify.api import run
+from afsmc.verify.core.api import run
 from tests.conftest import ROOT
 
 HERE = os.path.dirname(__file__)

@@ -14,7 +14,7 @@ from afsmc.backends.prism import emit
 from afsmc.compiler import load
 from afsmc.lower.lowering import lower
 from afsmc.lower.reduce import reduce
-from afsmc.verify.api import run
+from afsmc.verify.core.api import run
 from tests.conftest import ROOT
 
 TWO_UAV = os.path.join(ROOT, "examples", "two_uav.afsm")

@@ -12,7 +12,7 @@ import pytest
 
 from afsmc.compiler import load
 from afsmc.diagnostics import CompileError, Diagnostic
-from afsmc.verify.api import run
+from afsmc.verify.core.api import run
 
 PAIR = """machine pair;
 compose timed ties weight;

@@ -8,7 +8,7 @@ import os
 
 import pytest
 
-from afsmc.verify.api import run
+from afsmc.verify.core.api import run
 from tests.conftest import ROOT
 
 PATH = os.path.join(ROOT, "examples", "two_uav.afsm")

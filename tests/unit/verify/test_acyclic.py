@@ -1,4 +1,4 @@
-"""The backward pass over an acyclic model (afsmc.verify.acyclic) gives Storm's values.
+"""The backward pass over an acyclic model (afsmc.verify.engines.acyclic) gives Storm's values.
 
 The oracle is Storm itself: `--solver topological` is the path afsmc took before, on the
 same built model. Every example and test machine is checked both ways; the patrol robot
@@ -13,7 +13,8 @@ import numpy as np
 import pytest
 
 from afsmc.compiler import load
-from afsmc.verify import acyclic, run
+from afsmc.verify import run
+from afsmc.verify.engines import acyclic
 from tests.conftest import EXAMPLES
 from tests.unit.backends.test_prism import SMALL
 from tests.unit.verify.models import TEXT
@@ -26,7 +27,7 @@ pytestmark = pytest.mark.storm
 def _storm_builds(monkeypatch: pytest.MonkeyPatch) -> None:
     """These tests are of the pass over Storm's own build: afsmc's exploration, which a
     job tries first (test_explicit.py), is not tried here."""
-    monkeypatch.setattr("afsmc.verify.runner.applies", lambda *_a: False)
+    monkeypatch.setattr("afsmc.verify.core.runner.applies", lambda *_a: False)
 
 EXAMPLE_FILES = sorted(EXAMPLES.glob("*.afsm"))
 CYCLIC = {"patrol", "warehouse"}  # examples with a cycle of more than one state

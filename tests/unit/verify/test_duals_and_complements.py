@@ -1,4 +1,4 @@
-"""afsmc.verify.queries: a bounded G asked as its dual, a Pmax as 1 - its complementary Pmin,
+"""afsmc.verify.plan.queries: a bounded G asked as its dual, a Pmax as 1 - its complementary Pmin,
 and the words the user sees for these internal queries."""
 
 from __future__ import annotations
@@ -7,7 +7,7 @@ import pytest
 
 from afsmc.model import expr as E
 from afsmc.model import ir
-from afsmc.verify.queries import (
+from afsmc.verify.plan.queries import (
     DUAL,
     REST,
     TERMINATES,

@@ -17,7 +17,7 @@ from afsmc.compiler import load, lowered
 from afsmc.lower.reduce import Reductions
 from afsmc.model import ir
 from afsmc.verify import run
-from afsmc.verify.storm import Job, execute
+from afsmc.verify.engines.storm import Job, execute
 from tests.conftest import EXAMPLES, run_cli
 from tests.unit.backends.test_prism import SMALL
 
@@ -158,7 +158,7 @@ def test_auto_with_hybrid_groups_the_queries_in_two_processes(tmp_path: object) 
     # each answer is reported as it comes, by what it is, not by afsmc's internal name
     assert any(s.startswith("checked reach_max as 1 - Pmin on the MDP") for s in said), said
     assert not any("__afsmc" in s for s in said), said
-    # with room, afsmc's own exploration answers first (afsmc.verify.explicit); with none,
+    # with room, afsmc's own exploration answers first (afsmc.verify.engines.explicit); with none,
     # it gives up within the budget and the hybrid path above runs
     assert roomy.model.engine == "explicit" and roomy.model.processes == 1
     _close(_values(tight), _values(sparse), 1e-6)
@@ -238,7 +238,7 @@ def test_auto_with_hybrid_checks_probabilities_only_in_one_process(tmp_path: obj
     _close(_values(tight), _values(sparse), 1e-6)
     # with room for the sparse engine, the same job asks Pmax itself
     roomy = run(str(path), properties=["reach"], engine="auto", memory_budget=1 << 40)
-    # with room, afsmc's own exploration answers first (afsmc.verify.explicit); with none,
+    # with room, afsmc's own exploration answers first (afsmc.verify.engines.explicit); with none,
     # it gives up within the budget and the hybrid path above runs
     assert roomy.model.engine == "explicit" and roomy.model.processes == 1
     _close(_values(roomy), _values(sparse), 1e-9)
@@ -287,8 +287,8 @@ def test_hybrid_pmax_falls_back_when_paths_need_not_end(tmp_path: object) -> Non
 @pytest.mark.slow
 def test_too_small_decision_diagram_tables_are_retried_with_storm_s_default() -> None:
     # Sylvan ends the process when its tables are full; the guard runs the job again.
-    from afsmc.verify.guard import run_isolated
-    from afsmc.verify.storm import DD_MEMORY_RETRY
+    from afsmc.verify.engines.guard import run_isolated
+    from afsmc.verify.engines.storm import DD_MEMORY_RETRY
 
     out, names = _small_uav(lambda p: p.name == "success")
     said: list[str] = []
@@ -306,8 +306,8 @@ def test_too_small_decision_diagram_tables_are_retried_with_storm_s_default() ->
 def test_complementary_queries_keep_the_larger_tables_once_one_needed_them(
         monkeypatch: pytest.MonkeyPatch) -> None:
     # Every first attempt gets 1 MB tables, too small for any query of the small UAV.
-    from afsmc.verify import runner
-    from afsmc.verify.storm import DD_MEMORY_RETRY
+    from afsmc.verify.core import runner
+    from afsmc.verify.engines.storm import DD_MEMORY_RETRY
 
     make_job = runner.make_job
     monkeypatch.setattr(runner, "make_job", lambda *a, **k: dataclasses.replace(
@@ -347,13 +347,13 @@ def test_full_tables_in_a_grouped_process_replan_the_queries_it_had_not_answered
         monkeypatch: pytest.MonkeyPatch, answered: int) -> None:
     # The guard's verdict when Sylvan ends a process of several queries while checking
     # (seen on scenario 1 after one answer): stand in for it with Storm's real answers.
-    from afsmc.verify import runner
-    from afsmc.verify.storm import JobResult, StormFailure
+    from afsmc.verify.core import runner
+    from afsmc.verify.engines.storm import JobResult, StormFailure
 
     names = ["success", "drops"]
     sparse = run(UAV, consts=SMALL["uav"], properties=names, engine="sparse", isolate=False,
                  uniform=False)
-    from afsmc.verify.guard import run_job as real
+    from afsmc.verify.engines.guard import run_job as real
     calls: list[tuple[str, ...]] = []
 
     def run_job(job: Job, bound: int, *, isolate: bool | None,

@@ -1,4 +1,4 @@
-"""afsmc's own exploration and backward pass (afsmc.verify.explore, explicit) give
+"""afsmc's own exploration and backward pass (afsmc.verify.engines.explore, explicit) give
 Storm's model and Storm's values.
 
 The oracle is Storm: `--solver topological` builds the model with Storm and solves it with
@@ -16,7 +16,8 @@ import pytest
 
 from afsmc.backends.prism import property_variants
 from afsmc.compiler import load, lowered
-from afsmc.verify import explicit, explore, explore_graph, run
+from afsmc.verify import run
+from afsmc.verify.engines import explicit, explore, explore_graph
 from tests.conftest import EXAMPLES
 from tests.unit.backends.test_prism import SMALL
 from tests.unit.verify.models import TEXT

@@ -1,4 +1,4 @@
-"""afsmc.verify.failures: each way a Storm process fails becomes one afsmc diagnostic
+"""afsmc.verify.engines.failures: each way a Storm process fails becomes one afsmc diagnostic
 (E402-E406, E411), pointing at the .afsm source where it can; and a failed query is told
 from a failed model."""
 
@@ -8,10 +8,10 @@ from afsmc.compiler import lowered
 from afsmc.diagnostics import Diagnostic, Severity
 from afsmc.lower.lowering import Lowered
 from afsmc.model import ir
-from afsmc.verify.failures import failure_diagnostic, one_query
-from afsmc.verify.jobs import make_job
-from afsmc.verify.queries import TERMINATES
-from afsmc.verify.storm import Engine, Job, JobResult, Stage, StormFailure
+from afsmc.verify.engines.failures import failure_diagnostic, one_query
+from afsmc.verify.engines.jobs import make_job
+from afsmc.verify.engines.storm import Engine, Job, JobResult, Stage, StormFailure
+from afsmc.verify.plan.queries import TERMINATES
 from tests.unit.verify.models import TEXT, prop, tiny
 
 

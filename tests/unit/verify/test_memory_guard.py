@@ -10,8 +10,8 @@ from pathlib import Path
 import pytest
 
 from afsmc.verify import run
-from afsmc.verify.guard import IN_PROCESS_STATES
-from afsmc.verify.storm import Job
+from afsmc.verify.engines.guard import IN_PROCESS_STATES
+from afsmc.verify.engines.storm import Job
 from tests.unit.backends.test_prism import SMALL
 from tests.unit.verify.test_engine_choice import UAV
 
@@ -47,7 +47,7 @@ def test_a_users_address_space_limit_is_kept_not_raised(tmp_path: Path) -> None:
 
 def test_progress_lines_thin_out_as_a_phase_goes_on() -> None:
     # An hour's check would otherwise log a line every 5 s (700 lines).
-    from afsmc.verify.guard import report_interval
+    from afsmc.verify.engines.guard import report_interval
 
     assert [report_interval(s, 5.0) for s in (0, 59, 60, 599, 600, 3600)] == \
         [5.0, 5.0, 30.0, 30.0, 60.0, 60.0]
@@ -67,10 +67,10 @@ def test_a_memory_stop_names_the_query_and_the_others_go_on(
     """The guard names the query it stopped (its "check" phase); the run goes on with the
     process's other queries in a fresh one, and the error says which query it was."""
     from afsmc.diagnostics import CompileError
-    from afsmc.verify import runner
-    from afsmc.verify.guard import _checking
-    from afsmc.verify.guard import run_job as real
-    from afsmc.verify.storm import JobResult, StormFailure
+    from afsmc.verify.core import runner
+    from afsmc.verify.engines.guard import _checking
+    from afsmc.verify.engines.guard import run_job as real
+    from afsmc.verify.engines.storm import JobResult, StormFailure
 
     assert _checking("check success_min") == "success_min" and _checking("build") is None
     calls: list[tuple[str, ...]] = []

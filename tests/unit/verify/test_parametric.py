@@ -9,8 +9,8 @@ import pytest
 
 from afsmc.compiler import load, lowered
 from afsmc.diagnostics import CompileError
-from afsmc.verify.parametric import extremes
-from afsmc.verify.precision import PARAMETER_PRECISION as DEFAULT_PRECISION
+from afsmc.verify.engines.parametric import extremes
+from afsmc.verify.plan.precision import PARAMETER_PRECISION as DEFAULT_PRECISION
 from tests.conftest import EXAMPLES
 from tests.unit.verify.points import value
 

@@ -10,8 +10,8 @@ import pytest
 from afsmc.compiler import load, lowered
 from afsmc.diagnostics import CompileError
 from afsmc.model.ir import Threshold
-from afsmc.verify import regions as R
-from afsmc.verify.verdicts import Verdict, judge
+from afsmc.verify.outcome.verdicts import Verdict, judge
+from afsmc.verify.reports import regions as R
 from tests.conftest import EXAMPLES
 from tests.unit.verify.points import value
 

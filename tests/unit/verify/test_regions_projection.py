@@ -12,9 +12,9 @@ import random
 
 import pytest
 
-from afsmc.commands.regions_plot import Fill, fills
+from afsmc.commands.render.regions_plot import Fill, fills
 from afsmc.compiler import load, lowered
-from afsmc.verify import regions as R
+from afsmc.verify.reports import regions as R
 from tests.conftest import EXAMPLES
 
 BOX: R.Bounds = {"A": (0.0, 1.0), "B": (0.2, 0.6), "C": (0.001, 0.01)}

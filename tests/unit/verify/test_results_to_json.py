@@ -1,4 +1,4 @@
-"""afsmc.verify.results: the JSON forms `afsmc verify --json` prints (JSON has no infinity:
+"""afsmc.verify.outcome.results: the JSON forms `afsmc verify --json` prints (JSON has no infinity:
 an infinite value is null and named under "infinite")."""
 
 from __future__ import annotations
@@ -12,8 +12,8 @@ import pytest
 from afsmc.diagnostics import Diagnostic, Severity
 from afsmc.interrupt import JsonResult
 from afsmc.verify import ModelStats, Partial, PropertyResult, VerifyResult
-from afsmc.verify.results import add_runs, find_property, stats_of
-from afsmc.verify.storm import JobResult
+from afsmc.verify.engines.storm import JobResult
+from afsmc.verify.outcome.results import add_runs, find_property, stats_of
 
 
 def _stats(**changes: object) -> ModelStats:

@@ -15,7 +15,7 @@ from afsmc.model import ir
 from afsmc.model.evaluate import Env, evaluate
 from afsmc.model.semantics import effective_weight, fire_condition
 from afsmc.verify import run
-from afsmc.verify.witness import Step, Witness
+from afsmc.verify.outcome.witness import Step, Witness
 from tests.conftest import EXAMPLES
 
 pytestmark = pytest.mark.storm
@@ -227,8 +227,8 @@ def test_the_variant_labels_keep_every_value(tmp_path: Any) -> None:
 
 def test_a_threshold_on_one_variable_separates_the_ends() -> None:
     from afsmc.compiler import load, lowered
-    from afsmc.verify.strategy import summarise
-    from afsmc.verify.strategy_storm import Group
+    from afsmc.verify.engines.strategy_storm import Group
+    from afsmc.verify.outcome.strategy import summarise
 
     low = lowered(load(PATROL).model, "nondet", None)
     lo = next(i for i, c in enumerate(low.commands) if c.choice == (("MOVE_COST", "lo"),))
@@ -250,7 +250,7 @@ def test_a_witness_goes_into_other_target_states_following_a_named_strategy() ->
     formula, e.g. the violating ones) following the strategy named, not the property's."""
     from afsmc.compiler import load
     from afsmc.verify import check
-    from afsmc.verify.strategy import witness_request
+    from afsmc.verify.outcome.strategy import witness_request
 
     model = load(PATROL).model
     props = [p for p in model.properties if p.name == "finish"]
@@ -311,7 +311,7 @@ def test_the_explored_model_gives_storm_s_strategies_and_paths(monkeypatch: Any)
     (the topological solver's route) must give the same tables and the same paths, ties
     included, up to the last digits of the probabilities. The tables are summed a chunk
     of states at a time (small chunks here: many)."""
-    from afsmc.verify import strategy_arrays
+    from afsmc.verify.engines import strategy_arrays
 
     monkeypatch.setattr(strategy_arrays, "CHUNK", 97)
     consts = {"T_LIMIT": 90, "DEADLINE": 90}
@@ -329,7 +329,7 @@ def test_the_explored_model_gives_storm_s_strategies_and_paths(monkeypatch: Any)
 def test_storm_s_model_gives_storm_s_strategies_and_paths(monkeypatch: Any) -> None:
     """Where afsmc's exploration does not apply, the backward pass over Storm's exported
     model gives them (strategy_arrays on Storm's arrays), equal to Storm's own to the bit."""
-    from afsmc.verify import runner
+    from afsmc.verify.core import runner
 
     monkeypatch.setattr(runner, "applies", lambda *_a: False)
     consts = {"T_LIMIT": 90, "DEADLINE": 90}

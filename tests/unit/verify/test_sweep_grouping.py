@@ -4,8 +4,8 @@ one task per value; step bounds go in chunks."""
 
 from __future__ import annotations
 
-from afsmc.verify.sweep_tasks import Task, independent, make_tasks, model_text
-from afsmc.verify.sweep_values import Kind
+from afsmc.verify.reports.sweep_tasks import Task, independent, make_tasks, model_text
+from afsmc.verify.reports.sweep_values import Kind
 
 # D is read by a property only; P_FAIL by the model.
 MODEL = """

@@ -7,8 +7,8 @@ import io
 import json
 import math
 
-from afsmc.verify.results import PropertyResult
-from afsmc.verify.sweep_result import SweepPoint, SweepResult
+from afsmc.verify.outcome.results import PropertyResult
+from afsmc.verify.reports.sweep_result import SweepPoint, SweepResult
 
 
 def _mdp_result() -> SweepResult:

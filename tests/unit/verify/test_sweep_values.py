@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import pytest
 
-from afsmc.verify.sweep_values import MAX_POINTS, parse_values
+from afsmc.verify.reports.sweep_values import MAX_POINTS, parse_values
 
 
 def test_a_range_includes_its_stop_when_the_steps_reach_it() -> None:
@@ -76,7 +76,7 @@ def test_a_value_of_thousands_of_digits_is_refused_not_a_crash() -> None:
     bits is refused before it is converted or printed."""
     import pytest as _pytest
 
-    from afsmc.verify import sweep_values
+    from afsmc.verify.reports import sweep_values
 
     with _pytest.raises(ValueError, match="does not fit in a 64-bit integer"):
         sweep_values._list("1" * 5000)

@@ -1,4 +1,4 @@
-"""A requirement's verdict from a min, a max and their error bound (afsmc.verify.verdicts):
+"""A requirement's verdict from a min, a max and their error bound (afsmc.verify.outcome.verdicts):
 every case is checked against the definition, judged by brute force over values the
 true min and max may take within the error."""
 
@@ -11,8 +11,8 @@ from fractions import Fraction
 import pytest
 
 from afsmc.model.ir import Threshold
-from afsmc.verify.results import PropertyResult
-from afsmc.verify.verdicts import failing, judge, judge_all
+from afsmc.verify.outcome.results import PropertyResult
+from afsmc.verify.outcome.verdicts import failing, judge, judge_all
 
 OPS = {">=": operator.ge, ">": operator.gt, "<=": operator.le, "<": operator.lt}
 

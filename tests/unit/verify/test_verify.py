@@ -321,8 +321,8 @@ def test_default_max_states_binds_the_sparse_engine_only(monkeypatch: pytest.Mon
     memory guard (scenario 1's 77.6 M states are over the default of 50 M). A limit above
     every variable's range: a counter beyond it is refused before a symbolic build (E420,
     tests/e2e/test_deep_guard.py)."""
-    import afsmc.verify.api as api
-    import afsmc.verify.runner as runner
+    import afsmc.verify.core.api as api
+    import afsmc.verify.core.runner as runner
     from afsmc.compiler import CompileError
     from afsmc.verify import run
 
@@ -487,7 +487,7 @@ def test_the_storm_child_allocates_in_huge_pages(monkeypatch: pytest.MonkeyPatch
     import multiprocessing
     import os
 
-    from afsmc.verify.guard import child_environment
+    from afsmc.verify.engines.guard import child_environment
 
     if users is None:
         monkeypatch.delenv("GLIBC_TUNABLES", raising=False)

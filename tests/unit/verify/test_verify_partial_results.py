@@ -11,7 +11,7 @@ import pytest
 
 from afsmc.compiler import load
 from afsmc.verify import run
-from afsmc.verify.storm import Job
+from afsmc.verify.engines.storm import Job
 from tests.conftest import run_cli
 from tests.unit.backends.test_prism import SMALL
 from tests.unit.verify.test_engine_choice import UAV, WIDE, _close, _values
@@ -26,9 +26,9 @@ def test_auto_hybrid_process_stopped_keeps_its_answers(
     # rest (termination, the complement) run one per process.
     import pathlib
 
-    from afsmc.verify import runner
-    from afsmc.verify.guard import run_job as real
-    from afsmc.verify.storm import JobResult, StormFailure
+    from afsmc.verify.core import runner
+    from afsmc.verify.engines.guard import run_job as real
+    from afsmc.verify.engines.storm import JobResult, StormFailure
 
     path = pathlib.Path(str(tmp_path)) / "wide.afsm"
     path.write_text(WIDE, encoding="utf-8")
@@ -98,9 +98,9 @@ def _stop_after_first_answer(monkeypatch: pytest.MonkeyPatch, stop: Callable[
         [dict[str, float]], BaseException | None]) -> None:
     """Run the first Storm job for real, then fail it (or raise) with its first answer only:
     what a memory stop or a Ctrl-C leaves, with Storm's real value."""
-    from afsmc.verify import runner
-    from afsmc.verify.guard import run_job as real
-    from afsmc.verify.storm import JobResult, StormFailure
+    from afsmc.verify.core import runner
+    from afsmc.verify.engines.guard import run_job as real
+    from afsmc.verify.engines.storm import JobResult, StormFailure
 
     calls: list[int] = []
 
@@ -143,7 +143,7 @@ def test_a_failed_run_reports_the_values_it_had(monkeypatch: pytest.MonkeyPatch)
 
 
 def test_kept_values_give_each_pmax_from_its_complement() -> None:
-    from afsmc.verify.queries import TERMINATES, complements, kept_note
+    from afsmc.verify.plan.queries import TERMINATES, complements, kept_note
 
     model = load(UAV, SMALL["uav"]).model
     comp = complements(model, [p for p in model.properties if p.name == "success"])
@@ -294,9 +294,9 @@ def test_a_failed_complement_does_not_matter_where_not_every_path_ends(
     1 - Pmin of its complement. A complement that failed (here, faked to run out of memory)
     is then no error: every value is answered, equal to the sparse engine's, and no error
     is raised."""
-    from afsmc.verify import runner
-    from afsmc.verify.guard import run_job as real
-    from afsmc.verify.storm import JobResult, StormFailure
+    from afsmc.verify.core import runner
+    from afsmc.verify.engines.guard import run_job as real
+    from afsmc.verify.engines.storm import JobResult, StormFailure
 
     path = tmp_path / "trap.afsm"
     path.write_text(TRAP, encoding="utf-8")
@@ -320,7 +320,7 @@ def test_a_failed_complement_does_not_matter_where_not_every_path_ends(
 
 def test_a_sweep_names_its_points_properties_as_written() -> None:
     from afsmc.diagnostics import Diagnostic, Severity
-    from afsmc.verify.sweep_tasks import Task, user_words
+    from afsmc.verify.reports.sweep_tasks import Task, user_words
 
     made = [Diagnostic("E406", Severity.ERROR, f"stopped while checking reach__at{i}_max as "
                        "1 - Pmin", None) for i in range(3)]

@@ -1,0 +1,300 @@
+"""The verification API: `run` (a file), `check` (a loaded model), and the loading of a
+file with ad-hoc formulas (`load_with_formulas`, `select`); `ask` answers PRISM queries of
+the caller's own on a lowered model (the diagram's reachability of each mode).
+
+See the package docstring (afsmc/verify/__init__.py) for the API.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import re
+import time
+import typing
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+
+from afsmc.backends.prism import emit as prism_emit
+from afsmc.compiler import load
+from afsmc.diagnostics import CompileError, Diagnostic, Related, Severity, Source, Span, codes
+from afsmc.lower.lowering import Lowered
+from afsmc.lower.reduce import Reductions
+from afsmc.model import ir
+from afsmc.model.names import did_you_mean
+from afsmc.stack import deep
+from afsmc.syntax.parser import parse, parse_property
+from afsmc.text import count, literal
+from afsmc.verify.core.runner import CheckRun, ModelLoop, Options
+from afsmc.verify.core.uncertainty import over_probabilities, sources
+from afsmc.verify.engines.guard import Progress, default_max_states, run_job, upper_bound
+from afsmc.verify.engines.storm import Engine, Job, StormFailure, Via
+from afsmc.verify.engines.storm_solvers import Solver
+from afsmc.verify.engines.strategy_storm import WitnessRequest
+from afsmc.verify.outcome.results import Checks, VerifyResult
+from afsmc.verify.outcome.strategy import extras, witness_request
+from afsmc.verify.outcome.verdicts import judge_all
+from afsmc.verify.plan.precision import DEFAULT_PRECISION, check_options, rational_text
+
+
+def _fresh_name(text: str, base: str, taken: set[str]) -> str:
+    """`base`, or `base2`, `base3`...: the first name neither taken nor a word of `text`."""
+    n, name = 1, base
+    while name in taken or re.search(rf"\b{name}\b", text):
+        n += 1
+        name = f"{base}{n}"
+    taken.add(name)
+    return name
+
+
+@dataclass
+class Loaded:
+    """A model loaded with ad-hoc formulas; `remap` moves a diagnostic about a formula
+    from the end of the (extended) file into the formula itself (file `--formula`)."""
+
+    model: ir.Model
+    warnings: list[Diagnostic]
+    adhoc: list[str]  # the generated property names, in the order of the formulas
+    limit: int = 0
+    where: list[tuple[int, int, int, str]] = field(default_factory=list)
+
+    def remap(self, d: Diagnostic) -> Diagnostic:
+        return _remap(d, self.limit, self.where)
+
+    def remap_error(self, exc: CompileError) -> CompileError:
+        return CompileError([self.remap(d) for d in exc.diagnostics], exc.partial)
+
+
+def load_with_formulas(path: str, overrides: Mapping[str, str] | None = None,
+                       formulas: Sequence[str] = (), *, text: str | None = None,
+                       run_checks: bool = True) -> Loaded:
+    """Load `path` with each formula appended as `property adhocN = <formula>;`."""
+    from afsmc.files import read_source
+
+    base = read_source(path) if text is None else text
+    full = base if base.endswith("\n") else base + "\n"
+    where: list[tuple[int, int, int, str]] = []  # (head, start, end, formula) offsets in `full`
+    names: list[str] = []
+    taken: set[str] = set()
+    for f in formulas:
+        if ";" in f:
+            raise CompileError([Diagnostic(
+                codes.E409, Severity.ERROR, f"--formula {f!r}: one property, without ';'", None,
+                hint="repeat --formula for several properties")])
+        # Parsed on its own first, so a syntax error speaks of the formula alone and not
+        # of the declaration it is wrapped in below.
+        parse_property(f, "--formula")
+        name = _fresh_name(base, "adhoc", taken)
+        names.append(name)
+        head = f"property {name} = "
+        where.append((len(full), len(full) + len(head), len(full) + len(head) + len(f), f))
+        full += f"{head}{f};\n"
+    try:
+        checked = load(path, overrides, text=full, run_checks=run_checks)
+    except CompileError as exc:
+        if where and any(d.code.startswith("E1") for d in exc.diagnostics):
+            parse(base, path)  # a syntax error of the file: its own, without the formulas
+        raise CompileError([_remap(d, len(base), where) for d in exc.diagnostics]) from None
+    return Loaded(checked.model, [_remap(d, len(base), where) for d in checked.diagnostics],
+                  names, len(base), where)
+
+
+def _remap(d: Diagnostic, limit: int, where: list[tuple[int, int, int, str]]) -> Diagnostic:
+    def span(s: Span | None) -> Span | None:
+        if s is None or s.start < limit or not where:
+            return s
+        if limit == 0 and s.start == 0:  # the whole of an empty file (E213)
+            return Span.at_offset(Source(s.source.path, ""), 0, 0)
+        for head, start, end, f in where:
+            if head <= s.start <= end:  # the formula, its `property NAME =` head, or ';'
+                src = Source("--formula", f)
+                if s.start < start:  # the whole declaration: the whole formula
+                    return Span.at_offset(src, 0, len(f))
+                a = min(s.start - start, len(f))
+                return Span.at_offset(src, a, min(max(a + 1, s.end - start), max(len(f), a + 1)))
+        return None
+
+    related = tuple(Related(r.message, span(r.span) or r.span) for r in d.related)
+    return dataclasses.replace(d, span=span(d.span), related=related)
+
+
+def select(model: ir.Model, names: Sequence[str], adhoc: Sequence[str] = ()) -> list[ir.Property]:
+    """The properties to check: those named (else every declared one) and the ad-hoc ones."""
+    declared = [p for p in model.properties if p.name not in adhoc]
+    if not names and not adhoc:
+        if not declared:
+            raise CompileError([Diagnostic(
+                codes.E407, Severity.ERROR, f"{model.source.path} declares no properties", None,
+                hint="declare one ('property ok = P=? [ F \"done\" ];') or pass --formula")])
+        return declared
+    by_name = {p.name: p for p in declared}
+    diags = []
+    out = []
+    for n in names:
+        if n in by_name:
+            if by_name[n] not in out:
+                out.append(by_name[n])
+        else:
+            diags.append(Diagnostic(codes.E407, Severity.ERROR, f"--property {n}: no property named "
+                                    f"'{n}' in {model.source.path}", None,
+                                    hint=did_you_mean(n, by_name) or (
+                                        "properties: " + ", ".join(by_name) if by_name else None)))
+    if diags:
+        raise CompileError(diags)
+    out += [p for p in model.properties if p.name in adhoc]
+    return out
+
+
+def check(model: ir.Model, props: Sequence[ir.Property], *, via: Via = "prism",
+          engine: Engine = "sparse", max_states: int | None = None, uniform: bool = True,
+          isolate: bool | None = None, progress: Progress | None = None,
+          reductions: Reductions | None = None, bisimulation: bool = False,
+          split: bool = False, memory_budget: int | None = None,
+          preserve: Sequence[ir.Property] = (), all_states: bool = False,
+          solver: Solver = "auto", precision: float | None = None,
+          exact: bool = False, strategy: bool = False,
+          witness: WitnessRequest | None = None) -> Checks:
+    """Check `props` (uniquely named) on a loaded model; raises CompileError on failure.
+
+    `preserve`: further properties that the reductions keep exact but that are not checked
+    (a sweep's other points, so that every chunk of it builds the same model).
+    `all_states`: Storm builds every reachable state even for one property (Job.all_states),
+    so that the state counts do not depend on how the properties are split over processes.
+    `solver`: how Storm solves the equation systems (storm_solvers.Solver).
+    `max_states`: None is the default limit, which the sparse engine only has: there the
+    state count predicts the memory. The symbolic engines' memory is held by the guard
+    instead (85% of the free memory), and "auto" picks hybrid only for a model whose
+    sparse matrices would not fit.
+
+    `split`: one Storm process per query (a property, or an MDP property's min or max), each
+    building the model afresh. Costs a build per query, but a process's memory is that of
+    one check. Without it the hybrid engine (chosen, or picked by "auto") uses two processes
+    per model: one for the expected rewards, one with larger decision-diagram tables for the
+    probabilities (each Pmax as 1 - the complementary Pmin). If a process of several queries
+    fills its tables, the queries it had not answered go on in a fresh process; if it runs
+    out of memory, they follow one per process.
+
+    `precision`: sound mode, every value within it of the true one (absolute); `exact`:
+    exact arithmetic (sparse engine). A property with a threshold (a requirement) makes the
+    check sound at `verdicts`' DEFAULT_PRECISION unless either is given; each requirement's
+    result then has its `verdict` (afsmc.verify.outcome.verdicts)."""
+    precision, engine = sound_mode(props, precision, exact, engine)
+    checking = CheckRun(model, list(props), list(preserve), engine, uniform, progress,
+                        reductions, Options(via, max_states, isolate, bisimulation, split,
+                                            memory_budget, solver, all_states,
+                                            None if precision is None
+                                            else rational_text(precision), exact, strategy,
+                                            witness))
+    for resolution, low, what in checking.lows:
+        ModelLoop(checking, resolution, low, what).check_all()
+    checks = checking.finish()
+    box, errors = over_probabilities(checks, model, props, via=via, reductions=reductions,
+                                     precision=None if exact else precision,
+                                     preserve=preserve)
+    judge_all(checks.properties, 0.0 if exact else precision, errors)
+    return dataclasses.replace(checks, uncertainty=sources(model), probability=box)
+
+
+def sound_mode(props: Sequence[ir.Property], precision: float | None, exact: bool,
+               engine: Engine) -> tuple[float | None, Engine]:
+    """The precision to check at (a requirement's default if none is given) and the engine
+    (exact: sparse); ValueError for a precision outside (0, 1), CompileError (E404) for an
+    engine that cannot give what is asked."""
+    requirement = next((p for p in props if p.threshold is not None), None)
+    if precision is None and not exact and requirement is not None:
+        precision = DEFAULT_PRECISION
+    if precision is not None and not 0 < precision < 1:
+        raise ValueError(f"precision must lie strictly between 0 and 1; got {precision!r}")
+    why = check_options(precision, exact, engine)
+    if why is not None:
+        at = requirement.span if requirement is not None and not exact else None
+        raise CompileError([Diagnostic(
+            codes.E404, Severity.ERROR, why, at,
+            hint="requirements and --precision need Storm's sound methods; --exact needs "
+                 "exact arithmetic (docs/verification.md, \"Requirements\")")])
+    return precision, "sparse" if exact else engine
+
+
+def check_choice(option: str, value: object, allowed: object) -> None:
+    """The API's Literal options, checked: a misspelt engine or via ran as sparse/PRISM."""
+    names = typing.get_args(allowed)
+    if value not in names:
+        raise ValueError(f"{option} must be one of " + ", ".join(map(repr, names))
+                         + f"; got {value!r}")
+
+
+@deep
+def run(path: str, *, consts: Mapping[str, str | bool | int | float] | None = None,
+        properties: Sequence[str] = (),
+        formulas: Sequence[str] = (), via: Via = "prism", engine: Engine = "sparse",
+        max_states: int | None = None, uniform: bool = True, isolate: bool | None = None,
+        progress: Progress | None = None, text: str | None = None,
+        reductions: Reductions | None = None, bisimulation: bool = False,
+        split: bool = False, memory_budget: int | None = None,
+        solver: Solver = "auto", precision: float | None = None,
+        exact: bool = False, strategy: bool = False,
+        witness: tuple[str | None, int] | None = None, witness_dir: str | None = None,
+        witness_target: str | None = None) -> VerifyResult:
+    """Verify one .afsm file; see the package docstring. Raises CompileError, or
+    ValueError for an unknown `via`, `engine` or `solver`."""
+    check_choice("via", via, Via)
+    check_choice("engine", engine, Engine)
+    check_choice("solver", solver, Solver)
+    t0 = time.perf_counter()
+    texts = None if consts is None else {k: literal(v) for k, v in consts.items()}
+    loaded = load_with_formulas(path, texts, formulas, text=text)
+    model = loaded.model
+    props = select(model, properties, loaded.adhoc)
+    wanted = witness_request(model, props, strategy, witness, witness_dir, witness_target)
+    load_time = time.perf_counter() - t0
+    limit = default_max_states() if max_states is None else max_states
+    bound = upper_bound(model)
+    if progress is not None:
+        progress(f"state space: at most {count(bound)} states (modes × variable ranges); "
+                 f"--max-states {limit:,}" + (" for the sparse engine" if max_states is None
+                                               and engine != "sparse" else ""))
+    try:
+        checks = check(model, props, via=via, engine=engine, max_states=max_states,
+                       uniform=uniform, isolate=isolate, progress=progress, reductions=reductions,
+                       bisimulation=bisimulation, split=split, memory_budget=memory_budget,
+                       solver=solver, precision=precision, exact=exact, strategy=strategy,
+                       witness=wanted)
+        if strategy or wanted is not None:
+            extras(checks, check, model, props, strategy, wanted, max_states=max_states,
+                   progress=progress, reductions=reductions, via=via)
+        for r in checks.properties:
+            r.witness_avoids = r.witnesses is not None and wanted is not None and wanted.avoid
+    except CompileError as exc:
+        raise loaded.remap_error(exc) from None
+    consts_used: dict[str, object] = {c.name: c.value for c in model.constants if c.is_param}
+    return VerifyResult(path, model.name, consts_used, via, engine, bound, limit, checks.model,
+                        checks.uniform_model, checks.properties, load_time,
+                        time.perf_counter() - t0, loaded.warnings,
+                        None if model.composition is None else model.composition.text,
+                        checks.uncertainty, checks.probability)
+
+
+@dataclass
+class Answers:
+    """What Storm answered for :func:`ask`: the model's kind and size, and a value per
+    query; or `failure`, why it answered none (the caller words it)."""
+
+    kind: str  # "dtmc" | "mdp"
+    states: int
+    transitions: int
+    values: dict[str, float] = field(default_factory=dict)
+    failure: StormFailure | None = None
+
+
+def ask(low: Lowered, queries: Mapping[str, str], *, bound: int, what: str,
+        max_states: int | None = None, progress: Progress | None = None) -> Answers:
+    """Answer `queries` (name -> a PRISM property of the generated model, such as
+    `Pmin=? [ F mode=3 ]`) on the lowered model, built once by Storm's sparse engine under
+    verify's guard: stopped at `max_states` (default: what the free memory holds) or when
+    the memory runs short. `bound`: the model's upper bound (`upper_bound`), which decides
+    whether Storm runs in a watched child process; `what` names the model in Storm's
+    messages."""
+    props = "".join(f'"{name}": {formula};\n' for name, formula in queries.items())
+    limit = default_max_states() if max_states is None else max_states
+    job = Job("prism", prism_emit(low).model, props, tuple(queries), "sparse", limit, what)
+    res = run_job(job, bound, isolate=None, progress=progress)
+    return Answers(res.kind, res.states, res.transitions, dict(res.values), res.failure)

@@ -1,0 +1,163 @@
+"""What a mission leaves uncertain, and a property's bounds over all of it together.
+
+A property's `min` and `max` range over everything uncertain at once (docs/verification.md,
+"What a result means"):
+
+- the interval constants (`const T = [a..b]`): floor or ceil, chosen anew at every step;
+- the order in which agents move (an interleaving, or `timed ties nondet`);
+- the interval probabilities (`const prob P = [lo, hi]`): one fixed value per run,
+  anywhere in the box.
+
+Storm's sparse and symbolic engines and afsmc's explorer bound the first two (an MDP's
+min and max) with every interval probability at its midpoint. Where the mission has
+interval probabilities, :func:`over_probabilities` asks Storm's parametric engine for the
+extremes over the whole box, jointly with the scheduler's choices (afsmc.verify.engines.parametric),
+and makes them the property's `min` and `max`; the midpoint's answer stays as a reference
+point (`PropertyResult.reference`), never judged.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+
+from afsmc.compiler import lowered
+from afsmc.diagnostics import Span
+from afsmc.lower.reduce import Reductions
+from afsmc.model import expr as E
+from afsmc.model import ir
+from afsmc.verify.engines import parametric
+from afsmc.verify.outcome.results import Checks, PropertyResult
+from afsmc.verify.plan.precision import PARAMETER_PRECISION, PARAMETER_SOLVER_ERROR
+
+INTERVAL_CONSTANTS = "interval constants"
+AGENT_ORDER = "agent order"
+INTERVAL_PROBABILITIES = "interval probabilities"
+
+
+def sources(model: ir.Model) -> tuple[str, ...]:
+    """What the mission's `min` and `max` range over, in the order of the docs; empty for
+    a mission with nothing uncertain (a DTMC: one value per property)."""
+    out = []
+    if model.interval_constants:
+        out.append(INTERVAL_CONSTANTS)
+    comp = model.composition
+    if comp is not None and comp.text in ("interleaving", "timed, ties nondet"):
+        out.append(AGENT_ORDER)
+    if model.prob_intervals:
+        out.append(INTERVAL_PROBABILITIES)
+    return tuple(out)
+
+
+@dataclass(frozen=True)
+class Reference:
+    """A property's values at a reference point, reported and never judged. `point`:
+    "midpoint" (every interval probability at the middle of its interval); `min`/`max`
+    over the other uncertainty there (an MDP), `value` (a DTMC), `uniform` (the interval
+    constants' floor or ceil at random), `exact` (--exact: the values as `num/den`)."""
+
+    point: str
+    min: float | None = None
+    max: float | None = None
+    value: float | None = None
+    uniform: float | None = None
+    exact: dict[str, str] = field(default_factory=dict)
+
+    def to_json(self) -> dict[str, object]:
+        from afsmc.verify.engines.storm import finite
+
+        out: dict[str, object] = {"point": self.point}
+        for key in ("min", "max", "value", "uniform"):
+            out[key] = finite(getattr(self, key))
+        if self.exact:
+            out["exact"] = dict(sorted(self.exact.items()))
+        return out
+
+
+@dataclass(frozen=True)
+class ProbabilityBox:
+    """The interval probabilities' box and, per property, where the extremes were found
+    (Storm's parametric engine): what `afsmc verify --json` prints as
+    `probability_intervals`."""
+
+    box: dict[str, tuple[float, float]]
+    extremes: tuple[parametric.Extreme, ...]
+    precision: float
+
+    def to_json(self) -> dict[str, object]:
+        return parametric.to_json(self.box, self.extremes, self.precision)
+
+
+def bound_error(precision: float | None) -> float:
+    """The error of a bound over interval probabilities: the parametric engine's refinement
+    precision and its solver's, plus that of the check at the midpoint when it is larger."""
+    base = PARAMETER_PRECISION + PARAMETER_SOLVER_ERROR
+    return base if precision is None else max(base, precision)
+
+
+def over_probabilities(checks: Checks, model: ir.Model, props: Sequence[ir.Property], *,
+                       via: str, reductions: Reductions | None, precision: float | None,
+                       preserve: Sequence[ir.Property] = ()) -> tuple[ProbabilityBox | None,
+                                                                      dict[str, float]]:
+    """Make each property's `min`/`max` its bounds over every fixed value of the interval
+    probabilities (with the midpoint's answer kept as its `reference`); the box, and each
+    property's error (none of either for a mission without interval probabilities).
+    `preserve`: the further properties the check's reductions kept exact (a sweep's other
+    points), so that the model bounded is the model checked.
+
+    The bounds are the values Storm attained (`Extreme.min_attained`): the true extreme
+    lies within `error` of each, beyond it (below a min, above a max)."""
+    box = parametric.interval_box(model)
+    if not box:
+        return None, {}
+    kept = dataclasses.replace(model, properties=tuple(props) + tuple(preserve))
+    found = parametric.extremes(lowered(kept, "nondet", reductions), props, via=via,
+                                precision=PARAMETER_PRECISION)
+    by_name = {e.name: e for e in found}
+    error = bound_error(precision)
+    errors = {}
+    for r in checks.properties:
+        e = by_name.get(r.name)
+        if e is None:
+            continue
+        _widen(r, e)
+        errors[r.name] = error
+    return ProbabilityBox(box, tuple(found), PARAMETER_PRECISION), errors
+
+
+def reach_bounds(model: ir.Model, targets: Sequence[tuple[str, E.Expr]], *,
+                 via: str = "prism") -> dict[str, tuple[float, float]]:
+    """The min and max probability of ever reaching each target (name, state predicate)
+    over everything uncertain, interval probabilities included (the diagram's --reach on
+    a mission with interval probabilities): the same bounds as `verify -f 'P=? [ F ... ]'`
+    gives."""
+    span = Span.at_offset(model.source, 0, 0)
+    props = [ir.Property(name, "P", "", ir.Path("F", target), None, span)
+             for name, target in targets]
+    kept = dataclasses.replace(model, properties=tuple(props))
+    found = parametric.extremes(lowered(kept, "nondet"), props, via=via,
+                                precision=PARAMETER_PRECISION)
+    return {e.name: (e.min_attained, e.max_attained) for e in found}
+
+
+def _widen(r: PropertyResult, e: parametric.Extreme) -> None:
+    """`r`'s midpoint answer to its reference; its min and max to the bounds of `e`."""
+    r.reference = Reference("midpoint", r.min, r.max, r.value, r.uniform, dict(r.exact))
+    r.min, r.max, r.value, r.uniform = e.min_attained, e.max_attained, None, None
+    r.exact = {}
+    r.attained_at = {"min": dict(e.min_at), "max": dict(e.max_at)}
+
+
+def described(over: Sequence[str], box: ProbabilityBox | None) -> str:
+    """What min and max range over, in words for the front-ends' headers (empty: nothing,
+    a DTMC's one value)."""
+    words = {INTERVAL_CONSTANTS: "the interval constants' floor/ceil choices",
+             AGENT_ORDER: "the order in which the agents move"}
+    parts = [words[s] for s in over if s in words]
+    if INTERVAL_PROBABILITIES in over and box is not None:
+        parts.append("every fixed " + ", ".join(f"{n} in [{lo:g}, {hi:g}]"
+                                                 for n, (lo, hi) in box.box.items()))
+    if len(parts) > 1:
+        return ", ".join(parts[:-1]) + " and " + parts[-1]
+    return parts[0] if parts else ""

@@ -1,0 +1,600 @@
+"""Every query of an acyclic model by one exact backward pass (inside the Storm process).
+
+A mission whose clock only grows has a reduced model that is acyclic but for the self-loops
+of its absorbing states. On such a model a reachability probability or an expected reward
+is known state by state in reverse topological order: a state's value needs only its
+successors', which are final by then. One visit per transition computes it exactly, against
+the many sweeps of value iteration or the strongly connected components of Storm's
+topological solver (one per state here).
+
+How: Storm builds the sparse model and decides each query's target states (its own
+semantics of labels and expressions); the model goes to numpy through Storm's binary export
+(UMB: the matrix, labels and rewards as flat arrays); the states are sorted into layers
+(every successor of a state lies in an earlier layer), renumbered so that each layer's
+states, choices and branches are contiguous, and each query is then one loop over the
+layers, vectorised within each. A model with any other cycle, or a query of another shape
+(bounded, until, cumulative), is left to Storm (:func:`plan`, :func:`load`). afsmc's own
+exploration (afsmc.verify.engines.explicit) gives the same arrays without Storm.
+
+Semantics follow Storm's: P [F T] is 1 on T; R [F T] is 0 on T and infinite where T is
+missed with positive probability (under every scheduler for a min, under some for a max);
+a choice that loops to its own state with probability s < 1 is solved exactly as
+(value of its other branches) / (1 - s), one that only loops is 0 (P) or infinite (R).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import ctypes
+import itertools
+import json
+import os
+import shutil
+import tarfile
+import tempfile
+from dataclasses import dataclass, field
+from typing import Any, Literal, Protocol
+
+import numpy as np
+import numpy.typing as npt
+
+F64 = npt.NDArray[np.float64]
+I64 = npt.NDArray[np.int64]
+Bools = npt.NDArray[np.bool_]
+Idx = npt.NDArray[np.int32]  # state numbers (a model of 2^31 states or branches is Storm's)
+
+LABEL = "__afsmc_target_"  # the labels this module adds for each query's target states
+
+
+@dataclass(frozen=True)
+class Query:
+    """One query the backward pass answers."""
+
+    name: str
+    kind: Literal["P", "R"]
+    opt: Literal["min", "max", ""]  # "" on a DTMC
+    target: int  # index into the plan's target formulas
+    reward: str  # the reward model's name ("" for P, or Storm's only reward model)
+
+
+@dataclass
+class Plan:
+    queries: list[Query] = field(default_factory=list)
+    targets: list[Any] = field(default_factory=list)  # Storm state formulas
+    left: list[str] = field(default_factory=list)  # names of the queries left to Storm
+
+
+def plan(names: list[str], props: list[Any], mdp: bool) -> Plan:
+    """The queries of the form P [F T] and R [F T], with min/max on an MDP and without a
+    bound to compare with; the others are left to Storm."""
+    out = Plan()
+    keys: dict[str, int] = {}
+    for name, prop in zip(names, props, strict=True):
+        f = prop.get_raw_formula()
+        kind: Literal["P", "R"] | None = ("P" if f.is_probability_operator_formula else
+                                          "R" if f.is_reward_operator_formula else None)
+        sub = f.subformula if kind is not None else None
+        opt: Literal["min", "max", ""] = ""
+        if f.has_optimality_type:
+            opt = "min" if str(f.optimality_type).upper().endswith("MINIMIZE") else "max"
+        if kind is None or sub is None or f.has_bound or not sub.is_eventually_formula \
+                or sub.is_bounded_until_formula or (mdp and not opt):
+            out.left.append(name)
+            continue
+        target = sub.subformula
+        key = str(target)
+        if key not in keys:
+            keys[key] = len(out.targets)
+            out.targets.append(target)
+        reward = ""
+        if kind == "R" and f.has_reward_model_name():
+            reward = str(f.reward_name)
+        out.queries.append(Query(name, kind, opt if mdp else "", keys[key], reward))
+    return out
+
+
+class Vec(Protocol):
+    """A float vector read by slices and index arrays: a numpy array, or a compact form."""
+
+    def __getitem__(self, key: Any, /) -> Any: ...
+
+    def __len__(self) -> int: ...
+
+
+@dataclass
+class Coded:
+    """Floats stored as codes into a table of their distinct values (a model's
+    probabilities take few values: 2 or 4 bytes a branch instead of 8, exactly)."""
+
+    table: F64
+    codes: npt.NDArray[np.unsignedinteger[Any]]
+
+    def __getitem__(self, key: Any, /) -> Any:
+        return self.table[self.codes[key]]
+
+    def __len__(self) -> int:
+        return len(self.codes)
+
+    @property
+    def nbytes(self) -> int:
+        return int(self.table.nbytes + self.codes.nbytes)
+
+
+@dataclass
+class Sparse:
+    """A float vector mostly 0: its non-zero entries (`at` sorted), read by slices."""
+
+    size: int
+    at: I64
+    values: F64
+
+    def __getitem__(self, key: Any, /) -> Any:
+        if not isinstance(key, slice) or key.step not in (None, 1):
+            raise TypeError("a Sparse vector is read by contiguous slices")
+        lo, hi, _ = key.indices(self.size)
+        out = np.zeros(max(hi - lo, 0))
+        i, j = np.searchsorted(self.at, [lo, hi])
+        out[self.at[i:j] - lo] = self.values[i:j]
+        return out
+
+    def __len__(self) -> int:
+        return self.size
+
+    @property
+    def nbytes(self) -> int:
+        return int(self.at.nbytes + self.values.nbytes)
+
+
+def sparse_or_dense(size: int, at: I64, values: F64) -> Vec:
+    """The vector of `values` at `at` (sorted), 0 elsewhere, in the smaller form."""
+    if 2 * len(at) < size:
+        return Sparse(size, at, values)
+    out = np.zeros(size)
+    out[at] = values
+    return out
+
+
+@dataclass
+class Arrays:
+    """A sparse model as flat arrays, states renumbered layer by layer (`layers[i]` is the
+    first state of layer i; every successor of a state lies in an earlier layer, or is
+    the state itself)."""
+
+    states: I64  # state -> its first choice (n + 1 offsets)
+    choices: I64  # choice -> its first branch (m + 1 offsets)
+    target: Idx  # branch -> successor state
+    prob: Vec  # branch -> probability (a strategy's extraction needs an array)
+    stay: Vec | None  # choice -> probability of its self-loop (None: no self-loops)
+    layers: I64  # layer boundaries (len = layers + 1)
+    initial: int  # the initial state
+    labels: dict[str, Bools]  # label -> states (targets)
+    rewards: dict[str, Vec]  # reward model -> its reward per choice (state + action)
+    # a strategy's (strategy_arrays), else None: each state's number in Storm's model (or
+    # its key), each choice's action (into `action_names`) or command, packed labels
+    order: I64 | None = None
+    actions: npt.NDArray[np.uint32] | None = None
+    commands: npt.NDArray[np.int32] | None = None
+    action_names: list[str] = field(default_factory=list)
+    packed: dict[str, npt.NDArray[np.uint8]] = field(default_factory=dict)
+
+    @property
+    def nbytes(self) -> int:
+        parts: list[Any] = [self.states, self.choices, self.target, self.prob, self.stay,
+                            *self.labels.values(), *self.rewards.values()]
+        return sum(int(getattr(x, "nbytes", 0)) for x in parts)
+
+
+def _ranges(starts: I64, ends: I64) -> I64:
+    """The concatenation of arange(starts[i], ends[i])."""
+    lens = ends - starts
+    total = int(lens.sum())
+    if total == 0:
+        return np.zeros(0, np.int64)
+    offsets = np.cumsum(lens) - lens
+    out: I64 = np.arange(total, dtype=np.int64) + np.repeat(starts - offsets, lens)
+    return out
+
+
+def _state_of_branches(states: I64, choices: I64) -> Idx:
+    """The state of each branch."""
+    n = len(states) - 1
+    per_choice = np.repeat(np.arange(n, dtype=np.int32), np.diff(states))
+    out: Idx = np.repeat(per_choice, np.diff(choices))
+    return out
+
+
+def layers_of(states: I64, choices: I64, target: Idx) -> list[I64] | None:
+    """States in layers (Kahn's algorithm, backwards, ignoring self-loops): layer 0 has no
+    successor but itself, each later one only successors in earlier layers. None if the
+    model has a cycle of more than one state."""
+    n = len(states) - 1
+    branch_state = _state_of_branches(states, choices)
+    moving = target != branch_state
+    src, dst = branch_state[moving], target[moving]
+    del branch_state, moving
+    pending = np.bincount(src, minlength=n)
+    rev_ptr = np.zeros(n + 1, np.int64)
+    np.cumsum(np.bincount(dst, minlength=n), out=rev_ptr[1:])
+    rev_src = src[np.argsort(dst, kind="stable")]
+    del src, dst
+    out = []
+    done = 0
+    frontier = np.flatnonzero(pending == 0)
+    while frontier.size:
+        out.append(frontier)
+        done += frontier.size
+        preds = rev_src[_ranges(rev_ptr[frontier], rev_ptr[frontier + 1])]
+        np.subtract.at(pending, preds, 1)
+        ready = np.sort(preds[pending[preds] == 0])  # each as often as it was a predecessor
+        frontier = ready[np.concatenate(([True], ready[1:] != ready[:-1]))] \
+            if ready.size else ready
+    return out if done == n else None
+
+
+CHUNK = 1 << 22  # choices gathered at a time while renumbering (bounds the temporary arrays)
+
+
+def renumber(states: I64, choices: I64, target: Idx, prob: F64,
+             perm: I64) -> tuple[I64, I64, I64, Idx, F64, Idx]:
+    """The model with its states in the order `perm` (new -> old): (state offsets, choice
+    offsets, old choice of each new choice, new targets, probabilities, new number of each
+    old state)."""
+    n = len(perm)
+    inv = np.empty(n, np.int32)
+    inv[perm] = np.arange(n, dtype=np.int32)
+    new_states = np.zeros(n + 1, np.int64)
+    np.cumsum(np.diff(states)[perm], out=new_states[1:])
+    old_choice = _ranges(states[perm], states[perm + 1])
+    m = len(old_choice)
+    new_choices = np.zeros(m + 1, np.int64)
+    np.cumsum(np.diff(choices)[old_choice], out=new_choices[1:])
+    new_target = np.empty(len(target), np.int32)
+    new_prob = np.empty(len(prob))
+    for c in range(0, m, CHUNK):
+        old = old_choice[c:c + CHUNK]
+        branch = _ranges(choices[old], choices[old + 1])
+        lo, hi = new_choices[c], new_choices[min(c + CHUNK, m)]
+        new_target[lo:hi] = inv[target[branch]]
+        new_prob[lo:hi] = prob[branch]
+    return new_states, new_choices, old_choice, new_target, new_prob, inv
+
+
+def self_loops(states: I64, choices: I64, target: Idx, prob: Vec) -> Vec | None:
+    """Each choice's probability of staying in its state (sparse where few choices loop);
+    None if no choice loops. A slice of choices at a time."""
+    m = len(choices) - 1
+    at: list[I64] = []
+    sums: list[F64] = []
+    for c in range(0, m, CHUNK):
+        ids = np.arange(c, min(c + CHUNK, m), dtype=np.int64)
+        state = np.searchsorted(states, ids, side="right") - 1
+        b0, b1 = int(choices[ids[0]]), int(choices[ids[-1] + 1])
+        owner = np.repeat(state, np.diff(choices[c:ids[-1] + 2]))
+        loops = np.flatnonzero(target[b0:b1] == owner)
+        del owner, state
+        if loops.size == 0:
+            continue
+        choice = np.searchsorted(choices, loops + b0, side="right") - 1
+        starts = np.flatnonzero(np.concatenate(([True], choice[1:] != choice[:-1])))
+        at.append(choice[starts])
+        sums.append(np.add.reduceat(prob[loops + b0], starts))
+    if not at:
+        return None
+    return sparse_or_dense(m, np.concatenate(at), np.concatenate(sums))
+
+
+# The most the values of one pass's queries take together: as much as the model's arrays
+# (so that a pass at most doubles the memory), within these bounds.
+GROUP_BYTES = (1 << 28, 1 << 31)
+
+
+def solve(a: Arrays, q: Query) -> float:
+    """The query's value in the initial state."""
+    return solve_many(a, [q])[q.name]
+
+
+def solve_many(a: Arrays, queries: list[Query]) -> dict[str, float]:
+    """Each query's value in the initial state. Queries of the same kind share their
+    passes (the values of each state side by side, a min and a max alike), as many at a
+    time as GROUP_BYTES allows."""
+    n = len(a.states) - 1
+    most = max(1, min(max(a.nbytes, GROUP_BYTES[0]), GROUP_BYTES[1]) // (8 * max(n, 1)))
+    groups: dict[str, list[Query]] = {}
+    for q in queries:
+        groups.setdefault(q.kind, []).append(q)
+    out: dict[str, float] = {}
+    for group in groups.values():
+        for i in range(0, len(group), most):
+            part = group[i:i + most]
+            out |= zip([q.name for q in part], _pass(a, part), strict=True)
+    return {q.name: out[q.name] for q in queries}
+
+
+def _pass(a: Arrays, qs: list[Query], best: npt.NDArray[np.int64] | None = None,
+          value: F64 | None = None) -> list[float]:
+    """One pass over the layers for queries of one kind, from the absorbing states back
+    to the initial one: per layer, the choices' values are one sparse product (its
+    branches' probabilities times their successors' values), then each state's is the
+    min or max over its choices. With `best` (one query): each state's first choice
+    (number within the state) whose value is the optimum, which is the choice Storm's
+    topological solver keeps; with `value` (n x 1): every state's value."""
+    from scipy.sparse import csr_matrix
+
+    k, n = len(qs), len(a.states) - 1
+    if value is None:
+        value = np.zeros((n, k))
+    on_target = [a.labels[LABEL + str(q.target)] for q in qs]
+    reward = [a.rewards[q.reward] for q in qs] if qs[0].kind == "R" else None
+    stuck = 0.0 if qs[0].kind == "P" else np.inf  # a choice that only loops
+    reached = 1.0 if qs[0].kind == "P" else 0.0  # on the target
+    low = np.array([q.opt == "min" for q in qs])
+    sign = np.where(low, 1.0, -1.0)  # a max as the min of the negated values
+    for i, (lo, hi) in enumerate(_spans(a.layers)):
+        if i % TRIM_EVERY == TRIM_EVERY - 1:
+            trim_heap()
+        c0, c1 = int(a.states[lo]), int(a.states[hi])
+        b0, b1 = int(a.choices[c0]), int(a.choices[c1])
+        rows = (a.choices[c0:c1 + 1] - b0).astype(np.int32 if b1 - b0 < 2**31 else np.int64)
+        step = csr_matrix((a.prob[b0:b1], a.target[b0:b1], rows), shape=(c1 - c0, n))
+        per_choice = np.asarray(step @ value)
+        if reward is not None:
+            per_choice += np.stack([r[c0:c1] for r in reward], axis=1)
+        if a.stay is not None:
+            s = a.stay[c0:c1][:, None]
+            if s.any():
+                with np.errstate(divide="ignore", invalid="ignore"):
+                    per_choice = np.where(s >= 1.0, stuck, per_choice / (1.0 - s))
+        if c1 - c0 == hi - lo:
+            per_state = per_choice
+        else:
+            # the optimum of each state's j-th choice (its last, past its count) over j:
+            # elementwise, where numpy's reduceat or a min down a middle axis is slower
+            first = a.states[lo:hi] - c0
+            last = a.states[lo + 1:hi + 1] - c0 - 1
+            signed = per_choice if low.all() else per_choice * sign
+            per_state = signed[first]
+            for j in range(1, int((last - first).max()) + 1):
+                np.minimum(per_state, signed[np.minimum(first + j, last)], out=per_state)
+            if not low.all():
+                per_state *= sign
+        if best is not None:
+            best[lo:hi] = _first_best(per_choice[:, 0], per_state[:, 0], a.states[lo:hi + 1] - c0)
+        value[lo:hi] = np.where(np.stack([t[lo:hi] for t in on_target], axis=1), reached,
+                                per_state)
+    return [float(v) for v in value[a.initial]]
+
+
+TRIM_EVERY = 32  # spans solved between two trim_heap()
+
+
+def trim_heap() -> None:
+    """Give the C heap's free memory back to the system. The many mid-sized temporaries
+    of a pass (or of an exploration), freed, leave free memory amid the heap that glibc
+    keeps: 0.7 GB of a pass over scenario 2's 0.6 GB model, 1.2 GB of its exploration."""
+    with contextlib.suppress(OSError, AttributeError):  # not glibc: nothing to do
+        ctypes.CDLL("libc.so.6").malloc_trim(0)
+
+
+SPAN = 1 << 18  # the most states of a layer solved at a time (bounds the temporaries)
+
+
+def _spans(layers: I64) -> list[tuple[int, int]]:
+    """The layers as ranges of states, the large ones cut into ranges of SPAN: the states
+    of a layer do not depend on each other."""
+    out = []
+    for lo, hi in itertools.pairwise(layers.tolist()):
+        out += [(k, min(k + SPAN, hi)) for k in range(lo, hi, SPAN)]
+    return out
+
+
+def _first_best(per_choice: F64, per_state: F64, offsets: I64) -> I64:
+    """Each state's first choice (number within the state) whose value is the state's
+    optimum (`offsets`: the states' first choices, and the end)."""
+    sizes = np.diff(offsets)
+    local = np.arange(len(per_choice), dtype=np.int64) - np.repeat(offsets[:-1], sizes)
+    hit = per_choice == np.repeat(per_state, sizes)
+    out: I64 = np.minimum.reduceat(np.where(hit, local, np.int64(1) << 40), offsets[:-1])
+    return np.where(out == np.int64(1) << 40, 0, out)
+
+
+def _member(tar: tarfile.TarFile, path: str, name: str, dtype: Any, count: int,
+            into: Any = None) -> npt.NDArray[Any] | None:
+    """The array stored as `name`, read as `dtype`; converted to `into` a slice at a time
+    (the unsigned 64-bit offsets and targets of the export as int64 and int32)."""
+    try:
+        info = tar.getmember(name)
+    except KeyError:
+        return None
+    if into is None:
+        return np.fromfile(path, dtype=dtype, count=count, offset=info.offset_data)
+    out = np.empty(count, into)
+    size = np.dtype(dtype).itemsize
+    for i in range(0, count, CHUNK):
+        k = min(CHUNK, count - i)
+        out[i:i + k] = np.fromfile(path, dtype=dtype, count=k,
+                                   offset=info.offset_data + i * size)
+    return out
+
+
+def _bits(tar: tarfile.TarFile, path: str, name: str, n: int) -> Bools | None:
+    raw = _member(tar, path, name, np.uint8, (n + 63) // 64 * 8)
+    if raw is None:
+        return None
+    return np.unpackbits(raw, bitorder="little")[:n].astype(bool)
+
+
+def _annotations(index: dict[str, Any], group: str) -> dict[str, tuple[str, Any]]:
+    """alias -> (the folder name in the archive, its description)."""
+    found = index.get("annotations", {}).get(group, {})
+    return {str(v.get("alias", k)): (k, v) for k, v in found.items()}
+
+
+@dataclass
+class Raw:
+    """The model as exported, before layering."""
+
+    states: I64
+    choices: I64
+    target: Idx
+    prob: F64
+    initial: int
+    labels: dict[str, Bools]
+    state_rewards: dict[str, list[tuple[str, F64]]]  # name -> (applies-to, values)
+    actions: npt.NDArray[np.uint32] | None = None  # these three: a strategy's, as in Arrays
+    action_names: list[str] = field(default_factory=list)
+    packed: dict[str, npt.NDArray[np.uint8]] | None = None
+
+
+def read_umb(path: str, labels: list[str], rewards: list[str],
+             packed: tuple[str, ...] | None = None) -> Raw | None:
+    """The arrays of a UMB archive (uncompressed, doubles); None if it is not of that form.
+    `packed`: labels read as they are stored (8 states a byte), with each choice's action:
+    what a strategy's extraction needs."""
+    with tarfile.open(path) as tar:
+        index = json.loads(tar.extractfile("index.json").read())  # type: ignore[union-attr]
+        ts = index["transition-system"]
+        if ts.get("branch-probability-type", {}).get("type") != "double":
+            return None
+        n, m, b = int(ts["#states"]), int(ts["#choices"]), int(ts["#branches"])
+        if max(n, b) >= 2**31:
+            return None
+        states = _member(tar, path, "state-to-choices.bin", np.uint64, n + 1, np.int64)
+        if states is None:  # a DTMC may leave out its trivial choices
+            states = np.arange(n + 1, dtype=np.int64)
+        choices = _member(tar, path, "choice-to-branches.bin", np.uint64, m + 1, np.int64)
+        target = _member(tar, path, "branch-to-target.bin", np.uint64, b, np.int32)
+        prob = _member(tar, path, "branch-to-probability.bin", np.float64, b)
+        initial = _bits(tar, path, "state-is-initial.bin", n)
+        if choices is None or target is None or prob is None or initial is None:
+            return None
+        aps = _annotations(index, "aps")
+        found = {x: _bits(tar, path, f"annotations/aps/{aps[x][0]}/states/values.bin", n)
+                 for x in labels if x in aps}
+        rws = _annotations(index, "rewards")
+        rw: dict[str, list[tuple[str, F64]]] = {}
+        for x in rewards:
+            key = x if x in rws else (next(iter(rws)) if x == "" and len(rws) == 1 else None)
+            if key is None:
+                return None
+            folder, desc = rws[key]
+            size = {"states": n, "choices": m}  # transition rewards: left to Storm
+            rw[x] = []
+            for where in desc.get("applies-to", []):
+                if where not in size:
+                    return None
+                vals = _member(tar, path, f"annotations/rewards/{folder}/{where}/values.bin",
+                               np.float64, size[where])
+                if vals is None or desc.get("type", {}).get("type") != "double":
+                    return None
+                rw[x].append((where, vals))
+        extra = None if packed is None else _extra(tar, path, index, packed, n, m)
+    if any(v is None for v in found.values()) or len(found) < len(labels) or (
+            packed is not None and extra is None):
+        return None
+    out = Raw(states, choices, target, prob,
+              int(np.flatnonzero(initial)[0]), {k: v for k, v in found.items()
+                                                if v is not None}, rw)
+    if extra is not None:
+        out.packed, out.actions, out.action_names = extra
+    return out
+
+
+def _extra(tar: tarfile.TarFile, path: str, index: dict[str, Any], packed: tuple[str, ...],
+           n: int, m: int) -> tuple[dict[str, npt.NDArray[np.uint8]], npt.NDArray[np.uint32],
+                                    list[str]] | None:
+    """The labels `packed`, as stored, and each choice's action with the actions' names
+    (an archive without actions: every choice unlabelled)."""
+    aps = _annotations(index, "aps")
+    bits = {}
+    for x in packed:
+        raw = None if x not in aps else _member(
+            tar, path, f"annotations/aps/{aps[x][0]}/states/values.bin", np.uint8,
+            (n + 63) // 64 * 8)
+        if raw is None:
+            return None
+        bits[x] = raw
+    actions = _member(tar, path, "actions/choices/values.bin", np.uint32, m)
+    if actions is None:
+        return bits, np.zeros(m, np.uint32), [""]
+    offsets = _member(tar, path, "actions/choices/string-mapping.bin", np.uint64,
+                      int(index["transition-system"].get("#choice-actions", 0)) + 1)
+    member = tar.extractfile("actions/choices/strings.bin")
+    if offsets is None or member is None:
+        return None
+    text = member.read().decode("utf-8")
+    names = [text[int(a):int(b)] for a, b in itertools.pairwise(offsets.tolist())]
+    return bits, actions, names
+
+
+def arrange(raw: Raw) -> Arrays | None:
+    """Layer and renumber the exported model; None if it has a cycle (other than
+    self-loops) or a transition of probability 0."""
+    if (raw.prob <= 0).any():
+        return None
+    layers = layers_of(raw.states, raw.choices, raw.target)
+    if layers is None:
+        return None
+    perm = np.concatenate(layers)
+    bounds = np.zeros(len(layers) + 1, np.int64)
+    np.cumsum([len(x) for x in layers], out=bounds[1:])
+    del layers
+    states, choices, old_choice, target, prob, inv = renumber(
+        raw.states, raw.choices, raw.target, raw.prob, perm)
+    raw.target, raw.prob = np.zeros(0, np.int32), np.zeros(0)  # freed
+    rewards: dict[str, Vec] = {}
+    for name, parts in raw.state_rewards.items():
+        per_choice = np.zeros(len(choices) - 1)
+        for where, vals in parts:
+            if where == "states":
+                per_choice += np.repeat(vals[perm], np.diff(states))
+            else:
+                per_choice += vals[old_choice]
+        rewards[name] = per_choice
+    labels = {k: v[perm] for k, v in raw.labels.items()}
+    stay = self_loops(states, choices, target, prob)
+    out = Arrays(states, choices, target, prob, stay, bounds, int(inv[raw.initial]),
+                 labels, rewards)
+    if raw.packed is not None and raw.actions is not None:
+        out.order, out.actions, out.action_names = perm, raw.actions[old_choice], raw.action_names
+        out.packed, raw.packed, raw.actions = raw.packed, None, None
+    del perm, old_choice
+    return out
+
+
+def export(stormpy: Any, model: Any, p: Plan, folder: str) -> str:
+    """Label each target's states in Storm's model and write it as an uncompressed UMB
+    archive in `folder`; the archive's path."""
+    from stormpy.developer import storage
+
+    for i, formula in enumerate(p.targets):
+        states = stormpy.model_checking(model, formula).get_truth_values_vector()
+        name = LABEL + str(i)
+        if not model.labeling.contains_label(name):
+            model.labeling.add_label(name)
+        model.labeling.set_states(name, states)
+    options = storage.UmbExportOptions()
+    options.compression = storage.CompressionMode.NO_COMPRESSION
+    umb = storage.sparse_model_to_umb(model, options)
+    path = os.path.join(folder, "model.umb")
+    storage.to_archive(umb, path, options)
+    del umb
+    return path
+
+
+def read(stormpy: Any, model: Any, p: Plan, packed: tuple[str, ...] | None = None) -> Raw | None:
+    """Storm's sparse `model`, with the plan's targets, as arrays; None if Storm's export
+    is not of the expected form. `packed`: see :func:`read_umb`."""
+    folder = tempfile.mkdtemp(prefix="afsmc-acyclic-")
+    try:
+        path = export(stormpy, model, p, folder)
+        return read_umb(path, [LABEL + str(i) for i in range(len(p.targets))],
+                        sorted({q.reward for q in p.queries if q.kind == "R"}), packed)
+    finally:
+        shutil.rmtree(folder, ignore_errors=True)
+
+
+def prepare(stormpy: Any, model: Any, p: Plan) -> Arrays | None:
+    """The layered arrays of Storm's sparse `model`; None if it has cycles (or Storm's
+    export is not of the expected form)."""
+    raw = read(stormpy, model, p)
+    return None if raw is None else arrange(raw)

@@ -1,0 +1,198 @@
+"""A job's queries answered without Storm: afsmc's own exploration of the lowered model
+(:mod:`afsmc.verify.engines.explore`) and one exact backward pass (:mod:`afsmc.verify.engines.acyclic`).
+
+It applies to the queries P [F T] and R [F T] (min and max on an MDP) of a model whose
+clock only grows: states, choices and transitions are those Storm would build, and the
+values those of Storm's solvers on an acyclic model. Other queries, and every query of a
+model the explorer gives up on (a cycle, a variable out of range...), are left to Storm,
+in the same process (:func:`afsmc.verify.engines.storm.execute` calls :func:`answer` first).
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, replace
+from typing import Any, Literal
+
+import numpy as np
+
+from afsmc.backends.prism import property_variants
+from afsmc.lower.lowering import Lowered
+from afsmc.model import expr as E
+from afsmc.model import ir
+from afsmc.sim.compile import SimError
+from afsmc.verify.engines import acyclic, explore, explore_graph, strategy_arrays
+from afsmc.verify.engines.strategy_storm import Extract, Extracted
+
+Notify = Callable[[str, Any], None]
+
+
+def applies(low: Lowered, engine: str, solver: str, other: bool) -> bool:
+    """Whether a job tries afsmc's own exploration first: on the sparse engine (or "auto"
+    before it picks one) with the default solver, nothing else asked of Storm (`other`:
+    bisimulation, exact or sound mode), a single machine without undefined constants.
+    Schedulers and paths come from its arrays where the backward pass gives them
+    (:func:`afsmc.verify.engines.strategy_arrays.covers`), else from Storm."""
+    return (engine in ("sparse", "auto") and solver == "auto" and not other
+            and low.network is None and not low.parameters)
+
+
+@dataclass
+class Plan:
+    queries: list[acyclic.Query]
+    targets: list[E.Expr]
+    rewards: list[str]
+    left: list[str]  # the job's queries it does not answer
+
+
+def plan(low: Lowered, names: tuple[str, ...]) -> Plan:
+    """The queries among `names` one backward pass answers; the others are left."""
+    variants = {n: (p, opt) for p in low.model.properties for n, opt in property_variants(low, p)}
+    out = Plan([], [], [], [])
+    keys: dict[str, int] = {}
+    for name in names:
+        found = variants.get(name)
+        target = None if found is None else _target(found[0])
+        if found is None or target is None:
+            out.left.append(name)
+            continue
+        prop, opt = found
+        key = repr(target)
+        if key not in keys:
+            keys[key] = len(out.targets)
+            out.targets.append(target)
+        reward = (prop.reward or "") if prop.kind == "R" else ""
+        if prop.kind == "R" and reward not in out.rewards:
+            out.rewards.append(reward)
+        kind: Literal["P", "R"] = "P" if prop.kind == "P" else "R"
+        direction: Literal["min", "max", ""] = "min" if opt == "min" else "max" if opt == "max" \
+            else ""
+        out.queries.append(acyclic.Query(name, kind, direction, keys[key], reward))
+    return out
+
+
+def _target(p: ir.Property) -> E.Expr | None:
+    """T of P [F T] or R [F T], without a step bound; else None."""
+    path = p.path
+    if path.kind != "F" or path.bound is not None or path.target is None:
+        return None
+    if p.kind == "R" and not p.reward:
+        return None
+    return path.target
+
+
+@dataclass
+class Answer:
+    values: dict[str, float]
+    seconds: dict[str, float]
+    states: int
+    choices: int
+    transitions: int
+    explore_time: float
+    left: list[str]
+    extracted: Extracted | None = None
+
+
+class TooMany(Exception):
+    def __init__(self, states: int) -> None:
+        super().__init__(states)
+        self.states = states
+
+
+def answer(low: Lowered, names: tuple[str, ...], what: str, notify: Notify,
+           max_states: int | None = None, max_bytes: int | None = None,
+           extract: Extract | None = None) -> Answer | None:
+    """The queries' values by exploration and a backward pass, and what `extract` asks;
+    None if the explorer gives up or the pass does not give what `extract` asks (Storm
+    then answers them all). Raises TooMany past `max_states`."""
+    p = plan(low, names)
+    if not p.queries or (extract is not None and not strategy_arrays.covers(extract, p.queries)):
+        return None
+    notify("phase", "explicit")
+    started = time.perf_counter()
+
+    def explored(event: str, data: Any) -> None:  # a progress line now and then
+        notify("solver", f"explored {data[1]:,} states of the {what} so far (clock at "
+               f"{data[0]}; {time.perf_counter() - started:.0f} s)")
+
+    try:
+        compiled = explore.compile_model(low, p.targets, p.rewards, extract is not None)
+        found = explore_graph.explore(compiled, explored, max_states, max_bytes)
+    except (explore.GiveUp, SimError) as exc:
+        notify("solver", f"afsmc's own exploration does not apply to the {what} ({exc}): "
+               "Storm builds it")
+        return None
+    except explore.TooManyStates as exc:
+        raise TooMany(exc.states) from None
+    built = time.perf_counter() - started
+    notify("built", (found.states, found.transitions, built))
+    notify("solver", f"the {what} explored by afsmc, acyclic but for self-loops "
+           f"({len(found.arrays.layers) - 1:,} layers): each query by one exact backward pass")
+    notify("phase", "check " + ", ".join(q.name for q in p.queries))
+    t0 = time.perf_counter()
+    out: Extracted | None = None
+    if extract is None:
+        values = acyclic.solve_many(found.arrays, p.queries)
+    else:  # one query at a time, with its strategies and paths
+        out = Extracted()
+        values = strategy_arrays.solve(found.arrays, p.queries, extract,
+                                       _view(found.arrays, low, compiled.layout, extract), out,
+                                       notify)
+    secs = (time.perf_counter() - t0) / len(p.queries)
+    for q in p.queries:
+        notify("value", (q.name, values[q.name], secs))
+    return Answer(values, {q.name: secs for q in p.queries}, found.states, found.choices,
+                  found.transitions, built, p.left, out)
+
+
+def _view(a: acyclic.Arrays, low: Lowered, layout: explore.Layout,
+          extract: Extract) -> strategy_arrays.View:
+    """The explored states' values from their keys, the choices' commands as explored;
+    the variables in the order of Storm's valuations (the mode, the integers, the
+    booleans), as Storm's route gives them."""
+    keys, commands = a.order, a.commands
+    assert keys is not None and commands is not None
+    variables = ("mode", *[v.name for v in low.model.variables if v.type is not E.Type.BOOL],
+                 *[v.name for v in low.model.variables if v.type is E.Type.BOOL])
+    decisive = np.asarray(extract.decisive, np.int64)
+
+    def values(states: acyclic.I64) -> acyclic.I64:
+        got = layout.decode(keys[states])
+        out: acyclic.I64 = np.zeros((len(states), len(variables)), np.int64)
+        for j, name in enumerate(variables):
+            out[:, j] = got[name]
+        return out
+
+    def variant(choices: acyclic.I64) -> acyclic.I64:
+        c = commands[choices].astype(np.int64)
+        out: acyclic.I64 = np.where(np.isin(c, decisive), c, -1)
+        return out
+
+    return strategy_arrays.View(variables, values, variant,
+                                lambda choice, _row: int(commands[choice]))
+
+
+def fill(job: Any, res: Any, notify: Notify, too_big: Callable[[Any, int], Any]) -> Any:
+    """Answer what the exploration can of a Storm job (afsmc.verify.engines.storm.Job) into its
+    result `res`; the job of what is left for Storm, or None if nothing is (or the model
+    has too many states: `res.failure` says so)."""
+    try:
+        ans = answer(job.explicit, job.names, job.what, notify, job.max_states,
+                     job.memory_budget, job.extract)
+    except TooMany as exc:
+        res.states, res.failure = exc.states, too_big(job, exc.states)
+        return None
+    if ans is None:
+        return replace(job, explicit=None)
+    res.states, res.choices, res.transitions = ans.states, ans.choices, ans.transitions
+    res.kind, res.engine, res.solver = job.explicit.kind, "explicit", "acyclic"
+    res.engine_reason = ("afsmc's own exploration: the model's clock only grows, so one "
+                         "exact backward pass answers its reachability queries")
+    res.build_time, res.check_time = ans.explore_time, sum(ans.seconds.values())
+    res.values, res.seconds = dict(ans.values), dict(ans.seconds)
+    res.extracted = ans.extracted
+    notify("engine", "explicit")
+    if not ans.left:
+        return None
+    return replace(job, names=tuple(ans.left), explicit=None, hybrid_extra=(), extract=None)

@@ -1,0 +1,54 @@
+"""How Storm solves the equation systems of a check: the `--solver` choices and the
+environment of each (the sound and exact ones are afsmc.verify.plan.precision's).
+
+These functions run inside the Storm process (afsmc.verify.engines.storm).
+"""
+
+from __future__ import annotations
+
+from typing import Any, Literal
+
+# How Storm solves the equation systems on the sparse and hybrid engines. "auto": value
+# iteration on hybrid; on sparse, one exact backward pass where the model is acyclic but for
+# self-loops (afsmc.verify.engines.acyclic, reported as "acyclic"), else Storm's topological solver,
+# which on a mission whose clock only grows finds one component per state (on scenario 1,
+# 137 s of a 394 s query that value iteration answered in 276 s; docs/benchmarks.md).
+Solver = Literal["auto", "topological", "value-iteration"]
+SOLVERS: tuple[Solver, ...] = ("auto", "topological", "value-iteration")
+# Value iteration's relative stopping bound (Storm's 1e-6 moved values in the ninth digit;
+# 1e-10 equals the topological solver's to ~1e-14 on the UAV at no measurable cost).
+VI_PRECISION = "1/10000000000"
+
+__all__ = ["SOLVERS", "VI_PRECISION", "Solver", "solver_for", "value_iteration"]
+
+
+def solver_for(solver: Solver, engine: str) -> str:
+    """The method `solver` means on `engine` (after "auto" has picked one); "" for the dd
+    engine, which always iterates on decision diagrams, to Storm's own precision."""
+    if engine == "dd":
+        return ""
+    if solver == "auto":
+        return "value-iteration" if engine == "hybrid" else "topological"
+    return solver
+
+
+def value_iteration(stormpy: Any, dd_memory_mb: int) -> Any:
+    """Storm's environment for checks by value iteration (Storm's default, None, is the
+    topological solver)."""
+    from stormpy import developer
+
+    env = stormpy.Environment()
+    env.dd().sylvan().maximal_memory = dd_memory_mb  # as built (Sylvan is set up once)
+    min_max = env.solver().min_max()  # an MDP's
+    min_max.method = developer.MinMaxMethod.VALUE_ITERATION
+    min_max.precision = stormpy.Rational(VI_PRECISION)
+    min_max.relative_termination_criterion = True
+    # a DTMC's: Storm's own iterative solver, by plain iteration of x = Ax + b (its "power"
+    # method), which is value iteration without the choice (the 5x5 UAV's uniform DTMC:
+    # 2.4-4.8 s against 4.0-10.4 s per query with the topological solver)
+    env.solver().set_linear_equation_solver_type(developer.EquationSolverType.NATIVE)
+    native = env.solver().native()
+    native.method = developer.NativeLinearEquationSolverMethod.POWER
+    native.precision = stormpy.Rational(VI_PRECISION)
+    native.relative_termination_criterion = True
+    return env

@@ -1,0 +1,1 @@
+"""One typed answer per property: the results, their verdicts, strategies and witnesses in mission terms."""

@@ -1,0 +1,1 @@
+"""Many answers and their reports: sweeps (CSV, JSON, plots), parameter regions, JUnit."""
