@@ -19,7 +19,8 @@ class Followed(Answer):
 
     property: str = Field(description="the property whose strategy it is")
     direction: Literal["min", "max"] = Field(description="its min or max strategy")
-    value: float = Field(description="the property's min or max, as Storm computed it")
+    value: Estimate = Field(description="the property's min or max, as Storm computed it "
+                                        "('inf' for an infinite expected reward)")
     states: int = Field(ge=0, description="states in which the strategy was recorded")
 
 

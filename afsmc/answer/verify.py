@@ -156,12 +156,20 @@ class IntervalBound(Answer):
     """A property's bounds over the interval probabilities."""
 
     name: str = Field(description="the property")
-    min: float = Field(description="a sound lower bound over every fixed value in the box")
-    max: float = Field(description="a sound upper bound over every fixed value in the box")
-    min_attained: float = Field(description="the least value Storm found, at `min_at`")
-    max_attained: float = Field(description="the greatest value Storm found, at `max_at`")
+    min: float | None = Field(description="a sound lower bound over every fixed value in the "
+                                          "box (null: infinite, named in `infinite`)")
+    max: float | None = Field(description="a sound upper bound over every fixed value in the "
+                                          "box (null: infinite)")
+    min_attained: float | None = Field(description="the least value Storm found, at `min_at`: "
+                                                   "the property's `min` (null: infinite)")
+    max_attained: float | None = Field(description="the greatest value Storm found, at "
+                                                   "`max_at`: the property's `max` (null: "
+                                                   "infinite)")
     min_at: dict[str, float] = Field(description="where: each interval probability's value")
     max_at: dict[str, float] = Field(description="where: each interval probability's value")
+    infinite: list[Literal["min", "max", "min_attained", "max_attained"]] | Absent = Field(
+        None, description="which of the four are an infinite expected reward (JSON has no "
+                          "infinity: they are null); absent when none is")
 
 
 class ProbabilityIntervals(Answer):

@@ -213,7 +213,7 @@ class Estimates:
         """The object `afsmc simulate --json` prints for the same file and options."""
         p = self.policy
         head: dict[str, Any] = {} if p is None else {"strategy": {
-            "property": p.property, "direction": p.direction, "value": p.value,
+            "property": p.property, "direction": p.direction, "value": _num(p.value),
             "states": len(p.states)}}
         return head | {
             "file": self.path,  # which machine and instance, as verify --json says them

@@ -169,7 +169,7 @@ def run(args: argparse.Namespace) -> int:
         return fail(CompileError([Diagnostic(codes.E413, Severity.ERROR, f"sweep failed: {exc}",
                                              None, hint="is a Dask scheduler running at "
                                              f"{args.dask}?" if args.dask else None)]),
-                    args.json)
+                    args.json, wrapped=True)
     if args.json:
         print(json.dumps(res.to_json(), indent=2))
     elif to_stdout or (not args.output and not args.plot):

@@ -77,8 +77,7 @@ def test_the_python_api_takes_deep_expressions_as_the_commands_do(long_file: Pat
     import threading
 
     from afsmc.compiler import load
-    from afsmc.verify import run
-    from afsmc.verify.reports import sweep
+    from afsmc.verify import run, sweep
 
     limit = sys.getrecursionlimit()
     text = "machine m;\nmode S = 0 initial;\nmode D = 1 final;\naction Go in S weight (" \

@@ -14,8 +14,7 @@ import pytest
 
 from afsmc.commands.sweep import split_consts
 from afsmc.diagnostics import CompileError
-from afsmc.verify import parse_values
-from afsmc.verify.reports import sweep
+from afsmc.verify import parse_values, sweep
 from tests.conftest import EXAMPLES, run_cli
 from tests.specs import BOOL_PARAM
 from tests.unit.verify.test_verify import DEADLINE, GEO, RECORD
@@ -277,8 +276,7 @@ def test_uav_deadline_sweep(tmp_path: Path) -> None:
 def test_uav_deadline_sweep_equals_verify_at_each_point() -> None:
     """The shared build of a deadline sweep gives exactly what `verify` gives per point
     (the model must not be saturated at the first deadline it was built with)."""
-    from afsmc.verify import run
-    from afsmc.verify.reports import sweep
+    from afsmc.verify import run, sweep
 
     uav = str(Path(__file__).resolve().parents[2] / "examples" / "uav.afsm")
     consts = {"WIDTH": "2", "HEIGHT": "2", "T_LIMIT": "60"}

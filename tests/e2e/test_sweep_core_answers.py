@@ -22,8 +22,8 @@ from typing import Any
 import pytest
 
 import afsmc
-from afsmc.verify import run
-from afsmc.verify.reports import sweep, sweep_verdicts
+from afsmc.verify import run, sweep
+from afsmc.verify.reports import sweep_verdicts
 from afsmc.verify.reports.sweep_result import SweepResult
 from afsmc.verify.reports.sweep_tasks import Task, evaluate, make_tasks
 from tests.conftest import EXAMPLES, run_cli

@@ -10,8 +10,7 @@ from pathlib import Path
 
 import pytest
 
-from afsmc.verify import run
-from afsmc.verify.reports import sweep
+from afsmc.verify import run, sweep
 from tests.conftest import EXAMPLES, run_cli
 from tests.unit.verify.test_verify import DEADLINE
 

@@ -23,6 +23,7 @@ floating-point environment answers in a fraction of a second.
 from __future__ import annotations
 
 import dataclasses
+import math
 import os
 import re
 import tempfile
@@ -277,9 +278,17 @@ class Extreme:
     max_at: dict[str, float]
 
     def to_json(self) -> dict[str, object]:
-        return {"name": self.name, "min": self.min, "max": self.max,
-                "min_attained": self.min_attained, "max_attained": self.max_attained,
-                "min_at": self.min_at, "max_at": self.max_at}
+        """JSON has no infinity: an infinite bound (an expected reward) is null, named in
+        `infinite`, as in a property's own object."""
+        values = {"min": self.min, "max": self.max, "min_attained": self.min_attained,
+                  "max_attained": self.max_attained}
+        out: dict[str, object] = {"name": self.name}
+        out |= {k: v if math.isfinite(v) else None for k, v in values.items()}
+        out |= {"min_at": self.min_at, "max_at": self.max_at}
+        infinite = [k for k, v in values.items() if not math.isfinite(v)]
+        if infinite:
+            out["infinite"] = infinite
+        return out
 
 
 def interval_box(model: ir.Model) -> dict[str, tuple[float, float]]:
