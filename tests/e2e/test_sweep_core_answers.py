@@ -252,8 +252,6 @@ def test_with_interval_probabilities_each_point_is_the_cores_answer(patrol_box: 
             assert row[f"reference_{key}"] == ("" if ref[key] is None else repr(ref[key]))
 
 
-@pytest.mark.xfail(strict=True, reason="check() judges interval probabilities at their "
-                   "midpoint; verify re-judges over the box (issue 44: the core's change)")
 @pytest.mark.storm
 def test_with_interval_probabilities_sweep_and_verify_say_the_same(patrol_box: str) -> None:
     need = 'P>=0.6 [ F "done" ]'
