@@ -65,7 +65,8 @@ def verify_file(path: str, properties: Sequence[str] | str | None = None, *,
     """The one way afsmc verifies, for `afsmc verify` and :meth:`Mission.verify`:
     :func:`afsmc.verify.run` with the command's defaults (every option passed on as
     given), its worker processes started without re-running a user's script."""
-    kwargs = {**VERIFY_DEFAULTS, **options}
+    # the command's defaults, unless the options come whole (options=VerifyOptions(...))
+    kwargs = options if "options" in options else {**VERIFY_DEFAULTS, **options}
     try:
         with without_main():
             res = lib.run(path, text=text, consts=dict(consts or {}),

@@ -54,7 +54,9 @@ def sweep_file(path: str, variable: str | Mapping[str, Sequence[Number]],
     :func:`afsmc.verify.reports.sweep` with the command's defaults (every option passed on as
     given), its worker processes started without re-running a user's script. `variable`
     a mapping {name: values} sweeps the grid of several constants."""
-    kwargs: dict[str, Any] = {**VERIFY_DEFAULTS, **options}
+    # the command's defaults, unless the options come whole (options=VerifyOptions(...))
+    kwargs: dict[str, Any] = options if "options" in options else {**VERIFY_DEFAULTS,
+                                                                     **options}
     try:
         with without_main():
             res = lib.sweep(path, variable, list(values), text=text, consts=dict(consts or {}),

@@ -16,12 +16,13 @@ import sys
 from collections.abc import Callable
 
 from afsmc.api.sweep import sweep_file
-from afsmc.commands.common import add_file, dask_address, fail, reductions, usage_error
+from afsmc.commands.common import add_file, dask_address, fail, usage_error
 from afsmc.commands.verify import (
     add_storm_options,
     positive,
     progress_printer,
     refuse_bisim_on_symbolic,
+    storm_options,
 )
 from afsmc.diagnostics import CompileError, Diagnostic, Severity, codes
 from afsmc.files import check_writable, write_atomic
@@ -155,10 +156,8 @@ def run(args: argparse.Namespace) -> int:
                 check_writable(out, protect=(args.file,))
         res = sweep_file(args.file, variable if len(swept) <= 1 else swept, values, kind=kind,
                          consts=fixed, properties=args.property, formulas=args.formula,
-                         via=args.via, engine=args.engine, max_states=args.max_states,
-                         jobs=args.jobs, dask=args.dask, uniform=args.uniform,
-                         progress=progress, reductions=reductions(args),
-                         bisimulation=args.bisim, split=args.split, solver=args.solver).raw
+                         jobs=args.jobs, dask=args.dask, progress=progress,
+                         options=storm_options(args)).raw
         write(res)
     except CompileError as exc:
         if not isinstance(exc.partial, SweepResult) or not exc.partial.points:

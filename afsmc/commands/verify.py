@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import json
 import sys
 from collections.abc import Callable
@@ -29,6 +30,7 @@ from afsmc.commands.render.requirements import (
 from afsmc.diagnostics import CompileError
 from afsmc.text import literal, num
 from afsmc.verify import VerifyResult
+from afsmc.verify.core.options import VerifyOptions
 from afsmc.verify.core.uncertainty import INTERVAL_CONSTANTS, described
 from afsmc.verify.engines.storm import ENGINES, VIAS
 from afsmc.verify.engines.storm_solvers import SOLVERS
@@ -88,6 +90,14 @@ def add_storm_options(p: argparse.ArgumentParser) -> None:
                    help="for an MDP, skip the uniform resolution of the interval constants")
     p.add_argument("--progress", action="store_true",
                    help="show progress on stderr even with --json")
+
+
+def storm_options(args: argparse.Namespace) -> VerifyOptions:
+    """The options `verify` and `sweep` share (add_storm_options), as one VerifyOptions."""
+    return VerifyOptions(via=args.via, engine=args.engine, solver=args.solver,
+                         max_states=args.max_states, uniform=args.uniform,
+                         reductions=reductions(args), bisimulation=args.bisim,
+                         split=args.split)
 
 
 def progress_printer(args: argparse.Namespace) -> Callable[[str], None] | None:
@@ -226,14 +236,13 @@ def run(args: argparse.Namespace) -> int:
     if args.traces_out and args.witness is None:
         usage_error("--traces-out writes the --witness paths: give --witness K as well")
     try:
+        options = dataclasses.replace(
+            storm_options(args), precision=args.precision, exact=args.exact,
+            strategy=args.strategy, witness=extras.witness(args),
+            witness_dir=args.witness_dir)
         done = verify_file(args.file, args.property, consts=overrides(args),
-                          formulas=args.formula, via=args.via, engine=args.engine,
-                          max_states=args.max_states, uniform=args.uniform,
-                          progress=progress_printer(args), reductions=reductions(args),
-                          bisimulation=args.bisim, split=args.split, solver=args.solver,
-                          precision=args.precision, exact=args.exact,
-                          strategy=args.strategy, witness=extras.witness(args),
-                          witness_dir=args.witness_dir)
+                           formulas=args.formula, progress=progress_printer(args),
+                           options=options)
         res = done.raw
         if args.traces_out:
             extras.write_traces(args.traces_out, res, args.file)

@@ -10,9 +10,15 @@ were answered, the error's ``partial`` keeps the answers: a :class:`Partial` (``
 ``.uniform_model``, ``.properties``, None where a query has no value) from ``run`` and
 ``check``, a ``SweepResult`` of the points evaluated (whole or in part) from ``sweep``.
 
-``run(path, *, consts=None, properties=(), formulas=(), via="prism", engine="sparse",
-max_states=None, uniform=True, isolate=None, progress=None, text=None, reductions=None,
-bisimulation=False, split=False, memory_budget=None, solver="auto") -> VerifyResult``
+``VerifyOptions(via="prism", engine="sparse", solver="auto", max_states=None,
+memory_budget=None, uniform=True, isolate=None, reductions=None, bisimulation=False,
+split=False, precision=None, exact=False, strategy=False, witness=None, witness_dir=None,
+witness_target=None)``
+    Every option of a verification, frozen (afsmc.verify.core.options). ``run``, ``check``
+    and ``sweep`` take one as ``options=``, or its fields as keyword arguments.
+
+``run(path, options=None, *, consts=None, properties=(), formulas=(), progress=None,
+text=None, **option_fields) -> VerifyResult``
     Load, check and lower the file, build it with Storm and check the properties: the ones
     named in `properties` (default: every declared one, unless there are ad-hoc formulas:
     then none) plus each ad-hoc formula in
@@ -23,6 +29,10 @@ bisimulation=False, split=False, memory_budget=None, solver="auto") -> VerifyRes
     `max_states` (default: derived from free memory) stops larger models with E405;
     `isolate` forces (True) or forbids (False) the watched child process (default: only
     when the upper bound exceeds 200,000 states). `progress(text)` receives progress lines.
+    The values are bounds over everything the mission leaves uncertain
+    (docs/verification.md, "What a result means"): with interval probabilities ``min`` and
+    ``max`` come from Storm's parametric engine and the midpoint's answer is each
+    property's ``reference``.
     ``strategy=True``: each MDP property's ``.strategy`` is ``{"min": [...], "max": [...]}``
     of :class:`afsmc.verify.outcome.strategy.StrategyEntry` (constant, end, value, action, mode,
     states, when); ``witness=(name, K)`` (name None: the only property) with
@@ -44,14 +54,14 @@ transitions, choices, parse/build/check times), ``.properties`` (list of
 unguaranteed; ``exact``, the values as fractions under ``exact=True``), ``.property(name)``,
 ``.kind``, ``.upper_bound``, ``.to_json()`` (the ``afsmc verify --json`` object).
 
-``check(model, props, *, via, engine, max_states, uniform, isolate, progress) -> Checks``
+``check(model, props, options=None, *, progress=None, preserve=(), all_states=False,
+witness=None, **option_fields) -> Checks``
     The same on an already loaded :class:`afsmc.model.ir.Model` and a list of
     :class:`afsmc.model.ir.Property` (uniquely named), for callers that build properties.
 
 ``sweep(path, variable, values, *, kind="const", consts=None, properties=(), formulas=(),
-via="prism", engine="sparse", max_states=None, jobs=None, dask=None, uniform=True,
-progress=None, text=None, reductions=None, bisimulation=False, split=False,
-solver="auto") -> SweepResult``
+jobs=None, dask=None, progress=None, text=None, options=None, **option_fields)
+-> SweepResult``
     Evaluate the properties for each value of one open constant (``kind="const"``) or of
     the step bound of the properties (``kind="bound"``: ``F<=k``, ``C<=k``, ``I=k``; a property
     without a step bound is E410, raised before any point; the model is built once per chunk
@@ -65,14 +75,16 @@ solver="auto") -> SweepResult``
 ``parse_values(text) -> list[int | float]``: ``"0:900:25"`` (inclusive) or ``"1,2,5"``.
 ``upper_bound(model) -> int``: modes × the product of the variables' ranges.
 
-The modules: ``api`` (``run``, ``check``, loading with ad-hoc formulas, and ``ask`` for
-PRISM queries of the caller's own), ``results`` (the result types), ``queries`` (the queries
-asked for each property: bounded G as duals, Pmax as complements), ``runner`` (the Storm
-processes of one check), ``jobs`` (a Storm job for a lowered model), ``failures`` (Storm's
-failures as diagnostics), ``guard`` and ``storm`` (one watched Storm process), ``sweep``.
+The subpackages, each importing only those before it (docs/architecture.md): ``plan``
+(what to ask: the queries of each property, precision and exact modes), ``engines`` (build
+and solve: Storm's processes, afsmc's explorer, the parametric engine), ``outcome`` (one
+typed answer per property: results, verdicts, strategies, witnesses), ``core`` (``run``,
+``check``, ``VerifyOptions``, the bounds over everything uncertain), ``reports`` (sweeps,
+regions, JUnit).
 """
 
 from afsmc.verify.core.api import Loaded, check, load_with_formulas, run, select
+from afsmc.verify.core.options import VerifyOptions
 from afsmc.verify.engines.guard import default_max_states, upper_bound
 from afsmc.verify.outcome.results import Checks, ModelStats, Partial, PropertyResult, VerifyResult
 from afsmc.verify.reports.sweep import sweep
@@ -87,6 +99,7 @@ __all__ = [
     "PropertyResult",
     "SweepPoint",
     "SweepResult",
+    "VerifyOptions",
     "VerifyResult",
     "check",
     "default_max_states",

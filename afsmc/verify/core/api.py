@@ -10,30 +10,29 @@ from __future__ import annotations
 import dataclasses
 import re
 import time
-import typing
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
+from typing import Any
 
 from afsmc.backends.prism import emit as prism_emit
 from afsmc.compiler import load
 from afsmc.diagnostics import CompileError, Diagnostic, Related, Severity, Source, Span, codes
 from afsmc.lower.lowering import Lowered
-from afsmc.lower.reduce import Reductions
 from afsmc.model import ir
 from afsmc.model.names import did_you_mean
 from afsmc.stack import deep
 from afsmc.syntax.parser import parse, parse_property
 from afsmc.text import count, literal
+from afsmc.verify.core.options import VerifyOptions
 from afsmc.verify.core.runner import CheckRun, ModelLoop, Options
 from afsmc.verify.core.uncertainty import over_probabilities, sources
 from afsmc.verify.engines.guard import Progress, default_max_states, run_job, upper_bound
-from afsmc.verify.engines.storm import Engine, Job, StormFailure, Via
-from afsmc.verify.engines.storm_solvers import Solver
+from afsmc.verify.engines.storm import Engine, Job, StormFailure
 from afsmc.verify.engines.strategy_storm import WitnessRequest
 from afsmc.verify.outcome.results import Checks, VerifyResult
 from afsmc.verify.outcome.strategy import extras, witness_request
 from afsmc.verify.outcome.verdicts import judge_all
-from afsmc.verify.plan.precision import DEFAULT_PRECISION, check_options, rational_text
+from afsmc.verify.plan.precision import DEFAULT_PRECISION, check_options
 
 
 def _fresh_name(text: str, base: str, taken: set[str]) -> str:
@@ -144,16 +143,13 @@ def select(model: ir.Model, names: Sequence[str], adhoc: Sequence[str] = ()) -> 
     return out
 
 
-def check(model: ir.Model, props: Sequence[ir.Property], *, via: Via = "prism",
-          engine: Engine = "sparse", max_states: int | None = None, uniform: bool = True,
-          isolate: bool | None = None, progress: Progress | None = None,
-          reductions: Reductions | None = None, bisimulation: bool = False,
-          split: bool = False, memory_budget: int | None = None,
+def check(model: ir.Model, props: Sequence[ir.Property],
+          options: VerifyOptions | None = None, *, progress: Progress | None = None,
           preserve: Sequence[ir.Property] = (), all_states: bool = False,
-          solver: Solver = "auto", precision: float | None = None,
-          exact: bool = False, strategy: bool = False,
-          witness: WitnessRequest | None = None) -> Checks:
+          witness: WitnessRequest | None = None, **option_values: Any) -> Checks:
     """Check `props` (uniquely named) on a loaded model; raises CompileError on failure.
+    `options` (or its fields as keywords, `engine="hybrid"`): how (VerifyOptions); its
+    `witness` is resolved against the properties by the caller and given as `witness`.
 
     `preserve`: further properties that the reductions keep exact but that are not checked
     (a sweep's other points, so that every chunk of it builds the same model).
@@ -177,20 +173,17 @@ def check(model: ir.Model, props: Sequence[ir.Property], *, via: Via = "prism",
     exact arithmetic (sparse engine). A property with a threshold (a requirement) makes the
     check sound at `verdicts`' DEFAULT_PRECISION unless either is given; each requirement's
     result then has its `verdict` (afsmc.verify.outcome.verdicts)."""
-    precision, engine = sound_mode(props, precision, exact, engine)
-    checking = CheckRun(model, list(props), list(preserve), engine, uniform, progress,
-                        reductions, Options(via, max_states, isolate, bisimulation, split,
-                                            memory_budget, solver, all_states,
-                                            None if precision is None
-                                            else rational_text(precision), exact, strategy,
-                                            witness))
+    o = VerifyOptions.of(options, option_values)
+    precision, engine = sound_mode(props, o.precision, o.exact, o.engine)
+    checking = CheckRun(model, list(props), list(preserve), engine, o.uniform, progress,
+                        o.reductions, Options.of(o, all_states, precision, witness))
     for resolution, low, what in checking.lows:
         ModelLoop(checking, resolution, low, what).check_all()
     checks = checking.finish()
-    box, errors = over_probabilities(checks, model, props, via=via, reductions=reductions,
-                                     precision=None if exact else precision,
+    box, errors = over_probabilities(checks, model, props, via=o.via, reductions=o.reductions,
+                                     precision=None if o.exact else precision,
                                      preserve=preserve)
-    judge_all(checks.properties, 0.0 if exact else precision, errors)
+    judge_all(checks.properties, 0.0 if o.exact else precision, errors)
     return dataclasses.replace(checks, uncertainty=sources(model), probability=box)
 
 
@@ -214,59 +207,41 @@ def sound_mode(props: Sequence[ir.Property], precision: float | None, exact: boo
     return precision, "sparse" if exact else engine
 
 
-def check_choice(option: str, value: object, allowed: object) -> None:
-    """The API's Literal options, checked: a misspelt engine or via ran as sparse/PRISM."""
-    names = typing.get_args(allowed)
-    if value not in names:
-        raise ValueError(f"{option} must be one of " + ", ".join(map(repr, names))
-                         + f"; got {value!r}")
-
-
 @deep
-def run(path: str, *, consts: Mapping[str, str | bool | int | float] | None = None,
-        properties: Sequence[str] = (),
-        formulas: Sequence[str] = (), via: Via = "prism", engine: Engine = "sparse",
-        max_states: int | None = None, uniform: bool = True, isolate: bool | None = None,
+def run(path: str, options: VerifyOptions | None = None, *,
+        consts: Mapping[str, str | bool | int | float] | None = None,
+        properties: Sequence[str] = (), formulas: Sequence[str] = (),
         progress: Progress | None = None, text: str | None = None,
-        reductions: Reductions | None = None, bisimulation: bool = False,
-        split: bool = False, memory_budget: int | None = None,
-        solver: Solver = "auto", precision: float | None = None,
-        exact: bool = False, strategy: bool = False,
-        witness: tuple[str | None, int] | None = None, witness_dir: str | None = None,
-        witness_target: str | None = None) -> VerifyResult:
-    """Verify one .afsm file; see the package docstring. Raises CompileError, or
-    ValueError for an unknown `via`, `engine` or `solver`."""
-    check_choice("via", via, Via)
-    check_choice("engine", engine, Engine)
-    check_choice("solver", solver, Solver)
+        **option_values: Any) -> VerifyResult:
+    """Verify one .afsm file; see the package docstring. `options` (or its fields as
+    keywords, `precision=1e-9`): how (VerifyOptions). Raises CompileError, ValueError for
+    an unknown `via`, `engine` or `solver`, TypeError for an unknown option."""
+    o = VerifyOptions.of(options, option_values)
     t0 = time.perf_counter()
     texts = None if consts is None else {k: literal(v) for k, v in consts.items()}
     loaded = load_with_formulas(path, texts, formulas, text=text)
     model = loaded.model
     props = select(model, properties, loaded.adhoc)
-    wanted = witness_request(model, props, strategy, witness, witness_dir, witness_target)
+    wanted = witness_request(model, props, o.strategy, o.witness, o.witness_dir,
+                             o.witness_target)
     load_time = time.perf_counter() - t0
-    limit = default_max_states() if max_states is None else max_states
+    limit = default_max_states() if o.max_states is None else o.max_states
     bound = upper_bound(model)
     if progress is not None:
         progress(f"state space: at most {count(bound)} states (modes × variable ranges); "
-                 f"--max-states {limit:,}" + (" for the sparse engine" if max_states is None
-                                               and engine != "sparse" else ""))
+                 f"--max-states {limit:,}" + (" for the sparse engine" if o.max_states is None
+                                               and o.engine != "sparse" else ""))
     try:
-        checks = check(model, props, via=via, engine=engine, max_states=max_states,
-                       uniform=uniform, isolate=isolate, progress=progress, reductions=reductions,
-                       bisimulation=bisimulation, split=split, memory_budget=memory_budget,
-                       solver=solver, precision=precision, exact=exact, strategy=strategy,
-                       witness=wanted)
-        if strategy or wanted is not None:
-            extras(checks, check, model, props, strategy, wanted, max_states=max_states,
-                   progress=progress, reductions=reductions, via=via)
+        checks = check(model, props, o, progress=progress, witness=wanted)
+        if o.strategy or wanted is not None:
+            extras(checks, check, model, props, o.strategy, wanted, max_states=o.max_states,
+                   progress=progress, reductions=o.reductions, via=o.via)
         for r in checks.properties:
             r.witness_avoids = r.witnesses is not None and wanted is not None and wanted.avoid
     except CompileError as exc:
         raise loaded.remap_error(exc) from None
     consts_used: dict[str, object] = {c.name: c.value for c in model.constants if c.is_param}
-    return VerifyResult(path, model.name, consts_used, via, engine, bound, limit, checks.model,
+    return VerifyResult(path, model.name, consts_used, o.via, o.engine, bound, limit, checks.model,
                         checks.uniform_model, checks.properties, load_time,
                         time.perf_counter() - t0, loaded.warnings,
                         None if model.composition is None else model.composition.text,

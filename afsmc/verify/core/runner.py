@@ -23,6 +23,7 @@ from afsmc.lower.lowering import Lowered
 from afsmc.lower.reduce import Reductions
 from afsmc.model import ir
 from afsmc.model.semantics import bounded_globally
+from afsmc.verify.core.options import VerifyOptions
 from afsmc.verify.engines.explicit import applies
 from afsmc.verify.engines.failures import (
     after_failure,
@@ -60,7 +61,7 @@ from afsmc.verify.outcome.results import (
 )
 from afsmc.verify.outcome.strategy import attach, request, stepped
 from afsmc.verify.plan.deep import refuse_deep
-from afsmc.verify.plan.precision import complement
+from afsmc.verify.plan.precision import complement, rational_text
 from afsmc.verify.plan.queries import (
     REST,
     TERMINATES,
@@ -105,6 +106,17 @@ class Options:
     exact: bool = False
     strategy: bool = False  # extract each property's min and max scheduler
     witness: WitnessRequest | None = None  # and a query's most probable paths
+
+    @classmethod
+    def of(cls, o: VerifyOptions, all_states: bool, precision: float | None,
+           witness: WitnessRequest | None) -> Options:
+        """A check's settings from the verification's options: the precision it runs at
+        (a requirement's default, from `sound_mode`) as Storm's rational, and the witness
+        request resolved against its properties."""
+        return cls(o.via, o.max_states, o.isolate, o.bisimulation, o.split, o.memory_budget,
+                   o.solver, all_states,
+                   None if precision is None else rational_text(precision), o.exact,
+                   o.strategy, witness)
 
 
 def _put(r: PropertyResult, key: str, value: float) -> None:

@@ -23,15 +23,13 @@ from afsmc.diagnostics import CompileError, Diagnostic, Severity, codes
 from afsmc.files import read_source
 from afsmc.interrupt import Stopped
 from afsmc.lifetime import die_with_parent, without_main, worker_died
-from afsmc.lower.reduce import Reductions
 from afsmc.model import expr as E
 from afsmc.model.limits import INT64
 from afsmc.stack import deep
 from afsmc.text import literal, plural
-from afsmc.verify.core.api import check_choice, load_with_formulas, select
+from afsmc.verify.core.api import load_with_formulas, select
+from afsmc.verify.core.options import VerifyOptions, check_choice
 from afsmc.verify.engines.guard import Progress
-from afsmc.verify.engines.storm import Engine, Via
-from afsmc.verify.engines.storm_solvers import Solver
 from afsmc.verify.reports.sweep_result import SweepPoint, SweepResult
 from afsmc.verify.reports.sweep_tasks import (
     Task,
@@ -50,21 +48,21 @@ Finished = dict[int, tuple[list[SweepPoint], list[Diagnostic]]]  # task index ->
 def sweep(path: str, variable: str | Mapping[str, Sequence[Number]],
           values: Sequence[Number] = (), *, kind: Kind = "const",
           consts: Mapping[str, str | bool | int | float] | None = None,
-          properties: Sequence[str] = (),
-          formulas: Sequence[str] = (), via: Via = "prism", engine: Engine = "sparse",
-          max_states: int | None = None, jobs: int | None = None, dask: Any = None,
-          uniform: bool = True, progress: Progress | None = None,
-          text: str | None = None, reductions: Reductions | None = None,
-          bisimulation: bool = False, split: bool = False,
-          solver: Solver = "auto") -> SweepResult:
+          properties: Sequence[str] = (), formulas: Sequence[str] = (),
+          jobs: int | None = None, dask: Any = None, progress: Progress | None = None,
+          text: str | None = None, options: VerifyOptions | None = None,
+          **option_values: Any) -> SweepResult:
     """Evaluate the properties at every value; see the package docstring. `variable` a
     mapping {name: values, ...} sweeps the grid of several constants (every combination;
-    the first constant varies slowest). Raises CompileError, or ValueError for an unknown
-    `kind`, `via`, `engine` or `solver`, or a grid of the step bound."""
+    the first constant varies slowest). `options` (or its fields as keywords): how each
+    point is verified (VerifyOptions; not --strategy or --witness, which are verify's).
+    Raises CompileError, or ValueError for an unknown `kind`, `via`, `engine` or
+    `solver`, a grid of the step bound, or a strategy or witness asked of a sweep."""
     check_choice("kind", kind, Kind)
-    check_choice("via", via, Via)
-    check_choice("engine", engine, Engine)
-    check_choice("solver", solver, Solver)
+    o = VerifyOptions.of(options, option_values)
+    if o.strategy or o.witness is not None:
+        raise ValueError("a sweep gives values and verdicts: --strategy and --witness are "
+                         "verify's, at one point")
     t0 = time.perf_counter()
     ranges: list[tuple[str, list[Number]]] = []
     if not isinstance(variable, str):
@@ -92,12 +90,10 @@ def sweep(path: str, variable: str | Mapping[str, Sequence[Number]],
         _check_bounds(path, source, texts, properties, formulas, values)
     jobs = jobs or os.cpu_count() or 1
     # Dask workers are daemon processes, which cannot start the guard's child process.
-    isolate: bool | None = False if dask is not None else None
+    o = dataclasses.replace(o, isolate=False if dask is not None else o.isolate)
     base = Task(path=path, text=source, consts=tuple(sorted(texts.items())),
                 properties=tuple(properties), formulas=tuple(formulas), variable=variable,
-                kind=kind, xs=(), via=via, engine=engine, max_states=max_states,
-                uniform=uniform, isolate=isolate, reductions=reductions,
-                bisimulation=bisimulation, split=split, solver=solver)
+                kind=kind, xs=(), options=o)
     tasks = grid_tasks(base, ranges, jobs, dask, progress) if ranges else \
         make_tasks(base, values, jobs, dask, progress)
     total = math.prod(len(v) for _, v in ranges) if ranges else len(values)

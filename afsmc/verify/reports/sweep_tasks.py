@@ -22,16 +22,14 @@ from typing import Any
 from afsmc.backends.prism import emit as prism_emit
 from afsmc.diagnostics import CompileError, Diagnostic, Severity, codes
 from afsmc.lower.lowering import lower
-from afsmc.lower.reduce import Reductions
 from afsmc.model import expr as E
 from afsmc.model import ir
 from afsmc.model.semantics import inline
 from afsmc.stack import deep
 from afsmc.text import literal
 from afsmc.verify.core.api import check, load_with_formulas, select
+from afsmc.verify.core.options import VerifyOptions
 from afsmc.verify.engines.guard import Progress
-from afsmc.verify.engines.storm import Engine, Via
-from afsmc.verify.engines.storm_solvers import Solver
 from afsmc.verify.outcome.results import Checks, Partial, PropertyResult, shown
 from afsmc.verify.reports.sweep_result import SweepPoint
 from afsmc.verify.reports.sweep_values import Kind, Number
@@ -49,19 +47,11 @@ class Task:
     variable: str
     kind: Kind
     xs: tuple[Number, ...]
-    via: Via
-    engine: Engine
-    max_states: int | None  # None: the default, for the sparse engine only (see check)
-    uniform: bool
-    isolate: bool | None
+    options: VerifyOptions  # how each point is verified (its isolate: False on Dask)
     shared: bool = False  # const sweep whose constant only the properties read: one build
     # Every value of the whole sweep (shared builds): the reductions keep each of them
     # exact, so every chunk builds the same model whatever the number of jobs.
     sweep_xs: tuple[Number, ...] = ()
-    reductions: Reductions | None = None
-    bisimulation: bool = False
-    split: bool = False  # one Storm process per query
-    solver: Solver = "auto"
     # A sweep over several constants: the values of the others at this task's points
     # (in `consts` too), in the order the sweep was given them.
     at: tuple[tuple[str, Number], ...] = ()
@@ -355,11 +345,8 @@ def _checks(model: ir.Model, props: list[ir.Property], task: Task,
     # and the reductions preserve these and `preserve` (the sweep's other points), so a
     # counter is capped above the largest deadline of the sweep, not the one the model was
     # loaded with.
-    return check(model, props, via=task.via, engine=task.engine, max_states=task.max_states,
-                 uniform=task.uniform, isolate=task.isolate, reductions=task.reductions,
-                 bisimulation=task.bisimulation, split=task.split, preserve=preserve,
-                 all_states=True,  # the same states whatever the chunks
-                 solver=task.solver)
+    return check(model, props, task.options, preserve=preserve,
+                 all_states=True)  # the same states whatever the chunks
 
 
 def _answered(exc: CompileError) -> tuple[Partial, list[Diagnostic]] | None:
