@@ -180,11 +180,12 @@ def check(model: ir.Model, props: Sequence[ir.Property],
     for resolution, low, what in checking.lows:
         ModelLoop(checking, resolution, low, what).check_all()
     checks = checking.finish()
-    box, errors = over_probabilities(checks, model, props, via=o.via, reductions=o.reductions,
-                                     precision=None if o.exact else precision,
-                                     preserve=preserve)
-    judge_all(checks.properties, 0.0 if o.exact else precision, errors)
-    return dataclasses.replace(checks, uncertainty=sources(model), probability=box)
+    checks, box, errors = over_probabilities(
+        checks, model, props, via=o.via, reductions=o.reductions,
+        precision=None if o.exact else precision, preserve=preserve)
+    judged = judge_all(checks.properties, 0.0 if o.exact else precision, errors)
+    return dataclasses.replace(checks, properties=judged, uncertainty=sources(model),
+                               probability=box)
 
 
 def sound_mode(props: Sequence[ir.Property], precision: float | None, exact: bool,
@@ -234,10 +235,13 @@ def run(path: str, options: VerifyOptions | None = None, *,
     try:
         checks = check(model, props, o, progress=progress, witness=wanted)
         if o.strategy or wanted is not None:
-            extras(checks, check, model, props, o.strategy, wanted, max_states=o.max_states,
-                   progress=progress, reductions=o.reductions, via=o.via)
-        for r in checks.properties:
-            r.witness_avoids = r.witnesses is not None and wanted is not None and wanted.avoid
+            checks = extras(checks, check, model, props, o.strategy, wanted,
+                            max_states=o.max_states, progress=progress,
+                            reductions=o.reductions, via=o.via)
+        if wanted is not None and wanted.avoid:
+            checks = dataclasses.replace(checks, properties=[
+                dataclasses.replace(r, witness_avoids=r.witnesses is not None)
+                for r in checks.properties])
     except CompileError as exc:
         raise loaded.remap_error(exc) from None
     consts_used: dict[str, object] = {c.name: c.value for c in model.constants if c.is_param}

@@ -119,18 +119,6 @@ class Options:
                    o.strategy, witness)
 
 
-def _put(r: PropertyResult, key: str, value: float) -> None:
-    """Set the min, max, uniform or value of `r`."""
-    if key == "min":
-        r.min = value
-    elif key == "max":
-        r.max = value
-    elif key == "uniform":
-        r.uniform = value
-    else:
-        r.value = value
-
-
 class CheckRun:
     """One call of `check`: the properties as asked (bounded G as their duals), the
     lowered models, and per model its stats, answers and check times so far."""
@@ -187,11 +175,14 @@ class CheckRun:
         return kept_note(done, self.comp, self.duals)
 
     def results(self) -> list[PropertyResult]:
-        """One result per property from the models answered so far (None where not)."""
+        """One result per property from the models answered so far (None where not),
+        each built whole: the schedulers and paths in it too."""
         first = self.lows[0][1]
         out = []
         for p in self.original:
-            r = PropertyResult(p.name, shown(p), p.kind, threshold=p.threshold)
+            values: dict[str, float] = {}
+            exacts: dict[str, str] = {}
+            seconds: dict[str, float] = {}
             variants = ([(opt, 0, name) for name, opt in property_variants(first, p)]
                         + ([("uniform", 1, p.name)] if len(self.lows) > 1 else [])
                         if first.kind == "mdp" else [("value", 0, p.name)])
@@ -202,16 +193,19 @@ class CheckRun:
                 v = self.values[which].get(query)
                 if v is None:
                     continue
-                _put(r, key, 1.0 - v if name in self.asked_as else v)
+                values[key] = 1.0 - v if name in self.asked_as else v
                 exact = self.exact.get(self.lows[which][0], {}).get(query)
                 if exact is not None:
-                    r.exact[key] = complement(exact) if name in self.asked_as else exact
+                    exacts[key] = complement(exact) if name in self.asked_as else exact
                 secs = self.timings[which].get(query)
                 if secs is not None:
-                    r.seconds[key] = secs
-            out.append(r)
+                    seconds[key] = secs
+            out.append(PropertyResult(
+                p.name, shown(p), p.kind, min=values.get("min"), max=values.get("max"),
+                uniform=values.get("uniform"), value=values.get("value"), seconds=seconds,
+                threshold=p.threshold, exact=exacts))
         if self.extracted:
-            attach(out, self.original, first, self.extracted, self.asked_as)
+            out = attach(out, self.original, first, self.extracted, self.asked_as)
         return out
 
     def partial(self, more: dict[str, float] | None = None,

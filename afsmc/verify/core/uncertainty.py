@@ -98,11 +98,11 @@ def bound_error(precision: float | None) -> float:
 
 def over_probabilities(checks: Checks, model: ir.Model, props: Sequence[ir.Property], *,
                        via: str, reductions: Reductions | None, precision: float | None,
-                       preserve: Sequence[ir.Property] = ()) -> tuple[ProbabilityBox | None,
-                                                                      dict[str, float]]:
-    """Make each property's `min`/`max` its bounds over every fixed value of the interval
-    probabilities (with the midpoint's answer kept as its `reference`); the box, and each
-    property's error (none of either for a mission without interval probabilities).
+                       preserve: Sequence[ir.Property] = ()
+                       ) -> tuple[Checks, ProbabilityBox | None, dict[str, float]]:
+    """`checks` with each property's `min`/`max` its bounds over every fixed value of the
+    interval probabilities (the midpoint's answer kept as its `reference`); the box, and
+    each property's error (none of either for a mission without interval probabilities).
     `preserve`: the further properties the check's reductions kept exact (a sweep's other
     points), so that the model bounded is the model checked.
 
@@ -110,20 +110,17 @@ def over_probabilities(checks: Checks, model: ir.Model, props: Sequence[ir.Prope
     lies within `error` of each, beyond it (below a min, above a max)."""
     box = parametric.interval_box(model)
     if not box:
-        return None, {}
+        return checks, None, {}
     kept = dataclasses.replace(model, properties=tuple(props) + tuple(preserve))
     found = parametric.extremes(lowered(kept, "nondet", reductions), props, via=via,
                                 precision=PARAMETER_PRECISION)
     by_name = {e.name: e for e in found}
     error = bound_error(precision)
-    errors = {}
-    for r in checks.properties:
-        e = by_name.get(r.name)
-        if e is None:
-            continue
-        _widen(r, e)
-        errors[r.name] = error
-    return ProbabilityBox(box, tuple(found), PARAMETER_PRECISION), errors
+    errors = {r.name: error for r in checks.properties if r.name in by_name}
+    widened = [_widened(r, by_name[r.name]) if r.name in by_name else r
+               for r in checks.properties]
+    return (dataclasses.replace(checks, properties=widened),
+            ProbabilityBox(box, tuple(found), PARAMETER_PRECISION), errors)
 
 
 def reach_bounds(model: ir.Model, targets: Sequence[tuple[str, E.Expr]], *,
@@ -141,12 +138,13 @@ def reach_bounds(model: ir.Model, targets: Sequence[tuple[str, E.Expr]], *,
     return {e.name: (e.min_attained, e.max_attained) for e in found}
 
 
-def _widen(r: PropertyResult, e: parametric.Extreme) -> None:
-    """`r`'s midpoint answer to its reference; its min and max to the bounds of `e`."""
-    r.reference = Reference("midpoint", r.min, r.max, r.value, r.uniform, dict(r.exact))
-    r.min, r.max, r.value, r.uniform = e.min_attained, e.max_attained, None, None
-    r.exact = {}
-    r.attained_at = {"min": dict(e.min_at), "max": dict(e.max_at)}
+def _widened(r: PropertyResult, e: parametric.Extreme) -> PropertyResult:
+    """`r` with its midpoint answer as its reference and the bounds of `e` as its min and
+    max."""
+    return dataclasses.replace(
+        r, reference=Reference("midpoint", r.min, r.max, r.value, r.uniform, dict(r.exact)),
+        min=e.min_attained, max=e.max_attained, value=None, uniform=None, exact={},
+        attained_at={"min": dict(e.min_at), "max": dict(e.max_at)})
 
 
 def described(over: Sequence[str], box: ProbabilityBox | None) -> str:

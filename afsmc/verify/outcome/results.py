@@ -60,7 +60,7 @@ class ModelStats:
         return out
 
 
-@dataclass
+@dataclass(frozen=True)
 class PropertyResult:
     """min/max: the bounds over everything the mission leaves uncertain (the interval
     constants' floor/ceil, the agents' order, every fixed value of the interval
@@ -137,7 +137,7 @@ def find_property(results: Sequence[PropertyResult], name: str) -> PropertyResul
     raise KeyError(f"no property {name!r}; there are " + ", ".join(repr(p.name) for p in results))
 
 
-@dataclass
+@dataclass(frozen=True)
 class Checks:
     """What :func:`check` returns: the models built and one result per property."""
 

@@ -12,6 +12,7 @@ from __future__ import annotations
 import dataclasses
 from collections.abc import Callable, Mapping, Sequence, Set
 from dataclasses import dataclass
+from typing import Any
 
 from afsmc.backends.prism import property_variants, variant_label
 from afsmc.diagnostics import CompileError, Diagnostic, Severity, codes
@@ -225,8 +226,9 @@ def extract_for(low: Lowered, strategies: tuple[str, ...], policy: str | None,
 
 
 def attach(results: Sequence[PropertyResult], props: Sequence[ir.Property], low: Lowered,
-           extracted: Sequence[Extracted], asked_as: Mapping[str, str]) -> None:
-    """Put the schedulers and paths extracted into the results of `props` (as `results`)."""
+           extracted: Sequence[Extracted], asked_as: Mapping[str, str]
+           ) -> list[PropertyResult]:
+    """The results of `props` (as `results`) with the schedulers and paths extracted."""
     groups: dict[str, list[Group]] = {}
     variables: tuple[str, ...] = ()
     paths: list[RawPath] = []
@@ -236,19 +238,22 @@ def attach(results: Sequence[PropertyResult], props: Sequence[ir.Property], low:
         variables = x.variables or variables
         if x.paths or x.witness_note:
             paths, note = x.paths, x.witness_note
+    out = []
     for r, p in zip(results, props, strict=True):
+        more: dict[str, Any] = {}
         for name, opt in property_variants(low, p):
             query = asked_as.get(name, name)
             if query in groups and opt in ("min", "max"):
-                r.strategy = r.strategy or {}
-                r.strategy[opt] = summarise(groups[query], variables, low)
+                more.setdefault("strategy", dict(r.strategy or {}))[opt] = summarise(
+                    groups[query], variables, low)
                 if turns_open(low):
-                    r.turns = r.turns or {}
-                    r.turns[opt] = turns(groups[query], variables, low)
+                    more.setdefault("turns", dict(r.turns or {}))[opt] = turns(
+                        groups[query], variables, low)
             if any(query == x.witness_query for x in extracted if x.witness_query):
-                r.witnesses = describe(paths, variables, low)
-                r.witness_note = note
-                r.witness_of = opt or "value"
+                more |= {"witnesses": describe(paths, variables, low), "witness_note": note,
+                         "witness_of": opt or "value"}
+        out.append(dataclasses.replace(r, **more) if more else r)
+    return out
 
 
 def turns_chosen(model: ir.Model) -> bool:
@@ -349,15 +354,15 @@ def _request(model: ir.Model, prop: ir.Property, name: str, k: int, direction: s
 def extras(checks: Checks, check: Callable[..., Checks], model: ir.Model,
            props: Sequence[ir.Property], strategy: bool, witness: WitnessRequest | None, *,
            max_states: int | None, progress: Callable[[str], None] | None,
-           reductions: Reductions | None, via: Via) -> None:
+           reductions: Reductions | None, via: Via) -> Checks:
     """Schedulers and paths come from the sparse engine. A check on a symbolic engine
     (chosen, or picked by "auto") gave none: check the MDP again with the sparse engine
-    if it fits (E416 if not), and put what it extracts into `checks`."""
+    if it fits (E416 if not); `checks` with what it extracts."""
     missing = [p for p, r in zip(props, checks.properties, strict=True)
                if (strategy and r.strategy is None and not stepped(p))
                or (witness is not None and r.witnesses is None and _owns(p, witness))]
     if not missing:
-        return
+        return checks
     if progress is not None:
         progress(f"the {checks.model.engine} engine (via {via}) gives no scheduler: the MDP "
                  "is checked again with the sparse engine, via PRISM, for the strategies "
@@ -375,13 +380,16 @@ def extras(checks: Checks, check: Callable[..., Checks], model: ir.Model,
             None, hint="a smaller instance (--const), or raise --max-states if the memory "
                        "allows")]) from None
     by_name = {r.name: r for r in again.properties}
+    out = []
     for r in checks.properties:
         got = by_name.get(r.name)
         if got is not None:
-            r.strategy = r.strategy or got.strategy
+            r = dataclasses.replace(r, strategy=r.strategy or got.strategy)
             if got.witnesses is not None:
-                r.witnesses, r.witness_of, r.witness_note = (got.witnesses, got.witness_of,
-                                                             got.witness_note)
+                r = dataclasses.replace(r, witnesses=got.witnesses, witness_of=got.witness_of,
+                                        witness_note=got.witness_note)
+        out.append(r)
+    return dataclasses.replace(checks, properties=out)
 
 
 def _owns(p: ir.Property, w: WitnessRequest) -> bool:

@@ -21,6 +21,7 @@ reported, never judged: each is one resolution among many.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import operator
 from collections.abc import Callable, Mapping, Sequence
@@ -113,20 +114,22 @@ def judge(threshold: ir.Threshold, lo: float, hi: float, error: float | None,
 
 
 def judge_all(results: Sequence[PropertyResult], error: float | None,
-              errors: Mapping[str, float] | None = None) -> None:
-    """Set each requirement's `verdict` and every result's `error` (the bound the values
-    were computed to: 0 exact, None without a guarantee; `errors`: a property's own, by
-    name, where its bounds came from another engine, as over interval probabilities)."""
+              errors: Mapping[str, float] | None = None) -> list[PropertyResult]:
+    """The results with their `error` (the bound the values were computed to: 0 exact,
+    None without a guarantee; `errors`: a property's own, by name, where its bounds came
+    from another engine, as over interval probabilities) and each requirement's
+    `verdict`."""
+    out = []
     for r in results:
-        r.error = (errors or {}).get(r.name, error)
+        e = (errors or {}).get(r.name, error)
         t = r.threshold
-        if t is None:
-            continue
-        if r.value is not None:
-            r.verdict = judge(t, r.value, r.value, r.error, r.exact.get("value"),
-                              r.exact.get("value"))
-        elif r.min is not None and r.max is not None:
-            r.verdict = judge(t, r.min, r.max, r.error, r.exact.get("min"), r.exact.get("max"))
+        verdict = None
+        if t is not None and r.value is not None:
+            verdict = judge(t, r.value, r.value, e, r.exact.get("value"), r.exact.get("value"))
+        elif t is not None and r.min is not None and r.max is not None:
+            verdict = judge(t, r.min, r.max, e, r.exact.get("min"), r.exact.get("max"))
+        out.append(dataclasses.replace(r, error=e, verdict=verdict))
+    return out
 
 
 def failing(results: Sequence[PropertyResult]) -> list[PropertyResult]:
