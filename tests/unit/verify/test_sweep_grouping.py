@@ -4,6 +4,7 @@ one task per value; step bounds go in chunks."""
 
 from __future__ import annotations
 
+from afsmc.verify.core.options import VerifyOptions
 from afsmc.verify.reports.sweep_tasks import Task, independent, make_tasks, model_text
 from afsmc.verify.reports.sweep_values import Kind
 
@@ -62,8 +63,7 @@ property quick = P=? [ F "quick" ];
 
 def _base(variable: str, kind: Kind = "const") -> Task:
     return Task(path="m.afsm", text=MODEL, consts=(), properties=(), formulas=(),
-                variable=variable, kind=kind, xs=(), via="prism",
-                engine="sparse", max_states=None, uniform=True, isolate=None)
+                variable=variable, kind=kind, xs=(), options=VerifyOptions())
 
 
 def test_a_constant_only_the_properties_read_leaves_the_model_unchanged() -> None:

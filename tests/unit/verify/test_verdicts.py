@@ -77,7 +77,7 @@ def test_a_dtmc_holds_or_fails_and_judge_all_sets_the_error() -> None:
     plain = PropertyResult("v", "P=? [ F \"done\" ]", "P", value=0.7)
     rew = PropertyResult("s", "R{\"steps\"}<=10 [ F \"done\" ]", "R", min=4.0,
                          max=float("inf"), threshold=_th("<=", "10"))
-    judge_all([dtmc, plain, rew], 1e-6)
+    dtmc, plain, rew = judge_all([dtmc, plain, rew], 1e-6)
     assert dtmc.verdict is not None and dtmc.verdict.kind == "holds"
     assert plain.verdict is None and plain.error == 1e-6
     # an infinite expected reward in some resolution: the requirement depends on it

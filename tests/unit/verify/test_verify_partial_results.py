@@ -320,13 +320,14 @@ def test_a_failed_complement_does_not_matter_where_not_every_path_ends(
 
 def test_a_sweep_names_its_points_properties_as_written() -> None:
     from afsmc.diagnostics import Diagnostic, Severity
+    from afsmc.verify.core.options import VerifyOptions
     from afsmc.verify.reports.sweep_tasks import Task, user_words
 
     made = [Diagnostic("E406", Severity.ERROR, f"stopped while checking reach__at{i}_max as "
                        "1 - Pmin", None) for i in range(3)]
     made.append(Diagnostic("N412", Severity.NOTE, "answered:\n  reach__at1_min = 0.5", None))
-    task = Task("m.afsm", "", (), (), (), "K", "const", (3, 5), "prism", "hybrid", None, True,
-                None)
+    task = Task("m.afsm", "", (), (), (), "K", "const", (3, 5),
+                VerifyOptions(engine="hybrid"))
     d, note = user_words(made, task)
     assert d.message == "stopped while checking reach_max as 1 - Pmin", d.message
     assert note.message == "answered:\n  reach_min at K=5 = 0.5", note.message
