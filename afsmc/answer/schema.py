@@ -76,3 +76,11 @@ def _one_line(node: Any) -> Any:
 def text(name: str) -> str:
     """The schema as the byte-deterministic text `afsmc schema NAME` prints."""
     return json.dumps(schema(name), indent=2, sort_keys=True, ensure_ascii=True) + "\n"
+
+
+def published(name: str, obj: Any) -> Any:
+    """`obj`, the object `afsmc NAME --json` prints, through its published model: checked
+    against the schema and written as the model writes it, so that what a command prints
+    is what its schema says (a key the schema does not know is a bug, found here before a
+    reader finds it)."""
+    return MODELS[name].model_validate(obj).model_dump(mode="json", by_alias=True)

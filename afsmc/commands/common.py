@@ -130,3 +130,12 @@ def fail(exc: CompileError, as_json: bool = False, wrapped: bool = False) -> int
 
 def print_json(obj: object) -> None:
     print(json.dumps(obj, indent=2, sort_keys=False))
+
+
+def answer_json(name: str, obj: object) -> str:
+    """The text `afsmc NAME --json` prints: `obj` through its published model
+    (afsmc.answer.schema.published), so that it is what the command's schema says. The
+    models are imported only for --json: pydantic takes half a second to load."""
+    from afsmc.answer.schema import published
+
+    return json.dumps(published(name, obj), indent=2)

@@ -5,7 +5,6 @@ every value, or is undecided (afsmc.verify.reports.regions)."""
 from __future__ import annotations
 
 import argparse
-import json
 import os
 import re
 import sys
@@ -15,6 +14,7 @@ from typing import Literal
 from afsmc.commands.common import (
     add_consts,
     add_file,
+    answer_json,
     dask_address,
     fail,
     overrides,
@@ -206,7 +206,7 @@ def run(args: argparse.Namespace) -> int:
             hint=f"is a Dask scheduler running at {args.dask}?" if args.dask else None)]),
             args.json, wrapped=True)
     if args.json:
-        print(json.dumps(res.to_json(), indent=2))
+        print(answer_json("regions", res.to_json()))
     else:
         fixed = [c.name for c in model.constants if c.name in box and not c.is_param]
         print(render(res, fixed, summary=args.summary))

@@ -17,10 +17,10 @@ from afsmc.commands.common import (
     add_consts,
     add_file,
     add_seed,
+    answer_json,
     dask_address,
     fail,
     overrides,
-    print_json,
     report,
     usage_error,
 )
@@ -164,7 +164,7 @@ def run(args: argparse.Namespace) -> int:
 def _finish(sim: Simulation, est: Estimates, args: argparse.Namespace) -> None:
     """Print the estimates (and the strategy the runs followed, if any)."""
     if args.json:
-        print_json(est.to_json())
+        print(answer_json("simulate", est.to_json()))
     else:
         _print(est.raw, args, sim.model.is_nondeterministic,
                endless=any(d.code == codes.W602 for d in est.warnings),

@@ -9,14 +9,13 @@ without one is an error, E410).
 from __future__ import annotations
 
 import argparse
-import json
 import math
 import os
 import sys
 from collections.abc import Callable
 
 from afsmc.api.sweep import sweep_file
-from afsmc.commands.common import add_file, dask_address, fail, usage_error
+from afsmc.commands.common import add_file, answer_json, dask_address, fail, usage_error
 from afsmc.commands.verify import (
     add_storm_options,
     positive,
@@ -140,7 +139,7 @@ def run(args: argparse.Namespace) -> int:
 
     def write(res: SweepResult) -> None:
         if args.output:
-            text = json.dumps(res.to_json(), indent=2) + "\n" if file_json else res.to_csv()
+            text = answer_json("sweep", res.to_json()) + "\n" if file_json else res.to_csv()
             write_atomic(args.output, text, protect=(args.file,))
             if progress:
                 progress(f"wrote {args.output}")
@@ -170,7 +169,7 @@ def run(args: argparse.Namespace) -> int:
                                              f"{args.dask}?" if args.dask else None)]),
                     args.json, wrapped=True)
     if args.json:
-        print(json.dumps(res.to_json(), indent=2))
+        print(answer_json("sweep", res.to_json()))
     elif to_stdout or (not args.output and not args.plot):
         sys.stdout.write(res.to_csv())
     if not args.json:

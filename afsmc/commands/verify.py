@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
-import json
 import sys
 from collections.abc import Callable
 
@@ -13,6 +12,7 @@ from afsmc.commands.common import (
     add_consts,
     add_file,
     add_reductions,
+    answer_json,
     fail,
     overrides,
     reductions,
@@ -251,7 +251,7 @@ def run(args: argparse.Namespace) -> int:
     if args.junit:
         write_junit(args.junit, res)
     if args.json:
-        print(json.dumps(done.to_json(), indent=2))
+        print(answer_json("verify", done.to_json()))
     else:
         report(res.warnings)
         more = extras.render(res)
