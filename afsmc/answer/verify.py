@@ -156,10 +156,10 @@ class IntervalBound(Answer):
     """A property's bounds over the interval probabilities."""
 
     name: str = Field(description="the property")
-    min: float | None = Field(description="a sound lower bound over every fixed value in the "
-                                          "box (null: infinite, named in `infinite`)")
-    max: float | None = Field(description="a sound upper bound over every fixed value in the "
-                                          "box (null: infinite)")
+    outer_min: float | None = Field(description="min_attained minus the refinement "
+                                                "precision (null: infinite)")
+    outer_max: float | None = Field(description="max_attained plus the refinement precision "
+                                                "(null: infinite)")
     min_attained: float | None = Field(description="the least value Storm found, at `min_at`: "
                                                    "the property's `min` (null: infinite)")
     max_attained: float | None = Field(description="the greatest value Storm found, at "
@@ -167,7 +167,8 @@ class IntervalBound(Answer):
                                                    "infinite)")
     min_at: dict[str, float] = Field(description="where: each interval probability's value")
     max_at: dict[str, float] = Field(description="where: each interval probability's value")
-    infinite: list[Literal["min", "max", "min_attained", "max_attained"]] | Absent = Field(
+    infinite: list[Literal["outer_min", "outer_max", "min_attained",
+                           "max_attained"]] | Absent = Field(
         None, description="which of the four are an infinite expected reward (JSON has no "
                           "infinity: they are null); absent when none is")
 

@@ -89,14 +89,15 @@ class Sweep:
         and, if a swept property is a requirement, ``verdict``: the verdict the
         verification core judged at that point ("holds", "fails", "depends",
         "undecided"; None for a property that is no requirement or a value that failed),
-        and, if the core gives a reference point (interval probabilities: their midpoint),
-        ``reference`` (its name) and ``reference_min``, ... (the values there).
+        and, with interval probabilities, ``midpoint_min``, ``midpoint_max``,
+        ``midpoint_uniform`` and ``midpoint_value`` (the values at their midpoint, the
+        core's reference point).
         ``df.pivot(index=variable, columns="property", values="value")`` gives a curve
         per column."""
         import pandas as pd
 
         df = pd.DataFrame(self.raw.rows(), columns=self.raw.columns())
-        for k in (*VALUES, *(f"reference_{v}" for v in VALUES)):
+        for k in (*VALUES, *(f"midpoint_{v}" for v in VALUES)):
             if k in df.columns:
                 df[k] = df[k].astype(float)
         return df

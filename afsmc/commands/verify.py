@@ -136,10 +136,11 @@ def _header(res: VerifyResult) -> str:
     if not over:
         return f"{res.path}: a DTMC: one value per property"
     refs = []
-    if any(_uniform(p) is not None for p in res.properties):
-        refs.append("uniform picks floor or ceil at random")
     if res.probability is not None:
         refs.append("midpoint has every interval probability at the middle of its interval")
+    if any(_uniform(p) is not None for p in res.properties):
+        refs.append(("midpoint_uniform" if res.probability is not None else "uniform")
+                    + " picks floor or ceil at random")
     return (f"{res.path}: min and max bound every property over {over}"
             + (f"; reference points, never judged: {'; '.join(refs)}" if refs else ""))
 
@@ -165,11 +166,13 @@ def _values_table(res: VerifyResult) -> list[list[str]]:
             [p.name, p.formula, num(p.value)] for p in res.properties]
     uniform = any(_uniform(p) is not None for p in res.properties)
     mid = res.probability is not None
-    head = (["property", "formula", "min", "max"] + (["uniform"] if uniform else [])
-            + (["midpoint"] if mid else []))
+    # with interval probabilities the uniform resolution is one at their midpoint: its
+    # column says so, beside the midpoint's own min – max
+    head = (["property", "formula", "min", "max"] + (["midpoint"] if mid else [])
+            + (["midpoint_uniform" if mid else "uniform"] if uniform else []))
     return [head] + [[p.name, p.formula, num(p.min), num(p.max)]
-                     + ([num(_uniform(p))] if uniform else [])
-                     + ([_midpoint(p)] if mid else []) for p in res.properties]
+                     + ([_midpoint(p)] if mid else [])
+                     + ([num(_uniform(p))] if uniform else []) for p in res.properties]
 
 
 def _model_name(res: VerifyResult, m: ModelStats) -> str:

@@ -245,11 +245,11 @@ def test_with_interval_probabilities_each_point_is_the_cores_answer(patrol_box: 
     assert len(rows) == len(refs) == 2
     for row, ref in zip(rows, refs, strict=True):
         if ref is None:
-            assert "reference" not in row
+            assert "midpoint_min" not in row
             continue
-        assert row["reference"] == ref["point"]
+        assert ref["point"] == "midpoint"
         for key in ("min", "max", "uniform", "value"):
-            assert row[f"reference_{key}"] == ("" if ref[key] is None else repr(ref[key]))
+            assert row[f"midpoint_{key}"] == ("" if ref[key] is None else repr(ref[key]))
 
 
 @pytest.mark.storm

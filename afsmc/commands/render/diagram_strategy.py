@@ -67,7 +67,8 @@ def overlay(args: argparse.Namespace, model: ir.Model) -> tuple[Overlay, list[st
                 marks = agents[who].moved
                 marks[t.local] = marks.get(t.local, 0) + t.states
                 moved += t.states
-        notes.append(f"{direction} strategy of {name}: {num(getattr(p, direction))}")
+        value, where = p.followed(direction)
+        notes.append(f"{direction} strategy of {name}{where}: {num(value)}")
         if moved:
             notes.append("[moved: N states]: where the agents' order matters, the strategy "
                          "moves this action first")
@@ -91,8 +92,15 @@ def overlay(args: argparse.Namespace, model: ir.Model) -> tuple[Overlay, list[st
             else:
                 for who, steps in _agent_paths(comp, w).items():
                     agents[who].path = steps
-            notes.append(f"most probable path of {name}: {num(w.probability)}, "
-                         f"{len(w.steps)} steps")
+            # what was drawn, in verify --witness's words: a way to miss a requirement, or
+            # a path into the target, and whose strategy it follows
+            what = "way to miss" if p.witness_avoids else "path of"
+            end = p.witness_of
+            value, where = p.followed(end)
+            follow = (f", following the {end} strategy{where} ({end} {num(value)})"
+                      if end in ("min", "max") and value is not None else "")
+            notes.append(f"most probable {what} {name}: {num(w.probability)}, "
+                         f"{len(w.steps)} steps{follow}")
     drawn = whole.overlay()
     if agents:
         drawn = Overlay(agents={who: m.overlay() for who, m in agents.items()})

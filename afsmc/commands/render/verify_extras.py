@@ -95,11 +95,12 @@ def turn_lines(p: PropertyResult) -> list[str]:
 
 def witness_lines(p: PropertyResult) -> list[str]:
     assert p.witnesses is not None
-    value = {"min": p.min, "max": p.max, "value": p.value}.get(p.witness_of)
+    value, where = p.followed(p.witness_of)
     ws = p.witnesses
     mass = math.fsum(w.probability for w in ws)
-    follow = f" following the {p.witness_of} strategy" if p.witness_of in DIRECTIONS else ""
-    of = f"{p.witness_of} {num(value)}" if value is not None else ""
+    follow = (f" following the {p.witness_of} strategy" if p.witness_of in DIRECTIONS
+              else "") + where
+    of = f"{p.witness_of}{where} {num(value)}" if value is not None else ""
     if p.witness_avoids and value is not None:  # the paths that miss it: 1 - value in all
         value, of = 1.0 - value, f"1 - {of} = {num(1.0 - value)}"
     share = f", {100 * mass / value:.1f}% of {of}" if value else ""

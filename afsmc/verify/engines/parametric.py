@@ -280,8 +280,8 @@ class Extreme:
     def to_json(self) -> dict[str, object]:
         """JSON has no infinity: an infinite bound (an expected reward) is null, named in
         `infinite`, as in a property's own object."""
-        values = {"min": self.min, "max": self.max, "min_attained": self.min_attained,
-                  "max_attained": self.max_attained}
+        values = {"outer_min": self.min, "outer_max": self.max,
+                  "min_attained": self.min_attained, "max_attained": self.max_attained}
         out: dict[str, object] = {"name": self.name}
         out |= {k: v if math.isfinite(v) else None for k, v in values.items()}
         out |= {"min_at": self.min_at, "max_at": self.max_at}
@@ -404,5 +404,8 @@ def extremes(low: Lowered, props: Sequence[ir.Property], *, via: str = "prism",
 def to_json(box: Mapping[str, tuple[float, float]], found: Sequence[Extreme],
             precision: float = PARAMETER_PRECISION) -> dict[str, object]:
     return {"box": {n: list(b) for n, b in box.items()}, "precision": precision,
-            "meaning": "one fixed value in each interval; min/max are sound outer bounds",
+            "meaning": "one fixed value in each interval; min_attained/max_attained are the "
+                       "properties' min and max (the true extremes lie within their error, "
+                       "beyond them); outer_min/outer_max lie the refinement precision "
+                       "further out",
             "properties": [e.to_json() for e in found]}

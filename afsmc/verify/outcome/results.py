@@ -100,6 +100,14 @@ class PropertyResult:
     reference: Reference | None = None
     attained_at: dict[str, dict[str, float]] | None = None
 
+    def followed(self, end: str) -> tuple[float | None, str]:
+        """The value of the model the strategies and witnesses follow, by end ("min",
+        "max", "value"), and where: with interval probabilities that model has them at
+        their midpoint (the reference), not the bounds over their box."""
+        at = self.reference if self.reference is not None else self
+        value = {"min": at.min, "max": at.max, "value": at.value}.get(end)
+        return value, (" at the midpoint" if self.reference is not None else "")
+
     def to_json(self) -> dict[str, object]:
         out: dict[str, object] = {"name": self.name, "formula": self.formula}
         infinite = []

@@ -78,12 +78,13 @@ class SweepResult:
     def columns(self) -> list[str]:
         """The CSV's columns (and `Sweep.to_pandas()`'s): the swept constants, the property,
         its values, the model's size, `verdict` if a swept property is a requirement, and
-        the values at the core's reference point if a property has one (`reference`: its
-        name, such as "midpoint"; `reference_min`, ...)."""
+        the values at the interval probabilities' midpoint if a property has them
+        (`midpoint_min`, ...: the core's reference point, as `Results.to_pandas()` names
+        it)."""
         verdicts, references = self._extras()
         return [*self.swept, "property", *VALUES, "states", "transitions", "uniform_states",
                 "uniform_transitions"] + (["verdict"] if verdicts else []) \
-            + (["reference", *(f"reference_{k}" for k in VALUES)] if references else [])
+            + ([f"midpoint_{k}" for k in VALUES] if references else [])
 
     def rows(self) -> list[list[Number | str | None]]:
         """The CSV's rows as values, one per point and property: a missing value is None,
@@ -100,7 +101,7 @@ class SweepResult:
                     row.append(r.verdict.kind if r.verdict is not None else None)
                 if references:
                     ref = reference(r) or {}
-                    row += [ref.get("point"), *(ref.get(k) for k in VALUES)]
+                    row += [ref.get(k) for k in VALUES]
                 out.append(row)
         return out
 
