@@ -41,6 +41,10 @@ class Regions(Answer):
     reason: str = Field(description="one sentence: why the box has that verdict")
     from_file: list[str] = Field(
         description="the dimensions no --param named: the file's interval probabilities")
+    region_meaning: str | None = Field(
+        description="what a region's verdict means where it is not verify's word for the "
+                    "values in it (an MDP with a bare requirement: a region fails where "
+                    "some floor/ceil choice misses it); null where it is")
     min: float | None = Field(
         description="the requirement's value's min over the whole box, as `afsmc verify` "
                     "bounds it (Storm's parametric engine); null if not computed")

@@ -225,6 +225,12 @@ def solve(args: argparse.Namespace, low: Lowered, req: R.Requirement, prop: ir.P
     res = R.RegionResult(req.text, box, regions, 0.0, args.coverage, rounds,
                          states=built.model.nr_states)
     res.coverage = res.fraction("holds") + res.fraction("fails")
+    if low.kind == "mdp" and not req.opt:
+        worst, best = ("min", "max") if req.cmp in (">=", ">") else ("max", "min")
+        res.meaning = (f"on this MDP a region holds where every floor/ceil choice meets the "
+                       f"requirement (its {worst} does) and fails where some choice misses "
+                       f"it: there `afsmc verify` says fails or depends, as its {best} "
+                       "decides")
     # the verdict over the whole box: the requirement's bounds over it, judged as verify
     # judges (docs/verification.md, "What a result means")
     (e,) = extremes(low, [prop], via=args.via, precision=PARAMETER_PRECISION, box=box)
@@ -277,6 +283,8 @@ def render(res: R.RegionResult, fixed: list[str] | None = None, *,
     lines += from_file_lines(res)
     if not summary:
         lines += ["", *table(res)]
+    if res.meaning:
+        lines += ["", res.meaning]
     lines.append("")
     lines.append(f"holds on {res.fraction('holds'):.1%} of the volume, fails on "
                  f"{res.fraction('fails'):.1%}, unknown {res.fraction('unknown'):.1%}: "

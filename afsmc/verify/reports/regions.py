@@ -128,6 +128,9 @@ class RegionResult:
     # computed
     bounds: tuple[float, float, float] | None = None
     judged: Verdict | None = None
+    # what a region's verdict means where it is not verify's word for its values (an MDP
+    # with a bare requirement: the regions decide the worst choice only); "" where it is
+    meaning: str = ""
 
     def fraction(self, verdict: str) -> float:
         return sum(r.volume(self.box) for r in self.regions if r.verdict == verdict)
@@ -155,6 +158,7 @@ class RegionResult:
             "unknown": self.fraction("unknown"), "rounds": self.rounds,
             "states": self.states, "seconds": round(self.seconds, 3),
             "verdict": verdict, "reason": reason, "from_file": list(self.from_file),
+            "region_meaning": self.meaning or None,
             "min": None if self.bounds is None else self.bounds[0],
             "max": None if self.bounds is None else self.bounds[1],
             "error": None if self.bounds is None else self.bounds[2],

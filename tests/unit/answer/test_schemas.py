@@ -115,7 +115,8 @@ def test_an_absent_key_is_left_out_and_never_null() -> None:
                                               '"message": "m", "hint": null}')
     box: dict[str, Any] = dict(requirement="r", box={}, coverage=1, target_coverage=0.9,
                                holds=1, fails=0, unknown=0, rounds=1, states=1, seconds=0,
-                               verdict="holds", reason="r", from_file=[], min=None, max=None,
+                               verdict="holds", reason="r", from_file=[], region_meaning=None,
+                               min=None, max=None,
                                error=None, decided_by=None, regions=[])
     assert "feasible" not in regions.Regions(**box).model_dump(mode="json")
     none = regions.Regions(**box, feasible=None, feasible_method=None)
