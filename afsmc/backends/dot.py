@@ -83,6 +83,14 @@ def _html(text: str) -> str:
 
 
 def _prob_text(prob: E.Expr, model: ir.Model) -> str:
+    box = {c.name: c.prob_interval for c in model.prob_intervals
+           if c.prob_interval is not None and c.name in E.consts_read(prob)}
+    if box:
+        # an interval probability: the range over its interval, not its midpoint, since
+        # the verified bounds range over it too (docs/verification.md)
+        ends = _over_box(prob, model, box)
+        if ends is not None:
+            return f"{short(ends[0], 3)}–{short(ends[1], 3)}"
     v = static_value(prob, model)
     if v is None:
         text = with_names(model.display_names())(prob)
@@ -90,6 +98,28 @@ def _prob_text(prob: E.Expr, model: ir.Model) -> str:
     if abs(v - 1.0) < 1e-12:
         return ""
     return short(v, 3)
+
+
+def _over_box(prob: E.Expr, model: ir.Model,
+              box: Mapping[str, tuple[float, float]]) -> tuple[float, float] | None:
+    """The least and greatest value of a state-free probability at the corners of the
+    interval probabilities' box (exact for the products and complements a branch's
+    probability is made of); None if it reads the state."""
+    import itertools
+
+    from afsmc.model.evaluate import EvalError, scalar
+
+    if static_value(prob, model) is None:
+        return None
+    names = sorted(box)
+    values = []
+    for corner in itertools.product(*(box[n] for n in names)):
+        try:
+            values.append(float(scalar(prob, model.const_values | dict(zip(names, corner,
+                                                                            strict=True)))))
+        except (EvalError, ZeroDivisionError, OverflowError):
+            return None
+    return min(values), max(values)
 
 
 def _item(arc: _Arc, model: ir.Model) -> str:
