@@ -23,6 +23,7 @@ import pytest
 
 import afsmc
 from afsmc.verify import run, sweep
+from afsmc.verify.core.options import VerifyOptions
 from afsmc.verify.reports import sweep_verdicts
 from afsmc.verify.reports.sweep_result import SweepResult
 from afsmc.verify.reports.sweep_tasks import Task, evaluate, make_tasks
@@ -71,8 +72,8 @@ def labelled(tmp_path: Path) -> str:
 
 def _task(path: str, variable: str) -> Task:
     return Task(path=path, text=Path(path).read_text(), consts=(), properties=(),
-                formulas=(), variable=variable, kind="const", xs=(), via="prism",
-                engine="sparse", max_states=None, uniform=True, isolate=None)
+                formulas=(), variable=variable, kind="const", xs=(),
+                options=VerifyOptions())
 
 
 def _same_values(got: afsmc.verify.PropertyResult, want: afsmc.verify.PropertyResult,
