@@ -1,9 +1,10 @@
 """The only module that talks to Storm: parse a generated model, build it, check properties.
 
 A :class:`Job` is plain picklable data (the model text, the property names to check, the
-engine), so it runs the same here, in a watched child (:mod:`afsmc.verify.engines.guard`), a pool
-or a Dask worker. Failures come back as :class:`StormFailure` data, never as exceptions,
-for the caller, which knows the .afsm source, to turn into diagnostics.
+engine), so it runs the same in this process, in a watched child process (see
+:mod:`afsmc.verify.engines.guard`), in a process pool or on a Dask worker. Failures come
+back as :class:`StormFailure` data, never as exceptions, and are turned into diagnostics by
+the caller, which knows the .afsm source.
 """
 
 from __future__ import annotations
@@ -16,7 +17,7 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any, Literal
 
-from afsmc.verify.engines import acyclic, explicit, strategy_arrays
+from afsmc.verify.engines import acyclic, explicit, strategy_arrays, umb
 from afsmc.verify.engines.storm_solvers import Solver, solver_for, value_iteration
 from afsmc.verify.engines.strategy_storm import Extract, Extracted, analyse, builder_options
 from afsmc.verify.plan import precision
@@ -29,8 +30,8 @@ SPARSE_BYTES_PER_STATE = 260
 Via = Literal["prism", "jani"]
 VIAS: tuple[Via, ...] = ("prism", "jani")
 
-# Storm stages a failure can come from (the caller picks the diagnostic code from it);
-# "stopped": the guard interrupted an explicit build that proved within --max-states.
+# Storm stages a failure can come from; the caller picks the diagnostic code from it.
+# "stopped": the guard interrupted an explicit build that proved within --max-states
 Stage = Literal["parse", "property", "build", "check", "too-big", "memory", "tables",
                 "internal", "stopped"]
 
@@ -498,7 +499,7 @@ def _acyclic(stormpy: Any, built: _Built, res: JobResult, notify: Notify, job: J
         return
     notify("phase", "acyclic")
     started = time.perf_counter()
-    raw = acyclic.read(stormpy, built.model, p)
+    raw = umb.read(stormpy, built.model, p)
     if raw is not None and not p.left:
         built.model = None  # one model in memory at a time: the arrays hold all it needs
         _give_back()

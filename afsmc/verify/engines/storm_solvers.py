@@ -15,8 +15,9 @@ from typing import Any, Literal
 # 137 s of a 394 s query that value iteration answered in 276 s; docs/benchmarks.md).
 Solver = Literal["auto", "topological", "value-iteration"]
 SOLVERS: tuple[Solver, ...] = ("auto", "topological", "value-iteration")
-# Value iteration's relative stopping bound (Storm's 1e-6 moved values in the ninth digit;
-# 1e-10 equals the topological solver's to ~1e-14 on the UAV at no measurable cost).
+# Value iteration stops when no value changes by more than this, relative to itself (Storm's
+# 1e-6 moved values in the ninth digit; 1e-10 equals the topological solver's to ~1e-14 on
+# the UAV at no measurable cost: an acyclic model converges in its longest path's steps).
 VI_PRECISION = "1/10000000000"
 
 __all__ = ["SOLVERS", "VI_PRECISION", "Solver", "solver_for", "value_iteration"]

@@ -37,7 +37,7 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
-from afsmc.verify.engines import acyclic
+from afsmc.verify.engines import acyclic, umb
 from afsmc.verify.engines.strategy_storm import SAME, Extract, Extracted, Group, RawPath, _groups
 
 I64 = npt.NDArray[np.int64]
@@ -189,7 +189,7 @@ def run(stormpy: Any, built: Any, res: Any, notify: Callable[[str, Any], None], 
     p = acyclic.plan(built.names, built.props, res.kind == "mdp")
     notify("phase", "acyclic")
     started = time.perf_counter()
-    raw = acyclic.read(stormpy, built.model, p, _label_bits(stormpy, built.model, program))
+    raw = umb.read(stormpy, built.model, p, _label_bits(stormpy, built.model, program))
     built.model = None  # one model in memory at a time: the arrays hold all it needs
     _give_back()
     arrays = None if raw is None else acyclic.arrange(raw)
@@ -261,7 +261,7 @@ def extract_query(a: acyclic.Arrays, q: acyclic.Query, extract: Extract, view: V
                 "probability", "")
             out.witness_note = f"the {what} is 0: no path reaches a target state{under}"
             return result
-        target = a.labels[acyclic.LABEL + str(q.target)]
+        target = a.labels[umb.LABEL + str(q.target)]
         _Paths(a, chosen, value[:, 0] > 0, target, view).collect(w.k, out)
     return result
 
