@@ -365,7 +365,11 @@ def test_cell(mission: str, row: str, options: str, references: References,
         results.write_text(json.dumps(data), encoding="utf-8")
         answer = fe.diagram_results([m.path], results, ref.names, tmp_path)
     elif row == "diagram-strategy":
-        answer = fe.diagram_strategy([m.path], "done", tmp_path)
+        answer = fe.diagram_strategy([m.path], "done", tmp_path, midpoint=m.box is not None)
+        if m.box is not None:
+            # the strategy drawn is the midpoint model's (docs/verification.md, "What a
+            # result means"): its value is verify's reference there, not the bound
+            ref = fe.Reference(fe.at_midpoint(ref.data))
     elif row == "diagram-witness":
         answer, p = fe.diagram_witness([m.path], "done", tmp_path)
         top = ref.bounds("done")[1]

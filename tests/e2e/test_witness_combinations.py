@@ -330,7 +330,8 @@ def test_diagram_witness_on_a_composed_mission_draws_each_agent_s_steps(
     assert [s.action for s in w.witnesses[0].steps] == ["a: Work", "b: Work"]
     assert list(drawn.agents["a"].path) == [(0, 1, "Work"), diagram_strategy.NOWHERE]
     assert list(drawn.agents["b"].path) == [diagram_strategy.NOWHERE, (0, 1, "Work")]
-    assert notes == [f"most probable path of both_done: {w.witnesses[0].probability:g}, 2 steps"]
+    assert notes == [f"most probable path of both_done: {w.witnesses[0].probability:g}, "
+                     f"2 steps, following the max strategy (max {w.max:g})"]
     dot = diagram(model, drawn).source
     assert "a_m0 -> a_m1" in dot and "step 1" in dot and "step 2" in dot
 

@@ -12,7 +12,7 @@ from afsmc import verify as lib
 from afsmc.backends.dot import Overlay
 from afsmc.commands.common import overrides
 from afsmc.model import ir
-from afsmc.text import num
+from afsmc.text import num, plural
 from afsmc.verify.core.policy import parse
 from afsmc.verify.outcome.strategy import has_choices
 from afsmc.verify.outcome.witness import Witness
@@ -100,7 +100,7 @@ def overlay(args: argparse.Namespace, model: ir.Model) -> tuple[Overlay, list[st
             follow = (f", following the {end} strategy{where} ({end} {num(value)})"
                       if end in ("min", "max") and value is not None else "")
             notes.append(f"most probable {what} {name}: {num(w.probability)}, "
-                         f"{len(w.steps)} steps{follow}")
+                         f"{plural(len(w.steps), 'step')}{follow}")
     drawn = whole.overlay()
     if agents:
         drawn = Overlay(agents={who: m.overlay() for who, m in agents.items()})

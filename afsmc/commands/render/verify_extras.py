@@ -7,7 +7,7 @@ import json
 import math
 
 from afsmc.files import write_atomic
-from afsmc.text import literal, num
+from afsmc.text import literal, num, plural
 from afsmc.verify import VerifyResult
 from afsmc.verify.outcome.results import PropertyResult
 from afsmc.verify.outcome.strategy import DIRECTIONS
@@ -108,13 +108,14 @@ def witness_lines(p: PropertyResult) -> list[str]:
     if not ws:
         return [f"no {what} {p.name} ({p.formula}){follow}"
                 + (f": {p.witness_note}" if p.witness_note else "")]
-    out = [f"the {len(ws)} most probable {what} {p.name} ({p.formula}){follow}: "
-           f"total {num(mass)}{share}"]
+    many = f"the {len(ws)} most probable {what}" if len(ws) > 1 else \
+        f"the most probable {what.replace('ways', 'way').replace('paths', 'path')}"
+    out = [f"{many} {p.name} ({p.formula}){follow}: total {num(mass)}{share}"]
     if p.witness_note:
         out.append(f"  ({p.witness_note})")
     for i, w in enumerate(ws, 1):
         check = "" if w.confirmed else " (NOT confirmed by replaying it through the model)"
-        out.append(f"path {i}: probability {num(w.probability)}, {len(w.steps)} steps, "
+        out.append(f"path {i}: probability {num(w.probability)}, {plural(len(w.steps), 'step')}, "
                    f"ends in {w.end_mode}{check}")
         for j, s in enumerate(w.steps, 1):
             changes = " ".join(f"{k}={literal(v)}" for k, v in s.changes.items())

@@ -407,28 +407,34 @@ def diagram_results(argv: Sequence[str], results: Path, names: Sequence[str],
     return answer
 
 
-def diagram_strategy(argv: Sequence[str], name: str, tmp: Path) -> Answer:
-    """`afsmc diagram --strategy min:NAME`: the note `min strategy of NAME: v` (6 digits),
-    shown as the property's lower bound."""
+def diagram_strategy(argv: Sequence[str], name: str, tmp: Path,
+                     midpoint: bool = False) -> Answer:
+    """`afsmc diagram --strategy min:NAME`: the note `min strategy of NAME: v` (6 digits;
+    `... of NAME at the midpoint: v` with interval probabilities), shown as the property's
+    lower bound."""
     answer, nodes = diagram([*argv, "--strategy", f"min:{name}"], tmp)
     if answer.code is None:
         texts = [t for node in nodes for t in node]
-        line = next((t for t in texts if t.startswith(f"min strategy of {name}: ")), None)
+        head = f"min strategy of {name}" + (" at the midpoint" if midpoint else "") + ": "
+        line = next((t for t in texts if t.startswith(head)), None)
         if line is None:
-            answer.notes.append(f"--strategy: no note 'min strategy of {name}: ...'")
+            answer.notes.append(f"--strategy: no note '{head}...'")
         else:
             answer.shown[name] = Shown(number(line.rsplit(": ", 1)[1]), None, digits=6)
     return answer
 
 
 def diagram_witness(argv: Sequence[str], name: str, tmp: Path) -> tuple[Answer, float | None]:
-    """`afsmc diagram --witness NAME`: the note `most probable path of NAME: p, n steps`;
-    returns the path's probability (no bound of the property is shown)."""
+    """`afsmc diagram --witness NAME`: the note `most probable path of NAME: p, n steps`
+    (`way to miss` for a requirement's violations); returns the path's probability (no
+    bound of the property is shown)."""
     answer, nodes = diagram([*argv, "--witness", name], tmp)
     if answer.code is not None:
         return answer, None
     texts = [t for node in nodes for t in node]
-    line = next((t for t in texts if t.startswith(f"most probable path of {name}: ")), None)
+    line = next((t for t in texts if t.startswith((f"most probable path of {name}: ",
+                                                   f"most probable way to miss {name}: "))),
+                None)
     if line is None:
         answer.notes.append(f"--witness: no note 'most probable path of {name}: ...'")
         return answer, None
