@@ -447,3 +447,10 @@ def test_a_storm_failure_at_reach_other_than_size_is_e612() -> None:
     assert d.message == ("Storm could not compute the reachability of the modes: "
                          "Storm could not solve it")
     assert [x.code for x in _reach_error(StormFailure("too-big", "big")).diagnostics] == ["E405"]
+
+
+def test_a_witness_named_as_its_query_is_e407_that_says_how_to_write_it(tmp_path: Path) -> None:
+    r = run_cli("diagram", str(EXAMPLES / "two_uav.afsm"), "--witness", "success_max",
+                "-o", str(tmp_path / "w.svg"))
+    assert r.code == 1 and "E407" in r.err and "--witness success_max" in r.err
+    assert "write max:success" in r.err and not (tmp_path / "w.svg").exists()

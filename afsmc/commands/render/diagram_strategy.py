@@ -11,7 +11,9 @@ from dataclasses import dataclass, field
 from afsmc import verify as lib
 from afsmc.backends.dot import Overlay
 from afsmc.commands.common import overrides
+from afsmc.diagnostics import CompileError, Diagnostic, Severity, codes
 from afsmc.model import ir
+from afsmc.model.names import did_you_mean
 from afsmc.text import num, plural
 from afsmc.verify.core.policy import parse
 from afsmc.verify.outcome.strategy import has_choices
@@ -77,6 +79,7 @@ def overlay(args: argparse.Namespace, model: ir.Model) -> tuple[Overlay, list[st
         name = args.witness
         if ":" in args.witness:
             way, name = parse(args.witness)
+        _known(model, name)
         res = lib.run(args.file, consts=overrides(args), properties=[name],
                       witness=(name, 1), uniform=False,
                       witness_dir=way if has_choices(model) else None)
@@ -105,6 +108,21 @@ def overlay(args: argparse.Namespace, model: ir.Model) -> tuple[Overlay, list[st
     if agents:
         drawn = Overlay(agents={who: m.overlay() for who, m in agents.items()})
     return drawn, notes
+
+
+def _known(model: ir.Model, name: str) -> None:
+    """E407 for a --witness naming no property, in --witness's words (the query names
+    NAME_min and NAME_max are written min:NAME and max:NAME)."""
+    names = [p.name for p in model.properties]
+    if name in names:
+        return
+    base, _, end = name.rpartition("_")
+    hint = (f"write {end}:{base} for the {end} strategy's path" if end in ("min", "max")
+            and base in names else did_you_mean(name, names)
+            or ("properties: " + ", ".join(names) if names else None))
+    raise CompileError([Diagnostic(codes.E407, Severity.ERROR, f"--witness {name}: no "
+                                   f"property named '{name}' in {model.source.path}", None,
+                                   hint=hint)])
 
 
 def _path(model: ir.Model, w: Witness) -> list[tuple[int, int, str]]:
