@@ -26,8 +26,8 @@ AUTO_SPARSE_BOUND = 1_000_000_000
 def choose_engine(engine: Engine, bound: int) -> tuple[Engine, str]:
     """`auto` with a small upper bound is simply sparse; otherwise the job decides."""
     if engine == "auto" and bound <= AUTO_SPARSE_BOUND:
-        return "sparse", (f"at most {count(bound)} states by the variables' ranges: the sparse "
-                          "engine is fastest at this size")
+        return "sparse", (f"at most {count(bound)} states by the variables' ranges: few "
+                          "enough for the sparse engine")
     return engine, ""
 
 
