@@ -58,7 +58,7 @@ def test_bisimulation_and_reductions_keep_every_value(path: str, consts: dict[st
 def test_auto_picks_sparse_for_small_models_and_says_why() -> None:
     res = run(str(EXAMPLES / "patrol.afsm"), engine="auto", isolate=False)
     assert res.model.engine == "sparse"
-    assert "sparse engine is fastest" in res.model.engine_reason, res.model.engine_reason
+    assert "few enough for the sparse engine" in res.model.engine_reason, res.model.engine_reason
 
 
 def _small_uav(keep: Callable[[ir.Property], bool]) -> tuple[PrismOutput, tuple[str, ...]]:
