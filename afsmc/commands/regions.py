@@ -30,7 +30,7 @@ from afsmc.model import ir
 from afsmc.text import num
 from afsmc.verify.core.api import load_with_formulas
 from afsmc.verify.core.uncertainty import bound_error
-from afsmc.verify.engines.parametric import extremes
+from afsmc.verify.engines.parametric import extreme_queries, extremes_on, with_parameters
 from afsmc.verify.engines.storm import VIAS
 from afsmc.verify.outcome.verdicts import judge
 from afsmc.verify.plan.precision import PARAMETER_PRECISION
@@ -218,7 +218,10 @@ def solve(args: argparse.Namespace, low: Lowered, req: R.Requirement, prop: ir.P
     from afsmc.backends.prism import PrismPrinter, formula_text
 
     query = formula_text(prop, prop.opt, PrismPrinter({}, low))
-    src, formulas, built = R.prepare(low, list(box), req, query, args.via)
+    # the requirement's bounds over the whole box are asked of the same parametric build
+    bound_queries = extreme_queries(with_parameters(low, box), [prop])
+    src, formulas, built = R.prepare(low, list(box), req, query, args.via,
+                                     also=sorted({q.text for q in bound_queries[prop.name]}))
     regions, rounds = R.refine(low, src, formulas, built, box, coverage=args.coverage,
                                jobs=max(1, args.jobs), dask=args.dask,
                                max_rounds=args.max_rounds, progress=say)
@@ -233,7 +236,7 @@ def solve(args: argparse.Namespace, low: Lowered, req: R.Requirement, prop: ir.P
                        "decides")
     # the verdict over the whole box: the requirement's bounds over it, judged as verify
     # judges (docs/verification.md, "What a result means")
-    (e,) = extremes(low, [prop], via=args.via, precision=PARAMETER_PRECISION, box=box)
+    (e,) = extremes_on(built, bound_queries, [prop], box, PARAMETER_PRECISION)
     error = bound_error(None)
     res.bounds = (e.min_attained, e.max_attained, error)
     res.judged = judge(threshold_of(req), e.min_attained, e.max_attained, error)

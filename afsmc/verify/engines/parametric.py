@@ -382,9 +382,22 @@ def extremes(low: Lowered, props: Sequence[ir.Property], *, via: str = "prism",
     lowering)."""
     box = interval_box(low.model) if box is None else box
     plow = with_parameters(low, box)
-    qs = {p.name: queries(plow, p) for p in props}
+    qs = extreme_queries(plow, props)
     built = Parametric(source(plow, via), sorted({q.text for v in qs.values() for q in v}))
     check_box(low, built, box)
+    return extremes_on(built, qs, props, box, precision)
+
+
+def extreme_queries(plow: Lowered, props: Sequence[ir.Property]) -> dict[str, list[Query]]:
+    """The min and max queries of each property (by name) on the parametric model `plow`:
+    their texts are what a `Parametric` must be built with to answer them."""
+    return {p.name: queries(plow, p) for p in props}
+
+
+def extremes_on(built: Parametric, qs: Mapping[str, list[Query]],
+                props: Sequence[ir.Property], box: Box, precision: float) -> list[Extreme]:
+    """`extremes` on a parametric model already built with the texts of `qs`
+    (`extreme_queries`), whose box is known to be well defined."""
     out = []
     for p in props:
         got: dict[str, tuple[float, float, dict[str, float]]] = {}

@@ -207,11 +207,14 @@ def _check_on_dask(src: Source, formulas: tuple[str, str], boxes: list[Bounds]) 
 
 
 def prepare(low: Lowered, params: Sequence[str], req: Requirement, prism_query: str,
-            via: str) -> tuple[Source, tuple[str, str], Parametric]:
+            via: str, also: Sequence[str] = ()) -> tuple[Source, tuple[str, str], Parametric]:
+    """The parametric model of `low` over `params`, built for the requirement, its
+    negation and the further formulas `also` (the bounds' queries, answered on the same
+    build)."""
     plow = with_parameters(low, params)
     src = source(plow, via)
     formulas = storm_formulas(req, prism_query, low.kind == "mdp")
-    return src, formulas, Parametric(src, list(formulas))
+    return src, formulas, Parametric(src, [*formulas, *also])
 
 
 def refine(low: Lowered, src: Source, formulas: tuple[str, str], built: Parametric,
