@@ -182,7 +182,7 @@ def check(model: ir.Model, props: Sequence[ir.Property],
     checks = checking.finish()
     checks, box, errors = over_probabilities(
         checks, model, props, via=o.via, reductions=o.reductions,
-        precision=None if o.exact else precision, preserve=preserve)
+        precision=None if o.exact else precision, preserve=preserve, progress=progress)
     judged = judge_all(checks.properties, 0.0 if o.exact else precision, errors)
     return dataclasses.replace(checks, properties=judged, uncertainty=sources(model),
                                probability=box)

@@ -19,7 +19,7 @@ point (`PropertyResult.reference`), never judged.
 from __future__ import annotations
 
 import dataclasses
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 
 from afsmc.compiler import lowered
@@ -98,7 +98,8 @@ def bound_error(precision: float | None) -> float:
 
 def over_probabilities(checks: Checks, model: ir.Model, props: Sequence[ir.Property], *,
                        via: str, reductions: Reductions | None, precision: float | None,
-                       preserve: Sequence[ir.Property] = ()
+                       preserve: Sequence[ir.Property] = (),
+                       progress: Callable[[str], None] | None = None
                        ) -> tuple[Checks, ProbabilityBox | None, dict[str, float]]:
     """`checks` with each property's `min`/`max` its bounds over every fixed value of the
     interval probabilities (the midpoint's answer kept as its `reference`); the box, and
@@ -111,6 +112,10 @@ def over_probabilities(checks: Checks, model: ir.Model, props: Sequence[ir.Prope
     box = parametric.interval_box(model)
     if not box:
         return checks, None, {}
+    if progress is not None:
+        progress(f"bounding {len(props)} propert{'y' if len(props) == 1 else 'ies'} over "
+                 + ", ".join(f"{n} in [{lo:g}, {hi:g}]" for n, (lo, hi) in box.items())
+                 + " with Storm's parametric engine")
     kept = dataclasses.replace(model, properties=tuple(props) + tuple(preserve))
     found = parametric.extremes(lowered(kept, "nondet", reductions), props, via=via,
                                 precision=PARAMETER_PRECISION)
