@@ -8,6 +8,8 @@ from __future__ import annotations
 
 from typing import Any, Literal
 
+from afsmc.verify.plan.precision import iterative_environment
+
 # How Storm solves the equation systems on the sparse and hybrid engines. "auto": value
 # iteration on hybrid; on sparse, one exact backward pass where the model is acyclic but for
 # self-loops (afsmc.verify.engines.acyclic, reported as "acyclic"), else Storm's topological solver,
@@ -35,21 +37,9 @@ def solver_for(solver: Solver, engine: str) -> str:
 
 def value_iteration(stormpy: Any, dd_memory_mb: int) -> Any:
     """Storm's environment for checks by value iteration (Storm's default, None, is the
+    topological solver). A DTMC's equations by Storm's own iterative solver, by plain
+    iteration of x = Ax + b (its "power" method), which is value iteration without the
+    choice (the 5x5 UAV's uniform DTMC: 2.4-4.8 s against 4.0-10.4 s per query with the
     topological solver)."""
-    from stormpy import developer
-
-    env = stormpy.Environment()
-    env.dd().sylvan().maximal_memory = dd_memory_mb  # as built (Sylvan is set up once)
-    min_max = env.solver().min_max()  # an MDP's
-    min_max.method = developer.MinMaxMethod.VALUE_ITERATION
-    min_max.precision = stormpy.Rational(VI_PRECISION)
-    min_max.relative_termination_criterion = True
-    # a DTMC's: Storm's own iterative solver, by plain iteration of x = Ax + b (its "power"
-    # method), which is value iteration without the choice (the 5x5 UAV's uniform DTMC:
-    # 2.4-4.8 s against 4.0-10.4 s per query with the topological solver)
-    env.solver().set_linear_equation_solver_type(developer.EquationSolverType.NATIVE)
-    native = env.solver().native()
-    native.method = developer.NativeLinearEquationSolverMethod.POWER
-    native.precision = stormpy.Rational(VI_PRECISION)
-    native.relative_termination_criterion = True
-    return env
+    return iterative_environment(stormpy, dd_memory_mb, "VALUE_ITERATION", "POWER",
+                                 VI_PRECISION, relative=True)

@@ -53,23 +53,33 @@ def check_options(precision: float | None, exact: bool, engine: str) -> str | No
     return None
 
 
-def sound_environment(stormpy: Any, precision: str, dd_memory_mb: int) -> Any:
-    """Storm's environment for sound checks within `precision` (a rational text), absolute:
-    sound value iteration for an MDP's min/max and a DTMC's linear equations."""
+def iterative_environment(stormpy: Any, dd_memory_mb: int, min_max: str, native: str,
+                          precision: str, relative: bool) -> Any:
+    """Storm's environment for iterative checks: an MDP's min/max by Storm's MinMaxMethod
+    `min_max`, a DTMC's linear equations by its own (native) solver's method `native`,
+    both stopping at `precision` (a rational text), relative or absolute."""
     from stormpy import developer
 
     env = stormpy.Environment()
     env.dd().sylvan().maximal_memory = dd_memory_mb  # as built (Sylvan is set up once)
-    env.solver().force_soundness = True
-    min_max = env.solver().min_max()
-    min_max.method = developer.MinMaxMethod.SOUND_VALUE_ITERATION
-    min_max.precision = stormpy.Rational(precision)
-    min_max.relative_termination_criterion = False
+    mm = env.solver().min_max()
+    mm.method = getattr(developer.MinMaxMethod, min_max)
+    mm.precision = stormpy.Rational(precision)
+    mm.relative_termination_criterion = relative
     env.solver().set_linear_equation_solver_type(developer.EquationSolverType.NATIVE)
-    native = env.solver().native()
-    native.method = developer.NativeLinearEquationSolverMethod.SOUND_VALUE_ITERATION
-    native.precision = stormpy.Rational(precision)
-    native.relative_termination_criterion = False
+    nat = env.solver().native()
+    nat.method = getattr(developer.NativeLinearEquationSolverMethod, native)
+    nat.precision = stormpy.Rational(precision)
+    nat.relative_termination_criterion = relative
+    return env
+
+
+def sound_environment(stormpy: Any, precision: str, dd_memory_mb: int) -> Any:
+    """Storm's environment for sound checks within `precision` (a rational text), absolute:
+    sound value iteration for an MDP's min/max and a DTMC's linear equations."""
+    env = iterative_environment(stormpy, dd_memory_mb, "SOUND_VALUE_ITERATION",
+                                "SOUND_VALUE_ITERATION", precision, relative=False)
+    env.solver().force_soundness = True
     return env
 
 
