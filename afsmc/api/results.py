@@ -18,6 +18,7 @@ from typing import TYPE_CHECKING, Any
 
 from afsmc import verify as lib
 from afsmc.api.errors import AfsmError
+from afsmc.compiler import Checked
 from afsmc.diagnostics import CompileError, Diagnostic
 from afsmc.lifetime import without_main
 from afsmc.text import num
@@ -49,28 +50,30 @@ def names(properties: Sequence[str] | str | None) -> list[str]:
 
 def verify(mission: Mission, properties: Sequence[str] | str | None = None,
            **options: Any) -> Results:
-    """:meth:`Mission.verify`: :func:`verify_file` on the mission's text and constants.
-    ``witness=K`` is `afsmc verify --witness K`: the paths of the one property checked."""
+    """:meth:`Mission.verify`: :func:`verify_file` on the mission as loaded (not loaded
+    again). ``witness=K`` is `afsmc verify --witness K`: the paths of the one property
+    checked."""
     k = options.get("witness")
     if isinstance(k, int) and not isinstance(k, bool):
         wanted = names(properties)
         options["witness"] = (wanted[0] if wanted and len(wanted) == 1 else None, k)
     return verify_file(mission.path, properties, text=mission.text,
-                       consts=dict(mission.consts), **options)
+                       consts=dict(mission.consts), checked=mission.checked, **options)
 
 
 def verify_file(path: str, properties: Sequence[str] | str | None = None, *,
                 text: str | None = None, consts: Mapping[str, str] | None = None,
-                **options: Any) -> Results:
+                checked: Checked | None = None, **options: Any) -> Results:
     """The one way afsmc verifies, for `afsmc verify` and :meth:`Mission.verify`:
     :func:`afsmc.verify.run` with the command's defaults (every option passed on as
-    given), its worker processes started without re-running a user's script."""
+    given), its worker processes started without re-running a user's script. `checked`:
+    the file loaded already with `consts`."""
     # the command's defaults, unless the options come whole (options=VerifyOptions(...))
     kwargs = options if "options" in options else {**VERIFY_DEFAULTS, **options}
     try:
         with without_main():
             res = lib.run(path, text=text, consts=dict(consts or {}),
-                          properties=names(properties), **kwargs)
+                          properties=names(properties), checked=checked, **kwargs)
     except CompileError as exc:
         raise AfsmError.of(exc) from None
     box = res.probability

@@ -6,7 +6,8 @@ finds; `run` applies them all, so an author sees every error of a file at once.
 
 from __future__ import annotations
 
-from collections.abc import Callable
+import dataclasses
+from collections.abc import Callable, Sequence
 
 from afsmc.check import (
     distributions,
@@ -68,8 +69,13 @@ def run(model: ir.Model, *, used_names: frozenset[str] = frozenset()) -> list[Di
         from afsmc.check.composition import check_composition
 
         return check_composition(model, used_names, run)
+    return _apply(RULES, model, used_names)
+
+
+def _apply(rules: Sequence[Rule], model: ir.Model,
+           used_names: frozenset[str] = frozenset()) -> list[Diagnostic]:
     rep = Reporter()
-    for rule in RULES:
+    for rule in rules:
         if rule is not overflow.check_overflow and rule not in STRUCTURAL and any(
                 d.code == codes.E307 for d in rep.diagnostics):
             continue
@@ -85,3 +91,22 @@ def run(model: ir.Model, *, used_names: frozenset[str] = frozenset()) -> list[Di
             rep.warning(codes.W309, f"the {name} check could not be completed: {exc}", None,
                         hint="the model may still violate it; simplify the expressions involved")
     return rep.sorted()
+
+
+# The rules that look at a property's expressions (through undefined.sites).
+PROPERTY_RULES: tuple[Rule, ...] = (overflow.check_overflow, undefined.check_undefined,
+                                    int_pow.check_int_pow, storm_depth.check_storm_depth)
+
+
+def run_properties(model: ir.Model, props: Sequence[ir.Property]) -> list[Diagnostic]:
+    """The diagnostics of properties added to a checked model (afsmc.compiler.
+    with_properties): the rules that read property expressions, on the model with only
+    those properties and none of its rewards, actions or hazards, whose diagnostics `run`
+    gave already (its labels stay: a property reads them; the caller drops what they
+    say again). A composed mission's properties are checked in no
+    agent (`check_composition` keeps each agent's own diagnostics), so neither are these."""
+    if model.composition is not None:
+        return []
+    view = dataclasses.replace(model, actions=(), hazards=(), rewards=(),
+                               properties=tuple(props), memo=ir.Memo())
+    return _apply(PROPERTY_RULES, view)

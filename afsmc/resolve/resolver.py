@@ -9,10 +9,11 @@ from __future__ import annotations
 
 import dataclasses
 import os
-from collections.abc import Mapping
-from dataclasses import dataclass
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
 
 from afsmc.diagnostics import CompileError, Diagnostic, Reporter
+from afsmc.model import expr as E
 from afsmc.model import ir
 from afsmc.model.names import safe_identifier
 from afsmc.resolve import compose
@@ -39,6 +40,56 @@ class Resolved:
     # With `open_params`: each constant whose value reads such params (through other
     # constants too), and their names.
     open_reads: Mapping[str, frozenset[str]]
+    # The names the model's properties may read, for properties that come later: the
+    # ad-hoc ones of `verify --formula` (PropertyScope.resolve).
+    scope: PropertyScope | None = field(default=None, compare=False, repr=False)
+
+
+@dataclass(frozen=True)
+class Adhoc:
+    """Properties resolved against a resolved model (PropertyScope.resolve): each as the
+    model's own would be, the diagnostics of resolving them (errors among them), and the
+    names of the model's variables, constants and formulas they read."""
+
+    properties: tuple[ir.Property, ...]
+    diagnostics: tuple[Diagnostic, ...]
+    reads: frozenset[str]
+
+
+class PropertyScope:
+    """The resolver of a model's own properties, kept after resolving the model: further
+    properties (`verify --formula`) are resolved against the model itself, with what its
+    declarations mean, instead of being added to its text and the whole file resolved
+    again. For a composed mission, the mission's module, with the agents' names
+    (`uav1.mode`) rewritten as its own properties are."""
+
+    def __init__(self, resolver: _Resolver, names: compose._Names | None = None) -> None:
+        self._resolver = resolver
+        self._names = names
+
+    def resolve(self, queries: Sequence[tuple[str, ast.PQuery | ast.RQuery]]) -> Adhoc:
+        """`queries`: (name, query as parsed, e.g. by afsmc.syntax.parser.parse_property).
+        The names must be new: neither a property's nor a query's of the model. The
+        diagnostics come query by query, each query's sorted."""
+        r = self._resolver
+        before = set(r.used)
+        props, diags = [], []
+        for name, q in queries:
+            r.rep = Reporter()
+            if self._names is not None:
+                self._names.rep = r.rep  # E253, E254: which agent's name it is
+                q = compose.rewrite(q, self._names.fn(None))
+            props.append(r._property(ast.PropertyDecl(ast.Ident(name, q.span), q, q.span)))
+            diags += r.rep.sorted()
+        reads = set(r.used) - before
+        r.used = before  # the model's own, for the next call
+        for p in props:
+            for e in (getattr(p.path, "target", None), getattr(p.path, "left", None),
+                      getattr(p.path, "bound", None)):
+                if e is not None:
+                    reads.update(n.name for n in E.walk(e)
+                                 if isinstance(n, E.VarRef | E.ConstRef | E.FormulaRef))
+        return Adhoc(tuple(props), tuple(diags), frozenset(reads))
 
 
 def resolve(module: ast.Module, overrides: Mapping[str, str] | None = None, *,
@@ -55,7 +106,8 @@ def resolve(module: ast.Module, overrides: Mapping[str, str] | None = None, *,
     if r.rep.has_errors:
         raise CompileError(r.rep.sorted())
     return Resolved(model, tuple(d for d in r.rep.sorted() if not d.is_error),
-                    frozenset(r.used), dict(r.open_errors), dict(r.open_reads))
+                    frozenset(r.used), dict(r.open_errors), dict(r.open_reads),
+                    PropertyScope(r))
 
 
 def _resolve_composed(module: ast.Module, overrides: Mapping[str, str] | None,
@@ -106,7 +158,7 @@ def _resolve_composed(module: ast.Module, overrides: Mapping[str, str] | None,
     comp = ir.Composition(kind, ties, tuple(views), shared, kw.span if kw else None)
     model = dataclasses.replace(model, actions=(), hazards=(), composition=comp)
     return Resolved(model, tuple(warnings), frozenset(used), dict(r.open_errors),
-                    dict(r.open_reads))
+                    dict(r.open_reads), PropertyScope(r, names))
 
 
 class _Resolver(NamesMixin, ConstantsMixin, DeclarationsMixin, ExpressionsMixin, ActionsMixin,

@@ -15,13 +15,14 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from afsmc.backends.prism import emit as prism_emit
-from afsmc.compiler import load
-from afsmc.diagnostics import CompileError, Diagnostic, Related, Severity, Source, Span, codes
+from afsmc.compiler import Checked, load, with_properties
+from afsmc.diagnostics import CompileError, Diagnostic, Severity, codes
 from afsmc.lower.lowering import Lowered
 from afsmc.model import ir
 from afsmc.model.names import did_you_mean
 from afsmc.stack import deep
-from afsmc.syntax.parser import parse, parse_property
+from afsmc.syntax import ast
+from afsmc.syntax.parser import parse_property
 from afsmc.text import count, literal
 from afsmc.verify.core.options import VerifyOptions
 from afsmc.verify.core.runner import CheckRun, ModelLoop, Options
@@ -45,75 +46,48 @@ def _fresh_name(text: str, base: str, taken: set[str]) -> str:
     return name
 
 
-@dataclass
+@dataclass(frozen=True)
 class Loaded:
-    """A model loaded with ad-hoc formulas; `remap` moves a diagnostic about a formula
-    from the end of the (extended) file into the formula itself (file `--formula`)."""
+    """A checked model with the ad-hoc formulas among its properties (`adhoc`: their
+    names, in the order of the formulas), and the warnings of loading it."""
 
     model: ir.Model
     warnings: list[Diagnostic]
-    adhoc: list[str]  # the generated property names, in the order of the formulas
-    limit: int = 0
-    where: list[tuple[int, int, int, str]] = field(default_factory=list)
-
-    def remap(self, d: Diagnostic) -> Diagnostic:
-        return _remap(d, self.limit, self.where)
-
-    def remap_error(self, exc: CompileError) -> CompileError:
-        return CompileError([self.remap(d) for d in exc.diagnostics], exc.partial)
+    adhoc: list[str]
+    checked: Checked
 
 
-def load_with_formulas(path: str, overrides: Mapping[str, str] | None = None,
-                       formulas: Sequence[str] = (), *, text: str | None = None,
-                       run_checks: bool = True) -> Loaded:
-    """Load `path` with each formula appended as `property adhocN = <formula>;`."""
-    from afsmc.files import read_source
-
-    base = read_source(path) if text is None else text
-    full = base if base.endswith("\n") else base + "\n"
-    where: list[tuple[int, int, int, str]] = []  # (head, start, end, formula) offsets in `full`
-    names: list[str] = []
-    taken: set[str] = set()
+def parse_formulas(formulas: Sequence[str], text: str,
+                   taken: Sequence[str] = ()) -> list[tuple[str, ast.PQuery | ast.RQuery]]:
+    """Each formula parsed on its own, so that a syntax error speaks of the formula alone,
+    and named `adhoc`, `adhoc2`...: the first names that are no word of the file's `text`
+    (nor in `taken`)."""
+    names: set[str] = set(taken)
+    out = []
     for f in formulas:
         if ";" in f:
             raise CompileError([Diagnostic(
                 codes.E409, Severity.ERROR, f"--formula {f!r}: one property, without ';'", None,
                 hint="repeat --formula for several properties")])
-        # Parsed on its own first, so a syntax error speaks of the formula alone and not
-        # of the declaration it is wrapped in below.
-        parse_property(f, "--formula")
-        name = _fresh_name(base, "adhoc", taken)
-        names.append(name)
-        head = f"property {name} = "
-        where.append((len(full), len(full) + len(head), len(full) + len(head) + len(f), f))
-        full += f"{head}{f};\n"
-    try:
-        checked = load(path, overrides, text=full, run_checks=run_checks)
-    except CompileError as exc:
-        if where and any(d.code.startswith("E1") for d in exc.diagnostics):
-            parse(base, path)  # a syntax error of the file: its own, without the formulas
-        raise CompileError([_remap(d, len(base), where) for d in exc.diagnostics]) from None
-    return Loaded(checked.model, [_remap(d, len(base), where) for d in checked.diagnostics],
-                  names, len(base), where)
+        out.append((_fresh_name(text, "adhoc", names), parse_property(f, "--formula")))
+    return out
 
 
-def _remap(d: Diagnostic, limit: int, where: list[tuple[int, int, int, str]]) -> Diagnostic:
-    def span(s: Span | None) -> Span | None:
-        if s is None or s.start < limit or not where:
-            return s
-        if limit == 0 and s.start == 0:  # the whole of an empty file (E213)
-            return Span.at_offset(Source(s.source.path, ""), 0, 0)
-        for head, start, end, f in where:
-            if head <= s.start <= end:  # the formula, its `property NAME =` head, or ';'
-                src = Source("--formula", f)
-                if s.start < start:  # the whole declaration: the whole formula
-                    return Span.at_offset(src, 0, len(f))
-                a = min(s.start - start, len(f))
-                return Span.at_offset(src, a, min(max(a + 1, s.end - start), max(len(f), a + 1)))
-        return None
+def load_with_formulas(path: str, overrides: Mapping[str, str] | None = None,
+                       formulas: Sequence[str] = (), *, text: str | None = None,
+                       run_checks: bool = True, checked: Checked | None = None) -> Loaded:
+    """Load `path` (or use `checked`, that file loaded already) and resolve each formula
+    against its model as a property of its own (afsmc.compiler.with_properties)."""
+    from afsmc.files import read_source
 
-    related = tuple(Related(r.message, span(r.span) or r.span) for r in d.related)
-    return dataclasses.replace(d, span=span(d.span), related=related)
+    if checked is None:
+        base = read_source(path) if text is None else text
+        queries = parse_formulas(formulas, base)
+        checked = load(path, overrides, text=base, run_checks=run_checks)
+    else:
+        queries = parse_formulas(formulas, checked.model.source.text)
+    full = with_properties(checked, queries, run_checks=run_checks)
+    return Loaded(full.model, list(full.diagnostics), [n for n, _ in queries], full)
 
 
 def select(model: ir.Model, names: Sequence[str], adhoc: Sequence[str] = ()) -> list[ir.Property]:
@@ -213,14 +187,16 @@ def run(path: str, options: VerifyOptions | None = None, *,
         consts: Mapping[str, str | bool | int | float] | None = None,
         properties: Sequence[str] = (), formulas: Sequence[str] = (),
         progress: Progress | None = None, text: str | None = None,
-        **option_values: Any) -> VerifyResult:
+        checked: Checked | None = None, **option_values: Any) -> VerifyResult:
     """Verify one .afsm file; see the package docstring. `options` (or its fields as
-    keywords, `precision=1e-9`): how (VerifyOptions). Raises CompileError, ValueError for
-    an unknown `via`, `engine` or `solver`, TypeError for an unknown option."""
+    keywords, `precision=1e-9`): how (VerifyOptions). `checked`: the file loaded already
+    with these `consts` (afsmc.compiler.load; a Mission's), so that it is not loaded again.
+    Raises CompileError, ValueError for an unknown `via`, `engine` or `solver`, TypeError
+    for an unknown option."""
     o = VerifyOptions.of(options, option_values)
     t0 = time.perf_counter()
     texts = None if consts is None else {k: literal(v) for k, v in consts.items()}
-    loaded = load_with_formulas(path, texts, formulas, text=text)
+    loaded = load_with_formulas(path, texts, formulas, text=text, checked=checked)
     model = loaded.model
     props = select(model, properties, loaded.adhoc)
     wanted = witness_request(model, props, o.strategy, o.witness, o.witness_dir,
@@ -232,18 +208,15 @@ def run(path: str, options: VerifyOptions | None = None, *,
         progress(f"state space: at most {count(bound)} states (modes × variable ranges); "
                  f"--max-states {limit:,}" + (" for the sparse engine" if o.max_states is None
                                                and o.engine != "sparse" else ""))
-    try:
-        checks = check(model, props, o, progress=progress, witness=wanted)
-        if o.strategy or wanted is not None:
-            checks = extras(checks, check, model, props, o.strategy, wanted,
-                            max_states=o.max_states, progress=progress,
-                            reductions=o.reductions, via=o.via)
-        if wanted is not None and wanted.avoid:
-            checks = dataclasses.replace(checks, properties=[
-                dataclasses.replace(r, witness_avoids=r.witnesses is not None)
-                for r in checks.properties])
-    except CompileError as exc:
-        raise loaded.remap_error(exc) from None
+    checks = check(model, props, o, progress=progress, witness=wanted)
+    if o.strategy or wanted is not None:
+        checks = extras(checks, check, model, props, o.strategy, wanted,
+                        max_states=o.max_states, progress=progress,
+                        reductions=o.reductions, via=o.via)
+    if wanted is not None and wanted.avoid:
+        checks = dataclasses.replace(checks, properties=[
+            dataclasses.replace(r, witness_avoids=r.witnesses is not None)
+            for r in checks.properties])
     consts_used: dict[str, object] = {c.name: c.value for c in model.constants if c.is_param}
     return VerifyResult(path, model.name, consts_used, o.via, o.engine, bound, limit, checks.model,
                         checks.uniform_model, checks.properties, load_time,

@@ -235,7 +235,7 @@ def _check_bounds(path: str, text: str, consts: dict[str, str], properties: Sequ
     diags = [d for p in select(loaded.model, properties, loaded.adhoc)
              if (d := unbounded(p)) is not None]
     if diags:
-        raise loaded.remap_error(CompileError(diags))
+        raise CompileError(diags)
 
 
 def _check_names(path: str, text: str, consts: dict[str, str], variable: str,
@@ -259,12 +259,12 @@ def _check_names(path: str, text: str, consts: dict[str, str], variable: str,
     const = next((c for c in loaded.model.constants if c.name == variable), None)
     doubles = [literal(x) for x in values if isinstance(x, float)]
     if const is not None and const.type is E.Type.INT and doubles:
-        raise loaded.remap_error(CompileError([Diagnostic(
+        raise CompileError([Diagnostic(
             codes.E208, Severity.ERROR, f"--const {variable}: {', '.join(doubles[:5])}"
             f"{', ...' if len(doubles) > 5 else ''} "
             f"{'is not an int' if len(doubles) == 1 else 'are not ints'}", const.span,
             hint=f"{variable} is declared int: write its values as integers (1, not 1.0 "
-                 "or 1e0)")]))
+                 "or 1e0)")])
     if const is not None and (const.type is E.Type.BOOL) != all(
             isinstance(x, bool) for x in values):
         # a bool swept as 0:1 (or a number as false,true): every point would say so
@@ -276,12 +276,9 @@ def _check_names(path: str, text: str, consts: dict[str, str], variable: str,
         else:
             message = "true and false are not numbers"
             hint = f"{variable} is declared {const.type.value}: sweep it over numbers, e.g. '0:10'"
-        raise loaded.remap_error(CompileError([Diagnostic(
-            codes.E208, Severity.ERROR, f"--const {variable}: {message}", const.span, hint=hint)]))
-    try:
-        select(loaded.model, properties, loaded.adhoc)
-    except CompileError as exc:
-        raise loaded.remap_error(exc) from None
+        raise CompileError([Diagnostic(
+            codes.E208, Severity.ERROR, f"--const {variable}: {message}", const.span, hint=hint)])
+    select(loaded.model, properties, loaded.adhoc)
 
 
 def _kept(path: str, variable: str, kind: Kind, points: list[SweepPoint],

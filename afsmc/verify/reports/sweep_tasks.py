@@ -142,10 +142,7 @@ def _evaluate(task: Task) -> list[SweepPoint]:
     loaded = load_with_formulas(task.path, consts, task.formulas, text=task.text)
     model = loaded.model
     props = select(model, task.properties, loaded.adhoc)
-    try:
-        return _points(model, props, task, t0)
-    except CompileError as exc:
-        raise loaded.remap_error(exc) from None
+    return _points(model, props, task, t0)
 
 
 def _points(model: ir.Model, props: list[ir.Property], task: Task, t0: float) -> list[SweepPoint]:
@@ -259,10 +256,7 @@ def _shared_points(task: Task, t0: float) -> list[SweepPoint]:
                                 _inline_consts(p, loaded.model, f"{p.name}__at{i}")))
             else:  # another chunk's point: kept exact by the reductions, not checked here
                 preserve.append(_inline_consts(p, loaded.model, f"{p.name}__keep{i}"))
-    try:
-        return _regroup(first.model, bounded, task, t0, preserve)
-    except CompileError as exc:
-        raise first.remap_error(exc) from None
+    return _regroup(first.model, bounded, task, t0, preserve)
 
 
 def model_text(path: str, text: str, consts: dict[str, str]) -> str:
