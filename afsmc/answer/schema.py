@@ -78,6 +78,16 @@ def text(name: str) -> str:
     return json.dumps(schema(name), indent=2, sort_keys=True, ensure_ascii=True) + "\n"
 
 
+def typed(name: str, obj: Any) -> BaseModel:
+    """`obj`, the object `afsmc NAME --json` prints, as the frozen pydantic model of its
+    schema (for `verify`: an `afsmc.answer.verify.Verification`): the typed answer the
+    Python API's `answer()` returns. Raises pydantic's ValidationError where `obj` is not
+    what the schema says."""
+    root = getattr(MODELS[name].model_validate(obj), "root", None)  # each model a RootModel
+    assert isinstance(root, BaseModel)
+    return root
+
+
 def published(name: str, obj: Any) -> Any:
     """`obj`, the object `afsmc NAME --json` prints, through its published model: checked
     against the schema and written as the model writes it, so that what a command prints

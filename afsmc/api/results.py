@@ -14,7 +14,7 @@ import html
 import json
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, cast
 
 from afsmc import verify as lib
 from afsmc.api.errors import AfsmError
@@ -29,6 +29,7 @@ from afsmc.verify.outcome.results import PropertyResult, VerifyResult
 if TYPE_CHECKING:
     import pandas as pd
 
+    from afsmc.answer.verify import Verification
     from afsmc.api.mission import Mission
 
 # `afsmc verify`'s defaults where afsmc.verify.run's differ (tests/unit/api check them
@@ -143,6 +144,13 @@ class Results:
         """The object `afsmc verify --json` prints for the same file, constants and options
         (with ``probability_intervals`` when the mission has interval probabilities)."""
         return self.raw.to_json()
+
+    def answer(self) -> Verification:
+        """The same answer as a frozen, typed pydantic model of its published schema
+        (`afsmc schema verify`): ``res.answer().properties[0].verdict.kind``."""
+        from afsmc.answer.schema import typed
+
+        return cast("Verification", typed("verify", self.to_json()))
 
     def rows(self) -> list[dict[str, object]]:
         """One dict per property: name, formula, kind, min, max, uniform, value (an infinite

@@ -12,7 +12,7 @@ import dataclasses
 import math
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, cast
 
 from afsmc.api.errors import AfsmError
 from afsmc.diagnostics import CompileError, Diagnostic, Severity, codes
@@ -28,6 +28,7 @@ from afsmc.verify.core.policy import Policy, extract
 if TYPE_CHECKING:
     import pandas as pd
 
+    from afsmc.answer.simulate import Simulation as SimulationAnswer
     from afsmc.api.mission import Mission
 
 AT = ("draw", "mid", "min", "max")
@@ -208,6 +209,13 @@ class Estimates:
                 return e
         raise KeyError(f"no property {name!r}; there are "
                        + ", ".join(repr(e.name) for e in self.raw.estimates))
+
+    def answer(self) -> SimulationAnswer:
+        """The same answer as a frozen, typed pydantic model of its published schema
+        (`afsmc schema simulate`)."""
+        from afsmc.answer.schema import typed
+
+        return cast("SimulationAnswer", typed("simulate", self.to_json()))
 
     def to_json(self) -> dict[str, Any]:
         """The object `afsmc simulate --json` prints for the same file and options."""

@@ -6,7 +6,7 @@ from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, cast
 
 from afsmc import verify as lib
 from afsmc.api.errors import AfsmError
@@ -20,6 +20,8 @@ if TYPE_CHECKING:
     import pandas as pd
     from matplotlib.figure import Figure
 
+    from afsmc.answer.sweep import Sweep as OneSweep
+    from afsmc.answer.sweep import SweepGrid
     from afsmc.api.mission import Mission
 
 
@@ -105,6 +107,14 @@ class Sweep:
     def to_json(self) -> dict[str, object]:
         """The object `afsmc sweep --json` prints."""
         return self.raw.to_json()
+
+    def answer(self) -> OneSweep | SweepGrid:
+        """The same answer as a frozen, typed pydantic model of its published schema
+        (`afsmc schema sweep`): a `Sweep` over one constant or the bound, a `SweepGrid`
+        over several constants."""
+        from afsmc.answer.schema import typed
+
+        return cast("OneSweep | SweepGrid", typed("sweep", self.to_json()))
 
     def to_csv(self) -> str:
         """The CSV `afsmc sweep` writes."""
