@@ -19,6 +19,7 @@ point (`PropertyResult.reference`), never judged.
 from __future__ import annotations
 
 import dataclasses
+import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 
@@ -84,6 +85,7 @@ class ProbabilityBox:
     box: dict[str, tuple[float, float]]
     extremes: tuple[parametric.Extreme, ...]
     precision: float
+    seconds: float = 0.0  # the parametric engine's time, build and refinement
 
     def to_json(self) -> dict[str, object]:
         return parametric.to_json(self.box, self.extremes, self.precision)
@@ -116,16 +118,18 @@ def over_probabilities(checks: Checks, model: ir.Model, props: Sequence[ir.Prope
         progress(f"bounding {len(props)} propert{'y' if len(props) == 1 else 'ies'} over "
                  + ", ".join(f"{n} in [{lo:g}, {hi:g}]" for n, (lo, hi) in box.items())
                  + " with Storm's parametric engine")
+    t0 = time.perf_counter()
     kept = dataclasses.replace(model, properties=tuple(props) + tuple(preserve))
     found = parametric.extremes(lowered(kept, "nondet", reductions), props, via=via,
                                 precision=PARAMETER_PRECISION)
+    seconds = time.perf_counter() - t0
     by_name = {e.name: e for e in found}
     error = bound_error(precision)
     errors = {r.name: error for r in checks.properties if r.name in by_name}
     widened = [_widened(r, by_name[r.name]) if r.name in by_name else r
                for r in checks.properties]
     return (dataclasses.replace(checks, properties=widened),
-            ProbabilityBox(box, tuple(found), PARAMETER_PRECISION), errors)
+            ProbabilityBox(box, tuple(found), PARAMETER_PRECISION, seconds), errors)
 
 
 def reach_bounds(model: ir.Model, targets: Sequence[tuple[str, E.Expr]], *,
