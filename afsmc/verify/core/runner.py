@@ -46,9 +46,7 @@ from afsmc.verify.engines.storm import (
     Job,
     JobResult,
     StormFailure,
-    Via,
 )
-from afsmc.verify.engines.storm_solvers import Solver
 from afsmc.verify.engines.strategy_storm import Extracted, WitnessRequest
 from afsmc.verify.outcome.results import (
     Checks,

@@ -101,13 +101,15 @@ def bound_error(precision: float | None) -> float:
 def over_probabilities(checks: Checks, model: ir.Model, props: Sequence[ir.Property], *,
                        via: str, reductions: Reductions | None, precision: float | None,
                        preserve: Sequence[ir.Property] = (),
-                       progress: Callable[[str], None] | None = None
+                       progress: Callable[[str], None] | None = None,
+                       beside: Sequence[ir.Property] = ()
                        ) -> tuple[Checks, ProbabilityBox | None, dict[str, float]]:
     """`checks` with each property's `min`/`max` its bounds over every fixed value of the
     interval probabilities (the midpoint's answer kept as its `reference`); the box, and
     each property's error (none of either for a mission without interval probabilities).
     `preserve`: the further properties the check's reductions kept exact (a sweep's other
-    points), so that the model bounded is the model checked.
+    points), so that the model bounded is the model checked. `beside`: further queries
+    bounded with them that are not the mission's (the conditioning's expected steps).
 
     The bounds are the values Storm attained (`Extreme.min_attained`): the true extreme
     lies within `error` of each, beyond it (below a min, above a max)."""
@@ -119,8 +121,9 @@ def over_probabilities(checks: Checks, model: ir.Model, props: Sequence[ir.Prope
                  + ", ".join(f"{n} in [{lo:g}, {hi:g}]" for n, (lo, hi) in box.items())
                  + " with Storm's parametric engine")
     t0 = time.perf_counter()
-    kept = dataclasses.replace(model, properties=tuple(props) + tuple(preserve))
-    found = parametric.extremes(lowered(kept, "nondet", reductions), props, via=via,
+    asked = [*props, *beside]
+    kept = dataclasses.replace(model, properties=tuple(asked) + tuple(preserve))
+    found = parametric.extremes(lowered(kept, "nondet", reductions), asked, via=via,
                                 precision=PARAMETER_PRECISION)
     seconds = time.perf_counter() - t0
     by_name = {e.name: e for e in found}
