@@ -217,6 +217,9 @@ E511 = Code("E511", Severity.ERROR, "a constant's data file has no such column")
 E512 = Code("E512", Severity.ERROR, "a data column holds a cell that is not a number")
 E513 = Code("E513", Severity.ERROR, "a data column holds no values")
 E514 = Code("E514", Severity.ERROR, "a data column of outcomes holds a value other than 0 or 1")
+E515 = Code("E515", Severity.ERROR, "a constant's data file lies outside the mission's folder")
+E516 = Code("E516", Severity.ERROR, "a constant's data file is not a regular file")
+E517 = Code("E517", Severity.ERROR, "a data file's rows do not match its header")
 
 
 # E6xx: diagrams
