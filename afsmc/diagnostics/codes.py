@@ -172,6 +172,8 @@ W303 = Code("W303", Severity.WARNING, "a variable is never read")
 W304 = Code("W304", Severity.WARNING, "a constant or formula is never used")
 W305 = Code("W305", Severity.WARNING, "the mode numbers span too many values")
 W306 = Code("W306", Severity.WARNING, "w(B) names an action that never acts in the weight's modes")
+W307 = Code("W307", Severity.WARNING, "an interval probability makes a transition disappear at an end")
+W308 = Code("W308", Severity.WARNING, "a property the parametric engine cannot bound over interval probabilities")
 W309 = Code("W309", Severity.WARNING, "a check could not be completed")
 
 
