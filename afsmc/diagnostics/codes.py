@@ -175,6 +175,7 @@ W306 = Code("W306", Severity.WARNING, "w(B) names an action that never acts in t
 W307 = Code("W307", Severity.WARNING, "an interval probability makes a transition disappear at an end")
 W308 = Code("W308", Severity.WARNING, "a property the parametric engine cannot bound over interval probabilities")
 W309 = Code("W309", Severity.WARNING, "a check could not be completed")
+W310 = Code("W310", Severity.WARNING, "a total reward of a structure that may be negative")
 
 
 # E4xx: verification with Storm, and sweeps

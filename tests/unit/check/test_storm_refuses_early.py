@@ -1,8 +1,9 @@
-"""Fail early (issue 50): what `afsmc verify` refuses about interval probabilities only after
-building the model, `check` (and so the editor) reports from the spec alone: an interval
-whose end makes a transition disappear (W307, verify's E440) and a property the parametric
-engine cannot check (W308, verify's E443). Each warning is checked against verify itself:
-where check warns, verify stops with that error; where it is silent, verify answers."""
+"""Fail early (issue 50): what `afsmc verify` refuses only after building the model, `check`
+(and so the editor) reports from the spec alone: an interval probability whose end makes a
+transition disappear (W307, verify's E440), a property the parametric engine cannot check
+(W308, verify's E443), a total reward that may be negative (W310: Storm's E404 on an MDP, a
+wrong +inf on a DTMC). Each warning is checked against verify itself: where check warns,
+verify stops with that error; where it is silent, verify answers."""
 
 from __future__ import annotations
 
@@ -42,7 +43,7 @@ def spec(slip: str = "[0.01, 0.15]", fault: str = "[0.001, 0.01]", up: str = STE
 def warned(text: str) -> list[tuple[str, int, str]]:
     diags = load("m.afsm", text=text).diagnostics
     return [(d.code, d.span.line if d.span else 0, d.message) for d in diags
-            if d.code in ("W307", "W308")]
+            if d.code in ("W307", "W308", "W310")]
 
 
 def verify_error(tmp_path: Path, text: str) -> str | None:
@@ -106,3 +107,42 @@ def test_verify_stops_exactly_where_check_warns(tmp_path: Path, text: str,
                                                 code: str | None) -> None:
     assert verify_error(tmp_path, text) == code
     assert bool(warned(text)) == (code is not None)
+
+
+SIGNED = """machine n;
+const int K = {k};
+var x : [0..4] init 0 clamp;
+mode A = 0 initial;
+mode Done = 1 final;
+action Up in A when x < 4 {{ 0.9: x += K; 0.1: skip; }}
+action Finish in A when x == 4 {{ goto Done; }}
+rewards gain {{ {state} : {loss}; [Up] true : 3; }}
+property total = R{{"gain"}}=? [ C ];
+property soon = R{{"gain"}}=? [ C<=4 ];
+property till_done = R{{"gain"}}=? [ F mode == Done ];
+"""
+
+
+def signed(k: str = "[1, 2]", state: str = "true", loss: str = "-1") -> str:
+    return SIGNED.format(k=k, state=state, loss=loss)
+
+
+def test_a_total_reward_that_may_be_negative_is_w310() -> None:
+    (code, at, message), = warned(signed())
+    assert (code, at) == ("W310", 9) and "the total reward of \"gain\", which may be " \
+        "negative" in message
+    assert warned(signed(loss="1")) == []  # never negative: a total reward exists
+    # negative only where x < 0, which no state has: interval bounds show it is >= 0
+    assert warned(signed(state="x < 0", loss="x")) == []
+
+
+@pytest.mark.storm
+def test_storm_refuses_it_on_an_mdp_and_gets_its_sign_wrong_on_a_dtmc(tmp_path: Path) -> None:
+    # the MDP: verify answers the step-bounded ones and reports E404 for the total
+    assert verify_error(tmp_path, signed()) == "E404"
+    # the DTMC: Done's state reward of -1 every step makes the total -inf; Storm says +inf
+    path = tmp_path / "m.afsm"
+    path.write_text(signed(k="1"))
+    total = next(p for p in run(str(path)).properties if p.name == "total")
+    assert total.value == float("inf")
+    assert [c for c, _, _ in warned(signed(k="1"))] == ["W310"]

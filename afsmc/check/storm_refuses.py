@@ -1,12 +1,20 @@
-"""What `afsmc verify` would refuse about interval probabilities, said by `check` and the
-editor before anything is built: `verify` bounds every property over the box of the
-interval probabilities with Storm's parametric engine, which needs every transition kept
-in the whole box and checks neither `X`, `I=k` nor an unbounded `C`.
+"""What `afsmc verify`'s Storm engines would refuse, or answer wrongly, that the spec alone
+shows: said by `check` and the editor before anything is built.
+
+Over interval probabilities, `verify` bounds every property over their box with Storm's
+parametric engine, which needs every transition kept in the whole box and checks neither
+`X`, `I=k` nor an unbounded `C`:
 
 - W307: at a corner of the box a branch probability leaves (0, 1]: an outcome's
   probability is 0 (`[0, 0.15]` for `SLIP: ...`), or a hazard's is 0 or 1 (at 1 the
   actions' own outcomes disappear). verify stops there with E440.
 - W308: a property of a kind the parametric engine cannot check; verify stops with E443.
+
+And whatever the probabilities:
+
+- W310: a total reward (`R [C]`, no step bound) of a structure that may be negative. Storm
+  refuses it on an MDP (verify's E404), and on a DTMC it may answer +inf where the runs
+  earn -inf without end (a negative state reward in a final mode).
 
 Warnings, not errors: `compile` and `simulate` take such a file as it is. The corners are
 those verify tries (afsmc.verify.engines.parametric.well_defined_ir); a probability that
@@ -23,6 +31,7 @@ from afsmc.check.ranges import value_at
 from afsmc.diagnostics import Reporter, codes
 from afsmc.model import expr as E
 from afsmc.model import ir
+from afsmc.model.bounds import bounds
 from afsmc.model.evaluate import EvalError, scalar
 from afsmc.model.expr import Type
 from afsmc.model.search import find
@@ -32,6 +41,25 @@ MAX_CORNERS = 64  # corners tried per probability (2^6 interval probabilities re
 _HINT = ("verify bounds every property over the interval probabilities with Storm's parametric "
          "engine (parameter lifting), which needs every transition to keep a positive "
          "probability in the whole box")
+
+
+def check_total_rewards(model: ir.Model, rep: Reporter) -> None:
+    """W310 at each `R [C]` without a step bound whose reward structure may be negative."""
+    signed: dict[str, bool] = {}
+    for r in model.rewards:
+        signed[r.name] = any(bounds(it.value, model)[0] < 0 for it in r.items)
+    for p in model.properties:
+        if p.kind != "R" or p.path.kind != "C" or p.path.bound is not None:
+            continue
+        name = p.reward if p.reward is not None else (model.rewards[0].name
+                                                      if model.rewards else "")
+        if signed.get(name):
+            rep.warning(codes.W310, f"property '{p.name}' asks the total reward of \"{name}\", "
+                        "which may be negative: a total reward that gains and loses without "
+                        "end has no value, Storm refuses it on an MDP (verify reports "
+                        "E404), and on a DTMC may answer +inf where the runs lose without end",
+                        p.span, hint="ask R{...}=? [ C<=k ] for the first k steps, or R{...}=? "
+                        "[ F ... ] up to the mission's end; or keep every reward >= 0")
 
 
 def check_prob_intervals(model: ir.Model, rep: Reporter) -> None:
