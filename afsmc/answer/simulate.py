@@ -34,6 +34,12 @@ class PropertyEstimate(Answer):
     high: Estimate = Field(description="its upper end ('inf' for an expected reward that "
                                        "undecided runs may make infinite)")
     undecided: int = Field(ge=0, description="runs stopped at --max-steps before deciding it")
+    method: Literal["clopper-pearson", "normal", "range", "one-sided"] = Field(
+        description="how the interval was made: Clopper-Pearson (a probability), the normal "
+                    "approximation (a reward), or, when every run earned the same, from the "
+                    "chance that a run differs and the range of a run's total in the model "
+                    "(range), one-sided where the model gives no upper end")
+    reason: str | Absent = Field(None, description="why the interval is range or one-sided")
 
 
 class TraceStep(Answer):

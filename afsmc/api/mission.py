@@ -209,7 +209,8 @@ class Mission:
         in the file against it, as `afsmc sim-check` does: options ``seed`` (0),
         ``timeout`` (seconds per simulator), ``update`` (rewrite the drifted constants in
         the file), ``confidence`` (the tests' level where a constant states none; 0.999),
-        ``progress`` (a function that receives a line per constant). A drift
+        ``progress`` (a function that receives a line per constant), ``data_root`` (the
+        folder `from data` files must lie under; default: the file's folder). A drift
         is in the result (``.ok`` is False, ``.errors`` has E502), not raised. Raises
         AfsmError (a simulator failed: E505)."""
         from afsmc.api.sim_check import sim_check

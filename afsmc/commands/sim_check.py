@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import argparse
 import math
+import os
 import sys
 
 from afsmc.api.sim_check import sim_check_file
@@ -31,6 +32,9 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                         "probability must cover the runs' Clopper-Pearson interval at it")
     p.add_argument("--update", action="store_true",
                    help="rewrite drifted constants in FILE in place, with a provenance comment")
+    p.add_argument("--data-root", metavar="DIR",
+                   help="the folder `from data` files must lie under (default: the spec's "
+                        "folder); paths stay relative to the spec's folder")
     p.add_argument("--json", action="store_true", help="print the evidence as JSON")
     p.add_argument("--list", action="store_true",
                    help="list the registered simulator outputs and exit")
@@ -44,6 +48,10 @@ def run(args: argparse.Namespace) -> int:
         return 2
     if args.runs < 2:
         print("afsmc sim-check: error: --runs must be at least 2", file=sys.stderr)
+        return 2
+    if args.data_root is not None and not os.path.isdir(args.data_root):
+        print(f"afsmc sim-check: error: --data-root {args.data_root} is not a folder",
+              file=sys.stderr)
         return 2
     budget = sandbox.memory_budget()
     fit = sandbox.runs_that_fit(budget)
@@ -60,8 +68,8 @@ def run(args: argparse.Namespace) -> int:
     try:
         res = sim_check_file(args.file, overrides(args), runs=args.runs, seed=args.seed,
                              timeout=args.timeout, update=args.update, budget=budget,
-                             confidence=args.confidence,
-                             progress=say)
+                             confidence=args.confidence, progress=say,
+                             data_root=args.data_root)
     except CompileError as exc:
         return fail(exc, args.json, wrapped=True)
     if args.json:

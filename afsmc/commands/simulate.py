@@ -239,6 +239,8 @@ def _print(out: Outcome, args: argparse.Namespace, intervals: bool, endless: boo
                                          ("--max-steps", e.undecided > 0)) if short]
             why.append(f"no interval from fewer than 2 finished runs: raise "
                        f"{' and '.join(raise_)}")
+        if e.reason:  # no run differed: the interval from the reward's range (sim/rare.py)
+            why.append(e.reason)
         note = f"  ({'; '.join(why)})" if why else ""
         print(f"  {e.name.ljust(width)}  {value.ljust(vwidth)}  [{num(e.low)}, {num(e.high)}]"
               f"{note}")
