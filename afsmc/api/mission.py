@@ -40,7 +40,12 @@ TARGETS: dict[str, str] = {
     "prism": "afsmc.backends.prism:files",
     "jani": "afsmc.backends.jani:files",
     "dot": "afsmc.backends.dot:files",
+    "python": "afsmc.controllers.python:files",
+    "c": "afsmc.controllers.c:files",
 }
+# The targets that write a controller: made from the checked model before the reductions
+# (the robot's variables), so compile hands them a lowering without any.
+CONTROLLERS = frozenset({"python", "c"})
 
 
 def available_targets() -> dict[str, Callable[[Lowered], dict[str, str]]]:
@@ -151,6 +156,8 @@ class Mission:
         if target not in targets:
             raise ValueError(f"target must be one of {', '.join(map(repr, targets))}; "
                              f"got {target!r}")
+        if target in CONTROLLERS:
+            reductions = Reductions.none()
         return targets[target](self.lowered(resolve, reductions))
 
     def compile(self, target: str = "prism", *, resolve: Resolution = "nondet",
