@@ -34,7 +34,7 @@ def files(low: Lowered) -> dict[str, str]:
     """The header (`.h`) and the source (`.c`), from the checked model `low.model` (the
     compile command hands over a lowering without reductions)."""
     model = low.model
-    refuse_composed(model, "c")
+    refuse_composed(model, "'compile -t c' writes the controller of one machine")
     gen = _C(layout(model))
     return {".h": gen.header(), ".c": gen.source(f"{model.name}.h")}
 

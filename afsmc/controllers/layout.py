@@ -78,15 +78,15 @@ class Layout:
         return tuple(h for h in self.hazards if mode in h.modes)
 
 
-def refuse_composed(model: ir.Model, target: str) -> None:
-    """A composed mission has no controller yet: E701, at its `compose` line."""
+def refuse_composed(model: ir.Model, what: str) -> None:
+    """A composed mission has no controller yet: E701, at its `compose` line. `what`: the
+    command's part, "'compile -t c' writes the controller of one machine"."""
     if model.composition is None:
         return
     span = model.composition.span
     raise CompileError([Diagnostic(
         codes.E701, Severity.ERROR,
-        f"'compile -t {target}' writes the controller of one machine; {model.name} is a "
-        f"mission of {len(model.composition.agents)} agents", span,
+        f"{what}; {model.name} is a mission of {len(model.composition.agents)} agents", span,
         hint="compile each agent as a machine of its own file, or use -t prism / -t jani "
              "for the composed model")])
 

@@ -25,7 +25,7 @@ def files(low: Lowered) -> dict[str, str]:
 
 
 def module(model: ir.Model) -> str:
-    refuse_composed(model, "python")
+    refuse_composed(model, "'compile -t python' writes the controller of one machine")
     lay = layout(model)
     out: list[str] = []
     out += _header(model)
