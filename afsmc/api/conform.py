@@ -83,14 +83,12 @@ def conform_file(path: str, consts: Mapping[str, str], log_paths: list[str], *,
     model = checked.model
     try:
         refuse_composed(model, "'conform' replays the logs of one machine")
-        steps = logs.read(log_paths)
     except CompileError as exc:
         raise AfsmError.of(exc) from None
-    except logs.LogErrors as exc:
-        raise AfsmError(exc.diagnostics) from None
+    steps, bad = logs.read(log_paths)
     result = replay.Checker(model).replay(steps)
-    if result.errors:
-        raise AfsmError(result.errors)
+    if bad or result.errors:  # every bad line, those that parse but name unknown things too
+        raise AfsmError(sorted([*bad, *result.errors], key=Diagnostic.sort_key)[:logs.MAX_ERRORS])
     evidence, idle = estimate.judged(model, result.trials, origin(log_paths), confidence)
     drifted = [e for e in evidence if not e.consistent]
     by_name = {c.name: c for c in model.constants}
@@ -101,17 +99,21 @@ def conform_file(path: str, consts: Mapping[str, str], log_paths: list[str], *,
         by_name[e.name].span) for e in drifted if not e.fits]
     drifted = [e for e in drifted if e.fits]
     updated: list[Evidence] = []
-    if update and drifted:
+    # a param is the scenario's, given with --const: its default is not rewritten
+    fixable = [e for e in drifted if not by_name[e.name].is_param]
+    if update and fixable:
         if text is None:
             text = checked.model.source.text
-        update_constants(path, consts, text, drifted, by_name)
-        updated = drifted
-    errors = unfit + ([] if updated else [Diagnostic(
+        update_constants(path, consts, text, fixable, by_name)
+        updated = fixable
+    errors = unfit + [Diagnostic(
         codes.E721, Severity.ERROR,
-        f"constant '{e.name}' = {e.declared} has drifted from the {e.ref} "
-        f"(mean {e.mean:.4g} over {e.runs:,} trials; the rule accepts {e.accept})",
-        by_name[e.name].span,
-        hint=f"the logs suggest {e.suggestion}; `afsmc conform --update` rewrites it")
-        for e in drifted])
+        f"{'param' if by_name[e.name].is_param else 'constant'} '{e.name}' = {e.declared} "
+        f"has drifted from the {e.ref} (mean {e.mean:.4g} over {e.runs:,} trials; the rule "
+        f"accepts {e.accept})", by_name[e.name].span,
+        hint=f"the logs suggest {e.suggestion}; " + (
+            "a param is not rewritten: give --const or change its default"
+            if by_name[e.name].is_param else "`afsmc conform --update` rewrites it"))
+        for e in drifted if e not in updated]
     return Conformance(path, tuple(log_paths), result.runs, result.steps, result.violations,
                        evidence, errors, idle, updated, result.ambiguous)

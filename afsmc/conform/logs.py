@@ -48,14 +48,9 @@ class Step:
         return Span.at_position(src, line, at + 1, line, at + len(key) + 3)
 
 
-class LogErrors(Exception):
-    def __init__(self, diagnostics: list[Diagnostic]) -> None:
-        super().__init__(f"{len(diagnostics)} error(s) in the logs")
-        self.diagnostics = diagnostics
-
-
-def read(paths: list[str]) -> list[Step]:
-    """Every step of the logs, in order; raises LogErrors with every error found."""
+def read(paths: list[str]) -> tuple[list[Step], list[Diagnostic]]:
+    """Every step of the logs that reads, in order, and every error found (at most
+    MAX_ERRORS)."""
     errors: list[Diagnostic] = []
     steps: list[Step] = []
     for path in paths:
@@ -72,9 +67,7 @@ def read(paths: list[str]) -> list[Step]:
         steps += parse(source, errors)
         if len(errors) >= MAX_ERRORS:
             break
-    if errors:
-        raise LogErrors(errors[:MAX_ERRORS])
-    return steps
+    return steps, errors[:MAX_ERRORS]
 
 
 def _line_span(source: Source, line: int) -> Span:
@@ -95,8 +88,8 @@ def _jsonl(source: Source, errors: list[Diagnostic]) -> list[Step]:
         try:
             obj = json.loads(raw)
         except json.JSONDecodeError as exc:
-            truncated = exc.pos >= len(raw.rstrip("\r"))
-            _error(errors, codes.E711, span, f"line {i} is not a JSON object: {exc.msg}"
+            truncated = not raw.rstrip().endswith("}")
+            _error(errors, codes.E711, span, f"line {i} is not a JSON object: {exc.msg} (column {exc.colno})"
                    + (" (the line ends before the object does: truncated?)" if truncated else ""),
                    hint="a log is JSON Lines: one JSON object per line, e.g. "
                         '{"mode": "Patrol", "action": "Move", "outcome": 0}')
@@ -183,7 +176,7 @@ def _csv(source: Source, errors: list[Diagnostic]) -> list[Step]:
             cell = cell.strip()
             if cell:
                 obj[key] = cell
-        if len(row) < len(header) and "mode" in obj and "action" not in obj:
+        if len(row) < len(header):
             _error(errors, codes.E711, span,
                    f"line {i} has {len(row)} cells, the header {len(header)}: truncated?")
             continue

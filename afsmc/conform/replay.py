@@ -98,6 +98,9 @@ class Checker:
                 states[step.run] = self.ctl.initial()
                 out.runs += 1
             s = states[step.run]
+            if not self._names_ok(step, out):
+                states[step.run] = None
+                continue
             if s is None:
                 continue  # lost after a violation that left the state unknown
             out.steps += 1
@@ -139,8 +142,6 @@ class Checker:
         return None if var.lo <= value <= var.hi else f"within its range [{var.lo}, {var.hi}]"
 
     def _step(self, step: Step, s: dict[str, Any], out: Replay) -> dict[str, Any] | None:
-        if not self._names_ok(step, out):
-            return None
         problems: list[str] = []
         if step.mode != s["mode"]:
             problems.append(f"the log says mode {step.mode}, the spec's run is in {s['mode']}")
