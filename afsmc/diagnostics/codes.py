@@ -262,6 +262,7 @@ GROUPS: tuple[tuple[str, tuple[str, ...]], ...] = (
     ("E5xx: simulation and simulation-backed constants", ("E5", "W5")),
     ("E6xx: diagrams", ("E6",)),
     ("W6xx: the mode graph", ("W6",)),
+    ("E7xx: controllers for the robot, and conformance of the robot's logs", ("E7",)),
     ("E9xx: the language server", ("E9",)),
 )
 
