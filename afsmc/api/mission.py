@@ -151,7 +151,8 @@ class Mission:
     def files(self, target: str = "prism", *, resolve: Resolution = "nondet",
               reductions: Reductions | None = None) -> dict[str, str]:
         """What `afsmc compile -t TARGET` writes: {suffix: text} (PRISM: ``.prism`` and
-        ``.props``; JANI: ``.json``; DOT: ``.gv``)."""
+        ``.props``; JANI: ``.json``; DOT: ``.gv``; a controller, docs/robot.md: ``.py``
+        for "python", ``.h`` and ``.c`` for "c", made without the reductions)."""
         targets = available_targets()
         if target not in targets:
             raise ValueError(f"target must be one of {', '.join(map(repr, targets))}; "
@@ -162,8 +163,8 @@ class Mission:
 
     def compile(self, target: str = "prism", *, resolve: Resolution = "nondet",
                 reductions: Reductions | None = None) -> str:
-        """The mission in `target`'s language ("prism", "jani", "dot"), as one text: the
-        output of `afsmc compile -t TARGET -o -` (PRISM: the model, then a line
+        """The mission in `target`'s language ("prism", "jani", "dot", "python", "c"), as
+        one text: the output of `afsmc compile -t TARGET -o -` (PRISM: the model, then a line
         ``// ==== NAME.props`` and the properties)."""
         return joined(self.path, self.files(target, resolve=resolve, reductions=reductions))
 

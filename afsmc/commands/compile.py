@@ -27,7 +27,9 @@ from afsmc.lower.reduce import Reductions
 def add_arguments(p: argparse.ArgumentParser) -> None:
     add_file(p)
     p.add_argument("-t", "--target", default="prism", choices=sorted(available_targets()),
-                   help="output language (default: prism)")
+                   help="output language (default: prism); python and c write the mission's "
+                        "controller for the robot (docs/robot.md), from the model before the "
+                        "reductions")
     p.add_argument("-o", "--output", metavar="DIR|FILE",
                    help="output directory, or file name (PRISM: a suffix such as .prism is "
                         "replaced by each file's); default: the current directory; '-' prints to stdout "
