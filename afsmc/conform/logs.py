@@ -6,7 +6,7 @@ hazard taken), both required; `outcome` (an index into the action's outcomes, 0 
 first written, or a hazard's name) or `changes` (the variables the step changed, by name,
 `mode` among them when it changed), at least one; `duration` (the measured value of the
 interval constant the outcome's updates read, a number; {NAME: number} for several);
-`run` (steps of one run share it; a file without it is one run) and `step` (any number,
+`run` (steps of one run share it, within one file; a file without it is one run) and `step` (any number,
 for people). Every error is collected, each at its file and line: E710 a file that cannot
 be read, E711 a line that is not a step (not JSON, not an object, a truncated line, a CSV
 row with too many cells), E712 a missing field or a value of the wrong kind.

@@ -92,19 +92,21 @@ class Checker:
 
     def replay(self, steps: Iterable[Step]) -> Replay:
         out = Replay()
-        states: dict[str, dict[str, Any] | None] = {}
+        # a run is its log's: each file is a run of its own where it names none
+        states: dict[tuple[str, str], dict[str, Any] | None] = {}
         for step in steps:
-            if step.run not in states:
-                states[step.run] = self.ctl.initial()
+            run = (step.span.source.path, step.run)
+            if run not in states:
+                states[run] = self.ctl.initial()
                 out.runs += 1
-            s = states[step.run]
+            s = states[run]
             if not self._names_ok(step, out):
-                states[step.run] = None
+                states[run] = None
                 continue
             if s is None:
                 continue  # lost after a violation that left the state unknown
             out.steps += 1
-            states[step.run] = self._step(step, s, out)
+            states[run] = self._step(step, s, out)
         return out
 
     def _names_ok(self, step: Step, out: Replay) -> bool:

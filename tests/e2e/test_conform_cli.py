@@ -211,3 +211,16 @@ def test_a_drifted_param_is_reported_not_rewritten(tmp_path: Path) -> None:
     assert r.code == 1 and "error[E721]: param 'ALPHA' = 0.2 has drifted" in r.err
     assert "a param is not rewritten" in r.err
     assert spec.read_text(encoding="utf-8") == UAV.read_text(encoding="utf-8")
+
+
+def test_each_log_without_run_ids_is_one_run(tmp_path: Path) -> None:
+    logs = simulate(PATROL, tmp_path / "p.jsonl", 3)
+    files = []
+    for r in range(3):
+        f = tmp_path / f"run{r}.jsonl"
+        steps = [json.loads(x) for x in logs.read_text(encoding="utf-8").splitlines()]
+        f.write_text("".join(json.dumps({k: v for k, v in s.items() if k != "run"}) + "\n"
+                             for s in steps if s["run"] == r), encoding="utf-8")
+        files.append(str(f))
+    out = conform(str(PATROL), *files)
+    assert out["runs"] == 3 and out["violations"] == []
