@@ -66,13 +66,14 @@ def origin(paths: list[str]) -> str:
 
 
 def conform_file(path: str, consts: Mapping[str, str], log_paths: list[str], *,
-                 update: bool = False, confidence: float | None = None) -> Conformance:
+                 update: bool = False, confidence: float | None = None,
+                 text: str | None = None) -> Conformance:
     """Replay the logs against the mission at `path` and judge its constants by them.
     `update` rewrites each drifted constant in the file with a provenance comment (as
     `sim-check --update` does), if the new text checks. Violations and drifts are results;
     raises AfsmError for the file's errors, a composed mission (E701) and bad logs
-    (E710-E713, every one, each at its line)."""
-    text = None
+    (E710-E713, every one, each at its line). `text`: the mission's source (default: the
+    file, as it is on disk; always so for `update`)."""
     if update:
         try:
             with open(path, encoding="utf-8", newline="") as f:

@@ -26,6 +26,7 @@ from afsmc.model import ir
 from afsmc.text import literal
 
 if TYPE_CHECKING:
+    from afsmc.api.conform import Conformance
     from afsmc.api.diagram import Diagram
     from afsmc.api.results import Results
     from afsmc.api.sim_check import SimCheck
@@ -223,6 +224,21 @@ class Mission:
         from afsmc.api.sim_check import sim_check
 
         return sim_check(self, runs, **options)
+
+    def conform(self, logs: Sequence[str], *, update: bool = False,
+                confidence: float | None = None) -> Conformance:
+        """Check logged runs (files in the format of docs/robot.md) against the mission, as
+        `afsmc conform` does: each step the spec does not allow (``.violations``, E720) and
+        each probability and interval constant the steps exercise, judged as sim-check
+        judges a simulation (``.evidence``; ``.errors`` has E721 for a drift). ``update``
+        rewrites the drifted constants in the file. Raises AfsmError for bad logs
+        (E710-E713) and a composed mission (E701)."""
+        from afsmc.api.conform import conform_file
+
+        if update and not os.path.isfile(self.path):
+            raise ValueError(f"update rewrites the mission's file; {self.path} is not a file")
+        return conform_file(self.path, self.consts, list(logs), update=update,
+                            confidence=confidence, text=None if update else self.text)
 
     def diagram(self, **options: Any) -> Diagram:
         """The mission diagram (`afsmc diagram`): it shows inline in Jupyter, and

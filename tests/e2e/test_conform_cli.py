@@ -224,3 +224,15 @@ def test_each_log_without_run_ids_is_one_run(tmp_path: Path) -> None:
         files.append(str(f))
     out = conform(str(PATROL), *files)
     assert out["runs"] == 3 and out["violations"] == []
+
+
+def test_the_python_api_gives_the_command_s_answer(tmp_path: Path) -> None:
+    import afsmc
+
+    logs = simulate(PATROL, tmp_path / "p.jsonl", 100)
+    res = afsmc.load(str(PATROL)).conform([str(logs)])
+    assert res.ok and res.runs == 100 and not res.violations
+    assert res.to_json() == conform(str(PATROL), str(logs))
+    text = afsmc.load(str(PATROL)).text.replace("P_SLIP   = 0.1;", "P_SLIP   = 0.5;")
+    drifted_ = afsmc.Mission.from_text(text).conform([str(logs)])
+    assert not drifted_.ok and [d.code for d in drifted_.errors] == ["E721"]
