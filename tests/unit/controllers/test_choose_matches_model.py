@@ -22,7 +22,7 @@ import pytest
 from afsmc.api.mission import Mission
 from afsmc.lower.lowering import lower
 from afsmc.model import ir
-from tests.conftest import EXAMPLES
+from tests.conftest import EXAMPLES, run_cli
 from tests.unit.controllers.reachable import State, reachable
 
 CONSTS: dict[str, dict[str, Any]] = {"uav": {"T_LIMIT": 100}}
@@ -128,3 +128,28 @@ def test_c_choose_is_the_model_s_choice_in_every_reachable_state(
     wrong = [(s, states[s], g) for s, g in zip(order, got, strict=True)
              if (states[s] or "-") != g]
     assert not wrong, f"{len(wrong)} of {len(states)} states differ, e.g. {wrong[:3]}"
+
+
+def test_a_composed_mission_has_no_controller(tmp_path: Path) -> None:
+    for target in ("python", "c"):
+        r = run_cli("compile", str(EXAMPLES / "two_uav.afsm"), "-t", target, "-o",
+                    str(tmp_path / "out"))
+        assert r.code == 1 and "Traceback" not in r.err
+        assert f"error[E701]: 'compile -t {target}' writes the controller of one machine; " \
+               "two_uav is a mission of 2 agents" in r.err
+    assert not list(tmp_path.iterdir())
+
+
+def test_the_c_source_includes_the_header_by_the_name_it_is_written_as(tmp_path: Path) -> None:
+    r = run_cli("compile", str(EXAMPLES / "patrol.afsm"), "-t", "c", "-o",
+                str(tmp_path / "ctl.c"))
+    assert r.code == 0, r.err
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["ctl.c", "ctl.h"]
+    assert '#include "ctl.h"' in (tmp_path / "ctl.c").read_text(encoding="utf-8")
+    # byte-deterministic: the same files again
+    again = tmp_path / "again"
+    again.mkdir()
+    assert run_cli("compile", str(EXAMPLES / "patrol.afsm"), "-t", "c", "-o",
+                   str(again / "ctl.c")).code == 0
+    for name in ("ctl.c", "ctl.h"):
+        assert (again / name).read_bytes() == (tmp_path / name).read_bytes()
