@@ -12,6 +12,8 @@ written as steps.
 
 from __future__ import annotations
 
+import csv
+import io
 import itertools
 import json
 from typing import Any
@@ -88,9 +90,6 @@ COLUMNS = ("run", "step", "mode", "action", "outcome", "duration", "changes")
 def csv_text(traces: list[list[dict[str, Any]]]) -> str:
     """The runs as CSV with the same columns: `changes` and a duration of several
     constants as `NAME=VALUE` pairs separated by spaces."""
-    import csv
-    import io
-
     buf = io.StringIO()
     w = csv.writer(buf, lineterminator="\n")
     w.writerow(COLUMNS)
