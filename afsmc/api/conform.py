@@ -86,8 +86,8 @@ def conform_file(path: str, consts: Mapping[str, str], log_paths: list[str], *,
         refuse_composed(model, "'conform' replays the logs of one machine")
     except CompileError as exc:
         raise AfsmError.of(exc) from None
-    steps, bad = logs.read(log_paths)
-    result = replay.Checker(model).replay(steps)
+    bad: list[Diagnostic] = []  # the logs' errors, found as the steps are replayed
+    result = replay.Checker(model).replay(logs.read(log_paths, bad))
     if bad or result.errors:  # every bad line, those that parse but name unknown things too
         raise AfsmError(sorted([*bad, *result.errors], key=Diagnostic.sort_key)[:logs.MAX_ERRORS])
     evidence, idle = estimate.judged(model, result.trials, origin(log_paths), confidence)

@@ -6,10 +6,11 @@ hazard taken), both required; `outcome` (an index into the action's outcomes, 0 
 first written, or a hazard's name) or `changes` (the variables the step changed, by name,
 `mode` among them when it changed), at least one; `duration` (the measured value of the
 interval constant the outcome's updates read, a number; {NAME: number} for several);
-`run` (steps of one run share it, within one file; a file without it is one run) and `step` (any number,
-for people). Every error is collected, each at its file and line: E710 a file that cannot
-be read, E711 a line that is not a step (not JSON, not an object, a truncated line, a CSV
-row with too many cells), E712 a missing field or a value of the wrong kind.
+`run` (steps of one run share it, within one file; a file without it is one run) and
+`step` (any number, for people). Every error is collected, each at its file and line:
+E710 a file that cannot be read, E711 a line that is not a step (not JSON, not an object,
+a truncated line, a CSV row whose cells do not match the header), E712 a missing field or
+a value of the wrong kind.
 """
 
 from __future__ import annotations
@@ -17,6 +18,7 @@ from __future__ import annotations
 import csv
 import json
 import math
+from collections.abc import Iterator
 from dataclasses import dataclass
 from typing import Any
 
@@ -48,12 +50,12 @@ class Step:
         return Span.at_position(src, line, at + 1, line, at + len(key) + 3)
 
 
-def read(paths: list[str]) -> tuple[list[Step], list[Diagnostic]]:
-    """Every step of the logs that reads, in order, and every error found (at most
-    MAX_ERRORS)."""
-    errors: list[Diagnostic] = []
-    steps: list[Step] = []
+def read(paths: list[str], errors: list[Diagnostic]) -> Iterator[Step]:
+    """Every step of the logs that reads, in order, one file in memory at a time; every
+    error found is appended to `errors` (at most MAX_ERRORS)."""
     for path in paths:
+        if len(errors) >= MAX_ERRORS:
+            return
         try:
             with open(path, encoding="utf-8", newline="") as f:
                 text = f.read()
@@ -64,10 +66,7 @@ def read(paths: list[str]) -> tuple[list[Step], list[Diagnostic]]:
             continue
         source = Source(path, text)
         parse = _csv if path.lower().endswith(".csv") else _jsonl
-        steps += parse(source, errors)
-        if len(errors) >= MAX_ERRORS:
-            break
-    return steps, errors[:MAX_ERRORS]
+        yield from parse(source, errors)
 
 
 def _line_span(source: Source, line: int) -> Span:
@@ -79,8 +78,7 @@ def _error(errors: list[Diagnostic], code: str, span: Span, message: str,
     errors.append(Diagnostic(code, Severity.ERROR, message, span, hint=hint))
 
 
-def _jsonl(source: Source, errors: list[Diagnostic]) -> list[Step]:
-    out = []
+def _jsonl(source: Source, errors: list[Diagnostic]) -> Iterator[Step]:
     for i, raw in enumerate(source.text.split("\n"), 1):
         if not raw.strip() or len(errors) >= MAX_ERRORS:
             continue
@@ -100,8 +98,7 @@ def _jsonl(source: Source, errors: list[Diagnostic]) -> list[Step]:
             continue
         step = _step(obj, span, errors)
         if step is not None:
-            out.append(step)
-    return out
+            yield step
 
 
 def _step(obj: dict[str, Any], span: Span, errors: list[Diagnostic]) -> Step | None:
@@ -148,21 +145,20 @@ def _duration(value: Any, bad: Any) -> Duration:
     return None
 
 
-def _csv(source: Source, errors: list[Diagnostic]) -> list[Step]:
+def _csv(source: Source, errors: list[Diagnostic]) -> Iterator[Step]:
     lines = source.text.splitlines()
     rows = csv.reader(lines)
     try:
         header = next(rows)
     except (StopIteration, csv.Error):
-        return []
+        return
     header = [h.strip() for h in header]
     missing = [c for c in ("mode", "action") if c not in header]
     if missing:
         _error(errors, codes.E712, _line_span(source, 1),
                f"the CSV header has no column {', '.join(missing)}",
                hint=f"the columns are {', '.join(COLUMNS)} (mode and action required)")
-        return []
-    out = []
+        return
     for i, row in enumerate(rows, 2):
         if not any(c.strip() for c in row) or len(errors) >= MAX_ERRORS:
             continue
@@ -189,8 +185,7 @@ def _csv(source: Source, errors: list[Diagnostic]) -> list[Step]:
             obj["duration"] = _pairs(d, cells=False) if "=" in d else _number(d)
         step = _step(obj, span, errors)
         if step is not None:
-            out.append(step)
-    return out
+            yield step
 
 
 def _number(text: str) -> Any:
