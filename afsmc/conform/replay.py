@@ -58,6 +58,10 @@ def controller(model: ir.Model) -> types.ModuleType:
 
 
 class Checker:
+    """Replays steps through the generated controller `ctl`. An outcome there is a tuple
+    (key, probability(s, K), updates(s, K) -> {variable: value}, interval constants read);
+    `ctl._outcomes(s, action)` gives them with their probabilities, hazards woven in."""
+
     def __init__(self, model: ir.Model) -> None:
         self.model = model
         self.ctl = controller(model)
@@ -182,10 +186,9 @@ class Checker:
                                 + ("" if step.duration is None else
                                    f" with duration {_value(step.duration)}"))
                 return self._violation(step, s, problems, out)
-            if len({o[0] for o, _, _ in fits}) > 1:
-                out.ambiguous += 1
             o, values, new = fits[0]
-            if len({f[0][0] for f in fits}) > 1:
+            if len({f[0][0] for f in fits}) > 1:  # no evidence of which outcome it was
+                out.ambiguous += 1
                 o = (None, *o[1:])
         if problems:
             return self._violation(step, s, problems, out, new)

@@ -236,3 +236,26 @@ def test_the_python_api_gives_the_command_s_answer(tmp_path: Path) -> None:
     text = afsmc.load(str(PATROL)).text.replace("P_SLIP   = 0.1;", "P_SLIP   = 0.5;")
     drifted_ = afsmc.Mission.from_text(text).conform([str(logs)])
     assert not drifted_.ok and [d.code for d in drifted_.errors] == ["E721"]
+
+
+AMBIGUOUS = """machine amb;
+const prob P_UP = 0.3;
+var n : [0..3] init 0;
+mode A = 0 initial;
+mode Done = 1 final;
+action Tick in A when n < 3 { P_UP: n := n + 1; 1 - P_UP: n := n + 1; }
+action Stop in A when n == 3 { goto Done; }
+"""
+
+
+def test_changes_that_fit_several_outcomes_are_no_evidence_of_which(tmp_path: Path) -> None:
+    spec = tmp_path / "amb.afsm"
+    spec.write_text(AMBIGUOUS, encoding="utf-8")
+    log = tmp_path / "amb.jsonl"
+    log.write_text("".join(json.dumps({"mode": "A", "action": "Tick", "changes": {"n": n}})
+                           + "\n" for n in (1, 2, 3))
+                   + json.dumps({"mode": "A", "action": "Stop", "changes": {"mode": "Done"}})
+                   + "\n", encoding="utf-8")
+    out = conform(str(spec), str(log))
+    assert out["violations"] == [] and out["steps"] == 4 and out["ambiguous"] == 3
+    assert out["constants"] == [] and out["unexercised"] == ["P_UP"]
