@@ -259,3 +259,10 @@ def test_changes_that_fit_several_outcomes_are_no_evidence_of_which(tmp_path: Pa
     out = conform(str(spec), str(log))
     assert out["violations"] == [] and out["steps"] == 4 and out["ambiguous"] == 3
     assert out["constants"] == [] and out["unexercised"] == ["P_UP"]
+
+
+@pytest.mark.parametrize("name", ["patrol", "warehouse", "drone", "auv", "rover", "overtake"])
+def test_simulated_runs_of_every_single_agent_example_conform(name: str, tmp_path: Path) -> None:
+    spec = EXAMPLES / f"{name}.afsm"
+    out = conform(str(spec), str(simulate(spec, tmp_path / "runs.jsonl", 200)))
+    assert out["violations"] == [] and drifted(out) == [] and out["runs"] == 200

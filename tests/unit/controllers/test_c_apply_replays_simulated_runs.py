@@ -3,7 +3,8 @@ each step of runs that `afsmc simulate --traces-out x.jsonl` wrote (the lowered 
 Monte Carlo, no code shared with the generator) is applied in C to the state before it,
 with the logged action, outcome and durations, and must return OK and the state the run
 reached. The missions: patrol (an interval constant, a hazard), uav (tuples, clamps,
-many intervals) and warehouse (an outcome reading two interval constants)."""
+many intervals), warehouse (an outcome reading two interval constants), drone (a hazard
+whose probability depends on the state), auv, rover and overtake (preemptive hazards)."""
 
 from __future__ import annotations
 
@@ -71,7 +72,7 @@ def _row(model: ir.Model, state: dict[str, Any]) -> list[int]:
     return [model.mode(state["mode"]).number, *(int(state[v.name]) for v in model.variables)]
 
 
-@pytest.mark.parametrize("name", ["patrol", "uav", "warehouse"])
+@pytest.mark.parametrize("name", ["patrol", "uav", "warehouse", "drone", "auv", "rover", "overtake"])
 def test_c_apply_reaches_the_state_each_simulated_step_reached(name: str, tmp_path: Path) -> None:
     mission = Mission.open(str(EXAMPLES / f"{name}.afsm"))
     model = mission.model
