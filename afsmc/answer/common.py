@@ -23,7 +23,7 @@ from pydantic import (
 )
 from pydantic.json_schema import SkipJsonSchema
 
-# One version for the four schemas, in each one's "$id" (urn:afsmc:schema:<name>:<version>).
+# One version for the five schemas, in each one's "$id" (urn:afsmc:schema:<name>:<version>).
 # Raise it whenever any schema changes: a key added, removed, renamed or retyped.
 SCHEMA_VERSION = 3
 

@@ -50,6 +50,13 @@ class TraceStep(Answer):
     action: str | Absent = Field(None, description="the action that led here; absent at step 0")
     hazard: str | Absent = Field(None, description="the hazard that happened instead of the "
                                                    "action's own outcome")
+    outcome: int | str | Absent = Field(
+        None, description="which outcome led here: its index among the action's outcomes "
+                          "(0 for the first written), or the hazard's name (H/j for "
+                          "outcome j of a hazard of several); absent at step 0")
+    duration: int | dict[str, int] | Absent = Field(
+        None, description="the value the step took for the interval constant its updates "
+                          "read ({NAME: value} for several); absent where it reads none")
     vars: dict[str, int | bool] = Field(description="every variable's value, by name")
 
 

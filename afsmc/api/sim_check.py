@@ -97,7 +97,7 @@ def sim_check_file(path: str, consts: Mapping[str, str], text: str | None = None
     updated: list[Evidence] = []
     if update and drifted:
         assert text is not None
-        _update(path, consts, text, drifted, by_name)
+        update_constants(path, consts, text, drifted, by_name)
         updated = drifted
     # Nothing to reject at this many runs: said, rather than called consistent.
     few = [Diagnostic(
@@ -191,7 +191,7 @@ def _from_data(path: str, c: ir.Constant, confidence: float | None,
     return dataclasses.replace(e, ref=c.source.display, seed=None)
 
 
-def _update(path: str, consts: Mapping[str, str], text: str, drifted: list[Evidence],
+def update_constants(path: str, consts: Mapping[str, str], text: str, drifted: list[Evidence],
             by_name: dict[str, ir.Constant]) -> None:
     """Rewrite the drifted constants in the file, if the new text checks as `afsmc check`
     would check it; AfsmError (the file unchanged) if it cannot."""

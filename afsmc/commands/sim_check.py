@@ -26,18 +26,24 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    metavar="SECONDS",
                    help="stop a simulator that runs longer than this, per constant; each runs "
                         f"in its own process (default {sandbox.DEFAULT_TIMEOUT:g})")
-    p.add_argument("--confidence", type=_level, metavar="C",
-                   help="confidence of the statistical tests of the constants that state none "
-                        "(`with confidence = C` in the file wins; default 0.999); an interval "
-                        "probability must cover the runs' Clopper-Pearson interval at it")
-    p.add_argument("--update", action="store_true",
-                   help="rewrite drifted constants in FILE in place, with a provenance comment")
+    add_judging(p, "runs'")
     p.add_argument("--data-root", metavar="DIR",
                    help="the folder `from data` files must lie under (default: the spec's "
                         "folder); paths stay relative to the spec's folder")
     p.add_argument("--json", action="store_true", help="print the evidence as JSON")
     p.add_argument("--list", action="store_true",
                    help="list the registered simulator outputs and exit")
+
+
+def add_judging(p: argparse.ArgumentParser, whose: str) -> None:
+    """--confidence and --update, of the commands that judge constants by samples (`whose`
+    samples: "runs'", "logs'")."""
+    p.add_argument("--confidence", type=level, metavar="C",
+                   help="confidence of the statistical tests of the constants that state none "
+                        "(`with confidence = C` in the file wins; default 0.999); an interval "
+                        f"probability must cover the {whose} Clopper-Pearson interval at it")
+    p.add_argument("--update", action="store_true",
+                   help="rewrite drifted constants in FILE in place, with a provenance comment")
 
 
 def run(args: argparse.Namespace) -> int:
@@ -75,7 +81,7 @@ def run(args: argparse.Namespace) -> int:
     if args.json:
         print_json(res.to_json())
     else:
-        _table(res.evidence)
+        table(res.evidence)
     if not res.evidence:
         print(f"{args.file}: no constant is backed by a simulation ('from sim ...')",
               file=sys.stderr)
@@ -87,7 +93,7 @@ def run(args: argparse.Namespace) -> int:
     return 0 if res.ok else 1
 
 
-def _level(text: str) -> float:
+def level(text: str) -> float:
     try:
         value = float(text)
     except ValueError:
@@ -122,10 +128,12 @@ def _list(args: argparse.Namespace) -> int:
     return 0
 
 
-def _table(results: list[Evidence]) -> None:
+def table(results: list[Evidence], origin: str = "simulation", runs: str = "runs") -> None:
+    """The judged constants, a row each, and a line of totals (`origin`: the column of
+    their source; `runs`: what a sample is called)."""
     if not results:
         return
-    head = ("constant", "simulation", "declared", "mean", "CI of mean", "F(lo), F(hi)",
+    head = ("constant", origin, "declared", "mean", "CI of mean", "F(lo), F(hi)",
             "hull", "verdict")
     rows = [head]
     for e in results:
@@ -134,7 +142,7 @@ def _table(results: list[Evidence]) -> None:
         hull = f"[{e.hull[0]}, {e.hull[1]}]" if e.hull else "-"
         rows.append((e.name, e.ref, e.declared, f"{e.mean:.4g}",
                      f"[{e.mean_low:.4g}, {e.mean_high:.4g}]", cdf, hull,
-                     {"inconclusive": "too few runs", "drifted": "DRIFTED"}.get(e.verdict,
+                     {"inconclusive": f"too few {runs}", "drifted": "DRIFTED"}.get(e.verdict,
                                                                                e.verdict)))
     widths = [max(len(r[i]) for r in rows) for i in range(len(head))]
     for r in rows:
@@ -144,9 +152,9 @@ def _table(results: list[Evidence]) -> None:
     sims = [e for e in results if e.seed is not None]
     data = len(results) - len(sims)
     where = ([f"{sims[0].runs} runs, seed {sims[0].seed}"] if sims else []) + (
-        [f"{data} from data files"] if data else [])
+        [f"{data} from {'data files' if origin == 'simulation' else origin}"] if data else [])
     print(f"\n{len(results)} constant(s), {sum(not e.consistent for e in results)} drifted"
-          + (f", {few} with too few runs to judge" if few else "") + "; "
+          + (f", {few} with too few {runs} to judge" if few else "") + "; "
           + ", ".join(where) + ", confidence "
           + ", ".join(f"{c:g}" for c in sorted(conf))
           + ("; probabilities: Clopper-Pearson intervals"

@@ -240,6 +240,17 @@ W602 = Code("W602", Severity.WARNING, "the mission cannot end once in a mode")
 W603 = Code("W603", Severity.WARNING, "an action can never fire")
 
 
+# E7xx: controllers for the robot, and conformance of the robot's logs
+
+E701 = Code("E701", Severity.ERROR, "a composed mission has no controller")
+E710 = Code("E710", Severity.ERROR, "a log file cannot be read")
+E711 = Code("E711", Severity.ERROR, "a log line is not a step")
+E712 = Code("E712", Severity.ERROR, "a logged step lacks a field or holds a bad value")
+E713 = Code("E713", Severity.ERROR, "a logged step names what the spec does not declare")
+E720 = Code("E720", Severity.ERROR, "a logged step the spec does not allow")
+E721 = Code("E721", Severity.ERROR, "a constant has drifted from the logs")
+
+
 # E9xx: the language server
 
 E999 = Code("E999", Severity.ERROR, "the language server could not process the file")
@@ -257,6 +268,7 @@ GROUPS: tuple[tuple[str, tuple[str, ...]], ...] = (
     ("E5xx: simulation and simulation-backed constants", ("E5", "W5")),
     ("E6xx: diagrams", ("E6",)),
     ("W6xx: the mode graph", ("W6",)),
+    ("E7xx: controllers for the robot, and conformance of the robot's logs", ("E7",)),
     ("E9xx: the language server", ("E9",)),
 )
 

@@ -21,7 +21,7 @@ from afsmc.model import expr as E
 from afsmc.model import ir
 from afsmc.model.bounds import bounds
 from afsmc.model.evaluate import scalar
-from afsmc.sim import rare, scheduler
+from afsmc.sim import logs, rare, scheduler
 from afsmc.sim.compile import Fn, Frame, Scope, SimError, compile_expr, fold, reads, static
 from afsmc.sim.policy import Lookup
 from afsmc.sim.stats import merge_moments
@@ -93,6 +93,8 @@ class Program:
     # each command's action in mission terms (afsmc.sim.scheduler.trace_names)
     agent_modes: list[tuple[str, str, dict[int, str]]] = field(default_factory=list)
     action_names: dict[int, str] = field(default_factory=dict)
+    # (command, branch) -> its outcome and duration in the robot's log (afsmc.sim.logs)
+    logged: dict[tuple[int, int], dict[str, Any]] = field(default_factory=dict)
 
 
 def build(low: Lowered, draw: bool = False) -> Program:
@@ -164,8 +166,7 @@ def build(low: Lowered, draw: bool = False) -> Program:
                    max(numbers) - min(numbers) + 1, min(numbers), monitors, state_rewards,
                    list(low.commands), draws=draws, movers=scheduler.movers(low),
                    agents=0 if low.network is None else len(low.network.parts),
-                   agent_modes=names[0], action_names=names[1])
-
+                   agent_modes=names[0], action_names=names[1], logged=logs.outcomes(low))
 
 
 def _monitor(p: ir.Property, sc: Scope, model: ir.Model, rindex: dict[str, int],
@@ -285,6 +286,7 @@ class _Batch:
                 hz = c.branches[br].hazard if 0 <= br < len(c.branches) else None
                 if hz:
                     entry["hazard"] = hz
+                entry.update(prog.logged.get((cmd_i, br), {}))
             elif t > 0:
                 entry["action"] = "(no enabled action)"
             entry["vars"] = {d: _py(state[v][j]) for v, d in zip(prog.variables, prog.displays,
