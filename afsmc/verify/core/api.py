@@ -27,7 +27,7 @@ from afsmc.text import count, literal
 from afsmc.verify.core import conditioning
 from afsmc.verify.core.options import VerifyOptions
 from afsmc.verify.core.runner import CheckRun, ModelLoop, Options
-from afsmc.verify.core.uncertainty import over_probabilities, sources
+from afsmc.verify.core.uncertainty import kept_at_midpoint, over_probabilities, sources
 from afsmc.verify.engines.guard import Progress, default_max_states, run_job, upper_bound
 from afsmc.verify.engines.storm import Engine, Job, StormFailure
 from afsmc.verify.engines.strategy_storm import WitnessRequest
@@ -161,10 +161,15 @@ def check(model: ir.Model, props: Sequence[ir.Property],
     for resolution, low, what in checking.lows:
         ModelLoop(checking, resolution, low, what).check_all()
     # kappa too is bounded over the interval probabilities' box: its largest value there
-    checks, box, errors = over_probabilities(
-        checking.finish(), asked.model, props, via=o.via, reductions=o.reductions,
-        precision=None if o.exact else precision, preserve=preserve, progress=progress,
-        beside=asked.properties(()))
+    at_points = checking.finish()
+    try:
+        checks, box, errors = over_probabilities(
+            at_points, asked.model, props, via=o.via, reductions=o.reductions,
+            precision=None if o.exact else precision, preserve=preserve, progress=progress,
+            beside=asked.properties(()))
+    except CompileError as exc:  # the values at the midpoint are not lost with the bounds
+        kept, partial = kept_at_midpoint(conditioning.steps(at_points, asked)[0])
+        raise CompileError([*exc.diagnostics, *kept], partial) from None
     checks, kappa = conditioning.steps(checks, asked)
     box = conditioning.without_steps(box)
     judged = conditioning.ordered(

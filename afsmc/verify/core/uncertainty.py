@@ -24,12 +24,13 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 
 from afsmc.compiler import lowered
-from afsmc.diagnostics import Span
+from afsmc.diagnostics import Diagnostic, Severity, Span, codes
 from afsmc.lower.reduce import Reductions
 from afsmc.model import expr as E
 from afsmc.model import ir
+from afsmc.text import num
 from afsmc.verify.engines import parametric
-from afsmc.verify.outcome.results import Checks, PropertyResult
+from afsmc.verify.outcome.results import Checks, Partial, PropertyResult
 from afsmc.verify.plan.precision import PARAMETER_PRECISION, PARAMETER_SOLVER_ERROR
 
 INTERVAL_CONSTANTS = "interval constants"
@@ -157,6 +158,23 @@ def _widened(r: PropertyResult, e: parametric.Extreme) -> PropertyResult:
         r, reference=Reference("midpoint", r.min, r.max, r.value, r.uniform, dict(r.exact)),
         min=e.min_attained, max=e.max_attained, value=None, uniform=None, exact={},
         attained_at={"min": dict(e.min_at), "max": dict(e.max_at)})
+
+
+def kept_at_midpoint(checks: Checks) -> tuple[list[Diagnostic], Partial]:
+    """What a failure of the bounds over the interval probabilities keeps of the check
+    already made at their midpoint: each answer as its reference (never as the bounds,
+    which are what failed), and a note that says them."""
+    props = [dataclasses.replace(
+        r, reference=Reference("midpoint", r.min, r.max, r.value, r.uniform, dict(r.exact)),
+        min=None, max=None, value=None, uniform=None, exact={}) for r in checks.properties]
+    said = "; ".join(
+        f"{r.name} " + ", ".join(f"{k} {num(v)}" for k in ("min", "max", "value", "uniform")
+                                  if (v := getattr(r, k)) is not None)
+        for r in checks.properties)
+    note = Diagnostic(codes.N412, Severity.NOTE, "answered at the interval probabilities' "
+                      f"midpoint before the failure (a reference point, not the bounds over "
+                      f"their box): {said}", None)
+    return [note], Partial(checks.model, checks.uniform_model, props)
 
 
 def described(over: Sequence[str], box: ProbabilityBox | None) -> str:

@@ -144,3 +144,26 @@ def test_a_min_above_the_max_becomes_their_middle_with_the_gap_in_the_error() ->
     (o,) = conditioning.ordered([r])
     assert o.min == o.max and o.min is not None and o.error is not None
     assert abs(o.min - 0.5) <= o.error and abs(o.min - (0.5 + 1e-12)) <= o.error
+
+
+def test_a_failure_of_the_bounds_keeps_the_midpoint_values_as_reference(tmp_path: Path) -> None:
+    from afsmc.diagnostics import CompileError
+    from afsmc.verify.outcome.results import Partial
+
+    root = Path(__file__).resolve().parents[3]
+    text = (root / "examples" / "patrol.afsm").read_text(encoding="utf-8")
+    box = tmp_path / "p0.afsm"  # an end at 0: the parametric engine refuses the box (E440)
+    box.write_text(text.replace("const prob P_FAULT  = 0.01;",
+                                "const prob P_FAULT = [0, 0.03];"), encoding="utf-8")
+    mid = tmp_path / "mid.afsm"  # the oracle: the same mission at the midpoint
+    mid.write_text(text.replace("const prob P_FAULT  = 0.01;",
+                                "const prob P_FAULT = 0.015;"), encoding="utf-8")
+    with pytest.raises(CompileError) as err:
+        verify.run(str(box), properties=["finish"])
+    assert [d.code for d in err.value.diagnostics] == ["E440", "N412"]
+    partial = err.value.partial
+    assert isinstance(partial, Partial)
+    (r,) = partial.properties
+    assert r.min is None and r.max is None and r.reference is not None  # never as bounds
+    (want,) = verify.run(str(mid), properties=["finish"]).properties
+    assert (r.reference.min, r.reference.max) == pytest.approx((want.min, want.max), abs=1e-9)
