@@ -13,8 +13,8 @@ parametric engine, which needs every transition kept in the whole box and checks
 And whatever the probabilities:
 
 - W310: a total reward (`R [C]`, no step bound) of a structure that may be negative. Storm
-  refuses it on an MDP (verify's E404), and on a DTMC it may answer +inf where the runs
-  earn -inf without end (a negative state reward in a final mode).
+  refuses it on an MDP, and on a DTMC it may answer +inf where the runs earn -inf without
+  end (a negative state reward in a final mode): verify refuses it before building (E404).
 
 Warnings, not errors: `compile` and `simulate` take such a file as it is. The corners are
 those verify tries (afsmc.verify.engines.parametric.well_defined_ir); a probability that
@@ -43,21 +43,29 @@ _HINT = ("verify bounds every property over the interval probabilities with Stor
          "probability in the whole box")
 
 
+def signed_total(p: ir.Property, model: ir.Model) -> str | None:
+    """The reward structure of `p` if `p` is a total reward (`R [C]`, no step bound) of a
+    structure that may be negative (interval arithmetic over the variables' ranges); else
+    None. `verify` refuses such a property (E404), `check` warns of it (W310)."""
+    if p.kind != "R" or p.path.kind != "C" or p.path.bound is not None:
+        return None
+    name = p.reward if p.reward is not None else (model.rewards[0].name
+                                                  if model.rewards else "")
+    r = next((r for r in model.rewards if r.name == name), None)
+    return name if r is not None and any(bounds(it.value, model)[0] < 0 for it in r.items) \
+        else None
+
+
 def check_total_rewards(model: ir.Model, rep: Reporter) -> None:
     """W310 at each `R [C]` without a step bound whose reward structure may be negative."""
-    signed: dict[str, bool] = {}
-    for r in model.rewards:
-        signed[r.name] = any(bounds(it.value, model)[0] < 0 for it in r.items)
     for p in model.properties:
-        if p.kind != "R" or p.path.kind != "C" or p.path.bound is not None:
-            continue
-        name = p.reward if p.reward is not None else (model.rewards[0].name
-                                                      if model.rewards else "")
-        if signed.get(name):
+        name = signed_total(p, model)
+        if name is not None:
             rep.warning(codes.W310, f"property '{p.name}' asks the total reward of \"{name}\", "
                         "which may be negative: a total reward that gains and loses without "
-                        "end has no value, Storm refuses it on an MDP (verify reports "
-                        "E404), and on a DTMC may answer +inf where the runs lose without end",
+                        "end has no value, Storm refuses it on an MDP and on a DTMC may "
+                        "answer +inf where the runs lose without end (verify refuses it, "
+                        "E404)",
                         p.span, hint="ask R{...}=? [ C<=k ] for the first k steps, or R{...}=? "
                         "[ F ... ] up to the mission's end; or keep every reward >= 0")
 
