@@ -96,6 +96,26 @@ def test_two_thirds_reached_slowly_never_gets_a_wrong_verdict(tmp_path: Path,
         _right_or_undecided(r, truth, op, t)
 
 
+@pytest.mark.parametrize("precision", [None, 1e-9])
+def test_a_million_steps_over_an_interval_probability_never_gets_a_wrong_verdict(
+        tmp_path: Path, precision: float | None) -> None:
+    # the expected steps 1/P_FAULT over P_FAULT in [1e-6, 2e-6]: min 500,000, max 1,000,000
+    path = tmp_path / "longiv.afsm"
+    path.write_text(LONG.format(fault="[0.000001, 0.000002]"))
+    lo, hi = Fraction(500_000), Fraction(10**6)
+    formulas = [f'R{{"steps"}}{op}{t} [ F "halted" ]'
+                for t in _thresholds(hi) for op in ("<=", ">=")]
+    res = verify.run(str(path), formulas=formulas, precision=precision)
+    for r in res.properties:
+        op, t = r.formula[10:12], Fraction(r.formula[12:].split(" ")[0])
+        worst, best = (hi, lo) if op == "<=" else (lo, hi)
+        meets = (lambda v: v <= t) if op == "<=" else (lambda v: v >= t)  # noqa: E731
+        truth = "holds" if meets(worst) else "fails" if not meets(best) else "depends"
+        assert r.verdict is not None and r.verdict.kind in (truth, "undecided"), \
+            (r.formula, r.verdict, r.min, r.max, r.error)
+        assert r.min is not None and r.max is not None and r.min <= r.max
+
+
 def test_the_bound_of_a_query_says_how_far_the_rounding_can_take_it(tmp_path: Path) -> None:
     path = tmp_path / "long.afsm"
     path.write_text(LONG.format(fault="0.000001"))
