@@ -61,6 +61,10 @@ def _right_or_undecided(r: PropertyResult, truth: Fraction, op: str, t: str) -> 
         assert r.min <= r.max
 
 
+def _meets(v: Fraction, op: str, t: Fraction) -> bool:
+    return v <= t if op == "<=" else v >= t
+
+
 def _thresholds(value: Fraction) -> list[str]:
     return [repr(float(value + Fraction(d))) for d in OFFSETS]
 
@@ -109,8 +113,8 @@ def test_a_million_steps_over_an_interval_probability_never_gets_a_wrong_verdict
     for r in res.properties:
         op, t = r.formula[10:12], Fraction(r.formula[12:].split(" ")[0])
         worst, best = (hi, lo) if op == "<=" else (lo, hi)
-        meets = (lambda v: v <= t) if op == "<=" else (lambda v: v >= t)  # noqa: E731
-        truth = "holds" if meets(worst) else "fails" if not meets(best) else "depends"
+        truth = "holds" if _meets(worst, op, t) else "fails" if not _meets(best, op, t) \
+            else "depends"
         assert r.verdict is not None and r.verdict.kind in (truth, "undecided"), \
             (r.formula, r.verdict, r.min, r.max, r.error)
         assert r.min is not None and r.max is not None and r.min <= r.max
