@@ -24,8 +24,8 @@ error turns `undecided` is decided again exactly, by Storm's exact engine on the
 written (rational arithmetic), where the model has at most `EXACT_STATES` states and no
 interval probabilities; otherwise it stays `undecided`, with the widened bound.
 
-Where kappa is unknown (a mission without final modes, a scheduler that can run forever,
-a composed mission) the same is done for margins thinner than `THIN` relative to the
+Where kappa is unknown (a machine without final modes, a scheduler that can run forever)
+the same is done for margins thinner than `THIN` relative to the
 value: they are decided exactly or left `undecided`.
 """
 
@@ -70,20 +70,34 @@ class Asked:
 
 def ask(model: ir.Model, props: Sequence[ir.Property]) -> Asked:
     """kappa's query beside `props` (asked in sound mode: requirements or --precision): a
-    state reward of 1 and its expected total until a final mode. A composed mission, or
-    one without a final mode, has none."""
-    finals = [m.number for m in model.modes if m.final]
+    state reward of 1 and its expected total until the run ends (`_end`). A mission with a
+    machine without a final mode has none."""
     taken = {p.name for p in props} | {r.name for r in model.rewards}
-    if model.composition is not None or not finals or STEPS in taken:
+    end = _end(model)
+    if end is None or STEPS in taken:
         return Asked(model, None)
     span = Span.at_offset(model.source, 0, 0)
-    mode = E.VarRef("mode", E.Type.INT)
-    end: E.Expr = E.FALSE
-    for n in finals:
-        end = E.Binary("||", end, E.Binary("==", mode, E.lit(n), E.Type.BOOL), E.Type.BOOL)
     reward = ir.RewardStruct(STEPS, (ir.RewardItem(None, E.TRUE, E.lit(1), span),), span)
     query = ir.Property(STEPS, "R", "", ir.RewardPath("F", end), STEPS, span)
     return Asked(dataclasses.replace(model, rewards=(*model.rewards, reward)), query)
+
+
+def _end(model: ir.Model) -> E.Expr | None:
+    """Where a run ends: in a final mode; in a composed mission, every agent in one of its
+    final modes. None if some machine has no final mode."""
+    machines = [("mode", model)] if model.composition is None else [
+        (a.mode_var, a.model) for a in model.composition.agents]
+    end: E.Expr = E.TRUE
+    for var, m in machines:
+        finals = [mode.number for mode in m.modes if mode.final]
+        if not finals:
+            return None
+        here: E.Expr = E.FALSE
+        for n in finals:
+            here = E.Binary("||", here, E.Binary("==", E.VarRef(var, E.Type.INT), E.lit(n),
+                                                 E.Type.BOOL), E.Type.BOOL)
+        end = E.Binary("&&", end, here, E.Type.BOOL)
+    return end
 
 
 def steps(checks: Checks, asked: Asked) -> tuple[Checks, float | None]:
