@@ -150,11 +150,10 @@ def check(model: ir.Model, props: Sequence[ir.Property],
     result then has its `verdict` (afsmc.verify.outcome.verdicts)."""
     o = VerifyOptions.of(options, option_values)
     precision, engine = sound_mode(props, o.precision, o.exact, o.engine)
-    # kappa, the expected number of steps, for the rounding's bound on the requirements'
-    # values (afsmc.verify.core.conditioning); not beside schedulers and paths, whose
-    # extraction would take it for one of the properties
-    asked = conditioning.ask(model, props) if precision is not None and not (
-        o.exact or o.strategy or witness is not None) else conditioning.Asked(model, None)
+    # kappa, the expected number of steps, for the rounding's bound on the values in sound
+    # mode (afsmc.verify.core.conditioning)
+    asked = conditioning.ask(model, props) if precision is not None and not o.exact \
+        else conditioning.Asked(model, None)
     checking = CheckRun(asked.model, asked.properties(props), list(preserve), engine,
                         o.uniform, progress, o.reductions,
                         Options.of(o, all_states, precision, witness))

@@ -23,6 +23,7 @@ from afsmc.lower.lowering import Lowered
 from afsmc.lower.reduce import Reductions
 from afsmc.model import ir
 from afsmc.model.semantics import bounded_globally
+from afsmc.verify.core import conditioning
 from afsmc.verify.core.options import VerifyOptions
 from afsmc.verify.engines.explicit import applies
 from afsmc.verify.engines.failures import (
@@ -414,8 +415,9 @@ class ModelLoop:
         if applies(self.low, self.job_engine, o.solver,
                    o.bisimulation or o.exact or run.precision is not None):
             job = dataclasses.replace(job, explicit=self.low)  # afsmc's own exploration first
+        # no scheduler for a step-bounded query, nor for the rounding's kappa (conditioning)
         ex = request(self.low, o.strategy, run.witness, mine, self.run.asked_as,
-                     skip={n for p, n in unit if stepped(p)})
+                     skip={n for p, n in unit if stepped(p) or p.name == conditioning.STEPS})
         if self.resolution == "nondet" and o.via == "prism" and ex is not None:
             job = dataclasses.replace(job, extract=ex, model_text=prism_emit(self.low, True).model)
         if self.job_engine == "auto":
