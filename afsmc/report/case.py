@@ -26,7 +26,7 @@ from afsmc.compiler import load as load_checked
 from afsmc.diagnostics import CompileError
 from afsmc.model import ir
 from afsmc.report.baseline import Comparison, compare
-from afsmc.report.causes import Split, split, splittable, why_not
+from afsmc.report.causes import Split, split_all, splittable, why_not
 from afsmc.report.sensitivity import Sensitivity, sensitivities
 from afsmc.sim.evidence import Evidence
 from afsmc.verify.core.options import VerifyOptions
@@ -174,25 +174,29 @@ def causes_of(checked: Checked, res: VerifyResult, say: Say) -> tuple[dict[str, 
                                                                       list[str]]:
     """The causes of every failure property (for the report's "How it fails"), and why
     the other reachability properties are not there."""
-    out: dict[str, list[Split]] = {}
     notes = []
     model = checked.model
     checked_names = {p.name for p in res.properties}
+    wanted = []
     for prop in model.properties:
         if not splittable(prop) or prop.name not in checked_names:
             continue
         reason = why_not(model, prop)
         if reason is not None:
             notes.append(reason)
-            continue
-        say(f"causes of {prop.name}")
-        try:
-            splits = split(model, prop)
-        except CompileError as exc:
-            notes.append(f"{prop.name}: {exc.diagnostics[0].message}")
-            continue
-        if failure(prop, splits):
-            out[prop.name] = splits
+        else:
+            wanted.append(prop)
+    if not wanted:
+        return {}, notes
+    say("causes of " + ", ".join(p.name for p in wanted))
+    try:
+        splits = split_all(model, wanted)
+    except CompileError as exc:
+        return {}, [*notes, exc.diagnostics[0].message]
+    out: dict[str, list[Split]] = {}
+    for prop in wanted:
+        if failure(prop, splits[prop.name]):
+            out[prop.name] = splits[prop.name]
         else:
             notes.append(f"{prop.name} is no failure property: no hazard leads into its "
                          "target, and it is no upper bound (P<=, P<)")

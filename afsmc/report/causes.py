@@ -206,7 +206,7 @@ def split_file(path: str, consts: Mapping[str, str] | None = None,
         bad = [p for p in props if why_not(model, p) is not None]
         if bad:
             raise CompileError([d for p in bad for d in _refusal(model, p).diagnostics])
-    return {p.name: split(model, p) for p in props if why_not(model, p) is None}
+    return split_all(model, [p for p in props if why_not(model, p) is None])
 
 
 def _refusal(model: ir.Model, prop: ir.Property) -> CompileError:
@@ -220,43 +220,75 @@ def split(model: ir.Model, prop: ir.Property, *, low: Lowered | None = None
     """The causes of `prop` (a reachability probability): one Split for a DTMC, two (min,
     max) for an MDP. `low`: the lowered model to instrument (default: the model's
     nondeterministic lowering with every reduction, as verify checks it)."""
-    if why_not(model, prop) is not None:
-        raise _refusal(model, prop)
-    assert isinstance(prop.path, ir.Path)
-    base = low if low is not None else lowered(model, "nondet")
+    return split_all(model, [prop], low=low)[prop.name]
+
+
+@dataclass(frozen=True)
+class _Asked:
+    """One property's queries on the instrumented model: the whole property by each
+    scheduler (`whole`), and each cause's part (`parts`, by the cause's key)."""
+
+    prop: ir.Property
+    whole: dict[Under, str]
+    parts: dict[tuple[Kind, str, str, int], str]
+
+
+def split_all(model: ir.Model, props: Sequence[ir.Property], *,
+              low: Lowered | None = None) -> dict[str, list[Split]]:
+    """:func:`split` of several properties on one model: each gets a cause variable of
+    its own, and Storm builds the model once for all."""
+    bad = [p for p in props if why_not(model, p) is not None]
+    if bad:
+        raise CompileError([d for p in bad for d in _refusal(model, p).diagnostics])
+    inst = low if low is not None else lowered(model, "nondet")
     if model.prob_intervals:
         # at the midpoint: every interval probability at the middle of its interval
-        base = dataclasses.replace(base, parameters=())
-    var = _fresh(model)
-    target = inline(prop.path.target, model)
-    inst, numbering = instrument(base, target, var)
+        inst = dataclasses.replace(inst, parameters=())
+    variables = []
+    numberings = []
+    for prop in props:
+        assert isinstance(prop.path, ir.Path)
+        var = _fresh(inst.model)
+        inst, numbering = instrument(inst, inline(prop.path.target, model), var)
+        variables.append(var)
+        numberings.append(numbering)
     p = PrismPrinter(weight_formula_names(inst), inst)
     opts: list[Under] = ["min", "max"] if inst.kind == "mdp" else ["value"]
-    whole = {u: formula_text(prop, "" if u == "value" else u, p) for u in opts}
-    cause = E.VarRef(var, E.Type.INT)
-    parts = {}
-    for key, k in numbering.keys.items():
-        restricted = E.conj(prop.path.target, E.Binary("==", cause, E.lit(k), E.Type.BOOL))
-        path = dataclasses.replace(prop.path, target=restricted)
-        parts[key] = formula_text(dataclasses.replace(prop, path=path), "", p)
-    values = _storm(emit(inst).model, whole, parts)
+    asked = []
+    for prop, var, numbering in zip(props, variables, numberings, strict=True):
+        assert isinstance(prop.path, ir.Path)
+        whole = {u: formula_text(prop, "" if u == "value" else u, p) for u in opts}
+        cause = E.VarRef(var, E.Type.INT)
+        parts = {}
+        for key, k in numbering.keys.items():
+            restricted = E.conj(prop.path.target,
+                                E.Binary("==", cause, E.lit(k), E.Type.BOOL))
+            path = dataclasses.replace(prop.path, target=restricted)
+            parts[key] = formula_text(dataclasses.replace(prop, path=path), "", p)
+        asked.append(_Asked(prop, whole, parts))
+    values = _storm(emit(inst).model, asked)
     names = model.mode_names
-    out = []
-    for u in opts:
-        total, got = values[u]
-        causes = tuple(sorted(
-            (Cause(kind, event, during, names[mode], v)
-             for (kind, event, during, mode), v in got.items()
-             if v > 0), key=lambda c: (-c.probability, c.kind, c.event, c.mode)))
-        out.append(Split(prop.name, u, total, causes))
+    out: dict[str, list[Split]] = {}
+    for a, got in zip(asked, values, strict=True):
+        splits = []
+        for u in opts:
+            total, shares = got[u]
+            causes = tuple(sorted(
+                (Cause(kind, event, during, names[mode], v)
+                 for (kind, event, during, mode), v in shares.items() if v > 0),
+                key=lambda c: (-c.probability, c.kind, c.event, c.during, c.mode)))
+            splits.append(Split(a.prop.name, u, total, causes))
+        out[a.prop.name] = splits
     return out
 
 
-def _storm(model_text: str, whole: dict[Under, str], parts: dict[Any, str]
-           ) -> dict[Under, tuple[float, dict[Any, float]]]:
-    """Storm's sparse engine, in this process: each of `whole` (by the scheduler it
-    optimises) with its scheduler applied, and every one of `parts` on the DTMC it
-    induces."""
+Shares = dict[Under, tuple[float, dict[tuple[Kind, str, str, int], float]]]
+
+
+def _storm(model_text: str, asked: Sequence[_Asked]) -> list[Shares]:
+    """Storm's sparse engine, in this process, on the model built once: each property's
+    whole query (by the scheduler it optimises) with its scheduler applied, and each of
+    its parts on the DTMC that induces."""
     import stormpy
     from stormpy import developer
 
@@ -269,25 +301,26 @@ def _storm(model_text: str, whole: dict[Under, str], parts: dict[Any, str]
             with open(path, "w", encoding="utf-8") as f:
                 f.write(model_text)
             program = stormpy.parse_prism_program(path)
-        keys = list(parts)
-        props = stormpy.parse_properties(";\n".join([*whole.values(), *parts.values()]),
-                                         program)
-        tops, rest = props[:len(whole)], props[len(whole):]
-        built = stormpy.build_model(program, props)
+        texts = [t for a in asked for t in [*a.whole.values(), *a.parts.values()]]
+        parsed = iter(stormpy.parse_properties(";\n".join(texts), program))
+        queries = [([next(parsed) for _ in a.whole], [next(parsed) for _ in a.parts])
+                   for a in asked]
+        built = stormpy.build_model(program, [q for w, r in queries for q in (*w, *r)])
         env = _precise(stormpy)
-        out: dict[Under, tuple[float, dict[Any, float]]] = {}
         init = built.initial_states[0]
-        for u, prop in zip(whole, tops, strict=True):
-            mdp = u != "value"
-            res = stormpy.model_checking(built, prop, extract_scheduler=mdp,
-                                         environment=env)
-            dtmc = induced(stormpy, built, res)[0] if mdp else built
-            start = dtmc.initial_states[0]
-            got = {}
-            for key, q in zip(keys, rest, strict=True):
-                r = stormpy.model_checking(dtmc, q, environment=env)
-                got[key] = float(r.get_value(start))
-            out[u] = (float(res.get_value(init)), got)
+        out = []
+        for a, (tops, rest) in zip(asked, queries, strict=True):
+            shares: Shares = {}
+            for u, prop in zip(a.whole, tops, strict=True):
+                mdp = u != "value"
+                res = stormpy.model_checking(built, prop, extract_scheduler=mdp,
+                                             environment=env)
+                dtmc = induced(stormpy, built, res)[0] if mdp else built
+                start = dtmc.initial_states[0]
+                shares[u] = (float(res.get_value(init)), {
+                    key: float(stormpy.model_checking(dtmc, q, environment=env)
+                               .get_value(start)) for key, q in zip(a.parts, rest, strict=True)})
+            out.append(shares)
         return out
     except RuntimeError as exc:
         raise _fail(f"Storm could not split the property by cause: {' '.join(str(exc).split())}"
