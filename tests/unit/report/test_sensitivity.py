@@ -10,9 +10,10 @@ import pytest
 
 from afsmc import verify
 from afsmc.compiler import load
-from afsmc.report.sensitivity import figures, sensitivities
+from afsmc.report.sensitivity import Sensitivity, figures, sensitivities
 from afsmc.sim.evidence import value_spans
 from afsmc.verify.core.options import VerifyOptions
+from afsmc.verify.outcome.results import PropertyResult
 from tests.conftest import EXAMPLES
 
 pytestmark = pytest.mark.storm
@@ -36,13 +37,13 @@ def _with(text: str, path: str, name: str, value: float) -> str:
     return text[:start] + repr(value) + text[end:]
 
 
-def _run(path: Path, text: str, names: list[str], **kw: object) -> dict[str, object]:
+def _run(path: Path, text: str, names: list[str], **kw: object) -> dict[str, PropertyResult]:
     res = verify.run(str(path), text=text, properties=names, uniform=False, **kw)  # type: ignore[arg-type]
     return {p.name: p for p in res.properties}
 
 
 @pytest.fixture(scope="module")
-def computed(spec: Path) -> list[object]:
+def computed(spec: Path) -> list[Sensitivity]:
     text = spec.read_text(encoding="utf-8")
     model = load(str(spec)).model
     res = verify.run(str(spec), properties=["fault_low", "finish_ok"], uniform=False)
@@ -60,7 +61,7 @@ def test_the_figures_are_the_probabilities_and_double_params() -> None:
     assert "OBJECTS" not in kinds  # an integer has no derivative
 
 
-def test_each_derivative_agrees_with_two_verify_runs(spec: Path, computed: list) -> None:
+def test_each_derivative_agrees_with_two_verify_runs(spec: Path, computed: list[Sensitivity]) -> None:
     text = spec.read_text(encoding="utf-8")
     assert len(computed) == 4
     for s in computed:
@@ -70,28 +71,30 @@ def test_each_derivative_agrees_with_two_verify_runs(spec: Path, computed: list)
                   precision=1e-12)[s.requirement]
         down = _run(spec, _with(text, str(spec), f.name, f.value - h), [s.requirement],
                     precision=1e-12)[s.requirement]
-        fd = (getattr(up, which) - getattr(down, which)) / (2 * h)
+        fd = (float(getattr(up, which)) - float(getattr(down, which))) / (2 * h)
         assert s.derivative is not None
         assert (s.derivative > 0) == (fd > 0), s
         assert s.derivative == pytest.approx(fd, rel=1e-3), s
 
 
-def test_ranked_most_influential_first(computed: list) -> None:
+def test_ranked_most_influential_first(computed: list[Sensitivity]) -> None:
     for name in ("fault_low", "finish_ok"):
-        mine = [abs(s.derivative) for s in computed if s.requirement == name]
+        mine = [abs(s.derivative or 0.0) for s in computed if s.requirement == name]
         assert mine == sorted(mine, reverse=True)
-        assert [s.figure.name for s in computed if s.requirement == name][0] == "P_FAULT"
+        assert next(s.figure.name for s in computed if s.requirement == name) == "P_FAULT"
 
 
-def test_the_verdict_flips_at_the_flip_value(spec: Path, computed: list) -> None:
+def test_the_verdict_flips_at_the_flip_value(spec: Path, computed: list[Sensitivity]) -> None:
     text = spec.read_text(encoding="utf-8")
     flips = [s for s in computed if s.flip is not None]
     assert {s.figure.name for s in flips} == {"P_FAULT", "P_SLIP"}
     for s in flips:
+        assert s.flip is not None
         lo, hi = s.flip * (1 - 1e-4), s.flip * (1 + 1e-4)
         below, above = (_run(spec, _with(text, str(spec), s.figure.name, x),
                              [s.requirement])[s.requirement] for x in (lo, hi))
         # more faults or slips: the deciding bound crosses the threshold, away from holds
+        assert below.verdict is not None and above.verdict is not None
         assert below.verdict.kind == "holds" and above.verdict.kind != "holds", s
         assert (above.verdict.decided_by or "") in ("min", "max")
         threshold = {"fault_low": 0.2, "finish_ok": 0.8}[s.requirement]
