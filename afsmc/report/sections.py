@@ -195,24 +195,39 @@ def _fails(case: Case) -> Section:
     return Section("how-it-fails", "How it fails", blocks)
 
 
-def _worst(case: Case) -> Section:
-    blocks: list[Block] = []
+def worst_ends(case: Case) -> list[tuple[PropertyResult, str]]:
+    """The strategies the worst case shows: each requirement's at the bound its verdict
+    rests on, and each failure property's at its max (the most failures)."""
+    out = []
     for p in case.result.properties:
         if not p.strategy:
             continue
-        for end in ("min", "max"):
-            entries = p.strategy.get(end) or []
-            if not entries:
-                continue
-            blocks.append(Para(f"{p.name}, its {end} {number(getattr(p, end))}: the "
-                               "choices that attain it"))
+        if p.verdict is not None and p.verdict.decided_by in ("min", "max"):
+            out.append((p, p.verdict.decided_by))
+        elif p.threshold is None and p.name in case.causes:
+            out.append((p, "max"))
+    return out
+
+
+def _worst(case: Case) -> Section:
+    blocks: list[Block] = []
+    for p, end in worst_ends(case):
+        assert p.strategy is not None
+        entries = p.strategy.get(end) or []
+        what = "the verdict rests on" if p.threshold is not None else "the most failures"
+        blocks.append(Para(f"{p.name}, its {end} {number(getattr(p, end))} ({what}): "
+                           + ("the choices that attain it" if entries else
+                              "no choice that matters: every state it reaches gives the "
+                              "same value either way")))
+        if entries:
             blocks.append(Table(["in mode", "action", "constant", "takes", "when", "states"],
                                 [[e.mode, e.action, e.constant, f"{e.end} {e.value}",
                                   e.when or "always", f"{e.states:,}"] for e in entries],
                                 "playbook"))
     if not blocks:
         blocks.append(Para("Nothing in the mission is chosen (no interval constant, no "
-                           "choice of the agents' order): there is no worst case beyond "
+                           "choice of the agents' order), or no requirement or failure "
+                           "property depends on a choice: there is no worst case beyond "
                            "the values above."))
     return Section("worst-case", "The worst case", blocks)
 

@@ -148,7 +148,9 @@ def test_the_sensitivities_and_the_playbook(page: tuple[str, Page]) -> None:
     assert all(float(r["derivative"]) != 0 for r in rows)
     play = _rows(page[1], "playbook")
     assert {r["constant"] for r in play} == {"MOVE_COST"}
-    assert {r["takes"] for r in play} == {"floor 1", "ceil 2"}
+    # the worst case of each requirement and of fault (its max): moving costs 2, always
+    assert {r["takes"] for r in play} == {"ceil 2"} and {r["when"] for r in play} == {"always"}
+    assert len(page[1].tables["playbook"]) == 3
 
 
 def test_the_same_bytes_but_for_the_timestamp(spec: Path, page: tuple[str, Page]) -> None:
