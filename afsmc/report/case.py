@@ -21,7 +21,6 @@ from afsmc.api.results import verify_file
 from afsmc.api.sim_check import sim_check_file
 from afsmc.backends.dot import Overlay
 from afsmc.backends.dot import diagram as dot_diagram
-from afsmc.compiler import Checked
 from afsmc.compiler import load as load_checked
 from afsmc.diagnostics import CompileError
 from afsmc.model import ir
@@ -29,6 +28,7 @@ from afsmc.report.baseline import Comparison, compare
 from afsmc.report.causes import Split, split_all, splittable, why_not
 from afsmc.report.sensitivity import Sensitivity, sensitivities
 from afsmc.sim.evidence import Evidence
+from afsmc.verify.core.api import load_with_formulas
 from afsmc.verify.core.options import VerifyOptions
 from afsmc.verify.outcome.results import PropertyResult, VerifyResult
 from afsmc.verify.outcome.strategy import has_choices
@@ -170,12 +170,11 @@ def drawn(model: ir.Model, res: VerifyResult) -> tuple[str, str]:
     return re.sub(r"<!--.*?-->\n?", "", svg, flags=re.S), ""
 
 
-def causes_of(checked: Checked, res: VerifyResult, say: Say) -> tuple[dict[str, list[Split]],
-                                                                      list[str]]:
+def causes_of(model: ir.Model, res: VerifyResult, say: Say) -> tuple[dict[str, list[Split]],
+                                                                     list[str]]:
     """The causes of every failure property (for the report's "How it fails"), and why
     the other reachability properties are not there."""
     notes = []
-    model = checked.model
     checked_names = {p.name for p in res.properties}
     wanted = []
     for prop in model.properties:
@@ -231,7 +230,9 @@ def build(path: str, consts: Mapping[str, str] | None = None, *,
     res = verify_file(path, list(properties), text=text, consts=consts, checked=checked,
                       options=opts, formulas=list(formulas), progress=progress).raw
     svg, svg_note = drawn(model, res)
-    causes, notes = causes_of(checked, res, say)
+    # the ad-hoc formulas among the properties, named as verify named them
+    causes, notes = causes_of(load_with_formulas(path, consts, formulas, checked=checked).model,
+                              res, say)
     evidence: list[Evidence] = []
     if recheck:
         say(f"sim-check, {recheck:,} runs per constant")

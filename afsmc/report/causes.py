@@ -167,7 +167,10 @@ def instrument(low: Lowered, target: E.Expr, var: str) -> tuple[Lowered, _Number
             continue
         branches = []
         for b in cmd.branches:
-            kind: Kind = "hazard" if b.hazard is not None else "action"
+            # a probabilistic hazard is a branch of the action it strikes; a preemptive
+            # one (`hazard H from S when φ`) is a command of its own
+            kind: Kind = "hazard" if b.hazard is not None or cmd.kind == "preemptive" \
+                else "action"
             event = b.hazard if b.hazard is not None else cmd.action
             enters = E.conj(fresh, E.neg(target), _post(target, b.updates))
             during = cmd.action if b.hazard is not None else ""

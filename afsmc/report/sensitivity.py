@@ -5,20 +5,23 @@ prob P = 0.01`, and interval probabilities `const prob P = [lo, hi]`, taken at t
 midpoint). A requirement's sensitivity to a figure is the derivative of the bound its
 verdict rests on (`decided_by`: min, max or the value) at the nominal point, by the
 central difference of two verifications with the figure set a step below and above its
-value in the file's text, checked sound to `PRECISION` so that the difference is
-exact to far more digits than shown (docs/report.md, "What matters most"). Integer
-constants have no derivative and are left out.
+value in the file's text, each requirement asked for its values (`=?`: verify's exact
+backward pass where the model is acyclic, else its value iteration to a relative 1e-10)
+so that the difference is exact to far more digits than shown (docs/report.md, "What
+matters most"). Integer constants have no derivative and are left out.
 
 The flip value of a probability: where in its range ([0, 1], or its interval) the
-deciding bound crosses the threshold, if it does there: found by regula falsi on
-further verifications, and stated with the bound's value there. A `param double`
-declares no range, so it has none.
+deciding bound crosses the threshold, searched from the figure's value towards the end
+of the range the derivative points to (the bound taken to move one way along it): found
+by regula falsi on further verifications, and stated with the bound's value there. A
+`param double` declares no range, so it has none.
 """
 
 from __future__ import annotations
 
 import dataclasses
 import math
+import re
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 
@@ -30,10 +33,9 @@ from afsmc.sim.evidence import value_spans
 from afsmc.verify.core.options import VerifyOptions
 from afsmc.verify.outcome.results import PropertyResult
 
-PRECISION = 1e-11  # the sound precision of every verification here (absolute)
 STEP = 1e-4  # the step, relative to the figure's value (its distance from 0 and 1 for a
 # probability)
-FLIP_RUNS = 12  # at most this many verifications to find a flip value
+FLIP_RUNS = 10  # at most this many verifications to find a flip value, after its end's
 
 Say = Callable[[str], None]
 
@@ -80,14 +82,28 @@ def figures(model: ir.Model) -> list[Figure]:
     return out
 
 
+QUERY = re.compile(r'^(P|R\{"[^"]*"\})(min|max)?(<=|>=|<|>)\s*[^\s\[]+')
+
+
+def as_query(formula: str) -> str:
+    """A requirement's formula asked for its values: `P>=0.75 [ ... ]` -> `P=? [ ... ]`,
+    so that verify takes its quickest exact route (a threshold makes it check sound, by
+    iterating)."""
+    return QUERY.sub(lambda m: f"{m.group(1)}{m.group(2) or ''}=?", formula, count=1)
+
+
 class Runner:
     """Verifications of some requirements with one figure changed: a `param` through its
-    --const, any other constant by its value in the file's text."""
+    --const, any other constant by its value in the file's text. Each requirement is
+    asked as a formula of its own, `=?` for its threshold (`as_query`), and found again
+    by its place among them."""
 
     def __init__(self, path: str, text: str, consts: Mapping[str, str],
-                 names: Sequence[str], options: VerifyOptions):
-        self.path, self.text, self.consts, self.names = path, text, dict(consts), list(names)
-        self.options = dataclasses.replace(options, precision=PRECISION, exact=False,
+                 requirements: Sequence[PropertyResult], options: VerifyOptions):
+        self.path, self.text, self.consts = path, text, dict(consts)
+        self.names = [p.name for p in requirements]
+        self.formulas = [as_query(p.formula) for p in requirements]
+        self.options = dataclasses.replace(options, precision=None, exact=False,
                                            strategy=False, witness=None, uniform=False)
         self.spans = value_spans(text, path)
         self.runs = 0
@@ -100,9 +116,9 @@ class Runner:
             start, end = self.spans[f.name]
             text = text[:start] + repr(value) + text[end:]
         self.runs += 1
-        res = verify_file(self.path, self.names, text=text, consts=consts,
-                          options=self.options)
-        return {p.name: p for p in res.properties}
+        res = verify_file(self.path, [], text=text, consts=consts, options=self.options,
+                          formulas=self.formulas)
+        return dict(zip(self.names, res.properties, strict=True))
 
 
 def _bound(p: PropertyResult, which: str) -> float:
@@ -127,24 +143,31 @@ def _missing(p: PropertyResult, which: str, value: float) -> float:
     return (t.bound - value) if t.op in (">=", ">") else (value - t.bound)
 
 
-def _flip(run: Runner, f: Figure, p: PropertyResult, which: str
+def _flip(run: Runner, f: Figure, p: PropertyResult, which: str, at: float, slope: float
           ) -> tuple[float | None, float | None, str]:
-    """Where in its range the deciding bound crosses the threshold (regula falsi,
-    Illinois), and the bound there; None and why not."""
+    """Where in its range the deciding bound crosses the threshold, and the bound there;
+    None and why not. `at`: the bound at the figure's value, `slope`: its derivative. The
+    search goes from the value towards the end of the range the derivative points to
+    (towards the threshold), and finds the crossing by regula falsi (Illinois)."""
     if f.range is None:
         return None, None, "no range declared"
-    lo, hi = f.range
-    name = p.name
-    a, b = lo, hi
-    fa = _missing(p, which, _bound(run.bounds(f, a)[name], which))
-    fb = _missing(p, which, _bound(run.bounds(f, b)[name], which))
-    if math.isnan(fa) or math.isnan(fb) or (fa > 0) == (fb > 0):
-        return None, None, "the verdict does not flip within its range"
+    t = p.threshold
+    assert t is not None
+    a, fa = f.value, _missing(p, which, at)
+    towards = -slope if t.op in (">=", ">") else slope  # d(missing)/d(figure)
+    if towards == 0 or fa == 0:
+        return None, None, "the bound does not move towards the threshold"
+    up = (towards > 0) == (fa < 0)
+    b = f.range[1] if up else f.range[0]
+    fb = _missing(p, which, _bound(run.bounds(f, b)[p.name], which))
+    if math.isnan(fb) or (fa > 0) == (fb > 0):
+        return None, None, (f"the verdict does not flip between {f.value:g} and {b:g}, the "
+                            "end of its range the derivative points to")
     side = 0
     c, fc = a, fa
     for _ in range(FLIP_RUNS):
         c = (a * fb - b * fa) / (fb - fa)
-        fc = _missing(p, which, _bound(run.bounds(f, c)[name], which))
+        fc = _missing(p, which, _bound(run.bounds(f, c)[p.name], which))
         if abs(fc) <= 1e-9 or abs(b - a) <= 1e-9 * max(1.0, abs(c)):
             break
         if (fc > 0) == (fb > 0):
@@ -157,8 +180,6 @@ def _flip(run: Runner, f: Figure, p: PropertyResult, which: str
             if side == 1:
                 fb /= 2
             side = 1
-    t = p.threshold
-    assert t is not None
     bound = t.bound - fc if t.op in (">=", ">") else t.bound + fc
     return c, bound, ""
 
@@ -172,7 +193,7 @@ def sensitivities(path: str, text: str, model: ir.Model, consts: Mapping[str, st
     reqs = [p for p in requirements if p.verdict is not None and p.verdict.decided_by]
     if not reqs:
         return out
-    run = Runner(path, text, consts, [p.name for p in reqs], options)
+    run = Runner(path, text, consts, reqs, options)
     for f in figures(model):
         h = _step(f)
         if say:
@@ -188,9 +209,11 @@ def sensitivities(path: str, text: str, model: ir.Model, consts: Mapping[str, st
             continue
         for p in reqs:
             which = str(p.verdict.decided_by)  # type: ignore[union-attr]
-            d = (_bound(up[p.name], which) - _bound(down[p.name], which)) / (2 * h)
+            hi, lo = _bound(up[p.name], which), _bound(down[p.name], which)
+            d = (hi - lo) / (2 * h)
             try:
-                flip, there, note = _flip(run, f, p, which)
+                flip, there, note = (None, None, "no derivative") if math.isnan(d) else \
+                    _flip(run, f, p, which, (hi + lo) / 2, d)
             except (CompileError, AfsmError) as exc:
                 flip, there, note = None, None, f"no flip searched: {exc.diagnostics[0].message}"
             out.append(Sensitivity(p.name, which, f, None if math.isnan(d) else d, h,

@@ -54,7 +54,7 @@ def restricted(low: Lowered, target: E.Expr, cause: Cause) -> Lowered:
         branches = []
         for b in cmd.branches:
             event = b.hazard if b.hazard is not None else cmd.action
-            kind = "hazard" if b.hazard is not None else "action"
+            kind = "hazard" if b.hazard is not None or cmd.kind == "preemptive" else "action"
             during = cmd.action if b.hazard is not None else ""
             after = dict(b.updates).get("mode", E.CurrentMode())
             mine = (kind, event, during) == (cause.kind, cause.event, cause.during)
@@ -151,6 +151,27 @@ def test_a_small_dtmcs_causes_equal_their_closed_forms(tmp_path: object) -> None
     done = [c for c in over.causes if c.mode == "Done"]
     assert [(c.kind, c.event, c.during) for c in done] == [("action", "Finish", "")]
     assert done[0].probability == pytest.approx(step_ok ** 2 * q, abs=1e-12)
+
+
+PREEMPTED = """
+machine clocked;
+var t : [0..3] init 0;
+mode Work = 0 initial;
+mode Done = 1 final;
+mode Late = 2 final;
+action Step in Work when t < 3 { 0.5: t += 1; 0.5: goto Done; }
+hazard TimeUp from Work when t >= 2 { goto Late; }
+property late = P=? [ F mode == Late ];
+"""
+
+
+def test_a_preemptive_hazard_is_a_cause_of_its_own() -> None:
+    # `hazard H from S when φ` preempts every action where φ holds: its own command
+    model = load("clocked.afsm", {}, text=PREEMPTED).model
+    (s,) = split(model, _prop(model, "late"))
+    assert [(c.kind, c.event, c.during, c.mode) for c in s.causes] == [
+        ("hazard", "TimeUp", "", "Late")]
+    assert s.causes[0].probability == pytest.approx(0.25, abs=1e-12)  # two steps of t += 1
 
 
 def test_properties_without_a_first_entry_are_refused_with_e417() -> None:
