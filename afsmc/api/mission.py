@@ -229,7 +229,7 @@ class Mission:
         of :meth:`verify` (``engine``, ``formulas``, ...). Raises AfsmError."""
         from afsmc.api.results import VERIFY_DEFAULTS, names
         from afsmc.report import baseline as base
-        from afsmc.report.case import build
+        from afsmc.report.case import build, command
         from afsmc.report.document import Report
         from afsmc.verify.core.options import VerifyOptions
 
@@ -242,6 +242,8 @@ class Mission:
                          baseline_name="" if baseline is None else os.fspath(baseline),
                          tolerance=tolerance, formulas=formulas, text=self.text,
                          sensitivity=sensitivity, progress=progress,
+                         command=command(self.path, self.consts, names(properties), formulas,
+                                         opts.engine),
                          generated="Made from the Python API.")
         except CompileError as exc:
             raise AfsmError.of(exc) from None

@@ -7,7 +7,6 @@ from __future__ import annotations
 import argparse
 import datetime
 import os
-import shlex
 import sys
 
 from afsmc.commands.common import (
@@ -24,7 +23,7 @@ from afsmc.diagnostics import CompileError
 from afsmc.files import write_atomic
 from afsmc.report import baseline as base
 from afsmc.report import html, markdown
-from afsmc.report.case import build
+from afsmc.report.case import build, command
 
 FORMATS = ("html", "md")
 
@@ -58,17 +57,6 @@ def generated_line() -> str:
     return f"Generated {when.strftime('%Y-%m-%d %H:%M:%S UTC')}."
 
 
-def command_line(args: argparse.Namespace) -> str:
-    """The command that reproduces the numbers, its argument files expanded."""
-    words = ["afsmc", "report", args.file]
-    words += [f"--const={k}={v}" for k, v in overrides(args).items()]
-    words += [f"--property={n}" for n in args.property]
-    words += [f"--formula={f}" for f in args.formula]
-    if args.engine != "auto":
-        words.append(f"--engine={args.engine}")
-    return shlex.join(words)
-
-
 def _format(args: argparse.Namespace) -> str:
     if args.format:
         return str(args.format)
@@ -89,7 +77,8 @@ def run(args: argparse.Namespace) -> int:
             old = base.read(args.baseline, load(args.file, overrides(args)).model.name)
         case = build(args.file, overrides(args), options=storm_options(args),
                      properties=args.property, recheck=args.recheck or 0,
-                     command=command_line(args), generated=generated_line(),
+                     command=command(args.file, overrides(args), args.property,
+                                     args.formula, args.engine), generated=generated_line(),
                      baseline=old, baseline_name=args.baseline or "",
                      tolerance=args.tolerance, formulas=args.formula,
                      sensitivity=args.sensitivity, progress=say)

@@ -12,6 +12,7 @@ import hashlib
 import os
 import platform
 import re
+import shlex
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 
@@ -72,6 +73,16 @@ class Case:
 
     def property(self, name: str) -> PropertyResult:
         return self.result.property(name)
+
+
+def command(path: str, consts: Mapping[str, str], properties: Sequence[str] = (),
+            formulas: Sequence[str] = (), engine: str = "auto") -> str:
+    """The `afsmc report` command that makes the same numbers, argument files expanded."""
+    words = ["afsmc", "report", path, *[f"--const={k}={v}" for k, v in consts.items()],
+             *[f"--property={n}" for n in properties], *[f"--formula={f}" for f in formulas]]
+    if engine != "auto":
+        words.append(f"--engine={engine}")
+    return shlex.join(words)
 
 
 def description(text: str) -> str:

@@ -218,3 +218,18 @@ def test_every_gallery_example_has_a_report(path: Path, tmp_path: Path) -> None:
     p = Page(out.read_text(encoding="utf-8"))
     assert p.sections == SECTIONS and "svg" in p.tags
     assert (ROOT / "docs").is_dir()
+
+
+def test_the_api_report_is_the_commands(spec: Path, page: tuple[str, Page],
+                                        tmp_path: Path) -> None:
+    import afsmc
+
+    r = afsmc.load(str(spec)).report()
+    inline = Page(r._repr_html_())
+    assert inline.sections == SECTIONS and "svg" in inline.tags
+    # the same content as the command's page, but for the line that says how it was made
+    ours = [x for x in r.html().splitlines() if "Generated" not in x and "Made from" not in x]
+    theirs = [x for x in page[0].splitlines() if "Generated" not in x]
+    assert ours == theirs
+    saved = r.save(tmp_path / "r.md")
+    assert Path(saved).read_text(encoding="utf-8").startswith("# Assurance case: patrol")
