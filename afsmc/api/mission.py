@@ -219,14 +219,15 @@ class Mission:
 
     def report(self, properties: Sequence[str] | str | None = None, *, recheck: int = 0,
                baseline: str | os.PathLike[str] | None = None, tolerance: float = 0.0,
-               sensitivity: bool = True, progress: Callable[[str], None] | None = None,
-               **options: Any) -> Report:
+               sensitivity: bool = True, worst_case: bool = True, causes: bool = True,
+               progress: Callable[[str], None] | None = None, **options: Any) -> Report:
         """The assurance case of `afsmc report` (docs/report.md): it shows inline in
         Jupyter, ``.save("report.html")`` (or ``.md``) writes it. `recheck`: re-run every
         `from sim` simulation with that many runs (0: not re-checked); `baseline`: an
         earlier `afsmc verify --json` file to compare with, flagging moves beyond
-        `tolerance`; `sensitivity=False` leaves out "What matters most"; `options`: those
-        of :meth:`verify` (``engine``, ``formulas``, ...). Raises AfsmError."""
+        `tolerance`; `sensitivity=False`, `worst_case=False` and `causes=False` leave out
+        "What matters most", "The worst case" and "How it fails"; `options`: those of
+        :meth:`verify` (``engine``, ``formulas``, ...). Raises AfsmError."""
         from afsmc.api.results import VERIFY_DEFAULTS, names
         from afsmc.report import baseline as base
         from afsmc.report.case import build, command
@@ -241,7 +242,8 @@ class Mission:
                          properties=names(properties), recheck=recheck, baseline=old,
                          baseline_name="" if baseline is None else os.fspath(baseline),
                          tolerance=tolerance, formulas=formulas, text=self.text,
-                         sensitivity=sensitivity, progress=progress,
+                         sensitivity=sensitivity, worst_case=worst_case, causes=causes,
+                         progress=progress,
                          command=command(self.path, self.consts, names(properties), formulas,
                                          opts.engine),
                          generated="Made from the Python API.")

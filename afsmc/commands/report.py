@@ -43,6 +43,11 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--no-sensitivity", dest="sensitivity", action="store_false",
                    help="leave out \"What matters most\" (each requirement's derivative by "
                         "every figure: two more verifications per figure)")
+    p.add_argument("--no-worst-case", dest="worst_case", action="store_false",
+                   help="leave out \"The worst case\" (the strategies: on a large model, "
+                        "verify --strategy costs a slower build)")
+    p.add_argument("--no-causes", dest="causes", action="store_false",
+                   help="leave out \"How it fails\" (the causes: another build of the model)")
     add_baseline_options(p)
     add_storm_options(p)
     p.set_defaults(json=False)
@@ -81,7 +86,8 @@ def run(args: argparse.Namespace) -> int:
                                      args.formula, args.engine), generated=generated_line(),
                      baseline=old, baseline_name=args.baseline or "",
                      tolerance=args.tolerance, formulas=args.formula,
-                     sensitivity=args.sensitivity, progress=say)
+                     sensitivity=args.sensitivity, worst_case=args.worst_case,
+                     causes=args.causes, progress=say)
         text = (html if fmt == "html" else markdown).page(case)
         if out == "-":
             sys.stdout.write(text)

@@ -61,7 +61,7 @@ class Case:
     result: VerifyResult
     svg: str  # the diagram with the results drawn in ("" and `svg_note` if it cannot be)
     svg_note: str
-    causes: dict[str, list[Split]]
+    causes: dict[str, list[Split]] | None  # None: not asked for
     figures: list[Figure]
     rechecked: int  # the runs of the fresh sim-check; 0: not re-checked
     reproduce: list[tuple[str, str]]
@@ -70,6 +70,7 @@ class Case:
     baseline: Comparison | None = None
     notes: list[str] = field(default_factory=list)
     sensitivity: list[Sensitivity] | None = None  # None: not asked for
+    worst_case: bool = True  # the strategies were asked for
 
     def property(self, name: str) -> PropertyResult:
         return self.result.property(name)
@@ -225,25 +226,27 @@ def build(path: str, consts: Mapping[str, str] | None = None, *,
           recheck: int = 0, command: str = "", generated: str = "",
           baseline: Mapping[str, object] | None = None, baseline_name: str = "",
           tolerance: float = 0.0, formulas: Sequence[str] = (), text: str | None = None,
-          sensitivity: bool = True, progress: Say | None = None) -> Case:
+          sensitivity: bool = True, worst_case: bool = True, causes: bool = True,
+          progress: Say | None = None) -> Case:
     """Gather the report of the .afsm file at `path`: one verification with `options`
-    (strategies added where the mission has choices), the causes, the figures
-    (re-checked with `recheck` runs each, 0: not), a comparison with `baseline` (an
-    earlier `afsmc verify --json` object). Raises CompileError."""
+    (strategies added where the mission has choices, unless not `worst_case`), the
+    causes (unless not `causes`), the sensitivities (unless not `sensitivity`), the
+    figures (re-checked with `recheck` runs each, 0: not), a comparison with `baseline`
+    (an earlier `afsmc verify --json` object). Raises CompileError."""
     say = progress or (lambda line: None)
     consts = dict(consts or {})
     checked = load_checked(path, consts, text=text)
     model = checked.model
     opts = options or VerifyOptions(engine="auto")
-    if has_choices(model) and not opts.bisimulation:
+    if worst_case and has_choices(model) and not opts.bisimulation:
         opts = dataclasses.replace(opts, strategy=True)
     say("verifying")
     res = verify_file(path, list(properties), text=text, consts=consts, checked=checked,
                       options=opts, formulas=list(formulas), progress=progress).raw
     svg, svg_note = drawn(model, res)
     # the ad-hoc formulas among the properties, named as verify named them
-    causes, notes = causes_of(load_with_formulas(path, consts, formulas, checked=checked).model,
-                              res, say)
+    split, notes = causes_of(load_with_formulas(path, consts, formulas, checked=checked).model,
+                             res, say) if causes else (None, [])
     evidence: list[Evidence] = []
     if recheck:
         say(f"sim-check, {recheck:,} runs per constant")
@@ -258,6 +261,6 @@ def build(path: str, consts: Mapping[str, str] | None = None, *,
                                say)
     agents = [a.name for a in model.composition.agents] if model.composition else []
     return Case(path, model.name, description(checked.model.source.text),
-                dict(res.constants), list(model.modes), agents, res, svg, svg_note, causes,
+                dict(res.constants), list(model.modes), agents, res, svg, svg_note, split,
                 figures(model, evidence), recheck, reproduce(path, model, res), command,
-                generated, comparison, notes, slopes)
+                generated, comparison, notes, slopes, worst_case)

@@ -175,6 +175,9 @@ def _matters(case: Case) -> Section:
 
 def _fails(case: Case) -> Section:
     blocks: list[Block] = []
+    if case.causes is None:
+        blocks.append(Para("Not computed for this report (--no-causes)."))
+        return Section("how-it-fails", "How it fails", blocks)
     for name, splits in case.causes.items():
         p = case.property(name)
         for s in splits:
@@ -204,13 +207,16 @@ def worst_ends(case: Case) -> list[tuple[PropertyResult, str]]:
             continue
         if p.verdict is not None and p.verdict.decided_by in ("min", "max"):
             out.append((p, p.verdict.decided_by))
-        elif p.threshold is None and p.name in case.causes:
+        elif p.threshold is None and p.name in (case.causes or {}):
             out.append((p, "max"))
     return out
 
 
 def _worst(case: Case) -> Section:
     blocks: list[Block] = []
+    if not case.worst_case:
+        blocks.append(Para("Not computed for this report (--no-worst-case)."))
+        return Section("worst-case", "The worst case", blocks)
     for p, end in worst_ends(case):
         assert p.strategy is not None
         entries = p.strategy.get(end) or []

@@ -233,3 +233,14 @@ def test_the_api_report_is_the_commands(spec: Path, page: tuple[str, Page],
     assert ours == theirs
     saved = r.save(tmp_path / "r.md")
     assert Path(saved).read_text(encoding="utf-8").startswith("# Assurance case: patrol")
+
+
+def test_the_costly_sections_can_be_left_out(spec: Path) -> None:
+    r = run_cli("report", str(spec), "-o", "-", "--no-worst-case", "--no-causes",
+                "--no-sensitivity")
+    assert r.code == 0, r.err
+    p = Page(r.out)
+    assert p.sections == SECTIONS
+    assert "playbook" not in p.tables and "causes" not in p.tables
+    for flag in ("--no-worst-case", "--no-causes", "--no-sensitivity"):
+        assert f"Not computed for this report ({flag})." in r.out
