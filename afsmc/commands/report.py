@@ -15,9 +15,14 @@ from afsmc.commands.common import (
     add_file,
     fail,
     overrides,
-    usage_error,
 )
-from afsmc.commands.verify import add_storm_options, positive, progress_printer, storm_options
+from afsmc.commands.verify import (
+    add_storm_options,
+    positive,
+    progress_printer,
+    refuse_bisim_on_symbolic,
+    storm_options,
+)
 from afsmc.compiler import load
 from afsmc.diagnostics import CompileError
 from afsmc.files import write_atomic
@@ -73,8 +78,7 @@ def _format(args: argparse.Namespace) -> str:
 def run(args: argparse.Namespace) -> int:
     fmt = _format(args)
     out = args.output or os.path.splitext(os.path.basename(args.file))[0] + f".report.{fmt}"
-    if args.bisim and args.engine in ("hybrid", "dd"):
-        usage_error("--bisim needs the sparse model: use it with --engine sparse or auto")
+    refuse_bisim_on_symbolic(args)
     say = progress_printer(args) if args.progress else None
     try:
         old = None

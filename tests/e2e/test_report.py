@@ -244,3 +244,15 @@ def test_the_costly_sections_can_be_left_out(spec: Path) -> None:
     assert "playbook" not in p.tables and "causes" not in p.tables
     for flag in ("--no-worst-case", "--no-causes", "--no-sensitivity"):
         assert f"Not computed for this report ({flag})." in r.out
+
+
+def test_a_missed_requirement_has_a_negative_margin() -> None:
+    r = run_cli("report", str(EXAMPLES / "patrol.afsm"), "-f", 'P>=0.9 [ F "done" ]', "-o",
+                "-", "--no-worst-case", "--no-causes", "--no-sensitivity")
+    assert r.code == 0, r.err  # the report is made; the verdict is in it
+    (row,) = _rows(Page(r.out), "requirements")
+    v = json.loads(run_cli("verify", str(EXAMPLES / "patrol.afsm"), "-f",
+                           'P>=0.9 [ F "done" ]', "--json").out)["properties"][0]
+    assert row["verdict"] == v["verdict"] == "fails" and v["decided_by"] == "max"
+    assert float(row["margin"]) == pytest.approx(v["max"] - 0.9, abs=1e-15)
+    assert float(row["margin"]) < 0
