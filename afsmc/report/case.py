@@ -35,6 +35,7 @@ from afsmc.verify.outcome.results import PropertyResult, VerifyResult
 from afsmc.verify.outcome.strategy import has_choices
 
 Say = Callable[[str], None]
+PATHS = 3  # the most probable paths shown into each failure property's largest cause
 
 
 @dataclass(frozen=True)
@@ -201,7 +202,7 @@ def causes_of(model: ir.Model, res: VerifyResult, say: Say) -> tuple[dict[str, l
         return {}, notes
     say("causes of " + ", ".join(p.name for p in wanted))
     try:
-        splits = split_all(model, wanted)
+        splits = split_all(model, wanted, paths=PATHS)
     except CompileError as exc:
         return {}, [*notes, exc.diagnostics[0].message]
     out: dict[str, list[Split]] = {}

@@ -36,6 +36,9 @@ from afsmc.model import expr as E
 from afsmc.model import ir
 from afsmc.model.semantics import inline
 from afsmc.verify.core.api import load_with_formulas, select
+from afsmc.verify.engines.strategy_storm import Extract, Extracted, WitnessRequest
+from afsmc.verify.outcome.strategy import extract_for
+from afsmc.verify.outcome.witness import Witness, describe
 
 Kind = Literal["hazard", "action", "initial"]
 Under = Literal["min", "max", "value"]
@@ -77,6 +80,10 @@ class Split:
     under: Under
     total: float
     causes: tuple[Cause, ...]
+    # the most probable paths into the largest cause (under the max's scheduler, or a
+    # DTMC's), as mission traces, and why there are fewer than asked
+    paths: tuple[Witness, ...] = ()
+    paths_note: str = ""
 
     @property
     def summed(self) -> float:
@@ -237,9 +244,11 @@ class _Asked:
 
 
 def split_all(model: ir.Model, props: Sequence[ir.Property], *,
-              low: Lowered | None = None) -> dict[str, list[Split]]:
+              low: Lowered | None = None, paths: int = 0) -> dict[str, list[Split]]:
     """:func:`split` of several properties on one model: each gets a cause variable of
-    its own, and Storm builds the model once for all."""
+    its own, and Storm builds the model once for all. `paths`: with each property's
+    split under its max (a DTMC: its only one), the `paths` most probable paths into its
+    largest cause."""
     bad = [p for p in props if why_not(model, p) is not None]
     if bad:
         raise CompileError([d for p in bad for d in _refusal(model, p).diagnostics])
@@ -269,10 +278,11 @@ def split_all(model: ir.Model, props: Sequence[ir.Property], *,
             path = dataclasses.replace(prop.path, target=restricted)
             parts[key] = formula_text(dataclasses.replace(prop, path=path), "", p)
         asked.append(_Asked(prop, whole, parts))
-    values = _storm(emit(inst).model, asked)
+    extract = extract_for(inst, (), None, None) if paths else None
+    values = _storm(emit(inst, variant_labels=bool(paths)).model, asked, paths, extract)
     names = model.mode_names
     out: dict[str, list[Split]] = {}
-    for a, got in zip(asked, values, strict=True):
+    for a, (got, found) in zip(asked, values, strict=True):
         splits = []
         for u in opts:
             total, shares = got[u]
@@ -280,22 +290,38 @@ def split_all(model: ir.Model, props: Sequence[ir.Property], *,
                 (Cause(kind, event, during, names[mode], v)
                  for (kind, event, during, mode), v in shares.items() if v > 0),
                 key=lambda c: (-c.probability, c.kind, c.event, c.during, c.mode)))
-            splits.append(Split(a.prop.name, u, total, causes))
+            traced: tuple[Witness, ...] = ()
+            note = ""
+            if found is not None and u == opts[-1]:
+                traced = tuple(_without(w, set(variables))
+                               for w in describe(found.paths, found.variables, inst))
+                note = found.witness_note
+            splits.append(Split(a.prop.name, u, total, causes, traced, note))
         out[a.prop.name] = splits
     return out
+
+
+def _without(w: Witness, hidden: set[str]) -> Witness:
+    """A path with the cause variables left out of its steps' changes."""
+    steps = tuple(dataclasses.replace(st, changes={k: v for k, v in st.changes.items()
+                                                   if k not in hidden}) for st in w.steps)
+    return dataclasses.replace(w, steps=steps,
+                               start={k: v for k, v in w.start.items() if k not in hidden})
 
 
 Shares = dict[Under, tuple[float, dict[tuple[Kind, str, str, int], float]]]
 
 
-def _storm(model_text: str, asked: Sequence[_Asked]) -> list[Shares]:
+def _storm(model_text: str, asked: Sequence[_Asked], paths: int = 0,
+           extract: Extract | None = None) -> list[tuple[Shares, Extracted | None]]:
     """Storm's sparse engine, in this process, on the model built once: each property's
     whole query (by the scheduler it optimises) with its scheduler applied, and each of
-    its parts on the DTMC that induces."""
+    its parts on the DTMC that induces; with `paths`, the most probable paths into the
+    largest part under the last scheduler (`extract`: the commands' labels)."""
     import stormpy
     from stormpy import developer
 
-    from afsmc.verify.engines.strategy_storm import induced
+    from afsmc.verify.engines.strategy_storm import builder_options, induced
 
     developer.set_log_level(developer.LogLevel.OFF)
     try:
@@ -308,26 +334,47 @@ def _storm(model_text: str, asked: Sequence[_Asked]) -> list[Shares]:
         parsed = iter(stormpy.parse_properties(";\n".join(texts), program))
         queries = [([next(parsed) for _ in a.whole], [next(parsed) for _ in a.parts])
                    for a in asked]
-        built = stormpy.build_model(program, [q for w, r in queries for q in (*w, *r)])
+        every = [q for w, r in queries for q in (*w, *r)]
+        built = stormpy.build_model(program, every) if extract is None else \
+            stormpy.build_model(program, options=builder_options(stormpy, every, program,
+                                                                 extract))
         env = _precise(stormpy)
         init = built.initial_states[0]
-        out = []
+        out: list[tuple[Shares, Extracted | None]] = []
         for a, (tops, rest) in zip(asked, queries, strict=True):
             shares: Shares = {}
+            found = None
             for u, prop in zip(a.whole, tops, strict=True):
                 mdp = u != "value"
                 res = stormpy.model_checking(built, prop, extract_scheduler=mdp,
                                              environment=env)
                 dtmc = induced(stormpy, built, res)[0] if mdp else built
                 start = dtmc.initial_states[0]
-                shares[u] = (float(res.get_value(init)), {
-                    key: float(stormpy.model_checking(dtmc, q, environment=env)
-                               .get_value(start)) for key, q in zip(a.parts, rest, strict=True)})
-            out.append(shares)
+                got = {key: float(stormpy.model_checking(dtmc, q, environment=env)
+                                  .get_value(start)) for key, q in zip(a.parts, rest, strict=True)}
+                shares[u] = (float(res.get_value(init)), got)
+                if extract is not None and paths and got:
+                    largest = max(range(len(rest)), key=lambda i: list(got.values())[i])
+                    found = _traced(stormpy, program, dtmc, rest[largest], paths, extract,
+                                    list(got.values())[largest])
+            out.append((shares, found))
         return out
     except RuntimeError as exc:
         raise _fail(f"Storm could not split the property by cause: {' '.join(str(exc).split())}"
                     ) from None
+
+
+def _traced(stormpy: Any, program: Any, dtmc: Any, part: Any, k: int, extract: Extract,
+            value: float) -> Extracted:
+    """The `k` most probable paths of `dtmc` into the states of a cause (`part`'s target),
+    as verify's `--witness` finds them (afsmc.verify.engines.strategy_storm)."""
+    from afsmc.verify.engines.strategy_storm import _paths, _valuations, _variables
+
+    variables = _variables(stormpy, program)
+    out = Extracted(variables=tuple(n for n, _, _ in variables))
+    _paths(stormpy, program, dtmc, part, WitnessRequest("cause", k),
+           _valuations(dtmc, variables), extract, out, value)
+    return out
 
 
 def _precise(stormpy: Any) -> Any:

@@ -12,6 +12,7 @@ from fractions import Fraction
 
 from afsmc.report.baseline import shown
 from afsmc.report.case import Case
+from afsmc.report.causes import Split
 from afsmc.verify.core.uncertainty import described
 from afsmc.verify.outcome.results import PropertyResult
 
@@ -173,6 +174,24 @@ def _matters(case: Case) -> Section:
     return Section("what-matters-most", "What matters most", blocks)
 
 
+def _paths(s: Split) -> list[Block]:
+    """The most probable paths into a split's largest cause, one row per path."""
+    if not s.causes or (not s.paths and not s.paths_note):
+        return []
+    out: list[Block] = [Para(f"The most probable ways into the largest cause, "
+                             f"{s.causes[0].text}:")]
+    rows = []
+    for i, w in enumerate(s.paths, 1):
+        steps = " → ".join(f"{st.mode}: {st.hazard + ' in ' if st.hazard else ''}{st.action}"
+                           for st in w.steps)
+        rows.append([str(i), number(w.probability), f"{steps} → {w.end_mode}"])
+    if rows:
+        out.append(Table(["path", "probability", "steps (mode: action)"], rows, "paths"))
+    if s.paths_note:
+        out.append(Para(s.paths_note, "note"))
+    return out
+
+
 def _fails(case: Case) -> Section:
     blocks: list[Block] = []
     if case.causes is None:
@@ -191,6 +210,7 @@ def _fails(case: Case) -> Section:
             blocks.append(Para(head))
             blocks.append(Table(["cause", "event", "during", "mode entered", "probability"],
                                 rows, "causes"))
+            blocks += _paths(s)
     blocks += [Para(n, "note") for n in case.notes]
     if not case.causes:
         blocks.append(Para("No property is the probability of reaching a target: there "

@@ -256,3 +256,16 @@ def test_a_missed_requirement_has_a_negative_margin() -> None:
     assert row["verdict"] == v["verdict"] == "fails" and v["decided_by"] == "max"
     assert float(row["margin"]) == pytest.approx(v["max"] - 0.9, abs=1e-15)
     assert float(row["margin"]) < 0
+
+
+def test_the_likeliest_paths_into_the_largest_cause(page: tuple[str, Page]) -> None:
+    tables = page[1].tables["paths"]
+    assert len(tables) == 2  # fault's and fault_low's, under their max's scheduler
+    rows = tables[0][1:]
+    assert len(rows) == 3
+    probs = [float(r[1]) for r in rows]
+    assert probs == sorted(probs, reverse=True)
+    # the likeliest: a fault in the first move (P_FAULT); then one good move first
+    assert probs[0] == pytest.approx(0.01, rel=1e-12)
+    assert probs[1] == pytest.approx(0.99 * 0.9 * 0.01, rel=1e-12)
+    assert all(r[2].endswith("Patrol: Fault in Move → Halted") for r in rows)
