@@ -22,6 +22,7 @@ from afsmc.api.results import verify_file
 from afsmc.api.sim_check import sim_check_file
 from afsmc.backends.dot import Overlay
 from afsmc.backends.dot import diagram as dot_diagram
+from afsmc.check.sim_sources import INTERVAL, policy_of
 from afsmc.compiler import load as load_checked
 from afsmc.diagnostics import CompileError
 from afsmc.model import ir
@@ -153,12 +154,13 @@ def figures(model: ir.Model, evidence: Sequence[Evidence] = ()) -> list[Figure]:
             continue
         declared = (f"[{c.interval[0]}, {c.interval[1]}]" if c.interval is not None
                     and c.interval[0] != c.interval[1] else str(c.value))
-        policy = dict(c.source.policy)
-        conf = policy.get("confidence")
+        stated = dict(c.source.policy)
+        policy = policy_of(c)
+        conf = f"{policy.confidence:g}" + ("" if "confidence" in stated else " (the default)")
+        if policy.shape == INTERVAL:
+            conf += f"; coverage {policy.coverage:g}"
         out.append(Figure(c.name, declared, ("sim " if c.source.column is None else "")
-                          + c.source.display,
-                          f"{conf:g}" if conf is not None else "0.999 (the default)",
-                          by_name.get(c.name)))
+                          + c.source.display, conf, by_name.get(c.name)))
     return out
 
 

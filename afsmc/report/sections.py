@@ -13,6 +13,7 @@ from fractions import Fraction
 from afsmc.report.baseline import shown
 from afsmc.report.case import Case
 from afsmc.report.causes import Split
+from afsmc.text import num
 from afsmc.verify.core.uncertainty import described
 from afsmc.verify.outcome.results import PropertyResult
 
@@ -267,8 +268,8 @@ def _figures(case: Case) -> Section:
     for f in case.figures:
         e = f.evidence
         check = "not re-checked" if e is None else (
-            f"{e.verdict}: mean {number(e.mean)} in [{number(e.mean_low)}, "
-            f"{number(e.mean_high)}] over {e.runs:,} runs")
+            f"{e.verdict}: mean {num(e.mean)} in [{num(e.mean_low)}, {num(e.mean_high)}] "
+            f"over {e.runs:,} " + ("runs" if e.seed is not None else "rows of data"))
         rows.append([f.name, f.declared, f.source, f.confidence, check])
     blocks.append(Table(["constant", "declared", "source", "confidence", "fresh sim-check"],
                         rows, "figures"))

@@ -269,3 +269,19 @@ def test_the_likeliest_paths_into_the_largest_cause(page: tuple[str, Page]) -> N
     assert probs[0] == pytest.approx(0.01, rel=1e-12)
     assert probs[1] == pytest.approx(0.99 * 0.9 * 0.01, rel=1e-12)
     assert all(r[2].endswith("Patrol: Fault in Move → Halted") for r in rows)
+
+
+@pytest.mark.slow
+def test_recheck_gives_sim_checks_verdicts(tmp_path: Path) -> None:
+    import afsmc
+
+    out = tmp_path / "r.html"
+    r = run_cli("report", str(EXAMPLES / "uav.afsm"), "-p", "emergency", "--no-worst-case",
+                "--no-causes", "--recheck", "200", "-o", str(out))
+    assert r.code == 0, r.err
+    rows = {row["constant"]: row["fresh sim-check"]
+            for row in _rows(Page(out.read_text(encoding="utf-8")), "figures")}
+    check = afsmc.load(str(EXAMPLES / "uav.afsm")).sim_check(runs=200)
+    assert set(rows) == {e.name for e in check.evidence}
+    for e in check.evidence:  # the same seed: the same verdicts
+        assert rows[e.name].startswith(f"{e.verdict}: mean ") and "over 200 runs" in rows[e.name]
