@@ -13,10 +13,21 @@ from typing import TYPE_CHECKING, Any
 __version__ = "0.1.0"
 
 if TYPE_CHECKING:
-    from afsmc.api import AfsmError, Diagram, Estimates, Mission, Results, SimCheck, Sweep, load
+    from afsmc.api import (
+        AfsmError,
+        Conformance,
+        Diagram,
+        Estimates,
+        Mission,
+        Results,
+        SimCheck,
+        Sweep,
+        load,
+    )
 
 __all__ = [
     "AfsmError",
+    "Conformance",
     "Diagram",
     "Estimates",
     "Mission",

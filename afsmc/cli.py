@@ -30,7 +30,7 @@ from afsmc.stack import run_deep
 # name -> one-line help; the module afsmc.commands.<name> implements it
 COMMANDS: dict[str, str] = {
     "check": "check an .afsm file and report every problem",
-    "compile": "compile an .afsm file to PRISM, JANI or Graphviz DOT",
+    "compile": "compile an .afsm file to PRISM, JANI, Graphviz DOT, or a controller (Python, C)",
     "verify": "check an .afsm file's properties with Storm (min/max/uniform for intervals)",
     "sweep": "evaluate a property over a range of a constant or a time bound; CSV, JSON, plots",
     "regions": "split a parameter box into regions where a requirement holds, fails or is unknown",
@@ -40,8 +40,9 @@ COMMANDS: dict[str, str] = {
     "report": "write a mission's assurance case: one HTML page (or Markdown) for a reviewer",
     "sim-check": "re-run the simulations behind `from sim` constants and judge them",
     "simulate": "Monte Carlo simulation of the machine: estimate its properties",
+    "conform": "check logged runs against the spec: steps it does not allow, drifted figures",
     "explain": "explain a diagnostic code (e.g. E301) with a wrong and a right example, or list all",
-    "schema": "print the JSON Schema of a command's --json output (verify, sweep, regions, simulate)",
+    "schema": "print the JSON Schema of a command's --json output (verify, sweep, regions, simulate, conform)",
 }
 
 

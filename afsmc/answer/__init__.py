@@ -1,5 +1,5 @@
 """The answers afsmc prints with `--json`, as frozen pydantic models: one module per
-command (`verify`, `sweep`, `regions`, `simulate`), what they share in `common`, and the
+command (`verify`, `sweep`, `regions`, `simulate`, `conform`), what they share in `common`, and the
 published JSON Schemas generated from them in `schema` (`afsmc schema NAME`,
 docs/schemas/NAME.schema.json, versioned by `common.SCHEMA_VERSION`).
 
@@ -10,4 +10,4 @@ nothing at all, so that the CLI can offer the names without loading pydantic.
 """
 
 # The commands whose --json output has a published schema (afsmc.answer.schema.MODELS).
-NAMES = ("verify", "sweep", "regions", "simulate")
+NAMES = ("verify", "sweep", "regions", "simulate", "conform")

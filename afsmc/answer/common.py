@@ -23,9 +23,9 @@ from pydantic import (
 )
 from pydantic.json_schema import SkipJsonSchema
 
-# One version for the four schemas, in each one's "$id" (urn:afsmc:schema:<name>:<version>).
+# One version for the five schemas, in each one's "$id" (urn:afsmc:schema:<name>:<version>).
 # Raise it whenever any schema changes: a key added, removed, renamed or retyped.
-SCHEMA_VERSION = 2
+SCHEMA_VERSION = 3
 
 
 def _never_null_in_json(value: None, info: ValidationInfo) -> None:

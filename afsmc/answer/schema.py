@@ -1,4 +1,4 @@
-"""The published JSON Schemas of the four `--json` outputs: `afsmc schema NAME` prints one,
+"""The published JSON Schemas of the five `--json` outputs: `afsmc schema NAME` prints one,
 docs/schemas/NAME.schema.json holds it (scripts/gen_schemas.py writes them).
 
 Each schema is JSON Schema draft 2020-12, generated from the pydantic models of
@@ -18,6 +18,7 @@ from pydantic_core import core_schema
 
 from afsmc.answer import NAMES
 from afsmc.answer.common import SCHEMA_VERSION
+from afsmc.answer.conform import ConformOutput
 from afsmc.answer.regions import RegionsOutput
 from afsmc.answer.simulate import SimulateOutput
 from afsmc.answer.sweep import SweepOutput
@@ -25,7 +26,8 @@ from afsmc.answer.verify import VerifyOutput
 
 # command -> the model of every object its --json prints
 MODELS: dict[str, type[BaseModel]] = dict(zip(
-    NAMES, (VerifyOutput, SweepOutput, RegionsOutput, SimulateOutput), strict=True))
+    NAMES, (VerifyOutput, SweepOutput, RegionsOutput, SimulateOutput, ConformOutput),
+    strict=True))
 DIALECT = "https://json-schema.org/draft/2020-12/schema"
 DOC_DIR = "docs/schemas"
 REGENERATE = "python scripts/gen_schemas.py"

@@ -34,6 +34,12 @@ class PropertyEstimate(Answer):
     high: Estimate = Field(description="its upper end ('inf' for an expected reward that "
                                        "undecided runs may make infinite)")
     undecided: int = Field(ge=0, description="runs stopped at --max-steps before deciding it")
+    method: Literal["clopper-pearson", "normal", "range", "one-sided"] = Field(
+        description="how the interval was made: Clopper-Pearson (a probability), the normal "
+                    "approximation (a reward), or, when every run earned the same, from the "
+                    "chance that a run differs and the range of a run's total in the model "
+                    "(range), one-sided where the model gives no upper end")
+    reason: str | Absent = Field(None, description="why the interval is range or one-sided")
 
 
 class TraceStep(Answer):
@@ -44,6 +50,13 @@ class TraceStep(Answer):
     action: str | Absent = Field(None, description="the action that led here; absent at step 0")
     hazard: str | Absent = Field(None, description="the hazard that happened instead of the "
                                                    "action's own outcome")
+    outcome: int | str | Absent = Field(
+        None, description="which outcome led here: its index among the action's outcomes "
+                          "(0 for the first written), or the hazard's name (H/j for "
+                          "outcome j of a hazard of several); absent at step 0")
+    duration: int | dict[str, int] | Absent = Field(
+        None, description="the value the step took for the interval constant its updates "
+                          "read ({NAME: value} for several); absent where it reads none")
     vars: dict[str, int | bool] = Field(description="every variable's value, by name")
 
 

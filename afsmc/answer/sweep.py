@@ -33,12 +33,10 @@ class SweepProperty(Answer):
                                                     "sweep gives it at each point)")
 
 
-class PointValue(Answer):
-    """One property's answer at one point of a sweep over one constant or the bound."""
+class _Values(Answer):
+    """A property's answer at one point (the fields of PointValue and GridRow; pydantic
+    puts a base's fields after those of the bases listed before it)."""
 
-    name: str = Field(description="the property")
-    formula: str | Absent = Field(None, description="a bound sweep: the formula with this "
-                                                    "point's bound")
     min: float | None = Field(description=c.MIN)
     max: float | None = Field(description=c.MAX)
     uniform: float | None = Field(description=c.UNIFORM)
@@ -56,15 +54,35 @@ class PointValue(Answer):
     attained_at: c.AttainedAt | Absent = Field(None, description=c.ATTAINED_AT)
 
 
-class SweepPoint(Answer):
-    """One point of a sweep over one constant or the bound."""
+class _Sizes(Answer):
+    """A point's model sizes."""
 
-    x: ConstValue = Field(description="the swept constant's value (or the step bound) here")
     states: int | None = Field(description=STATES)
     transitions: int | None = Field(description=TRANSITIONS)
     uniform_states: int | None = Field(description=UNIFORM_STATES)
     uniform_transitions: int | None = Field(description=UNIFORM_TRANSITIONS)
+
+
+class _PointHead(Answer):
+    name: str = Field(description="the property")
+    formula: str | Absent = Field(None, description="a bound sweep: the formula with this "
+                                                    "point's bound")
+
+
+class PointValue(_Values, _PointHead):
+    """One property's answer at one point of a sweep over one constant or the bound."""
+
+
+class _SweepPointHead(Answer):
+    x: ConstValue = Field(description="the swept constant's value (or the step bound) here")
+
+
+class _SweepPointTail(Answer):
     properties: list[PointValue] = Field(description="each property's answer here")
+
+
+class SweepPoint(_SweepPointTail, _Sizes, _SweepPointHead):
+    """One point of a sweep over one constant or the bound."""
 
 
 class VerdictRange(Answer):
@@ -98,30 +116,13 @@ class Sweep(Answer):
         None, description="each requirement's sub-ranges; absent without requirements")
 
 
-class GridRow(Answer):
-    """One property at one point of a sweep over several constants."""
-
+class _GridHead(Answer):
     point: dict[str, ConstValue] = Field(description="each swept constant's value here")
     property: str = Field(description="the property")
-    min: float | None = Field(description=c.MIN)
-    max: float | None = Field(description=c.MAX)
-    uniform: float | None = Field(description=c.UNIFORM)
-    value: float | None = Field(description=c.VALUE)
-    infinite: list[Literal["min", "max", "uniform", "value"]] | Absent = Field(
-        None, description=c.INFINITE)
-    threshold: c.Threshold | Absent = Field(None, description="a requirement's comparison; "
-                                                             "absent for a query")
-    verdict: c.Verdict | Absent = Field(None, description=c.VERDICT.replace("null", "absent"))
-    error: float | Absent = Field(None, description=c.ERROR.replace("null", "absent"))
-    reason: str | Absent = Field(None, description=c.REASON)
-    broken_by: c.Bound | Absent = Field(None, description=c.BROKEN_BY)
-    decided_by: c.DecidedBy | Absent = Field(None, description=c.DECIDED_BY)
-    reference: c.Reference | Absent = Field(None, description=c.REFERENCE)
-    attained_at: c.AttainedAt | Absent = Field(None, description=c.ATTAINED_AT)
-    states: int | None = Field(description=STATES)
-    transitions: int | None = Field(description=TRANSITIONS)
-    uniform_states: int | None = Field(description=UNIFORM_STATES)
-    uniform_transitions: int | None = Field(description=UNIFORM_TRANSITIONS)
+
+
+class GridRow(_Sizes, _Values, _GridHead):
+    """One property at one point of a sweep over several constants."""
 
 
 class GridRequirement(Answer):

@@ -129,7 +129,9 @@ class PropertyResult(Answer):
         None, description=c.INFINITE)
     seconds: dict[Literal["min", "max", "uniform", "value"], float] = Field(
         description="Storm's time to check each value given, s (of the query asked instead: "
-                    "a Pmax as 1 - Pmin, a bounded G as its dual)")
+                    "a Pmax as 1 - Pmin, a bounded G as its dual); with interval "
+                    "probabilities, the reference point's queries (the bounds' time is "
+                    "timings.bounds)")
     threshold: c.Threshold | None = Field(description=c.THRESHOLD)
     verdict: c.Verdict | None = Field(description=c.VERDICT)
     error: float | None = Field(description=c.ERROR)
@@ -168,6 +170,9 @@ class Timings(Answer):
     check: float = Field(ge=0, description="Storm checking it")
     uniform_build: Seconds | Absent = Field(None, description="building the uniform DTMC")
     uniform_check: Seconds | Absent = Field(None, description="checking it")
+    bounds: Seconds | Absent = Field(
+        None, description="with interval probabilities: Storm's parametric engine bounding "
+                          "the properties over them (build and refinement)")
     total: float = Field(ge=0, description="the whole run")
 
 

@@ -8,11 +8,13 @@ draw it, with tables (pandas) and pictures that show inline in Jupyter.
 >>> m.sweep("ROUNDS", "1:5:1").plot()                      # a matplotlib Figure
 >>> m.simulate(runs=10_000).to_pandas()
 >>> m.sim_check().to_pandas()                              # `from sim` constants judged
+>>> m.conform(["runs.jsonl"]).ok                           # the robot's logs against the spec
 >>> m.diagram()                                            # SVG in a notebook
 
 One module per concept: ``mission`` (:class:`Mission`, :func:`load`, compiling), ``results``
 (:class:`Results` of verify), ``sweep`` (:class:`Sweep`), ``simulate``
-(:class:`Estimates`), ``sim_check`` (:class:`SimCheck`), ``diagram`` (:class:`Diagram`), ``errors`` (:class:`AfsmError`).
+(:class:`Estimates`), ``sim_check`` (:class:`SimCheck`), ``conform`` (:class:`Conformance`),
+``diagram`` (:class:`Diagram`), ``errors`` (:class:`AfsmError`).
 The API is a top layer like the CLI: the commands call into it, never the reverse.
 """
 
@@ -22,6 +24,7 @@ import importlib
 from typing import TYPE_CHECKING, Any
 
 if TYPE_CHECKING:
+    from afsmc.api.conform import Conformance
     from afsmc.api.diagram import Diagram
     from afsmc.api.errors import AfsmError
     from afsmc.api.mission import Mission, load
@@ -32,11 +35,11 @@ if TYPE_CHECKING:
 
 # Each name's module, imported on first use: `afsmc check` loads through afsmc.api.mission
 # and need not import Graphviz, Storm's wrappers or the simulator.
-_HOME = {"AfsmError": "errors", "Diagram": "diagram", "Estimates": "simulate",
-         "Mission": "mission", "Results": "results", "SimCheck": "sim_check", "Sweep": "sweep",
-         "load": "mission"}
-__all__ = ["AfsmError", "Diagram", "Estimates", "Mission", "Results", "SimCheck", "Sweep",
-           "load"]
+_HOME = {"AfsmError": "errors", "Conformance": "conform", "Diagram": "diagram",
+         "Estimates": "simulate", "Mission": "mission", "Results": "results",
+         "SimCheck": "sim_check", "Sweep": "sweep", "load": "mission"}
+__all__ = ["AfsmError", "Conformance", "Diagram", "Estimates", "Mission", "Results",
+           "SimCheck", "Sweep", "load"]
 
 
 def __getattr__(name: str) -> Any:

@@ -26,6 +26,7 @@ from afsmc.model import ir
 from afsmc.text import literal
 
 if TYPE_CHECKING:
+    from afsmc.api.conform import Conformance
     from afsmc.api.diagram import Diagram
     from afsmc.api.results import Results
     from afsmc.api.sim_check import SimCheck
@@ -41,7 +42,12 @@ TARGETS: dict[str, str] = {
     "prism": "afsmc.backends.prism:files",
     "jani": "afsmc.backends.jani:files",
     "dot": "afsmc.backends.dot:files",
+    "python": "afsmc.controllers.python:files",
+    "c": "afsmc.controllers.c:files",
 }
+# The targets that write a controller: made from the checked model before the reductions
+# (the robot's variables), so compile hands them a lowering without any.
+CONTROLLERS = frozenset({"python", "c"})
 
 
 def available_targets() -> dict[str, Callable[[Lowered], dict[str, str]]]:
@@ -147,17 +153,20 @@ class Mission:
     def files(self, target: str = "prism", *, resolve: Resolution = "nondet",
               reductions: Reductions | None = None) -> dict[str, str]:
         """What `afsmc compile -t TARGET` writes: {suffix: text} (PRISM: ``.prism`` and
-        ``.props``; JANI: ``.json``; DOT: ``.gv``)."""
+        ``.props``; JANI: ``.json``; DOT: ``.gv``; a controller, docs/robot.md: ``.py``
+        for "python", ``.h`` and ``.c`` for "c", made without the reductions)."""
         targets = available_targets()
         if target not in targets:
             raise ValueError(f"target must be one of {', '.join(map(repr, targets))}; "
                              f"got {target!r}")
+        if target in CONTROLLERS:
+            reductions = Reductions.none()
         return targets[target](self.lowered(resolve, reductions))
 
     def compile(self, target: str = "prism", *, resolve: Resolution = "nondet",
                 reductions: Reductions | None = None) -> str:
-        """The mission in `target`'s language ("prism", "jani", "dot"), as one text: the
-        output of `afsmc compile -t TARGET -o -` (PRISM: the model, then a line
+        """The mission in `target`'s language ("prism", "jani", "dot", "python", "c"), as
+        one text: the output of `afsmc compile -t TARGET -o -` (PRISM: the model, then a line
         ``// ==== NAME.props`` and the properties)."""
         return joined(self.path, self.files(target, resolve=resolve, reductions=reductions))
 
@@ -210,7 +219,8 @@ class Mission:
         in the file against it, as `afsmc sim-check` does: options ``seed`` (0),
         ``timeout`` (seconds per simulator), ``update`` (rewrite the drifted constants in
         the file), ``confidence`` (the tests' level where a constant states none; 0.999),
-        ``progress`` (a function that receives a line per constant). A drift
+        ``progress`` (a function that receives a line per constant), ``data_root`` (the
+        folder `from data` files must lie under; default: the file's folder). A drift
         is in the result (``.ok`` is False, ``.errors`` has E502), not raised. Raises
         AfsmError (a simulator failed: E505)."""
         from afsmc.api.sim_check import sim_check
@@ -250,6 +260,21 @@ class Mission:
         except CompileError as exc:
             raise AfsmError.of(exc) from None
         return Report(case)
+
+    def conform(self, logs: Sequence[str], *, update: bool = False,
+                confidence: float | None = None) -> Conformance:
+        """Check logged runs (files in the format of docs/robot.md) against the mission, as
+        `afsmc conform` does: each step the spec does not allow (``.violations``, E720) and
+        each probability and interval constant the steps exercise, judged as sim-check
+        judges a simulation (``.evidence``; ``.errors`` has E721 for a drift). ``update``
+        rewrites the drifted constants in the file. Raises AfsmError for bad logs
+        (E710-E713) and a composed mission (E701)."""
+        from afsmc.api.conform import conform_file
+
+        if update and not os.path.isfile(self.path):
+            raise ValueError(f"update rewrites the mission's file; {self.path} is not a file")
+        return conform_file(self.path, self.consts, list(logs), update=update,
+                            confidence=confidence, text=None if update else self.text)
 
     def diagram(self, **options: Any) -> Diagram:
         """The mission diagram (`afsmc diagram`): it shows inline in Jupyter, and

@@ -39,28 +39,30 @@ COLUMNS = ("constant", "simulation", "declared", "mean", "mean_low", "mean_high"
 
 def sim_check(mission: Mission, runs: int = 10_000, *, seed: int = 0,
               timeout: float = sandbox.DEFAULT_TIMEOUT, update: bool = False,
-              confidence: float | None = None, progress: Say | None = None) -> SimCheck:
+              confidence: float | None = None, progress: Say | None = None,
+              data_root: str | None = None) -> SimCheck:
     """:meth:`Mission.sim_check`: :func:`sim_check_file` on the mission's file (re-read
     as it is on disk for `update`, which rewrites it) or text, and constants."""
     if update and not os.path.isfile(mission.path):
         raise ValueError(f"update rewrites the mission's file; {mission.path} is not a file")
     return sim_check_file(mission.path, mission.consts, None if update else mission.text,
                           runs=runs, seed=seed, timeout=timeout, update=update,
-                          confidence=confidence, progress=progress)
+                          confidence=confidence, progress=progress, data_root=data_root)
 
 
 def sim_check_file(path: str, consts: Mapping[str, str], text: str | None = None, *,
                    runs: int = 10_000, seed: int = 0,
                    timeout: float = sandbox.DEFAULT_TIMEOUT, update: bool = False,
                    budget: int | None = None, confidence: float | None = None,
-                   progress: Say | None = None) -> SimCheck:
+                   progress: Say | None = None, data_root: str | None = None) -> SimCheck:
     """The one way afsmc judges simulated constants, for `afsmc sim-check` and
     :meth:`Mission.sim_check`. Each simulator runs `runs` times in its own process
     (stopped after `timeout` seconds or past `budget` bytes; default: the sandbox's share
     of the free memory). `update` rewrites the drifted constants in the file, with a
     provenance comment, if the new text checks. `confidence`: the level of the statistical
     tests of constants whose declaration states none (default 0.999). A constant backed by
-    a data file (`from data ...`) is judged on the file's rows instead of runs.
+    a data file (`from data ...`) is judged on the file's rows instead of runs; the file
+    must lie under `data_root` (default: the spec's folder; see afsmc.simlib.datafile).
     `progress` receives a line per constant.
 
     A drift is a result, not an exception: ``SimCheck.errors`` holds E502 (E508 if no
@@ -80,7 +82,7 @@ def sim_check_file(path: str, consts: Mapping[str, str], text: str | None = None
             text = None  # loading reports it (E001)
     checked = load_sourced(path, consts, text, say)
     sourced = [c for c in checked.model.constants if c.source is not None]
-    results = judge_all(path, sourced, runs, seed, timeout, budget, say, confidence)
+    results = judge_all(path, sourced, runs, seed, timeout, budget, say, confidence, data_root)
     by_name = {c.name: c for c in sourced}
     drifted = [e for e in results if not e.consistent]
     # No value its own rule accepts (an int whose accepted range holds no integer):
@@ -95,7 +97,7 @@ def sim_check_file(path: str, consts: Mapping[str, str], text: str | None = None
     updated: list[Evidence] = []
     if update and drifted:
         assert text is not None
-        _update(path, consts, text, drifted, by_name)
+        update_constants(path, consts, text, drifted, by_name)
         updated = drifted
     # Nothing to reject at this many runs: said, rather than called consistent.
     few = [Diagnostic(
@@ -145,7 +147,8 @@ def _origin(e: Evidence) -> str:
 
 
 def judge_all(path: str, sourced: list[ir.Constant], runs: int, seed: int, timeout: float,
-              budget: int | None, say: Say, confidence: float | None = None) -> list[Evidence]:
+              budget: int | None, say: Say, confidence: float | None = None,
+              data_root: str | None = None) -> list[Evidence]:
     """Each simulated constant judged against its simulation, run in a child process
     (afsmc.simlib.sandbox), a progress line before each; AfsmError E505 if a simulator
     fails in any way: an exception, an exit, a hang past `timeout`, too much memory."""
@@ -157,7 +160,7 @@ def judge_all(path: str, sourced: list[ir.Constant], runs: int, seed: int, timeo
             say(f"sim-check: [{i}/{len(sourced)}] {c.name} <- {c.source.display} "
                 f"({time.monotonic() - started:.1f} s)")
             try:
-                results.append(_from_data(path, c, confidence))
+                results.append(_from_data(path, c, confidence, data_root))
             except CompileError as exc:
                 raise AfsmError.of(exc) from None
             continue
@@ -178,16 +181,17 @@ def judge_all(path: str, sourced: list[ir.Constant], runs: int, seed: int, timeo
     return results
 
 
-def _from_data(path: str, c: ir.Constant, confidence: float | None) -> Evidence:
+def _from_data(path: str, c: ir.Constant, confidence: float | None,
+               data_root: str | None) -> Evidence:
     """A constant backed by a data file judged by the rule of its shape, the file's values
     standing for the runs (a `prob`'s column holds outcomes)."""
     assert c.source is not None
-    x = datafile.read(path, c, outcomes=c.declared_type == "prob")
+    x = datafile.read(path, c, outcomes=c.declared_type == "prob", data_root=data_root)
     e = judge(c, len(x), 0, samples=x, confidence=confidence, kind=data_kind(c))
     return dataclasses.replace(e, ref=c.source.display, seed=None)
 
 
-def _update(path: str, consts: Mapping[str, str], text: str, drifted: list[Evidence],
+def update_constants(path: str, consts: Mapping[str, str], text: str, drifted: list[Evidence],
             by_name: dict[str, ir.Constant]) -> None:
     """Rewrite the drifted constants in the file, if the new text checks as `afsmc check`
     would check it; AfsmError (the file unchanged) if it cannot."""

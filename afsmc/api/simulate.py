@@ -234,7 +234,8 @@ class Estimates:
             "confidence": self.confidence,
             **({"scheduler": self.scheduler} if self.scheduler else {}),
             "properties": [{"name": e.name, "estimate": _num(e.estimate), "low": _num(e.low),
-                            "high": _num(e.high), "undecided": e.undecided}
+                            "high": _num(e.high), "undecided": e.undecided,
+                            "method": e.method, **({"reason": e.reason} if e.reason else {})}
                            for e in self.raw.estimates],
             **({"traces": self.raw.traces} if self.traced else {}),
             "warnings": [d.to_json() for d in self.warnings],

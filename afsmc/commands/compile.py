@@ -1,4 +1,4 @@
-"""`afsmc compile FILE [-t prism|jani|dot] [-o DIR|FILE]`."""
+"""`afsmc compile FILE [-t prism|jani|dot|python|c] [-o DIR|FILE]`."""
 
 from __future__ import annotations
 
@@ -6,7 +6,7 @@ import argparse
 import os
 import sys
 
-from afsmc.api.mission import Mission, available_targets, target_notes
+from afsmc.api.mission import CONTROLLERS, Mission, available_targets, target_notes
 from afsmc.commands.common import (
     add_consts,
     add_file,
@@ -18,14 +18,18 @@ from afsmc.commands.common import (
     report,
     usage_error,
 )
+from afsmc.controllers.c import with_header
 from afsmc.diagnostics import CompileError
 from afsmc.files import check_writable, write_atomic
+from afsmc.lower.reduce import Reductions
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
     add_file(p)
     p.add_argument("-t", "--target", default="prism", choices=sorted(available_targets()),
-                   help="output language (default: prism)")
+                   help="output language (default: prism); python and c write the mission's "
+                        "controller for the robot (docs/robot.md), from the model before the "
+                        "reductions")
     p.add_argument("-o", "--output", metavar="DIR|FILE",
                    help="output directory, or file name (PRISM: a suffix such as .prism is "
                         "replaced by each file's); default: the current directory; '-' prints to stdout "
@@ -68,7 +72,9 @@ def run(args: argparse.Namespace) -> int:
     try:
         mission = Mission.open(args.file, overrides(args))
         try:
-            low = mission.lowered(args.resolve, reductions(args))
+            # a controller is the robot's logic: its variables, never the reduced model's
+            low = mission.lowered(args.resolve, Reductions.none() if args.target in
+                                  CONTROLLERS else reductions(args))
         except CompileError:
             report(mission.diagnostics)
             raise
@@ -82,6 +88,8 @@ def run(args: argparse.Namespace) -> int:
                 sys.stdout.write(text)
             return 0
         paths = outputs_for(args.file, args.output, list(files))
+        if args.target == "c":  # the source includes the header by the name it is given
+            files = with_header(files, os.path.basename(paths[".h"]))
         # Every output is checked before the first is written: nothing half-done.
         for path in paths.values():
             check_writable(path, protect=(args.file,))

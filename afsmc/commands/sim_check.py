@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import argparse
 import math
+import os
 import sys
 
 from afsmc.api.sim_check import sim_check_file
@@ -25,15 +26,24 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    metavar="SECONDS",
                    help="stop a simulator that runs longer than this, per constant; each runs "
                         f"in its own process (default {sandbox.DEFAULT_TIMEOUT:g})")
-    p.add_argument("--confidence", type=_level, metavar="C",
-                   help="confidence of the statistical tests of the constants that state none "
-                        "(`with confidence = C` in the file wins; default 0.999); an interval "
-                        "probability must cover the runs' Clopper-Pearson interval at it")
-    p.add_argument("--update", action="store_true",
-                   help="rewrite drifted constants in FILE in place, with a provenance comment")
+    add_judging(p, "runs'")
+    p.add_argument("--data-root", metavar="DIR",
+                   help="the folder `from data` files must lie under (default: the spec's "
+                        "folder); paths stay relative to the spec's folder")
     p.add_argument("--json", action="store_true", help="print the evidence as JSON")
     p.add_argument("--list", action="store_true",
                    help="list the registered simulator outputs and exit")
+
+
+def add_judging(p: argparse.ArgumentParser, whose: str) -> None:
+    """--confidence and --update, of the commands that judge constants by samples (`whose`
+    samples: "runs'", "logs'")."""
+    p.add_argument("--confidence", type=level, metavar="C",
+                   help="confidence of the statistical tests of the constants that state none "
+                        "(`with confidence = C` in the file wins; default 0.999); an interval "
+                        f"probability must cover the {whose} Clopper-Pearson interval at it")
+    p.add_argument("--update", action="store_true",
+                   help="rewrite drifted constants in FILE in place, with a provenance comment")
 
 
 def run(args: argparse.Namespace) -> int:
@@ -44,6 +54,10 @@ def run(args: argparse.Namespace) -> int:
         return 2
     if args.runs < 2:
         print("afsmc sim-check: error: --runs must be at least 2", file=sys.stderr)
+        return 2
+    if args.data_root is not None and not os.path.isdir(args.data_root):
+        print(f"afsmc sim-check: error: --data-root {args.data_root} is not a folder",
+              file=sys.stderr)
         return 2
     budget = sandbox.memory_budget()
     fit = sandbox.runs_that_fit(budget)
@@ -60,14 +74,14 @@ def run(args: argparse.Namespace) -> int:
     try:
         res = sim_check_file(args.file, overrides(args), runs=args.runs, seed=args.seed,
                              timeout=args.timeout, update=args.update, budget=budget,
-                             confidence=args.confidence,
-                             progress=say)
+                             confidence=args.confidence, progress=say,
+                             data_root=args.data_root)
     except CompileError as exc:
         return fail(exc, args.json, wrapped=True)
     if args.json:
         print_json(res.to_json())
     else:
-        _table(res.evidence)
+        table(res.evidence)
     if not res.evidence:
         print(f"{args.file}: no constant is backed by a simulation ('from sim ...')",
               file=sys.stderr)
@@ -79,7 +93,7 @@ def run(args: argparse.Namespace) -> int:
     return 0 if res.ok else 1
 
 
-def _level(text: str) -> float:
+def level(text: str) -> float:
     try:
         value = float(text)
     except ValueError:
@@ -114,10 +128,12 @@ def _list(args: argparse.Namespace) -> int:
     return 0
 
 
-def _table(results: list[Evidence]) -> None:
+def table(results: list[Evidence], origin: str = "simulation", runs: str = "runs") -> None:
+    """The judged constants, a row each, and a line of totals (`origin`: the column of
+    their source; `runs`: what a sample is called)."""
     if not results:
         return
-    head = ("constant", "simulation", "declared", "mean", "CI of mean", "F(lo), F(hi)",
+    head = ("constant", origin, "declared", "mean", "CI of mean", "F(lo), F(hi)",
             "hull", "verdict")
     rows = [head]
     for e in results:
@@ -126,7 +142,7 @@ def _table(results: list[Evidence]) -> None:
         hull = f"[{e.hull[0]}, {e.hull[1]}]" if e.hull else "-"
         rows.append((e.name, e.ref, e.declared, f"{e.mean:.4g}",
                      f"[{e.mean_low:.4g}, {e.mean_high:.4g}]", cdf, hull,
-                     {"inconclusive": "too few runs", "drifted": "DRIFTED"}.get(e.verdict,
+                     {"inconclusive": f"too few {runs}", "drifted": "DRIFTED"}.get(e.verdict,
                                                                                e.verdict)))
     widths = [max(len(r[i]) for r in rows) for i in range(len(head))]
     for r in rows:
@@ -136,9 +152,9 @@ def _table(results: list[Evidence]) -> None:
     sims = [e for e in results if e.seed is not None]
     data = len(results) - len(sims)
     where = ([f"{sims[0].runs} runs, seed {sims[0].seed}"] if sims else []) + (
-        [f"{data} from data files"] if data else [])
+        [f"{data} from {'data files' if origin == 'simulation' else origin}"] if data else [])
     print(f"\n{len(results)} constant(s), {sum(not e.consistent for e in results)} drifted"
-          + (f", {few} with too few runs to judge" if few else "") + "; "
+          + (f", {few} with too few {runs} to judge" if few else "") + "; "
           + ", ".join(where) + ", confidence "
           + ", ".join(f"{c:g}" for c in sorted(conf))
           + ("; probabilities: Clopper-Pearson intervals"

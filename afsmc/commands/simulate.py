@@ -8,6 +8,7 @@ import argparse
 import dataclasses
 import json
 import math
+import os
 import sys
 from typing import Any
 
@@ -28,6 +29,7 @@ from afsmc.commands.render.simulate_strategy import followed_text
 from afsmc.diagnostics import CompileError, codes
 from afsmc.files import check_writable, read_source, write_atomic
 from afsmc.interrupt import Stopped
+from afsmc.sim import logs
 from afsmc.sim.run import (
     BATCH,
     LOWERING,
@@ -69,7 +71,10 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    help=f"runs per batch, each with its own seed (default {BATCH})")
     p.add_argument("--traces", type=int, default=0, metavar="K",
                    help="print K sample runs in mission terms (modes, actions, variables)")
-    p.add_argument("--traces-out", metavar="PATH", help="save the traces as JSON to PATH")
+    p.add_argument("--traces-out", metavar="PATH",
+                   help="save the traces to PATH: as the robot's log (docs/robot.md) for a "
+                        "name ending in .jsonl (one step a line) or .csv, else as JSON (a "
+                        "list of runs of states)")
     p.add_argument("--json", action="store_true", help="print the estimates as JSON")
     p.add_argument("--strategy", metavar="min:NAME|max:NAME",
                    help="resolve the interval constants as Storm's min or max strategy of "
@@ -153,12 +158,23 @@ def run(args: argparse.Namespace) -> int:
             raise Stopped(notes=[_so_far(part, args)],
                           partial=_Partial(kept.to_json())) from exc
         if args.traces_out:
-            write_atomic(args.traces_out, json.dumps(est.traces, indent=1) + "\n",
+            write_atomic(args.traces_out, _traces_file(args.traces_out, est.traces),
                          protect=(args.file,))
     except CompileError as exc:
         return fail(exc, args.json, wrapped=True)
     _finish(sim, est, args)
     return 0
+
+
+def _traces_file(path: str, traces: list[list[dict[str, Any]]]) -> str:
+    """The sample runs as `--traces-out PATH` writes them: the robot's log format, which
+    `afsmc conform` reads, for PATH.jsonl and PATH.csv; else a JSON list of runs."""
+    ext = os.path.splitext(path)[1].lower()
+    if ext == ".jsonl":
+        return logs.jsonl(traces)
+    if ext == ".csv":
+        return logs.csv_text(traces)
+    return json.dumps(traces, indent=1) + "\n"
 
 
 def _finish(sim: Simulation, est: Estimates, args: argparse.Namespace) -> None:
@@ -239,6 +255,8 @@ def _print(out: Outcome, args: argparse.Namespace, intervals: bool, endless: boo
                                          ("--max-steps", e.undecided > 0)) if short]
             why.append(f"no interval from fewer than 2 finished runs: raise "
                        f"{' and '.join(raise_)}")
+        if e.reason:  # no run differed: the interval from the reward's range (sim/rare.py)
+            why.append(e.reason)
         note = f"  ({'; '.join(why)})" if why else ""
         print(f"  {e.name.ljust(width)}  {value.ljust(vwidth)}  [{num(e.low)}, {num(e.high)}]"
               f"{note}")

@@ -172,7 +172,10 @@ W303 = Code("W303", Severity.WARNING, "a variable is never read")
 W304 = Code("W304", Severity.WARNING, "a constant or formula is never used")
 W305 = Code("W305", Severity.WARNING, "the mode numbers span too many values")
 W306 = Code("W306", Severity.WARNING, "w(B) names an action that never acts in the weight's modes")
+W307 = Code("W307", Severity.WARNING, "an interval probability makes a transition disappear at an end")
+W308 = Code("W308", Severity.WARNING, "a property the parametric engine cannot bound over interval probabilities")
 W309 = Code("W309", Severity.WARNING, "a check could not be completed")
+W310 = Code("W310", Severity.WARNING, "a total reward of a structure that may be negative")
 
 
 # E4xx: verification with Storm, and sweeps
@@ -219,6 +222,9 @@ E511 = Code("E511", Severity.ERROR, "a constant's data file has no such column")
 E512 = Code("E512", Severity.ERROR, "a data column holds a cell that is not a number")
 E513 = Code("E513", Severity.ERROR, "a data column holds no values")
 E514 = Code("E514", Severity.ERROR, "a data column of outcomes holds a value other than 0 or 1")
+E515 = Code("E515", Severity.ERROR, "a constant's data file lies outside the mission's folder")
+E516 = Code("E516", Severity.ERROR, "a constant's data file is not a regular file")
+E517 = Code("E517", Severity.ERROR, "a data file's rows do not match its header")
 
 
 # E6xx: diagrams
@@ -234,6 +240,17 @@ E613 = Code("E613", Severity.ERROR, "the Graphviz program dot failed")
 W601 = Code("W601", Severity.WARNING, "a mode is unreachable from the initial mode")
 W602 = Code("W602", Severity.WARNING, "the mission cannot end once in a mode")
 W603 = Code("W603", Severity.WARNING, "an action can never fire")
+
+
+# E7xx: controllers for the robot, and conformance of the robot's logs
+
+E701 = Code("E701", Severity.ERROR, "a composed mission has no controller")
+E710 = Code("E710", Severity.ERROR, "a log file cannot be read")
+E711 = Code("E711", Severity.ERROR, "a log line is not a step")
+E712 = Code("E712", Severity.ERROR, "a logged step lacks a field or holds a bad value")
+E713 = Code("E713", Severity.ERROR, "a logged step names what the spec does not declare")
+E720 = Code("E720", Severity.ERROR, "a logged step the spec does not allow")
+E721 = Code("E721", Severity.ERROR, "a constant has drifted from the logs")
 
 
 # E9xx: the language server
@@ -253,6 +270,7 @@ GROUPS: tuple[tuple[str, tuple[str, ...]], ...] = (
     ("E5xx: simulation and simulation-backed constants", ("E5", "W5")),
     ("E6xx: diagrams", ("E6",)),
     ("W6xx: the mode graph", ("W6",)),
+    ("E7xx: controllers for the robot, and conformance of the robot's logs", ("E7",)),
     ("E9xx: the language server", ("E9",)),
 )
 

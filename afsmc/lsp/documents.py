@@ -95,7 +95,9 @@ def _changed(ls: AfsmServer, uri: str) -> None:
     st.version, st.text = doc.version, doc.source
     if st.task is not None:  # a newer version: the work on the older one stops
         st.task.cancel()
-    st.task = asyncio.get_running_loop().create_task(_analyse(ls, uri, st, st.version, st.text))
+    st.parsed = asyncio.Event()
+    st.task = asyncio.get_running_loop().create_task(
+        _analyse(ls, uri, st, st.version, st.text, st.parsed))
 
 
 async def _run(ls: AfsmServer, job: Job, what: str) -> Any:
@@ -108,10 +110,11 @@ async def _run(ls: AfsmServer, job: Job, what: str) -> Any:
 
 
 async def _analyse(ls: AfsmServer, uri: str, st: DocState, version: int | None,
-                   text: str) -> None:
+                   text: str, parsed: asyncio.Event) -> None:
     """Parse and resolve, publish; then check, publish. A small document is parsed in a
     thread (tens of milliseconds: no process to start) and checked in a child process; a
-    big one is parsed and checked in one child. Cancelling the task kills the child."""
+    big one is parsed and checked in one child. Cancelling the task kills the child.
+    `parsed` is set once the parse is known (or given up), for the semantic tokens."""
     path = to_fs_path(uri) or uri
     big = len(text) > SMALL
     job = Job(_work(text, path, (FAST, FULL) if big else (FAST,)), process=big)
@@ -126,6 +129,8 @@ async def _analyse(ls: AfsmServer, uri: str, st: DocState, version: int | None,
         if index is not None:
             st.index = index
             st.recovered = None
+            _refresh_tokens(ls)
+        parsed.set()
         # The facts hover shows (values, ranges) hold for the text that resolved: another
         # text keeps none rather than show a constant's old value beside its new declaration.
         st.model = model
@@ -148,7 +153,17 @@ async def _analyse(ls: AfsmServer, uri: str, st: DocState, version: int | None,
         diags, st.last_check = msg[1]
         _publish(ls, uri, version, text, diags)
     finally:
+        parsed.set()  # cancelled: a newer version's own event is waited for next
         job.cancel()
+
+
+def _refresh_tokens(ls: AfsmServer) -> None:
+    """Ask a client that supports it to ask for the semantic tokens again: the names of a
+    new parse may be coloured otherwise (a request answered before it had the last one)."""
+    caps = ls.client_capabilities.workspace
+    tokens = caps.semantic_tokens if caps is not None else None
+    if tokens is not None and tokens.refresh_support:
+        ls.workspace_semantic_tokens_refresh(None)
 
 
 @guarded

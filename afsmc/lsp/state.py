@@ -38,6 +38,9 @@ class DocState:
     published: str | None = None  # the text of the diagnostics on screen (their fixes' offsets)
     current: Any = None  # the editor's text as a positions.Doc, while it is the same
     shows_fast: bool = False  # the diagnostics on screen are parse or name errors
+    # set once the current version is parsed (its index, or its parse errors, known):
+    # semantic tokens asked for right after a change wait for it (tokens.py)
+    parsed: asyncio.Event | None = None
 
 
 

@@ -9,13 +9,15 @@ declared with a standard super type in the VS Code extension, so themes colour t
 
 from __future__ import annotations
 
+import asyncio
+import contextlib
 import re
 
 from lsprotocol import types as T
 
 from afsmc.lsp import index as I
 from afsmc.lsp.positions import Doc, Shift, shift_of
-from afsmc.lsp.state import AfsmServer, guarded
+from afsmc.lsp.state import AfsmServer, DocState, guarded
 from afsmc.model.expr import FUNCTIONS
 from afsmc.syntax import ast
 
@@ -86,10 +88,31 @@ def encode(rows: list[tuple[int, int, str, int]], shift: Shift, doc: Doc) -> lis
 
 
 @guarded
-def semantic_tokens(ls: AfsmServer, params: T.SemanticTokensParams) -> T.SemanticTokens:
+async def semantic_tokens(ls: AfsmServer, params: T.SemanticTokensParams) -> T.SemanticTokens:
+    """The tokens of the editor's text: a request that comes right after `didOpen` or
+    `didChange` waits (up to WAIT seconds) for that text's parse, so that a client that
+    asks once gets colours; a text that does not parse answers from the last good one."""
     uri = params.text_document.uri
     st = ls.docs.get(uri)
-    if st is None or st.index is None:
+    if st is None:
+        return T.SemanticTokens(data=[])
+    await _parsed(st)
+    if st.index is None:
         return T.SemanticTokens(data=[])
     shift, doc = shift_of(ls, uri, st.index)
     return T.SemanticTokens(data=encode(spans(st.index), shift, doc))
+
+
+WAIT = 5.0  # seconds a token request waits for the parse of the current text
+
+
+async def _parsed(st: DocState) -> None:
+    """Wait until the current version of the document is parsed (a newer version that
+    comes meanwhile is waited for in turn), at most WAIT seconds in all."""
+    deadline = asyncio.get_running_loop().time() + WAIT
+    while (event := st.parsed) is not None and not event.is_set():
+        left = deadline - asyncio.get_running_loop().time()
+        if left <= 0:
+            return
+        with contextlib.suppress(TimeoutError):
+            await asyncio.wait_for(event.wait(), left)

@@ -21,9 +21,10 @@ from afsmc.model import expr as E
 from afsmc.model import ir
 from afsmc.model.bounds import bounds
 from afsmc.model.evaluate import scalar
-from afsmc.sim import scheduler
+from afsmc.sim import logs, rare, scheduler
 from afsmc.sim.compile import Fn, Frame, Scope, SimError, compile_expr, fold, reads, static
 from afsmc.sim.policy import Lookup
+from afsmc.sim.stats import merge_moments
 
 UNDECIDED, TRUE, FALSE = 0, 1, 2
 
@@ -62,6 +63,7 @@ class Monitor:
     # R: every item of the structure is >= 0 in every state (interval bounds), so a run's
     # total is too and the mean's interval may be cut at 0
     nonneg: bool = False
+    span: rare.Range = (-math.inf, math.inf)  # R: the interval a run's total lies in
 
 
 @dataclass
@@ -91,6 +93,8 @@ class Program:
     # each command's action in mission terms (afsmc.sim.scheduler.trace_names)
     agent_modes: list[tuple[str, str, dict[int, str]]] = field(default_factory=list)
     action_names: dict[int, str] = field(default_factory=dict)
+    # (command, branch) -> its outcome and duration in the robot's log (afsmc.sim.logs)
+    logged: dict[tuple[int, int], dict[str, Any]] = field(default_factory=dict)
 
 
 def build(low: Lowered, draw: bool = False) -> Program:
@@ -151,7 +155,8 @@ def build(low: Lowered, draw: bool = False) -> Program:
                       for it in r.items if it.action is None] for r in model.rewards]
     nonneg = [all(bounds(it.value, model, generated=low.bounds)[0] >= 0 for it in r.items)
               for r in model.rewards]
-    monitors = [_monitor(p, base, model, reward_index, nonneg) for p in model.properties]
+    steps = rare.step_bounds(model, low.bounds)
+    monitors = [_monitor(p, base, model, reward_index, nonneg, steps) for p in model.properties]
     names = scheduler.trace_names(low)
     dtypes = {v.name: (np.bool_ if v.type is E.Type.BOOL else np.int64) for v in model.variables}
     shown = scheduler.displays(low)
@@ -161,12 +166,11 @@ def build(low: Lowered, draw: bool = False) -> Program:
                    max(numbers) - min(numbers) + 1, min(numbers), monitors, state_rewards,
                    list(low.commands), draws=draws, movers=scheduler.movers(low),
                    agents=0 if low.network is None else len(low.network.parts),
-                   agent_modes=names[0], action_names=names[1])
-
+                   agent_modes=names[0], action_names=names[1], logged=logs.outcomes(low))
 
 
 def _monitor(p: ir.Property, sc: Scope, model: ir.Model, rindex: dict[str, int],
-             nonneg: list[bool]) -> Monitor:
+             nonneg: list[bool], steps: list[rare.StepBounds]) -> Monitor:
     def bound(b: E.Expr | None) -> float:
         if b is None:
             return math.inf
@@ -180,8 +184,10 @@ def _monitor(p: ir.Property, sc: Scope, model: ir.Model, rindex: dict[str, int],
     target = compile_expr(fold(path.target, sc)) if path.target is not None else None
     rname = p.reward if p.reward is not None else (model.rewards[0].name if model.rewards else "")
     index = rindex.get(rname, -1)
-    return Monitor(p.name, "R", path.kind, bound(path.bound), target, None, index,
-                   index >= 0 and nonneg[index])
+    limit = bound(path.bound)
+    return Monitor(p.name, "R", path.kind, limit, target, None, index,
+                   index >= 0 and nonneg[index],
+                   rare.run_range(path.kind, limit, steps[index] if index >= 0 else None))
 
 
 @dataclass
@@ -194,32 +200,11 @@ class BatchResult:
     # 3e9 +- 0.001, sum(x^2)/m - mean^2 cancels to noise of about 1e3)
     m2: list[float]
     infinite: list[int]  # R: runs with an infinite reward
+    least: list[float]  # R: the smallest and the largest finite total of a decided run
+    most: list[float]
     steps: int  # run-steps simulated
     max_steps_hit: int
     traces: list[list[dict[str, Any]]] = field(default_factory=list)
-
-
-def merge_moments(count: list[int], total: list[float], m2: list[float], k: int,
-                  vals: npt.NDArray[np.float64] | tuple[int, float, float]) -> None:
-    """Add values (or another group's (count, total, m2)) to group k's count, sum and sum
-    of squared deviations from the mean, exactly as one pass over all of them would (Chan
-    et al.'s pairwise update: stable, and independent of the mean's magnitude)."""
-    if isinstance(vals, tuple):
-        n_b, s_b, m2_b = vals
-    else:
-        n_b = len(vals)
-        s_b = float(np.sum(vals))
-        m2_b = float(np.sum((vals - s_b / n_b) ** 2)) if n_b else 0.0
-    if n_b == 0:
-        return
-    n_a = count[k]
-    if n_a:
-        delta = s_b / n_b - total[k] / n_a
-        m2[k] += m2_b + delta * delta * n_a * n_b / (n_a + n_b)
-    else:
-        m2[k] = m2_b
-    count[k] += n_b
-    total[k] += s_b
 
 
 def _as_bool(v: Any, n: int) -> npt.NDArray[np.bool_]:
@@ -275,6 +260,7 @@ class _Batch:
         self.m2 = [0.0] * nm
         self.n_fin = [0] * nm  # R: finite values so far, for merge_moments
         self.n_inf = [0] * nm
+        self.least, self.most = [math.inf] * nm, [-math.inf] * nm
         self.absorbed = np.zeros(n, dtype=bool)
         self.traces: list[list[dict[str, Any]]] = [[] for _ in range(min(trace, n))]
         self.fired = np.full(n, -1, dtype=np.int64)
@@ -300,6 +286,7 @@ class _Batch:
                 hz = c.branches[br].hazard if 0 <= br < len(c.branches) else None
                 if hz:
                     entry["hazard"] = hz
+                entry.update(prog.logged.get((cmd_i, br), {}))
             elif t > 0:
                 entry["action"] = "(no enabled action)"
             entry["vars"] = {d: _py(state[v][j]) for v, d in zip(prog.variables, prog.displays,
@@ -402,6 +389,9 @@ class _Batch:
             inf = np.isinf(vals)
             self.n_inf[k] += int(np.count_nonzero(inf))
             merge_moments(self.n_fin, self.tot, self.m2, k, vals[~inf])
+            if np.any(~inf):
+                self.least[k] = min(self.least[k], float(np.min(vals[~inf])))
+                self.most[k] = max(self.most[k], float(np.max(vals[~inf])))
 
     def retire(self, done: npt.NDArray[np.bool_]) -> None:
         """Count the finished runs and drop them from the live arrays."""
@@ -544,7 +534,7 @@ class _Batch:
         for k in range(self.nm):
             self._count(k, self.status[k], self.acc[k])
         return BatchResult(runs, self.n_true, self.n_und, self.tot, self.m2, self.n_inf,
-                           self.steps_done, hit, self.traces)
+                           self.least, self.most, self.steps_done, hit, self.traces)
 
 
 def _choose(c: CCommand, fr: Frame, cnt: int,

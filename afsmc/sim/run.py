@@ -24,10 +24,11 @@ from afsmc.interrupt import Stopped
 from afsmc.lifetime import die_with_parent, worker_died
 from afsmc.lower.lowering import lower
 from afsmc.model import ir
-from afsmc.sim import stats
+from afsmc.sim import rare, stats
 from afsmc.sim.compile import SimError
-from afsmc.sim.engine import BatchResult, Program, build, merge_moments, simulate_batch
+from afsmc.sim.engine import BatchResult, Program, build, simulate_batch
 from afsmc.sim.policy import Lookup, Table
+from afsmc.sim.stats import merge_moments
 
 Strategy = Literal["uniform", "floor", "ceil", "lo", "hi"]
 STRATEGIES: tuple[Strategy, ...] = ("uniform", "floor", "ceil", "lo", "hi")
@@ -76,6 +77,10 @@ class Estimate:
     high: float
     undecided: int
     no_spread: bool = False  # R: fewer than two runs finished, so no interval from a variance
+    # how the interval was made (afsmc.sim.rare: clopper-pearson, normal, range, one-sided),
+    # and why, when it is not the usual one of its kind
+    method: str = rare.NORMAL
+    reason: str = ""
 
 
 @dataclass
@@ -226,7 +231,8 @@ def combine(prog: Program, results: list[BatchResult], confidence: float) -> lis
             low, _ = stats.clopper_pearson(s, n, confidence)
             # Undecided runs may go either way: the interval covers both outcomes.
             _, high = stats.clopper_pearson(s + und, n, confidence)
-            out.append(Estimate(mo.name, "P", s / n if n else 0.0, low, high, und))
+            out.append(Estimate(mo.name, "P", s / n if n else 0.0, low, high, und,
+                                method=rare.CLOPPER_PEARSON))
             continue
         inf = sum(r.infinite[k] for r in results)
         m = n - und - inf
@@ -243,6 +249,13 @@ def combine(prog: Program, results: list[BatchResult], confidence: float) -> lis
         if m < 2:
             # A sample variance needs two values: one run says nothing about the spread.
             out.append(Estimate(mo.name, "R", mean, floor, math.inf, und, no_spread=True))
+            continue
+        least = min(r.least[k] for r in results)
+        if least == max(r.most[k] for r in results):
+            # No run differed: no spread to measure, and a rare event unseen (rare.py).
+            low, high, method, why = rare.no_variation(least, m, mo.span, confidence)
+            out.append(Estimate(mo.name, "R", mean, max(low, floor),
+                                math.inf if und else high, und, method=method, reason=why))
             continue
         var = m2[0] / (m - 1)
         z = stats.normal_quantile(0.5 + confidence / 2)

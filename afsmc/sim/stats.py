@@ -93,3 +93,26 @@ def shortest_decimal(target: float, low: float, high: float) -> str:
 
 def normal_quantile(p: float) -> float:
     return float(stats.norm.ppf(p))
+
+
+def merge_moments(count: list[int], total: list[float], m2: list[float], k: int,
+                  vals: npt.NDArray[np.float64] | tuple[int, float, float]) -> None:
+    """Add values (or another group's (count, total, m2)) to group k's count, sum and sum
+    of squared deviations from the mean, exactly as one pass over all of them would (Chan
+    et al.'s pairwise update: stable, and independent of the mean's magnitude)."""
+    if isinstance(vals, tuple):
+        n_b, s_b, m2_b = vals
+    else:
+        n_b = len(vals)
+        s_b = float(np.sum(vals))
+        m2_b = float(np.sum((vals - s_b / n_b) ** 2)) if n_b else 0.0
+    if n_b == 0:
+        return
+    n_a = count[k]
+    if n_a:
+        delta = s_b / n_b - total[k] / n_a
+        m2[k] += m2_b + delta * delta * n_a * n_b / (n_a + n_b)
+    else:
+        m2[k] = m2_b
+    count[k] += n_b
+    total[k] += s_b

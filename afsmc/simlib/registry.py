@@ -66,6 +66,11 @@ class UnknownSimulator(LookupError):
     """A reference that names no registered simulator output."""
 
 
+class BadOutput(ValueError):
+    """A simulator returned what is not samples of its outputs: a missing output, a wrong
+    shape, values that are not real numbers of the declared kind."""
+
+
 def _builtin() -> tuple[Simulator, ...]:
     from afsmc.simlib.uav import SIMULATORS
 
@@ -171,16 +176,38 @@ def _simulate(name: str, runs: int, seed: int) -> Mapping[str, npt.NDArray[Any]]
     result: dict[str, npt.NDArray[Any]] = {}
     for out, k in sim.outputs.items():
         if out not in raw:
-            raise ValueError(f"simulator {name!r} returned no output {out!r}")
+            raise BadOutput(f"simulator {name!r} returned no output {out!r}")
         arr = np.asarray(raw[out])
         if arr.shape != (runs,):
-            raise ValueError(
+            raise BadOutput(
                 f"simulator {name!r} output {out!r} has shape {arr.shape}, expected ({runs},)"
             )
+        why = not_real(arr, k)
+        if why is not None:
+            raise BadOutput(f"simulator {name!r} output {out!r} {why}")
         arr = arr.astype(bool) if k == "probability" else arr.astype(np.float64)
         arr.setflags(write=False)  # cached: callers get copies
         result[out] = arr
     return MappingProxyType(result)
+
+
+def not_real(arr: npt.NDArray[Any], kind: str) -> str | None:
+    """Why `arr` is not samples of its kind ("holds complex numbers"), or None. A duration
+    or a battery figure is an array of real numbers (integers or floats); a probability's
+    samples are outcomes, booleans or numbers that are all 0 or 1. Nothing is cast: a
+    complex number would lose its imaginary part, an object its meaning."""
+    dtype = arr.dtype
+    if dtype.kind == "c":
+        return "holds complex numbers, not real ones"
+    if dtype.kind not in "biuf":
+        return f"holds values of type {dtype.name!r}, not numbers"
+    if kind == "probability":
+        if dtype.kind != "b" and not bool(np.all((arr == 0) | (arr == 1))):
+            return "holds values other than 0 and 1 (True and False): a probability's " \
+                "samples are outcomes"
+    elif dtype.kind == "b":
+        return f"holds booleans, not the numbers of a {kind} figure"
+    return None
 
 
 def simulate(name: str, runs: int, seed: int) -> dict[str, npt.NDArray[Any]]:

@@ -129,6 +129,8 @@ def _child(conn: Any, ref: str, runs: int, seed: int, budget: int | None, parent
         limit_gb = f" (its limit: {budget / 2**30:.1f} GB, {MEMORY_SHARE:.0%} of the free memory)" \
             if budget is not None else ""
         msg = ("error", f"it ran out of memory at {runs:,} runs{limit_gb}; lower --runs")
+    except registry.BadOutput as exc:  # what it returned is no samples: said as such
+        msg = ("error", str(exc))
     except SystemExit as exc:
         msg = ("error", f"it raised SystemExit({exc.code!r}) instead of returning samples")
     except BaseException as exc:  # a plugin's error of any kind is its verdict

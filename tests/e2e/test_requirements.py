@@ -31,7 +31,9 @@ def test_patrol_verdicts_and_exit_codes(formula: str, verdict: str, code: int) -
     r = run_cli("verify", PATROL, "-f", formula, "--json", "--no-uniform")
     assert r.code == code, r.err
     (p,) = json.loads(r.out)["properties"]
-    assert p["verdict"] == verdict and p["error"] == 1e-6
+    # the precision asked, plus the bound on the built model's rounding over patrol's few
+    # expected steps (afsmc.verify.core.conditioning): far below the precision here
+    assert p["verdict"] == verdict and 1e-6 <= p["error"] < 1.001e-6
     op = re.match(r'[PR](?:\{"\w+"\})?(<=|>=|<|>)([\d.]+)', formula)
     assert op is not None
     assert p["threshold"] == {"op": op.group(1), "bound": float(op.group(2))}
@@ -95,7 +97,9 @@ def test_exact_values_are_rationals_and_sound_ones_lie_within_their_bound() -> N
     exact = verify.run(PATROL, exact=True, uniform=False)
     sound = verify.run(PATROL, precision=1e-9, uniform=False)
     for e, s in zip(exact.properties, sound.properties, strict=True):
-        assert e.error == 0 and s.error == 1e-9
+        # the precision, plus the bound on the built model's rounding (a little more for
+        # the expected rewards, which it scales)
+        assert e.error == 0 and s.error is not None and 1e-9 <= s.error < 1.1e-9
         for key in ("min", "max"):
             q = Fraction(e.exact[key])
             assert float(q) == getattr(e, key)

@@ -136,7 +136,8 @@ def test_a_missing_column_is_e511_with_the_closest_name(tmp_path: Path) -> None:
 def test_a_cell_that_is_no_number_is_e512_and_never_code(tmp_path: Path) -> None:
     write_data(tmp_path, times=["2.1", "", "__import__('os').system('touch pwned')", "inf"])
     err = _error(tmp_path, "E512")
-    assert "line 4: \"__import__('os')" in err and "line 5: 'inf'" in err
+    assert "line 4 (not a number); line 5 (not finite)" in err
+    assert "__import__" not in err  # a message never quotes the file's text
     assert not (tmp_path / "pwned").exists() and not Path("pwned").exists()
 
 
@@ -150,7 +151,7 @@ def test_an_outcome_other_than_0_or_1_is_e514(tmp_path: Path) -> None:
     write_data(tmp_path, successes=[1, 0, 2])
     (tmp_path / "runs.csv").write_text("run,success\n1,1\n2,true\n3,0.85\n")
     err = _error(tmp_path, "E514")
-    assert "line 4: '0.85'" in err
+    assert "line 4 (not 0, 1, true or false)" in err and "0.85" not in err
 
 
 def test_a_bool_from_data_and_a_bad_policy_are_check_errors(tmp_path: Path) -> None:

@@ -37,10 +37,25 @@ def _huge(runs, rng):
 def _nan(runs, rng):
     return {"duration": np.full(runs, np.nan)}
 
+def _complex(runs, rng):
+    return {"duration": np.full(runs, 1.0 + 2.0j)}
+
+def _objects(runs, rng):
+    return {"duration": np.full(runs, 10, dtype=object)}
+
+def _complex_both(runs, rng):
+    return {"go": np.full(runs, 1.0 + 1.0j), "fail": np.full(runs, 1.0 + 0.5j)}
+
+def _fractions(runs, rng):
+    return {"go": np.full(runs, 10.0), "fail": np.full(runs, 0.3)}
+
 SIMULATORS = tuple(
     Simulator("fake." + name, "misbehaves", {"duration": "duration"}, fn)
     for name, fn in [("exit", _exit), ("osexit", _underscore_exit), ("hang", _hang),
-                     ("huge", _huge), ("nan", _nan)])
+                     ("huge", _huge), ("nan", _nan), ("complex", _complex),
+                     ("objects", _objects)]) + tuple(
+    Simulator("fake." + name, "misbehaves", {"go": "duration", "fail": "probability"}, fn)
+    for name, fn in [("both", _complex_both), ("fractions", _fractions)])
 '''
 
 SPEC = """machine m;
@@ -89,6 +104,10 @@ def _spec(tmp_path: Path, name: str) -> tuple[Path, bytes]:
     ("exit", "it raised SystemExit(0) instead of returning samples"),
     ("osexit", "it ended the process (exit code 0) without returning samples"),
     ("nan", "200 of its 200 samples are not finite numbers"),
+    ("complex", "simulator 'fake.complex' output 'duration' holds complex numbers, not real "
+                "ones"),
+    ("objects", "simulator 'fake.objects' output 'duration' holds values of type 'object', "
+                "not numbers"),
 ])
 @pytest.mark.slow
 def test_a_simulator_that_exits_or_lies_fails_at_the_constant(
@@ -99,6 +118,42 @@ def test_a_simulator_that_exits_or_lies_fails_at_the_constant(
     assert f"{spec}:3:27: error[E505]: simulator 'fake.{name}.duration' failed: {says}" \
         in r.stderr, r.stderr
     assert "Traceback" not in r.stderr
+    assert spec.read_bytes() == before
+
+
+TWO = """machine m;
+
+const int T_GO = [10, 11] from sim fake.{name}.go;
+const prob P_FAIL = 0.1 from sim fake.{name}.fail;
+var t : [0..60] init 0 clamp;
+
+mode A = 0 initial;
+mode Done = 1 final;
+mode Failed = 2 final;
+
+action Fly in A when t < 40 {{ 1 - P_FAIL: t += T_GO; P_FAIL: goto Failed; }}
+action Land in A when t >= 40 {{ goto Done; }}
+
+property done = P=? [ F mode == Done ];
+"""
+
+
+@pytest.mark.parametrize(("name", "says"), [
+    ("both", "simulator 'fake.both' output 'go' holds complex numbers, not real ones"),
+    ("fractions", "simulator 'fake.fractions' output 'fail' holds values other than 0 and 1"),
+])
+@pytest.mark.slow
+def test_update_leaves_the_spec_untouched_when_a_simulator_lies_about_its_kind(
+        name: str, says: str, plugin: dict[str, str], tmp_path: Path) -> None:
+    # complex samples were cast to real (a ComplexWarning) and --update wrote
+    # T_GO = [1, 1] and P_FAIL = 1.0; a probability's 0.3 was cast to True
+    spec = tmp_path / f"{name}.afsm"
+    spec.write_text(TWO.format(name=name), encoding="utf-8")
+    before = spec.read_bytes()
+    r = _sim_check(plugin, spec, "--update")
+    assert r.returncode == 1, r.stdout + r.stderr
+    assert "error[E505]" in r.stderr and says in r.stderr, r.stderr
+    assert "Warning" not in r.stderr and "Traceback" not in r.stderr, r.stderr
     assert spec.read_bytes() == before
 
 

@@ -49,7 +49,8 @@ STAGES: tuple[tuple[str, tuple[str, ...]], ...] = (
     # the pipeline so far as two calls: load (source -> checked IR) and lowered
     ("pipeline", ("afsmc.compiler",)),
     # lowered IR -> PRISM/JANI/DOT text, simulated runs, Storm's and afsmc's numbers
-    ("engines", ("afsmc.backends", "afsmc.sim", "afsmc.verify.plan", "afsmc.verify.engines")),
+    ("engines", ("afsmc.backends", "afsmc.controllers", "afsmc.sim", "afsmc.conform",
+                 "afsmc.verify.plan", "afsmc.verify.engines")),
     # numbers -> one typed answer per property (verify.core drives the engines)
     ("answer", ("afsmc.verify.outcome", "afsmc.verify.core")),
     # many answers (sweeps, regions) and the reports rendered from answers; afsmc.verify,

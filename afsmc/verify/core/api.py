@@ -24,13 +24,14 @@ from afsmc.stack import deep
 from afsmc.syntax import ast
 from afsmc.syntax.parser import parse_property
 from afsmc.text import count, literal
+from afsmc.verify.core import conditioning
 from afsmc.verify.core.options import VerifyOptions
 from afsmc.verify.core.runner import CheckRun, ModelLoop, Options
-from afsmc.verify.core.uncertainty import over_probabilities, sources
+from afsmc.verify.core.uncertainty import kept_at_midpoint, over_probabilities, sources
 from afsmc.verify.engines.guard import Progress, default_max_states, run_job, upper_bound
 from afsmc.verify.engines.storm import Engine, Job, StormFailure
 from afsmc.verify.engines.strategy_storm import WitnessRequest
-from afsmc.verify.outcome.results import Checks, VerifyResult
+from afsmc.verify.outcome.results import Checks, PropertyResult, VerifyResult
 from afsmc.verify.outcome.strategy import extras, witness_request
 from afsmc.verify.outcome.verdicts import judge_all
 from afsmc.verify.plan.precision import DEFAULT_PRECISION, check_options
@@ -149,17 +150,60 @@ def check(model: ir.Model, props: Sequence[ir.Property],
     result then has its `verdict` (afsmc.verify.outcome.verdicts)."""
     o = VerifyOptions.of(options, option_values)
     precision, engine = sound_mode(props, o.precision, o.exact, o.engine)
-    checking = CheckRun(model, list(props), list(preserve), engine, o.uniform, progress,
-                        o.reductions, Options.of(o, all_states, precision, witness))
+    # kappa, the expected number of steps, for the rounding's bound on the requirements'
+    # values (afsmc.verify.core.conditioning); not beside schedulers and paths, whose
+    # extraction would take it for one of the properties
+    asked = conditioning.ask(model, props) if precision is not None and not (
+        o.exact or o.strategy or witness is not None) else conditioning.Asked(model, None)
+    checking = CheckRun(asked.model, asked.properties(props), list(preserve), engine,
+                        o.uniform, progress, o.reductions,
+                        Options.of(o, all_states, precision, witness))
     for resolution, low, what in checking.lows:
         ModelLoop(checking, resolution, low, what).check_all()
-    checks = checking.finish()
-    checks, box, errors = over_probabilities(
-        checks, model, props, via=o.via, reductions=o.reductions,
-        precision=None if o.exact else precision, preserve=preserve, progress=progress)
-    judged = judge_all(checks.properties, 0.0 if o.exact else precision, errors)
+    # kappa too is bounded over the interval probabilities' box: its largest value there
+    at_points = checking.finish()
+    try:
+        checks, box, errors = over_probabilities(
+            at_points, asked.model, props, via=o.via, reductions=o.reductions,
+            precision=None if o.exact else precision, preserve=preserve, progress=progress,
+            beside=asked.properties(()))
+    except CompileError as exc:  # the values at the midpoint are not lost with the bounds
+        kept, partial = kept_at_midpoint(conditioning.steps(at_points, asked)[0])
+        raise CompileError([*exc.diagnostics, *kept], partial) from None
+    checks, kappa = conditioning.steps(checks, asked)
+    box = conditioning.without_steps(box)
+    judged = conditioning.ordered(
+        judge_all(checks.properties, 0.0 if o.exact else precision, errors))
+    if precision is not None and not o.exact:
+        judged = _rounding_accounted(judged, kappa, model, props, o, checks, progress)
     return dataclasses.replace(checks, properties=judged, uncertainty=sources(model),
                                probability=box)
+
+
+def _rounding_accounted(judged: list[PropertyResult], kappa: float | None, model: ir.Model,
+                        props: Sequence[ir.Property], o: VerifyOptions, checks: Checks,
+                        progress: Progress | None) -> list[PropertyResult]:
+    """The requirements judged with the rounding of the built model accounted for, and
+    those whose verdict it could change decided again: exactly, where the model is small
+    enough and has no interval probabilities, else `undecided`."""
+    acc = conditioning.account(judged, kappa)
+    if not acc.redecide:
+        return acc.results
+    small = checks.model.states <= conditioning.EXACT_STATES and not model.prob_intervals
+
+    def exact(names: list[str]) -> list[PropertyResult]:
+        if progress is not None:
+            progress(f"deciding {', '.join(names)} again with exact arithmetic: the "
+                     "rounding of the model Storm built could change the verdict")
+        again = dataclasses.replace(o, exact=True, precision=None, engine="sparse",
+                                    uniform=False, strategy=False, witness=None)
+        try:
+            return check(model, [p for p in props if p.name in names], again,
+                         progress=progress).properties
+        except CompileError:
+            return []  # the exact engine could not: undecided, with the widened error
+
+    return conditioning.redecided(acc.results, acc.redecide, exact if small else None)
 
 
 def sound_mode(props: Sequence[ir.Property], precision: float | None, exact: bool,

@@ -46,9 +46,7 @@ from afsmc.verify.engines.storm import (
     Job,
     JobResult,
     StormFailure,
-    Via,
 )
-from afsmc.verify.engines.storm_solvers import Solver
 from afsmc.verify.engines.strategy_storm import Extracted, WitnessRequest
 from afsmc.verify.outcome.results import (
     Checks,
@@ -92,20 +90,13 @@ def so_far(seconds: float) -> str:
 
 @dataclass(frozen=True)
 class Options:
-    """How :func:`afsmc.verify.check` runs Storm (its keyword arguments of the same names)."""
+    """How :func:`afsmc.verify.check` runs Storm: the verification's options as given, and
+    what `check` resolves of them for this call."""
 
-    via: Via
-    max_states: int | None
-    isolate: bool | None
-    bisimulation: bool
-    split: bool
-    memory_budget: int | None
-    solver: Solver
-    all_states: bool
-    precision: str | None = None  # sound mode within this (Job.precision)
-    exact: bool = False
-    strategy: bool = False  # extract each property's min and max scheduler
-    witness: WitnessRequest | None = None  # and a query's most probable paths
+    given: VerifyOptions
+    all_states: bool  # Storm builds every reachable state (Job.all_states)
+    precision: str | None  # sound mode within this, as Storm's rational (Job.precision)
+    witness: WitnessRequest | None  # a query's most probable paths, resolved
 
     @classmethod
     def of(cls, o: VerifyOptions, all_states: bool, precision: float | None,
@@ -113,10 +104,8 @@ class Options:
         """A check's settings from the verification's options: the precision it runs at
         (a requirement's default, from `sound_mode`) as Storm's rational, and the witness
         request resolved against its properties."""
-        return cls(o.via, o.max_states, o.isolate, o.bisimulation, o.split, o.memory_budget,
-                   o.solver, all_states,
-                   None if precision is None else rational_text(precision), o.exact,
-                   o.strategy, witness)
+        return cls(o, all_states, None if precision is None else rational_text(precision),
+                   witness)
 
 
 class CheckRun:
@@ -157,7 +146,7 @@ class CheckRun:
             if low.kind == "dtmc":
                 self.lows.append(("uniform", low, "uniform DTMC"))
         for _, low, _ in self.lows:  # a counter too deep for an unwatched symbolic build
-            refuse_deep(low, self.engine, options.max_states, default_max_states())
+            refuse_deep(low, self.engine, options.given.max_states, default_max_states())
         self.stats: list[ModelStats | None] = []  # None: every process of that model failed
         self.values: list[dict[str, float]] = []
         self.timings: list[dict[str, float]] = []  # each query's check time, as `values`
@@ -296,7 +285,7 @@ class ModelLoop:
         the expected rewards in one process, with small decision-diagram tables (their
         minimum needs the most explicit memory: 18.8 GB on scenario 1), the probabilities
         in another, with large tables (their complementary targets need them)."""
-        split = self.run.options.split
+        split = self.run.options.given.split
         if not hybrid:
             return [[q] for q in qs] if split and len(qs) > 1 else [qs] if qs else []
         if split:
@@ -408,7 +397,8 @@ class ModelLoop:
     def job_for(self, unit: list[Query], group: list[ir.Property]) -> tuple[Job, bool, bool]:
         """The Storm job of `unit`; whether it asks complementary Pmin queries only, and
         whether it gets the larger decision-diagram tables."""
-        o = self.run.options
+        run = self.run.options
+        o = run.given
         limit = o.max_states if o.max_states is not None else (
             default_max_states() if self.job_engine == "sparse" else None)
         # "auto" checks what the hybrid engine would check first, if it picks that: with
@@ -419,12 +409,12 @@ class ModelLoop:
         job = make_job(self.low, group, o.via, self.job_engine, limit, self.what, o.bisimulation,
                        o.memory_budget, only=tuple(mine),
                        hybrid_skip=tuple(n for n in mine if n not in first), hybrid_extra=extra)
-        job = dataclasses.replace(job, solver=o.solver, all_states=o.all_states,
-                                  precision=o.precision, exact=o.exact)
+        job = dataclasses.replace(job, solver=o.solver, all_states=run.all_states,
+                                  precision=run.precision, exact=o.exact)
         if applies(self.low, self.job_engine, o.solver,
-                   o.bisimulation or o.exact or o.precision is not None):
+                   o.bisimulation or o.exact or run.precision is not None):
             job = dataclasses.replace(job, explicit=self.low)  # afsmc's own exploration first
-        ex = request(self.low, o.strategy, o.witness, mine, self.run.asked_as,
+        ex = request(self.low, o.strategy, run.witness, mine, self.run.asked_as,
                      skip={n for p, n in unit if stepped(p)})
         if self.resolution == "nondet" and o.via == "prism" and ex is not None:
             job = dataclasses.replace(job, extract=ex, model_text=prism_emit(self.low, True).model)
@@ -447,7 +437,7 @@ class ModelLoop:
     def fresh_process(self, group: list[ir.Property]) -> bool | None:
         """A fresh process per unit when there are several, except where no child process
         may be started (isolate=False: Dask workers); None lets the guard decide."""
-        isolate = self.run.options.isolate
+        isolate = self.run.options.given.isolate
         fresh = isolate if isolate is False or len(self.units) == 1 else True
         if fresh is None and self.run.bound * max(
                 steps(p, self.run.model) for p in group) > IN_PROCESS_WORK:
@@ -567,5 +557,5 @@ class ModelLoop:
                                                             for u in self.plan(left, True)) if u]
             if run.progress is not None and left:
                 run.progress(f"the {self.what} is checked with the hybrid engine: "
-                             + ("one query per Storm process" if run.options.split else
+                             + ("one query per Storm process" if run.options.given.split else
                                 "the other queries follow in one more Storm process"))

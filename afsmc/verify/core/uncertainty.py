@@ -19,16 +19,18 @@ point (`PropertyResult.reference`), never judged.
 from __future__ import annotations
 
 import dataclasses
+import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 
 from afsmc.compiler import lowered
-from afsmc.diagnostics import Span
+from afsmc.diagnostics import Diagnostic, Severity, Span, codes
 from afsmc.lower.reduce import Reductions
 from afsmc.model import expr as E
 from afsmc.model import ir
+from afsmc.text import num
 from afsmc.verify.engines import parametric
-from afsmc.verify.outcome.results import Checks, PropertyResult
+from afsmc.verify.outcome.results import Checks, Partial, PropertyResult
 from afsmc.verify.plan.precision import PARAMETER_PRECISION, PARAMETER_SOLVER_ERROR
 
 INTERVAL_CONSTANTS = "interval constants"
@@ -84,6 +86,7 @@ class ProbabilityBox:
     box: dict[str, tuple[float, float]]
     extremes: tuple[parametric.Extreme, ...]
     precision: float
+    seconds: float = 0.0  # the parametric engine's time, build and refinement
 
     def to_json(self) -> dict[str, object]:
         return parametric.to_json(self.box, self.extremes, self.precision)
@@ -99,13 +102,15 @@ def bound_error(precision: float | None) -> float:
 def over_probabilities(checks: Checks, model: ir.Model, props: Sequence[ir.Property], *,
                        via: str, reductions: Reductions | None, precision: float | None,
                        preserve: Sequence[ir.Property] = (),
-                       progress: Callable[[str], None] | None = None
+                       progress: Callable[[str], None] | None = None,
+                       beside: Sequence[ir.Property] = ()
                        ) -> tuple[Checks, ProbabilityBox | None, dict[str, float]]:
     """`checks` with each property's `min`/`max` its bounds over every fixed value of the
     interval probabilities (the midpoint's answer kept as its `reference`); the box, and
     each property's error (none of either for a mission without interval probabilities).
     `preserve`: the further properties the check's reductions kept exact (a sweep's other
-    points), so that the model bounded is the model checked.
+    points), so that the model bounded is the model checked. `beside`: further queries
+    bounded with them that are not the mission's (the conditioning's expected steps).
 
     The bounds are the values Storm attained (`Extreme.min_attained`): the true extreme
     lies within `error` of each, beyond it (below a min, above a max)."""
@@ -116,16 +121,19 @@ def over_probabilities(checks: Checks, model: ir.Model, props: Sequence[ir.Prope
         progress(f"bounding {len(props)} propert{'y' if len(props) == 1 else 'ies'} over "
                  + ", ".join(f"{n} in [{lo:g}, {hi:g}]" for n, (lo, hi) in box.items())
                  + " with Storm's parametric engine")
-    kept = dataclasses.replace(model, properties=tuple(props) + tuple(preserve))
-    found = parametric.extremes(lowered(kept, "nondet", reductions), props, via=via,
+    t0 = time.perf_counter()
+    asked = [*props, *beside]
+    kept = dataclasses.replace(model, properties=tuple(asked) + tuple(preserve))
+    found = parametric.extremes(lowered(kept, "nondet", reductions), asked, via=via,
                                 precision=PARAMETER_PRECISION)
+    seconds = time.perf_counter() - t0
     by_name = {e.name: e for e in found}
     error = bound_error(precision)
     errors = {r.name: error for r in checks.properties if r.name in by_name}
     widened = [_widened(r, by_name[r.name]) if r.name in by_name else r
                for r in checks.properties]
     return (dataclasses.replace(checks, properties=widened),
-            ProbabilityBox(box, tuple(found), PARAMETER_PRECISION), errors)
+            ProbabilityBox(box, tuple(found), PARAMETER_PRECISION, seconds), errors)
 
 
 def reach_bounds(model: ir.Model, targets: Sequence[tuple[str, E.Expr]], *,
@@ -150,6 +158,23 @@ def _widened(r: PropertyResult, e: parametric.Extreme) -> PropertyResult:
         r, reference=Reference("midpoint", r.min, r.max, r.value, r.uniform, dict(r.exact)),
         min=e.min_attained, max=e.max_attained, value=None, uniform=None, exact={},
         attained_at={"min": dict(e.min_at), "max": dict(e.max_at)})
+
+
+def kept_at_midpoint(checks: Checks) -> tuple[list[Diagnostic], Partial]:
+    """What a failure of the bounds over the interval probabilities keeps of the check
+    already made at their midpoint: each answer as its reference (never as the bounds,
+    which are what failed), and a note that says them."""
+    props = [dataclasses.replace(
+        r, reference=Reference("midpoint", r.min, r.max, r.value, r.uniform, dict(r.exact)),
+        min=None, max=None, value=None, uniform=None, exact={}) for r in checks.properties]
+    said = "; ".join(
+        f"{r.name} " + ", ".join(f"{k} {num(v)}" for k in ("min", "max", "value", "uniform")
+                                  if (v := getattr(r, k)) is not None)
+        for r in checks.properties)
+    note = Diagnostic(codes.N412, Severity.NOTE, "answered at the interval probabilities' "
+                      f"midpoint before the failure (a reference point, not the bounds over "
+                      f"their box): {said}", None)
+    return [note], Partial(checks.model, checks.uniform_model, props)
 
 
 def described(over: Sequence[str], box: ProbabilityBox | None) -> str:

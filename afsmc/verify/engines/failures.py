@@ -14,6 +14,7 @@ import re
 from collections.abc import Callable, Mapping, Sequence
 
 from afsmc.backends.prism import property_variants
+from afsmc.check.storm_refuses import signed_total
 from afsmc.diagnostics import CompileError, Diagnostic, Severity, Span, codes
 from afsmc.lower.lowering import Lowered
 from afsmc.model import ir
@@ -199,8 +200,19 @@ def symbolic_gap(p: ir.Property, model: ir.Model, engine: Engine) -> str | None:
 
 def refuse_symbolic(props: Sequence[ir.Property], model: ir.Model, engine: Engine) -> None:
     """E404 before any build, for what Storm's symbolic engines cannot check (symbolic_gap),
-    which they would say only after building, or not at all. ("auto" learns its engine in
-    the Storm process: Job.symbolic_refused.)"""
+    which they would say only after building, or not at all ("auto" learns its engine in
+    the Storm process: Job.symbolic_refused); and, on every engine, for a total reward that
+    may be negative, which Storm refuses on an MDP and may answer with the wrong sign on a
+    DTMC (+inf where the runs lose without end)."""
+    signed = [(p, name) for p in props if (name := signed_total(p, model)) is not None]
+    if signed:
+        raise CompileError([Diagnostic(
+            codes.E404, Severity.ERROR, f"afsmc does not ask Storm for '{p.name}', the total "
+            f"reward of \"{name}\", which may be negative: Storm refuses it on an MDP and may "
+            "answer +inf on a DTMC whose runs lose without end", p.span,
+            hint=f"ask R{{\"{name}\"}}=? [ C<=k ] for the first k steps, or R{{\"{name}\"}}=? "
+                 "[ F ... ] up to the mission's end; or keep every reward >= 0")
+            for p, name in signed])
     if engine not in ("hybrid", "dd"):
         return
     bad = [(p, why) for p in props if (why := symbolic_gap(p, model, engine)) is not None]

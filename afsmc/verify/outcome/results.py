@@ -211,6 +211,8 @@ class VerifyResult:
             "build": self.model.build_time, "check": self.model.check_time}
         if u is not None:
             timings |= {"uniform_build": u.build_time, "uniform_check": u.check_time}
+        if self.probability is not None:
+            timings["bounds"] = self.probability.seconds
         timings["total"] = self.total_time
         out: dict[str, object] = {
             "file": self.path,

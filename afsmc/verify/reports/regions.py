@@ -3,7 +3,11 @@ where a requirement holds for every value, fails for every value, or is not deci
 
 Each sub-box is analysed by Storm's parameter lifting (sound: it over-approximates the box),
 which proves the requirement for every value of the box (holds), proves its negation for
-every value (fails), or neither. Neither: the box is halved along its widest side
+every value (fails), or neither. Each proof keeps a margin (`margin`): the requirement is
+proved with its threshold moved by the margin against it (`P>=b` as `P>=b+m`) and its
+negation with the threshold moved the other way, so that a box whose values lie within the
+engine's numerical error of the threshold (a value that does not depend on the parameters
+and lies right at it) is left unknown rather than labelled by rounding. Neither: the box is halved along its widest side
 (relative to the whole box) and its halves are checked in the next round, until the
 decided volume reaches the coverage asked for (default 95%) or `max_rounds` rounds have
 run. The boxes of one round are independent and
@@ -26,6 +30,7 @@ fails or is unknown.
 from __future__ import annotations
 
 import bisect
+import dataclasses
 import itertools
 import math
 import multiprocessing
@@ -41,6 +46,7 @@ from afsmc.lifetime import die_with_parent
 from afsmc.lower.lowering import Lowered
 from afsmc.verify.engines.parametric import Parametric, Source, check_box, source, with_parameters
 from afsmc.verify.outcome.verdicts import Verdict
+from afsmc.verify.plan.precision import PARAMETER_SOLVER_ERROR
 
 Bounds = dict[str, tuple[float, float]]
 _NEGATE = {">=": "<", ">": "<=", "<=": ">", "<": ">="}
@@ -196,9 +202,13 @@ def _init(src: Source, formulas: tuple[str, str], parent: int | None = None) -> 
 
 
 def _check(b: Bounds) -> str:
+    """A box's label: holds if all of it meets the requirement with the margin against it,
+    fails if none of it meets it with the margin for it (with_margin), else unknown."""
     built: Parametric = _WORKER["built"]
-    holds, _ = _WORKER["formulas"]
-    return built.analyze(holds, b)
+    tight, loose = _WORKER["formulas"]
+    if built.analyze(tight, b) == "holds":
+        return "holds"
+    return "fails" if built.analyze(loose, b) == "fails" else "unknown"
 
 
 def _check_on_dask(src: Source, formulas: tuple[str, str], boxes: list[Bounds]) -> list[str]:
@@ -206,14 +216,34 @@ def _check_on_dask(src: Source, formulas: tuple[str, str], boxes: list[Bounds]) 
     return [_check(b) for b in boxes]
 
 
+def margin(req: Requirement) -> float:
+    """How far a region's values must lie from the threshold for the region to be labelled:
+    the parametric engine's numerical error (its solver's precision), relative to the
+    threshold for a reward beyond 1."""
+    return PARAMETER_SOLVER_ERROR * max(1.0, abs(req.bound))
+
+
+def with_margin(req: Requirement, prism_query: str, mdp: bool) -> tuple[str, str]:
+    """The formulas a region is labelled by: the requirement with its threshold moved by
+    `margin` against it (all of the box satisfies it: holds), and with its threshold moved
+    by `margin` for it (none of the box satisfies it: fails)."""
+    m = margin(req) if req.cmp in (">=", ">") else -margin(req)
+
+    def at(bound: float) -> Requirement:  # a probability's threshold stays in [0, 1]
+        return dataclasses.replace(req, bound=min(1.0, max(0.0, bound)) if req.op == "P"
+                                   else bound)
+    tight, loose = at(req.bound + m), at(req.bound - m)
+    return (storm_formulas(tight, prism_query, mdp)[0], storm_formulas(loose, prism_query, mdp)[0])
+
+
 def prepare(low: Lowered, params: Sequence[str], req: Requirement, prism_query: str,
             via: str, also: Sequence[str] = ()) -> tuple[Source, tuple[str, str], Parametric]:
-    """The parametric model of `low` over `params`, built for the requirement, its
-    negation and the further formulas `also` (the bounds' queries, answered on the same
-    build)."""
+    """The parametric model of `low` over `params`, built for the requirement with its
+    margins (`with_margin`: the formulas returned) and the further formulas `also` (the
+    bounds' queries, answered on the same build)."""
     plow = with_parameters(low, params)
     src = source(plow, via)
-    formulas = storm_formulas(req, prism_query, low.kind == "mdp")
+    formulas = with_margin(req, prism_query, low.kind == "mdp")
     return src, formulas, Parametric(src, [*formulas, *also])
 
 

@@ -165,7 +165,7 @@ def coin_lows(tmp_path: Path, gain: str) -> list[tuple[float, float]]:
     out = []
     for seed in range(8):
         est = sim_json(src, "--runs", "3", "--seed", str(seed))["properties"][0]  # type: ignore[index]
-        out.append((est["estimate"], est["low"]))
+        out.append((est["estimate"], float(est["low"])))  # "-inf": no spread, no floor
     return out
 
 
@@ -202,7 +202,8 @@ def test_uav_success_agrees_with_storm(tmp_path: Path) -> None:
     data = sim_json(UAV, "--runs", "20000", *args)
     for p in data["properties"]:  # type: ignore[union-attr]
         if p["name"] in exact and math.isfinite(exact[p["name"]]):
-            assert p["low"] <= exact[p["name"]] <= p["high"], p
+            # JSON's "inf": a reward no run earned, one-sided (tests/unit/sim/test_rare_events.py)
+            assert float(p["low"]) <= exact[p["name"]] <= float(p["high"]), p
 
 
 def test_json_shape() -> None:
@@ -222,7 +223,7 @@ def test_merged_moments_equal_one_pass_over_all_values() -> None:
     the same as numpy over all values at once, even at a mean of 3e9."""
     import numpy as np
 
-    from afsmc.sim.engine import merge_moments
+    from afsmc.sim.stats import merge_moments
 
     rng = np.random.default_rng(1)
     vals = 3e9 + rng.random(1000) * 1e-3

@@ -4,6 +4,8 @@ its centre by an ordinary Storm model at those values; the coverage is the decid
 from __future__ import annotations
 
 import itertools
+from fractions import Fraction
+from pathlib import Path
 
 import pytest
 
@@ -36,7 +38,9 @@ def test_regions_are_confirmed_at_their_corners_and_centre(patrol: object) -> No
     req = R.parse_requirement(f'P>={BOUND} [ F "done" ]')
     box = {"P_FAULT": (0.005, 0.02), "P_SLIP": (0.05, 0.15)}
     src, formulas, built = R.prepare(low, list(box), req, 'P=? [ F "done" ]', "prism")
-    assert formulas == (f'Pmin>={BOUND} [ F "done" ]', f'Pmin<{BOUND} [ F "done" ]')
+    # the requirement with its margin against it, and for it (R.with_margin)
+    m = R.margin(req)
+    assert formulas == (f'Pmin>={BOUND + m!r} [ F "done" ]', f'Pmin>={BOUND - m!r} [ F "done" ]')
     regions, rounds = R.refine(low, src, formulas, built, box, coverage=0.8, max_rounds=8)
     decided = [r for r in regions if r.verdict != "unknown"]
     assert {r.verdict for r in decided} == {"holds", "fails"}
@@ -125,3 +129,41 @@ def test_the_verdict_over_the_box_is_verifys_judgement_of_the_bounds() -> None:
     judged = judge(Threshold(">=", 0.5, "0.5"), 0.3, 0.7, 1e-4)
     assert _whole(["holds", "fails"], judged) == (judged.kind, judged.reason)
     assert judged.kind == "depends" and judged.decided_by == "min"
+
+
+FLAT = """machine flat;
+const prob P_X = [0.1, 0.2];
+mode A = 0 initial;
+mode B = 1;
+mode Done = 2 final;
+mode Fail = 3 final;
+action Go in A {
+    P_X: goto B;
+    1 - P_X: goto B;
+}
+action Fin in B {
+    0.3: goto Done;
+    0.7: goto Fail;
+}
+"""
+
+
+@pytest.mark.parametrize("threshold", ["0.3", "0.29999999", "0.30000001", "0.2999999999",
+                                       "0.3000000001"])
+def test_a_flat_value_at_the_threshold_is_never_labelled_wrongly(tmp_path: Path,
+                                                                 threshold: str) -> None:
+    # P(F Done) is exactly 3/10 whatever P_X is; 0.3 is no double, and the parametric
+    # engine's numbers are within its precision of it: only a margin keeps a label honest
+    path = tmp_path / "flat.afsm"
+    path.write_text(FLAT, encoding="utf-8")
+    low = lowered(load(str(path)).model, "nondet")
+    req = R.parse_requirement(f"P>={threshold} [ F mode == Done ]")
+    box = {"P_X": (0.1, 0.2)}
+    src, formulas, built = R.prepare(low, list(box), req, "P=? [ F mode=2 ]", "prism")
+    regions, _ = R.refine(low, src, formulas, built, box, coverage=0.95, max_rounds=3)
+    truth = "holds" if Fraction(3, 10) >= Fraction(threshold) else "fails"
+    assert {r.verdict for r in regions} <= {truth, "unknown"}
+    # within the margin of the value nothing is labelled: the engine's error could be
+    # on either side of the threshold
+    assert abs(Fraction(threshold) - Fraction(3, 10)) < Fraction(R.margin(req))
+    assert {r.verdict for r in regions} == {"unknown"}
