@@ -30,10 +30,10 @@ from afsmc.report.baseline import Comparison, compare
 from afsmc.report.causes import Split, split_all, splittable, why_not
 from afsmc.report.sensitivity import Sensitivity, sensitivities
 from afsmc.sim.evidence import Evidence
-from afsmc.verify.core.api import load_with_formulas
+from afsmc.verify.core.api import load_with_formulas, select, sound_mode
 from afsmc.verify.core.options import VerifyOptions
 from afsmc.verify.outcome.results import PropertyResult, VerifyResult
-from afsmc.verify.outcome.strategy import has_choices
+from afsmc.verify.outcome.strategy import StrategyEntry, has_choices
 
 Say = Callable[[str], None]
 PATHS = 3  # the most probable paths shown into each failure property's largest cause
@@ -73,6 +73,8 @@ class Case:
     notes: list[str] = field(default_factory=list)
     sensitivity: list[Sensitivity] | None = None  # None: not asked for
     worst_case: bool = True  # the strategies were asked for
+    # the min and max strategies of each property (verify --strategy), by name
+    strategies: dict[str, dict[str, list[StrategyEntry]]] = field(default_factory=dict)
 
     def property(self, name: str) -> PropertyResult:
         return self.result.property(name)
@@ -241,15 +243,27 @@ def build(path: str, consts: Mapping[str, str] | None = None, *,
     checked = load_checked(path, consts, text=text)
     model = checked.model
     opts = options or VerifyOptions(engine="auto")
-    if worst_case and has_choices(model) and not opts.bisimulation:
-        opts = dataclasses.replace(opts, strategy=True)
+    # the ad-hoc formulas among the properties, named as verify names them
+    full = load_with_formulas(path, consts, formulas, checked=checked)
+    plays = worst_case and has_choices(model) and not opts.bisimulation
+    # verify's schedulers come beside the values in one run, except in sound mode (a
+    # requirement), where verify's values are checked without them (afsmc.verify.core
+    # .conditioning): there the strategies come from a run of their own
+    sound = not opts.exact and sound_mode(select(full.model, properties, full.adhoc),
+                                          opts.precision, opts.exact, opts.engine)[0] is not None
     say("verifying")
     res = verify_file(path, list(properties), text=text, consts=consts, checked=checked,
-                      options=opts, formulas=list(formulas), progress=progress).raw
+                      options=dataclasses.replace(opts, strategy=plays and not sound),
+                      formulas=list(formulas), progress=progress).raw
+    plans = res
+    if plays and sound:
+        say("the strategies")
+        plans = verify_file(path, list(properties), text=text, consts=consts,
+                            checked=checked, options=dataclasses.replace(opts, strategy=True),
+                            formulas=list(formulas)).raw
+    strategies = {p.name: p.strategy for p in plans.properties if p.strategy is not None}
     svg, svg_note = drawn(model, res)
-    # the ad-hoc formulas among the properties, named as verify named them
-    split, notes = causes_of(load_with_formulas(path, consts, formulas, checked=checked).model,
-                             res, say) if causes else (None, [])
+    split, notes = causes_of(full.model, res, say) if causes else (None, [])
     evidence: list[Evidence] = []
     if recheck:
         say(f"sim-check, {recheck:,} runs per constant")
@@ -266,4 +280,4 @@ def build(path: str, consts: Mapping[str, str] | None = None, *,
     return Case(path, model.name, description(checked.model.source.text),
                 dict(res.constants), list(model.modes), agents, res, svg, svg_note, split,
                 figures(model, evidence), recheck, reproduce(path, model, res), command,
-                generated, comparison, notes, slopes, worst_case)
+                generated, comparison, notes, slopes, worst_case, strategies)

@@ -224,7 +224,7 @@ def worst_ends(case: Case) -> list[tuple[PropertyResult, str]]:
     rests on, and each failure property's at its max (the most failures)."""
     out = []
     for p in case.result.properties:
-        if not p.strategy:
+        if not case.strategies.get(p.name):
             continue
         if p.verdict is not None and p.verdict.decided_by in ("min", "max"):
             out.append((p, p.verdict.decided_by))
@@ -239,8 +239,7 @@ def _worst(case: Case) -> Section:
         blocks.append(Para("Not computed for this report (--no-worst-case)."))
         return Section("worst-case", "The worst case", blocks)
     for p, end in worst_ends(case):
-        assert p.strategy is not None
-        entries = p.strategy.get(end) or []
+        entries = case.strategies[p.name].get(end) or []
         what = "the verdict rests on" if p.threshold is not None else "the most failures"
         blocks.append(Para(f"{p.name}, its {end} {number(getattr(p, end))} ({what}): "
                            + ("the choices that attain it" if entries else
