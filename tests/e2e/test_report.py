@@ -14,7 +14,7 @@ import pytest
 
 from tests.conftest import EXAMPLES, ROOT, run_cli
 
-pytestmark = pytest.mark.storm
+pytestmark = [pytest.mark.storm, pytest.mark.slow]  # full reports: 4-8 s each
 
 SECTIONS = ["mission", "requirements", "what-matters-most", "how-it-fails", "worst-case",
             "figures", "reproducibility"]
@@ -207,7 +207,6 @@ def test_report_baseline_flags_a_flip(spec: Path, tmp_path: Path) -> None:
 GALLERY = sorted(EXAMPLES.glob("*.afsm"))
 
 
-@pytest.mark.slow
 @pytest.mark.parametrize("path", GALLERY, ids=[p.stem for p in GALLERY])
 def test_every_gallery_example_has_a_report(path: Path, tmp_path: Path) -> None:
     args = path.with_suffix(".gallery.args")
@@ -271,7 +270,6 @@ def test_the_likeliest_paths_into_the_largest_cause(page: tuple[str, Page]) -> N
     assert all(r[2].endswith("Patrol: Fault in Move → Halted") for r in rows)
 
 
-@pytest.mark.slow
 def test_recheck_gives_sim_checks_verdicts(tmp_path: Path) -> None:
     import afsmc
 

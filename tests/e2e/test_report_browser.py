@@ -12,7 +12,7 @@ import pytest
 from tests.conftest import EXAMPLES, run_cli
 from tests.e2e.test_report import REQUIREMENTS, SECTIONS
 
-pytestmark = pytest.mark.storm
+pytestmark = [pytest.mark.storm, pytest.mark.slow]  # a report and a browser: 8 s
 
 CHROMIUM = shutil.which("chromium") or shutil.which("chromium-browser")
 

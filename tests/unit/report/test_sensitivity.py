@@ -16,7 +16,7 @@ from afsmc.verify.core.options import VerifyOptions
 from afsmc.verify.outcome.results import PropertyResult
 from tests.conftest import EXAMPLES
 
-pytestmark = pytest.mark.storm
+pytestmark = [pytest.mark.storm, pytest.mark.slow]  # ~20 verifications: 6 s
 
 REQUIREMENTS = """
 property fault_low = P<=0.2 [ F "halted" ];
