@@ -84,6 +84,7 @@ class Split:
     # DTMC's), as mission traces, and why there are fewer than asked
     paths: tuple[Witness, ...] = ()
     paths_note: str = ""
+    midpoint: bool = False  # with the interval probabilities at their midpoint
 
     @property
     def summed(self) -> float:
@@ -296,7 +297,8 @@ def split_all(model: ir.Model, props: Sequence[ir.Property], *,
                 traced = tuple(_without(w, set(variables))
                                for w in describe(found.paths, found.variables, inst))
                 note = found.witness_note
-            splits.append(Split(a.prop.name, u, total, causes, traced, note))
+            splits.append(Split(a.prop.name, u, total, causes, traced, note,
+                                bool(model.prob_intervals)))
         out[a.prop.name] = splits
     return out
 

@@ -201,10 +201,13 @@ def _fails(case: Case) -> Section:
     for name, splits in case.causes.items():
         p = case.property(name)
         for s in splits:
-            shown = {"min": p.min, "max": p.max, "value": p.value}[s.under]
+            at = p.reference if s.midpoint and p.reference is not None else p
+            shown = {"min": at.min, "max": at.max, "value": at.value}[s.under]
             head = (f"{name} = {number(shown)}" if s.under == "value"
                     else f"{name}, its {s.under} {number(shown)}: under the scheduler "
                          "that attains it")
+            if s.midpoint:
+                head += ", with the interval probabilities at their midpoint (the reference)"
             rows = [[c.kind, c.event, c.during or "-", c.mode, number(c.probability)]
                     for c in s.causes]
             rows.append(["sum", "", "", "", number(s.summed)])

@@ -17,6 +17,8 @@ def cause_lines(splits: dict[str, list[Split]]) -> list[str]:
         for s in parts:
             under = "" if s.under == "value" else f", its {s.under} (under the scheduler " \
                 "that attains it)"
+            if s.midpoint:
+                under += " with the interval probabilities at their midpoint"
             out += ["", f"causes of {name}{under}: what first led into the target"]
             rows = [["cause", "event", "during", "mode entered", "probability"]]
             rows += [[c.kind, c.event, c.during or "-", c.mode, num(c.probability)]

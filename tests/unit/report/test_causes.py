@@ -181,3 +181,18 @@ def test_properties_without_a_first_entry_are_refused_with_e417() -> None:
         with pytest.raises(CompileError) as err:
             split(model, _prop(model, name))
         assert err.value.diagnostics[0].code == "E417"
+
+
+def test_with_interval_probabilities_the_causes_are_the_midpoints(tmp_path: object) -> None:
+    text = (EXAMPLES / "patrol.afsm").read_text(encoding="utf-8").replace(
+        "const prob P_FAULT  = 0.01;", "const prob P_FAULT  = [0.005, 0.015];")
+    res = verify.run("pint.afsm", text=text, properties=["fault"], uniform=False)
+    (p,) = res.properties
+    assert p.reference is not None and p.min is not None and p.max is not None
+    model = load("pint.afsm", {}, text=text).model
+    splits: dict[str, Split] = {s.under: s for s in split(model, _prop(model, "fault"))}
+    for under, want in (("min", p.reference.min), ("max", p.reference.max)):
+        assert splits[under].midpoint
+        assert splits[under].summed == pytest.approx(want, abs=1e-9)
+    # the bounds over the box are wider than the midpoint's: not what the causes add to
+    assert p.min < splits["min"].summed and p.max > splits["max"].summed
