@@ -37,6 +37,7 @@ COMMANDS: dict[str, str] = {
     "fmt": "rewrite .afsm files in the canonical layout (--check: only list them)",
     "lsp": "run the language server (LSP over stdio) for editors",
     "diagram": "render a mission diagram (SVG, PNG or PDF) with Graphviz",
+    "report": "write a mission's assurance case: one HTML page (or Markdown) for a reviewer",
     "sim-check": "re-run the simulations behind `from sim` constants and judge them",
     "simulate": "Monte Carlo simulation of the machine: estimate its properties",
     "conform": "check logged runs against the spec: steps it does not allow, drifted figures",

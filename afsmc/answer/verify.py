@@ -93,6 +93,29 @@ class Witness(Answer):
     steps: list[WitnessStep] = Field(description="its steps, in order")
 
 
+class CauseKey(Answer):
+    """What led into a property's target: the step that first entered it."""
+
+    kind: Literal["hazard", "action", "initial"] = Field(
+        description="hazard: a hazard happened in that step; action: the action fired and "
+                    "no hazard happened; initial: the first state is in the target already")
+    event: str = Field(description="the hazard's or the action's name (initial: the "
+                                   "machine's)")
+    during: str | Absent = Field(None, description="a hazard's: the action it struck")
+    mode: str = Field(description="the mode the step entered")
+
+
+class CauseShare(Answer):
+    """One cause and its probability; a property's causes add up to its value (or, in an
+    MDP, to its min and to its max, each under the scheduler that attains it)."""
+
+    cause: CauseKey = Field(description="the cause")
+    probability: float = Field(ge=0, description="the probability of reaching the target "
+                                                 "by this cause")
+    under: Literal["min", "max", "value"] = Field(
+        description="the scheduler: that of the min or the max (an MDP), or value (a DTMC)")
+
+
 class PropertyResult(Answer):
     """One property's answer."""
 
@@ -133,6 +156,9 @@ class PropertyResult(Answer):
                           "(a P>= requirement's violations)")
     witness_note: str | Absent = Field(
         None, description="with witnesses: why there are fewer than asked")
+    causes: list[CauseShare] | Absent = Field(
+        None, description="--causes: the probability split by what led into the target, "
+                          "most probable first (docs/report.md, \"How it fails\")")
 
 
 class Timings(Answer):
@@ -189,6 +215,37 @@ class ProbabilityIntervals(Answer):
     properties: list[IntervalBound] = Field(description="one entry per property")
 
 
+class BaselineChange(Answer):
+    """One property against the baseline (`--baseline old.json`)."""
+
+    name: str = Field(description="the property")
+    old: dict[Literal["min", "max", "value"], float | None] = Field(
+        description="its bounds in the baseline (null: not there, or infinite)")
+    new: dict[Literal["min", "max", "value"], float | None] = Field(
+        description="its bounds now (null: not there, or infinite)")
+    old_verdict: c.Verdict | None = Field(description="the baseline's verdict")
+    new_verdict: c.Verdict | None = Field(description="the verdict now")
+    moved: float | None = Field(description="the largest change of a bound given in both "
+                                            "(null: one became infinite)")
+    flipped: bool = Field(description="the verdict changed")
+    worse: bool = Field(description="it changed away from holds (exit 1)")
+    flagged: bool = Field(description="flipped, moved by more than the tolerance, or in "
+                                      "one run only")
+    only_in: Literal["old", "new"] | Absent = Field(
+        None, description="the property is in that run only")
+
+
+class Baseline(Answer):
+    """`--baseline`: this run against an earlier `afsmc verify --json`."""
+
+    baseline: str = Field(description="the baseline file")
+    tolerance: float = Field(ge=0, description="--tolerance: a bound that moved by more is "
+                                               "flagged")
+    changes: list[BaselineChange] = Field(description="one entry per property, this run's "
+                                                      "order, then those only in the "
+                                                      "baseline")
+
+
 class Verification(Answer):
     """`afsmc verify --json` when it succeeds (exit 0, or 1 when a requirement does not
     hold)."""
@@ -210,6 +267,7 @@ class Verification(Answer):
                     "means\"); empty: nothing is uncertain, a DTMC's one value per property")
     probability_intervals: ProbabilityIntervals | Absent = Field(
         None, description="bounds over the interval probabilities; absent without them")
+    baseline: Baseline | Absent = Field(None, description="--baseline: what changed")
 
 
 class VerifyFailure(Answer):

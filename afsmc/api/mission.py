@@ -32,6 +32,7 @@ if TYPE_CHECKING:
     from afsmc.api.sim_check import SimCheck
     from afsmc.api.simulate import Estimates
     from afsmc.api.sweep import Sweep
+    from afsmc.report.document import Report
 
 Value = str | bool | int | float
 TEXT_PATH = "<text>"  # the name diagnostics give a mission loaded from a string
@@ -225,6 +226,40 @@ class Mission:
         from afsmc.api.sim_check import sim_check
 
         return sim_check(self, runs, **options)
+
+    def report(self, properties: Sequence[str] | str | None = None, *, recheck: int = 0,
+               baseline: str | os.PathLike[str] | None = None, tolerance: float = 0.0,
+               sensitivity: bool = True, worst_case: bool = True, causes: bool = True,
+               progress: Callable[[str], None] | None = None, **options: Any) -> Report:
+        """The assurance case of `afsmc report` (docs/report.md): it shows inline in
+        Jupyter, ``.save("report.html")`` (or ``.md``) writes it. `recheck`: re-run every
+        `from sim` simulation with that many runs (0: not re-checked); `baseline`: an
+        earlier `afsmc verify --json` file to compare with, flagging moves beyond
+        `tolerance`; `sensitivity=False`, `worst_case=False` and `causes=False` leave out
+        "What matters most", "The worst case" and "How it fails"; `options`: those of
+        :meth:`verify` (``engine``, ``formulas``, ...). Raises AfsmError."""
+        from afsmc.api.results import VERIFY_DEFAULTS, names
+        from afsmc.report import baseline as base
+        from afsmc.report.case import build, command
+        from afsmc.report.document import Report
+        from afsmc.verify.core.options import VerifyOptions
+
+        formulas = options.pop("formulas", ())
+        try:
+            opts = VerifyOptions(**{**VERIFY_DEFAULTS, **options})
+            old = None if baseline is None else base.read(os.fspath(baseline), self.name)
+            case = build(self.path, dict(self.consts), options=opts,
+                         properties=names(properties), recheck=recheck, baseline=old,
+                         baseline_name="" if baseline is None else os.fspath(baseline),
+                         tolerance=tolerance, formulas=formulas, text=self.text,
+                         sensitivity=sensitivity, worst_case=worst_case, causes=causes,
+                         progress=progress,
+                         command=command(self.path, self.consts, names(properties), formulas,
+                                         opts.engine),
+                         generated="Made from the Python API.")
+        except CompileError as exc:
+            raise AfsmError.of(exc) from None
+        return Report(case)
 
     def conform(self, logs: Sequence[str], *, update: bool = False,
                 confidence: float | None = None) -> Conformance:

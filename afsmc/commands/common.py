@@ -96,6 +96,28 @@ def overrides(args: argparse.Namespace) -> dict[str, str]:
     return out
 
 
+def add_baseline_options(p: argparse.ArgumentParser) -> None:
+    """--baseline and --tolerance (`verify` and `report`)."""
+    p.add_argument("--baseline", metavar="JSON",
+                   help="compare with an earlier `afsmc verify --json` output: each "
+                        "property's old and new bounds and verdict, flagged where the "
+                        "verdict flips or a bound moves by more than --tolerance; exit 1 "
+                        "on a flip to worse")
+    p.add_argument("--tolerance", type=_tolerance, default=0.0, metavar="EPS",
+                   help="with --baseline: flag a bound that moved by more than EPS "
+                        "(absolute; default 0: any change)")
+
+
+def _tolerance(text: str) -> float:
+    try:
+        v = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
+    if not v >= 0 or v == float("inf"):
+        raise argparse.ArgumentTypeError(f"expected a finite number >= 0, got {text!r}")
+    return v
+
+
 def usage_error(message: str) -> None:
     print(f"afsmc: error: {message}", file=sys.stderr)
     raise SystemExit(2)

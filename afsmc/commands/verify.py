@@ -9,6 +9,7 @@ from collections.abc import Callable
 
 from afsmc.api.results import verify_file
 from afsmc.commands.common import (
+    add_baseline_options,
     add_consts,
     add_file,
     add_reductions,
@@ -19,6 +20,7 @@ from afsmc.commands.common import (
     report,
     usage_error,
 )
+from afsmc.commands.render import verify_changes as changes
 from afsmc.commands.render import verify_extras as extras
 from afsmc.commands.render.requirements import (
     add_requirement_options,
@@ -28,6 +30,8 @@ from afsmc.commands.render.requirements import (
     with_verdicts,
 )
 from afsmc.diagnostics import CompileError
+from afsmc.report import baseline as base
+from afsmc.report.causes import split_file
 from afsmc.text import literal, num
 from afsmc.verify import VerifyResult
 from afsmc.verify.core.options import VerifyOptions
@@ -118,6 +122,11 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    help="print one JSON object: model, properties, timings")
     add_requirement_options(p)
     extras.add_arguments(p)
+    p.add_argument("--causes", action="store_true",
+                   help="split each probability of reaching a target (-p NAME: that one) "
+                        "by cause: the hazard or action, and the mode, of the step that "
+                        "first entered it (docs/report.md)")
+    add_baseline_options(p)
 
 
 def table(rows: list[list[str]], right: set[int]) -> list[str]:
@@ -250,15 +259,23 @@ def run(args: argparse.Namespace) -> int:
         res = done.raw
         if args.traces_out:
             extras.write_traces(args.traces_out, res, args.file)
+        splits = split_file(args.file, overrides(args), args.property, args.formula) \
+            if args.causes else {}
+        comparison = base.compare(base.read(args.baseline, res.machine), res.to_json(),
+                                  args.tolerance, args.baseline) if args.baseline else None
     except CompileError as exc:
         return fail(exc, args.json, wrapped=True)
     if args.junit:
         write_junit(args.junit, res)
     if args.json:
-        print(answer_json("verify", done.to_json()))
+        print(answer_json("verify", changes.with_changes(done.to_json(), splits, comparison)))
     else:
         report(res.warnings)
         more = extras.render(res)
+        more += "\n".join(changes.cause_lines(splits))
+        if comparison is not None:
+            more += "\n".join(changes.baseline_lines(comparison))
         print(render(res) + ("\n" + more if more else ""))
-    return 1 if failing(res.properties) else 0
+    worse = comparison is not None and bool(comparison.worse)
+    return 1 if failing(res.properties) or worse else 0
 

@@ -26,6 +26,7 @@ def python_block(page: Path, heading: str) -> str:
 @pytest.mark.parametrize(("page", "heading"), [
     ("README.md", "## From Python and Jupyter"),
     ("docs/verification.md", "## From Python"),
+    ("docs/report.md", "# The assurance case"),
 ])
 def test_the_documented_python_runs_as_a_plain_script(page: str, heading: str,
                                                       tmp_path: Path) -> None:
@@ -38,5 +39,8 @@ def test_the_documented_python_runs_as_a_plain_script(page: str, heading: str,
     proc = subprocess.run([sys.executable, str(script)], cwd=tmp_path, env=env,
                           capture_output=True, text=True, timeout=600)
     assert proc.returncode == 0, proc.stderr
-    if "save(" in code:
+    if 'save("report.html")' in code:
+        page = (tmp_path / "report.html").read_text(encoding="utf-8")
+        assert page.startswith("<!DOCTYPE html>") and 'id="how-it-fails"' in page
+    if 'save("patrol.svg")' in code:
         assert (tmp_path / "patrol.svg").read_text().lstrip().startswith("<?xml")

@@ -56,8 +56,8 @@ STAGES: tuple[tuple[str, tuple[str, ...]], ...] = (
     # many answers (sweeps, regions) and the reports rendered from answers; afsmc.verify,
     # the package's door, re-exports the core and the sweeps
     ("studies", ("afsmc.verify.reports", "afsmc.verify")),
-    # the Python API for people
-    ("library", ("afsmc.api",)),
+    # the Python API for people, and the assurance case made from its answers
+    ("library", ("afsmc.api", "afsmc.report")),
     # the command line and the editor
     ("cli", ("afsmc.commands", "afsmc.commands.render", "afsmc.cli", "afsmc.__main__",
              "afsmc.lsp")),
