@@ -27,7 +27,8 @@ MISSION_MODE = "_mission"
 
 
 def is_composed(module: ast.Module) -> bool:
-    return any(isinstance(d, (ast.AgentDecl, ast.ComposeDecl)) for d in module.decls)
+    return any(isinstance(d, (ast.AgentDecl, ast.AgentsDecl, ast.ComposeDecl))
+               for d in module.decls)
 
 
 def mode_numbers(decls: tuple[ast.Decl, ...]) -> dict[str, int]:

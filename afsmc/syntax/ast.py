@@ -432,10 +432,30 @@ class AgentDecl:
     clock: Ident | None
     decls: tuple[Decl, ...]
     span: Span
+    # a template (`agent Robot(id, grant) { ... }`): its parameters; None: an agent
+    params: tuple[Ident, ...] | None = None
+
+
+@dataclass(frozen=True)
+class Instance:
+    """`r1 = Robot(1, Grant1)`: an agent made from a template."""
+
+    name: Ident
+    template: Ident
+    args: tuple[Expr, ...]
+    span: Span
+
+
+@dataclass(frozen=True)
+class AgentsDecl:
+    """`agents r1 = Robot(1, Grant1), r2 = Robot(2, Grant2);`."""
+
+    instances: tuple[Instance, ...]
+    span: Span
 
 
 Decl = Union[ConstDecl, ParamDecl, VarDecl, ModeDecl, ActionDecl, HazardDecl, FormulaDecl,
-             LabelDecl, RewardsDecl, PropertyDecl, ComposeDecl, AgentDecl]
+             LabelDecl, RewardsDecl, PropertyDecl, ComposeDecl, AgentDecl, AgentsDecl]
 
 
 @dataclass(frozen=True)

@@ -220,9 +220,21 @@ class Builder(Transformer[Token, Any]):
                                self._s(meta))
 
     def agent_decl(self, meta: Any, c: list[Any]) -> ast.AgentDecl:
+        params = None
+        if len(c) > 1 and isinstance(c[1], tuple) and c[1] and c[1][0] == "params":
+            params, c = c[1][1], [c[0], *c[2:]]
         clock = self._id(c[1]) if len(c) > 1 and isinstance(c[1], Token) else None
         decls = tuple(x for x in c[1:] if not isinstance(x, Token))
-        return ast.AgentDecl(self._id(c[0]), clock, decls, self._s(meta))
+        return ast.AgentDecl(self._id(c[0]), clock, decls, self._s(meta), params)
+
+    def agent_params(self, meta: Any, c: list[Token]) -> tuple[str, tuple[ast.Ident, ...]]:
+        return ("params", tuple(self._id(t) for t in c))
+
+    def agents_decl(self, meta: Any, c: list[ast.Instance]) -> ast.AgentsDecl:
+        return ast.AgentsDecl(tuple(c), self._s(meta))
+
+    def instance(self, meta: Any, c: list[Any]) -> ast.Instance:
+        return ast.Instance(self._id(c[0]), self._id(c[1]), tuple(c[2:]), self._s(meta))
 
     def sync_action(self, meta: Any, c: list[Any]) -> ast.ActionDecl:
         a: ast.ActionDecl = c[0]

@@ -442,11 +442,16 @@ class _Formatter:
         elif isinstance(d, ast.AgentDecl):
             brace = self._next((d.clock or d.name).span.end, "LBRACE")
             clock = f" clock {d.clock.text}" if d.clock is not None else ""
+            params = "" if d.params is None else f"({', '.join(p.text for p in d.params)})"
             out.append(Unit(d.span.start, brace.end_pos or 0, depth,
-                            [f"{pad}agent {d.name.text}{clock} {{"], "open"))
+                            [f"{pad}agent {d.name.text}{params}{clock} {{"], "open"))
             for x in d.decls:
                 out.extend(self.decl_units(x, depth + 1))
             out.append(Unit(d.span.end - 1, d.span.end, depth, [pad + "}"], "close"))
+        elif isinstance(d, ast.AgentsDecl):
+            parts = [f"{i.name.text} = {i.template.text}({', '.join(self.expr(a) for a in i.args)})"
+                     for i in d.instances]
+            out.append(Unit(d.span.start, d.span.end, depth, self.fill("agents ", parts, depth)))
         elif isinstance(d, ast.RewardsDecl):
             brace = self._next(d.name.span.end, "LBRACE")
             out.append(Unit(d.span.start, brace.end_pos or 0, depth,
