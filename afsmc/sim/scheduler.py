@@ -24,9 +24,10 @@ UNIFORM = "uniform over the agents that can move"
 def movers(low: Lowered) -> dict[int, tuple[int, ...]] | None:
     """For a composed MDP: each lowered command's index -> the agents (by declaration
     order) it moves; the mission's own self-loop moves none. None: no choice of mover
-    (a single machine, or a timed composition whose ties are settled)."""
+    (a single machine, or a timed composition whose ties are settled). `compose
+    interleaving uniform;` is this scheduler made the mission's own (a DTMC)."""
     net = low.network
-    if net is None or low.kind != "mdp":
+    if net is None or not (low.kind == "mdp" or net.ties == "uniform"):
         return None
     owner: dict[str, tuple[int, ...]] = {}
     takers: dict[str, list[int]] = {}

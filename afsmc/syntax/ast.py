@@ -100,6 +100,7 @@ class Ite:
 class ModeIn:
     modes: ModeSet
     span: Span
+    agent: Ident | None = None  # `r1.mode in {...}`: that agent's mode (a composed mission)
 
 
 Expr = Union[Num, BoolLit, Name, FieldRef, ModeRef, LabelRef, Call, Unary, Binary, Ite, ModeIn]
@@ -417,11 +418,13 @@ class PropertyDecl:
 
 @dataclass(frozen=True)
 class ComposeDecl:
-    """`compose interleaving;` or `compose timed ties order;`."""
+    """`compose interleaving;`, `compose interleaving uniform;` or `compose timed ties
+    order;`."""
 
     kind: Ident
     ties: Ident | None
     span: Span
+    scheduler: Ident | None = None  # `uniform` in `compose interleaving uniform;`
 
 
 @dataclass(frozen=True)

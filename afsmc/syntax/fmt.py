@@ -224,7 +224,8 @@ class _Formatter:
             return (f"{self.expr(e.cond, _IMPLIES)} ? {self.expr(e.then)} : "
                     f"{self.expr(e.other)}"), _ITE
         if isinstance(e, ast.ModeIn):
-            return "mode in " + self.mode_set(e.modes), _CMP
+            agent = f"{e.agent.text}." if e.agent is not None else ""
+            return f"{agent}mode in " + self.mode_set(e.modes), _CMP
         raise TypeError(type(e).__name__)
 
     def bound(self, e: ast.Expr) -> str:
@@ -293,7 +294,8 @@ class _Formatter:
             return [f"var {d.name.text}", text + ";"]
         if isinstance(d, ast.ComposeDecl):
             ties = f" ties {d.ties.text}" if d.ties is not None else ""
-            return [f"compose {d.kind.text}{ties};"]
+            how = f" {d.scheduler.text}" if d.scheduler is not None else ""
+            return [f"compose {d.kind.text}{how}{ties};"]
         if isinstance(d, ast.ModeDecl):
             attrs = " initial" * d.initial + " final" * d.final + ";"
             if d.number_span is None:
