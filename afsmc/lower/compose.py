@@ -194,6 +194,21 @@ def assemble(net: Network) -> tuple[Command, ...]:
     return tuple(commands)
 
 
+def action_agents(net: Network) -> dict[str, tuple[int, ...]]:
+    """Each action of the mission's commands (`agent_A`, or a synchronised action's name)
+    and the agents (by declaration order) it moves."""
+    owner: dict[str, tuple[int, ...]] = {}
+    takers: dict[str, list[int]] = {}
+    for i, part in enumerate(net.parts):
+        for c in part.local:
+            owner[c.action] = (i,)
+        for name, _ in part.sync:
+            takers.setdefault(name, []).append(i)
+    for name, who in takers.items():
+        owner.setdefault(name, tuple(who))
+    return owner
+
+
 def current_weight(agent: ir.Agent, weights: dict[str, E.Expr]) -> E.Expr:
     """The weight of the action the agent takes in a state (in the mission's names): the
     largest of its actions' effective weights (each 0 where its action is disabled)."""

@@ -246,8 +246,9 @@ class Composition:
 
     kind: Literal["interleaving", "timed"]
     # how agents that may move at once are ordered; for an interleaving, "nondet" or
-    # "uniform" (`compose interleaving uniform;`: each with equal probability)
-    ties: Literal["nondet", "order", "weight", "uniform"]
+    # "uniform" (`compose interleaving uniform;`: each with equal probability) or "fair"
+    # (`compose interleaving fair;`: min/max over fair schedulers)
+    ties: Literal["nondet", "order", "weight", "uniform", "fair"]
     agents: tuple[Agent, ...]
     writers: tuple[tuple[str, tuple[str, ...]], ...]  # shared variable -> who may write it
     span: Span | None

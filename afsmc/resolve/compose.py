@@ -195,10 +195,12 @@ def split(module: ast.Module, rep: Reporter) -> tuple[
 
 def composition_kind(compose: ast.ComposeDecl | None, agents: list[ast.AgentDecl],
                      rep: Reporter) -> tuple[Literal["interleaving", "timed"],
-                                             Literal["nondet", "order", "weight", "uniform"]]:
+                                             Literal["nondet", "order", "weight", "uniform",
+                                                     "fair"]]:
     """The composition and its rule for agents that may move at once: for an
     interleaving every agent that can move, `nondet` (min/max over who moves) or
-    `uniform` (`compose interleaving uniform;`: each with equal probability)."""
+    `uniform` (`compose interleaving uniform;`: each with equal probability) or `fair`
+    (`compose interleaving fair;`: min/max over fair schedulers only)."""
     if compose is None:
         return "interleaving", "nondet"
     kind = compose.kind.text
@@ -220,13 +222,14 @@ def composition_kind(compose: ast.ComposeDecl | None, agents: list[ast.AgentDecl
             rep.error(codes.E253, f"'{how.text}' is a rule of the interleaving, not of the "
                       "timed composition", how.span, hint="write 'compose interleaving "
                       f"{how.text};', or a rule for ties ('compose timed ties order;')")
-        elif how.text == "uniform":
-            ties = "uniform"
+        elif how.text in ("uniform", "fair"):
+            ties = how.text
         else:
             rep.error(codes.E253, f"'{how.text}' is no rule of the interleaving", how.span,
-                      hint="write 'compose interleaving;' (min and max over who moves next) or "
-                      "'compose interleaving uniform;' (who moves next is uniform among the "
-                      "agents that can move)")
+                      hint="write 'compose interleaving;' (min and max over who moves next), "
+                      "'compose interleaving fair;' (over fair schedulers) or 'compose "
+                      "interleaving uniform;' (who moves next is uniform among the agents that "
+                      "can move)")
     if kind == "timed":
         for a in agents:
             own = {d.name.text for d in a.decls if isinstance(d, ast.VarDecl)}

@@ -6,6 +6,7 @@ and against `simulate`, whose scheduler it is."""
 
 from __future__ import annotations
 
+import os
 from fractions import Fraction
 from functools import cache
 
@@ -152,3 +153,18 @@ def test_uniform_is_a_rule_of_the_interleaving_without_interval_constants() -> N
         with pytest.raises(CompileError) as info:
             load("race.afsm", {}, text=text)
         assert message in [d.message for d in info.value.diagnostics if d.code == "E253"]
+
+
+@pytest.mark.storm
+def test_an_agent_moving_in_place_does_not_end_a_run() -> None:
+    """starve.afsm under the uniform pick: r1 wanders in place forever while r2 waits to be
+    picked; a run ends only where no agent can move, so the estimate holds the exact value
+    (P_PLUG), where a run ended at r1's first step in place would not."""
+    pytest.importorskip("stormpy")
+    path = os.path.join(os.path.dirname(__file__), "starve.afsm")
+    with open(path, encoding="utf-8") as f:
+        text = f.read().replace("compose interleaving fair;", "compose interleaving uniform;")
+    exact = run(path, text=text).property("both_done").value
+    assert exact == pytest.approx(0.8)
+    est = simulate_file(path, text, {}, 4000, seed=5, max_steps=200)["both_done"]
+    assert est.low <= exact <= est.high
