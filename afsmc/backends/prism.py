@@ -56,6 +56,15 @@ def pnum(v: int | float | bool) -> str:
     return number(v)
 
 
+def prange(lo: int | float, hi: int | float) -> str:
+    """A PRISM range `[lo..hi]`; a single value's is written `[lo..lo+1]`. Storm's PRISM
+    state generator gives a variable of one value no bits, and an update of it overwrites
+    a bit of the variable stored after it (a wrong state, so wrong values); the value
+    lo+1 is never reached (every update stays in the variable's range, E303), so the
+    states are the same."""
+    return f"[{pnum(lo)}..{pnum(hi if hi > lo else lo + 1)}]"
+
+
 def describe(cmd: Command, modes: str) -> str:
     """What a command stands for, for the generated file's comments."""
     if cmd.kind == "deadlock":
@@ -170,14 +179,14 @@ def emit(low: Lowered, variant_labels: bool = False) -> PrismOutput:
     modes = ", ".join(f"{m.name}={m.number}" for m in model.modes)
     w(f"  // modes: {modes}")
     numbers = [m.number for m in model.modes]
-    w(f"  mode : [{pnum(min(numbers))}..{pnum(max(numbers))}] init "
+    w(f"  mode : {prange(min(numbers), max(numbers))} init "
       f"{pnum(model.initial_mode.number)};")
     for v in model.variables:
         note = f" // {v.display}, {where(v.span)}" + (", clamped" if v.clamp else "")
         if v.type is E.Type.BOOL:
             w(f"  {v.name} : bool init {number(bool(v.init))};{note}")
         else:
-            w(f"  {v.name} : [{pnum(v.lo)}..{pnum(v.hi)}] init {pnum(v.init)};{note}")
+            w(f"  {v.name} : {prange(v.lo, v.hi)} init {pnum(v.init)};{note}")
     last = None
     for ci, cmd in enumerate(low.commands):
         if cmd.span != last:

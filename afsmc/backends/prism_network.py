@@ -7,7 +7,15 @@ from __future__ import annotations
 import os
 
 from afsmc import __version__
-from afsmc.backends.prism import PrismOutput, PrismPrinter, _constants, pnum, properties, where
+from afsmc.backends.prism import (
+    PrismOutput,
+    PrismPrinter,
+    _constants,
+    pnum,
+    prange,
+    properties,
+    where,
+)
 from afsmc.lower.compose import Network
 from afsmc.lower.lowering import Command, Lowered
 from afsmc.model import expr as E
@@ -19,7 +27,7 @@ def _variable(v: ir.Variable, head: str) -> str:
     note = f" // {v.display}, {where(v.span)}" + (", clamped" if v.clamp else "")
     if v.type is E.Type.BOOL:
         return f"{head}{v.name} : bool init {number(bool(v.init))};{note}"
-    return f"{head}{v.name} : [{pnum(v.lo)}..{pnum(v.hi)}] init {pnum(v.init)};{note}"
+    return f"{head}{v.name} : {prange(v.lo, v.hi)} init {pnum(v.init)};{note}"
 
 
 def _command(p: PrismPrinter, label: str, cmd: Command, extra: E.Expr) -> list[str]:

@@ -7,7 +7,15 @@ renamed into the mission's variables, then put together (docs/language.md, "Comp
   is (one silent self-loop) only when no agent can move.
 * A synchronised action: one command per combination of its partners' commands, guarded
   by all their guards, each branch a product of theirs (PRISM's synchronous product).
-* Interleaving: every agent's commands stand side by side (an MDP). Timed: a command may
+* Interleaving: every agent's commands stand side by side (an MDP). `compose interleaving
+  uniform;` (ties "uniform"): who moves next is uniform among the agents that can move, a
+  DTMC. Each agent has at most one enabled command (Definition 2 within the agent, and no
+  interval constant: E253), and a DTMC's semantics (PRISM's and Storm's, both routes)
+  takes each enabled command of the product with equal probability; a synchronised
+  action moves all its partners, so it is taken when any of them is picked: its
+  combination of commands is repeated once per partner (in the first partner's commands),
+  which gives it the weight (partners)/(agents that can move), as the simulator picks
+  (afsmc.sim.scheduler). Timed: a command may
   fire only if its agents' least clock is no greater than that of any other agent that
   can move (ties: `order`, the agent declared first; `nondet`, all of them).
 """
@@ -112,6 +120,10 @@ def lower_composed(model: ir.Model, resolution: Resolution = "nondet") -> Lowere
     for i, (_, _, sync) in enumerate(raw):
         for name in sync:
             takers.setdefault(name, []).append(i)
+    if comp.ties == "uniform":  # a synchronised action's weight: its partners (above)
+        for name, who in takers.items():
+            sync = raw[who[0]][2]
+            sync[name] = sync[name] * len(who)
 
     def offers(i: int, name: str) -> E.Expr:
         return E.disj(*(c.guard for c in raw[i][2].get(name, [])))
@@ -180,6 +192,21 @@ def assemble(net: Network) -> tuple[Command, ...]:
             commands.append(_product(tuple(combo), name, timing))
     commands.append(net.stay)
     return tuple(commands)
+
+
+def action_agents(net: Network) -> dict[str, tuple[int, ...]]:
+    """Each action of the mission's commands (`agent_A`, or a synchronised action's name)
+    and the agents (by declaration order) it moves."""
+    owner: dict[str, tuple[int, ...]] = {}
+    takers: dict[str, list[int]] = {}
+    for i, part in enumerate(net.parts):
+        for c in part.local:
+            owner[c.action] = (i,)
+        for name, _ in part.sync:
+            takers.setdefault(name, []).append(i)
+    for name, who in takers.items():
+        owner.setdefault(name, tuple(who))
+    return owner
 
 
 def current_weight(agent: ir.Agent, weights: dict[str, E.Expr]) -> E.Expr:

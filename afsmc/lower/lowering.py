@@ -75,7 +75,8 @@ class Lowered:
     @property
     def kind(self) -> Literal["dtmc", "mdp"]:
         net = self.network
-        if net is not None and ((net.kind == "interleaving" and len(net.parts) > 1)
+        if net is not None and ((net.kind == "interleaving" and len(net.parts) > 1
+                                 and net.ties != "uniform")
                                 or (net.kind == "timed" and net.ties == "nondet")):
             return "mdp"
         return "mdp" if self.resolution == "nondet" and self.model.is_nondeterministic else "dtmc"

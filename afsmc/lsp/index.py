@@ -137,6 +137,8 @@ def build(module: ast.Module, text: str) -> Index:
             decls[:0] = d.decls
             if d.clock is not None:
                 use(VALUE, d.clock.text, d.clock.span)
+        elif isinstance(d, ast.AgentsDecl):  # the instances' arguments (`r1 = Robot(B_FULL)`)
+            walk(tuple(a for i in d.instances for a in i.args))
         elif isinstance(d, (ast.ConstDecl, ast.ParamDecl)):
             define(VALUE, d.name, "constant", d)
             walk(d.value if isinstance(d, ast.ConstDecl) else d.default)

@@ -245,7 +245,10 @@ class Composition:
     the one whose current action has the larger weight)."""
 
     kind: Literal["interleaving", "timed"]
-    ties: Literal["nondet", "order", "weight"]
+    # how agents that may move at once are ordered; for an interleaving, "nondet" or
+    # "uniform" (`compose interleaving uniform;`: each with equal probability) or "fair"
+    # (`compose interleaving fair;`: min/max over fair schedulers)
+    ties: Literal["nondet", "order", "weight", "uniform", "fair"]
     agents: tuple[Agent, ...]
     writers: tuple[tuple[str, tuple[str, ...]], ...]  # shared variable -> who may write it
     span: Span | None
@@ -259,9 +262,11 @@ class Composition:
 
 
 def composition_text(kind: str, ties: str) -> str:
-    """How agents move together, as a `compose` line says it: "interleaving", "timed, ties
-    order" or "timed, ties nondet"."""
-    return kind + (f", ties {ties}" if kind == "timed" else "")
+    """How agents move together, as a `compose` line says it: "interleaving",
+    "interleaving, uniform", "timed, ties order" or "timed, ties nondet"."""
+    if kind == "timed":
+        return f"{kind}, ties {ties}"
+    return kind + (f", {ties}" if ties != "nondet" else "")
 
 
 @dataclass

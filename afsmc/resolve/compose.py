@@ -17,6 +17,7 @@ from typing import Any, Literal, cast
 
 from afsmc.diagnostics import Diagnostic, Reporter, Span, codes
 from afsmc.resolve.declarations import numbered
+from afsmc.resolve.expressions import modes_in
 from afsmc.syntax import ast
 
 _AGENT_ITEMS = (ast.VarDecl, ast.ModeDecl, ast.ActionDecl, ast.HazardDecl, ast.FormulaDecl)
@@ -27,7 +28,8 @@ MISSION_MODE = "_mission"
 
 
 def is_composed(module: ast.Module) -> bool:
-    return any(isinstance(d, (ast.AgentDecl, ast.ComposeDecl)) for d in module.decls)
+    return any(isinstance(d, (ast.AgentDecl, ast.AgentsDecl, ast.ComposeDecl))
+               for d in module.decls)
 
 
 def mode_numbers(decls: tuple[ast.Decl, ...]) -> dict[str, int]:
@@ -82,6 +84,8 @@ class _Names:
                 return self._mode_compare(n, go, here)
             if isinstance(n, ast.FieldRef) and n.base.text in self.agents:
                 return self._field(n, here)
+            if isinstance(n, ast.ModeIn) and n.agent is not None:
+                return self._mode_in(n, here)
             if isinstance(n, ast.ModeRef) and here is None:
                 self.rep.error(codes.E253, "which agent's mode? A mission of several agents "
                                "names it", n.span, hint="write e.g. 'uav1.mode'")
@@ -100,6 +104,26 @@ class _Names:
                 num = ast.Num(number, str(number), other.span)
                 return ast.Binary(n.op, left, num, n.span)
         return None
+
+    def _mode_in(self, n: ast.ModeIn, here: str | None) -> Any:
+        """`r1.mode in {Wait, Charging}`: the agent's own `mode in {...}`, or a test of
+        its mode variable for every other view (as `r1.mode == Wait` is)."""
+        assert n.agent is not None
+        agent = n.agent.text
+        if agent not in self.agents:
+            self.rep.error(codes.E253, f"'{agent}' is no agent", n.agent.span,
+                           hint="name an agent of the mission: " + ", ".join(self.agents))
+            return ast.BoolLit(False, n.span)
+        if agent == here:
+            return ast.ModeIn(n.modes, n.span)
+        numbers = modes_in(n.modes, self.modes[agent], self.rep, f" of agent {agent}")
+        self.read_modes.add(agent)
+        var = ast.Name(ast.Ident(f"{agent}_mode", n.agent.span), n.agent.span)
+        out: Any = ast.BoolLit(False, n.span)
+        for k in numbers:
+            test = ast.Binary("==", var, ast.Num(k, str(k), n.span), n.span)
+            out = test if isinstance(out, ast.BoolLit) else ast.Binary("||", out, test, n.span)
+        return out
 
     def _field(self, n: ast.FieldRef, here: str | None) -> Any:
         agent = n.base.text
@@ -171,7 +195,12 @@ def split(module: ast.Module, rep: Reporter) -> tuple[
 
 def composition_kind(compose: ast.ComposeDecl | None, agents: list[ast.AgentDecl],
                      rep: Reporter) -> tuple[Literal["interleaving", "timed"],
-                                             Literal["nondet", "order", "weight"]]:
+                                             Literal["nondet", "order", "weight", "uniform",
+                                                     "fair"]]:
+    """The composition and its rule for agents that may move at once: for an
+    interleaving every agent that can move, `nondet` (min/max over who moves) or
+    `uniform` (`compose interleaving uniform;`: each with equal probability) or `fair`
+    (`compose interleaving fair;`: min/max over fair schedulers only)."""
     if compose is None:
         return "interleaving", "nondet"
     kind = compose.kind.text
@@ -187,6 +216,20 @@ def composition_kind(compose: ast.ComposeDecl | None, agents: list[ast.AgentDecl
         ties = "nondet"
     if kind == "interleaving" and compose.ties is not None:
         rep.error(codes.E253, "ties are a rule of the timed composition", compose.ties.span)
+    how = compose.scheduler
+    if how is not None:
+        if kind != "interleaving":
+            rep.error(codes.E253, f"'{how.text}' is a rule of the interleaving, not of the "
+                      "timed composition", how.span, hint="write 'compose interleaving "
+                      f"{how.text};', or a rule for ties ('compose timed ties order;')")
+        elif how.text in ("uniform", "fair"):
+            ties = how.text
+        else:
+            rep.error(codes.E253, f"'{how.text}' is no rule of the interleaving", how.span,
+                      hint="write 'compose interleaving;' (min and max over who moves next), "
+                      "'compose interleaving fair;' (over fair schedulers) or 'compose "
+                      "interleaving uniform;' (who moves next is uniform among the agents that "
+                      "can move)")
     if kind == "timed":
         for a in agents:
             own = {d.name.text for d in a.decls if isinstance(d, ast.VarDecl)}

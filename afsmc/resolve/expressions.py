@@ -10,7 +10,7 @@ from __future__ import annotations
 
 from typing import Any
 
-from afsmc.diagnostics import codes
+from afsmc.diagnostics import Reporter, codes
 from afsmc.model import expr as E
 from afsmc.model.evaluate import EvalError, RangeError, scalar
 from afsmc.model.expr import Type
@@ -98,6 +98,11 @@ class ExpressionsMixin(ResolverBase):
                 return E.Lit(0, Type.MODE, s)
             return E.CurrentMode(s)
         if isinstance(e, ast.ModeIn):
+            if e.agent is not None:  # a composed mission rewrote every agent's
+                self.rep.error(codes.E253, f"'{e.agent.text}.mode' is the mode of an agent, "
+                               "and this machine has no agents", e.span,
+                               hint="its own mode is 'mode in {...}'")
+                return E.FALSE
             if not ctx.state:
                 self.rep.error(codes.E224, f"{ctx.what} cannot depend on the mode", s)
                 return E.FALSE
@@ -184,29 +189,7 @@ class ExpressionsMixin(ResolverBase):
     def _mode_set_any(self, ms: ast.ModeSet) -> tuple[int, ...]:
         """`mode in {...}`: unlike an action's mode set, final modes are fine here
         (`mode in {Done, Crashed}`)."""
-        by_name = {m.name: m.number for m in self.modes.values()}
-        out: set[int] = set()
-        for item in ms.items:
-            if isinstance(item, ast.ModeName):
-                if item.name.text in by_name:
-                    out.add(by_name[item.name.text])
-                else:
-                    self.rep.error(codes.E215, f"'{item.name.text}' is not a mode", item.span,
-                                   hint=did_you_mean(item.name.text, by_name))
-            elif isinstance(item, ast.ModeNumber):
-                # as in an action's mode set: a number no mode has is a typo, not `false`
-                if item.number in by_name.values():
-                    out.add(item.number)
-                else:
-                    self.rep.error(codes.E215, f"no mode has number {item.number}", item.span)
-            else:
-                hit = {n for n in by_name.values() if item.lo <= n <= item.hi}
-                if not hit:
-                    self.rep.error(codes.E215, f"no mode has a number in {item.lo}..{item.hi}",
-                                   item.span)
-                out |= hit
-        numbers = set(by_name.values())
-        return tuple(sorted((numbers - out) if ms.every else (out & numbers)))
+        return modes_in(ms, {m.name: m.number for m in self.modes.values()}, self.rep)
 
     def _call(self, e: ast.Call, ctx: Ctx) -> E.Expr:
         f = e.func.text
@@ -264,3 +247,31 @@ class ExpressionsMixin(ResolverBase):
                            hint="w(...) names an action or a hazard with a condition (when)")
             return self._placeholder(s)
         return E.WeightRef(target.text, s)
+
+
+def modes_in(ms: ast.ModeSet, by_name: dict[str, int], rep: Reporter,
+             whose: str = "") -> tuple[int, ...]:
+    """The numbers of the modes (`by_name`) a `mode in {...}` set names; E215 for a name
+    or number that is no mode (`whose`: " of agent b", for another agent's modes)."""
+    out: set[int] = set()
+    for item in ms.items:
+        if isinstance(item, ast.ModeName):
+            if item.name.text in by_name:
+                out.add(by_name[item.name.text])
+            else:
+                rep.error(codes.E215, f"'{item.name.text}' is not a mode{whose}", item.span,
+                          hint=did_you_mean(item.name.text, by_name))
+        elif isinstance(item, ast.ModeNumber):
+            # as in an action's mode set: a number no mode has is a typo, not `false`
+            if item.number in by_name.values():
+                out.add(item.number)
+            else:
+                rep.error(codes.E215, f"no mode{whose} has number {item.number}", item.span)
+        else:
+            hit = {n for n in by_name.values() if item.lo <= n <= item.hi}
+            if not hit:
+                rep.error(codes.E215, f"no mode{whose} has a number in {item.lo}..{item.hi}",
+                          item.span)
+            out |= hit
+    numbers = set(by_name.values())
+    return tuple(sorted((numbers - out) if ms.every else (out & numbers)))

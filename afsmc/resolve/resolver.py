@@ -12,11 +12,11 @@ import os
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 
-from afsmc.diagnostics import CompileError, Diagnostic, Reporter
+from afsmc.diagnostics import CompileError, Diagnostic, Reporter, codes
 from afsmc.model import expr as E
 from afsmc.model import ir
 from afsmc.model.names import safe_identifier
-from afsmc.resolve import compose
+from afsmc.resolve import compose, templates
 from afsmc.resolve.actions import ActionsMixin
 from afsmc.resolve.constants import ConstantsMixin
 from afsmc.resolve.declarations import DeclarationsMixin
@@ -115,6 +115,9 @@ def _resolve_composed(module: ast.Module, overrides: Mapping[str, str] | None,
     """A mission of several agents: each agent's view and the mission's own module,
     resolved as single machines (afsmc.resolve.compose says how they are made)."""
     rep = Reporter()
+    module = templates.expand(module, rep)
+    if rep.has_errors:  # an instance not made: what names it would be errors of its own
+        raise CompileError(rep.sorted())
     kw, agents, mission = compose.split(module, rep)
     kind, ties = compose.composition_kind(kw, agents, rep)
     names = compose._Names(agents, rep)
@@ -150,6 +153,12 @@ def _resolve_composed(module: ast.Module, overrides: Mapping[str, str] | None,
     model = r.run()
     rep.extend(r.rep.diagnostics)
     used |= r.used
+    if ties == "uniform" and model.interval_constants and kw is not None:
+        name = model.interval_constants[0].name
+        rep.error(codes.E253, f"the interval constant {name}'s floor or ceil would be a "
+                  "choice, which 'compose interleaving uniform' (a DTMC) does not have",
+                  kw.span, hint=f"give {name} one value, or write 'compose interleaving;' (min "
+                  "and max over who moves next and the interval's ends)")
     if not rep.has_errors:
         rep.extend(unplaced)
     if rep.has_errors:

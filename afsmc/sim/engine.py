@@ -112,6 +112,7 @@ def build(low: Lowered, draw: bool = False) -> Program:
     per_run = frozenset(draws)
     base = Scope(consts, formulas, labels, low.weights, per_run=per_run)
     reward_index = {r.name: i for i, r in enumerate(model.rewards)}
+    movers = scheduler.movers(low)
     modes: dict[int, list[CCommand]] = {}
     for m in model.modes:
         sc = Scope(consts, formulas, labels, low.weights, m.number, per_run)
@@ -145,7 +146,11 @@ def build(low: Lowered, draw: bool = False) -> Program:
                             read |= reads(v)
                             rws.append((reward_index[r.name], compile_expr(v)))
             gs = static(g)
-            selfloop = len(branches) == 1 and branches[0].prob_static == 1.0
+            # Where the scheduler picks who moves, an agent's move that leaves the state as
+            # it is absorbs nothing (another agent may be picked next); only the mission's
+            # own self-loop, where no agent can move, does.
+            selfloop = len(branches) == 1 and branches[0].prob_static == 1.0 and (
+                movers is None or cmd.silent)
             cmds.append(CCommand(i, "" if cmd.silent else cmd.action, compile_expr(g),
                                  None if gs is None else bool(gs), branches,
                                  sorted(read - {"mode"}), selfloop, rws))
@@ -164,7 +169,7 @@ def build(low: Lowered, draw: bool = False) -> Program:
                    [shown.get(v.name, v.display) for v in model.variables],
                    {v.name: v.init for v in model.variables}, dtypes, modes,
                    max(numbers) - min(numbers) + 1, min(numbers), monitors, state_rewards,
-                   list(low.commands), draws=draws, movers=scheduler.movers(low),
+                   list(low.commands), draws=draws, movers=movers,
                    agents=0 if low.network is None else len(low.network.parts),
                    agent_modes=names[0], action_names=names[1], logged=logs.outcomes(low))
 

@@ -16,6 +16,7 @@ from collections.abc import Sequence
 import numpy as np
 import numpy.typing as npt
 
+from afsmc.lower.compose import action_agents
 from afsmc.lower.lowering import Lowered
 
 UNIFORM = "uniform over the agents that can move"
@@ -24,19 +25,12 @@ UNIFORM = "uniform over the agents that can move"
 def movers(low: Lowered) -> dict[int, tuple[int, ...]] | None:
     """For a composed MDP: each lowered command's index -> the agents (by declaration
     order) it moves; the mission's own self-loop moves none. None: no choice of mover
-    (a single machine, or a timed composition whose ties are settled)."""
+    (a single machine, or a timed composition whose ties are settled). `compose
+    interleaving uniform;` is this scheduler made the mission's own (a DTMC)."""
     net = low.network
-    if net is None or low.kind != "mdp":
+    if net is None or not (low.kind == "mdp" or net.ties == "uniform"):
         return None
-    owner: dict[str, tuple[int, ...]] = {}
-    takers: dict[str, list[int]] = {}
-    for i, part in enumerate(net.parts):
-        for c in part.local:
-            owner[c.action] = (i,)
-        for name, _ in part.sync:
-            takers.setdefault(name, []).append(i)
-    for name, who in takers.items():
-        owner.setdefault(name, tuple(who))
+    owner = action_agents(net)
     return {i: owner.get(c.action, ()) for i, c in enumerate(low.commands)
             if c.kind not in ("final", "deadlock")}
 

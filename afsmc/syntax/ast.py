@@ -100,6 +100,7 @@ class Ite:
 class ModeIn:
     modes: ModeSet
     span: Span
+    agent: Ident | None = None  # `r1.mode in {...}`: that agent's mode (a composed mission)
 
 
 Expr = Union[Num, BoolLit, Name, FieldRef, ModeRef, LabelRef, Call, Unary, Binary, Ite, ModeIn]
@@ -417,11 +418,13 @@ class PropertyDecl:
 
 @dataclass(frozen=True)
 class ComposeDecl:
-    """`compose interleaving;` or `compose timed ties order;`."""
+    """`compose interleaving;`, `compose interleaving uniform;` or `compose timed ties
+    order;`."""
 
     kind: Ident
     ties: Ident | None
     span: Span
+    scheduler: Ident | None = None  # `uniform` in `compose interleaving uniform;`
 
 
 @dataclass(frozen=True)
@@ -432,10 +435,30 @@ class AgentDecl:
     clock: Ident | None
     decls: tuple[Decl, ...]
     span: Span
+    # a template (`agent Robot(id, grant) { ... }`): its parameters; None: an agent
+    params: tuple[Ident, ...] | None = None
+
+
+@dataclass(frozen=True)
+class Instance:
+    """`r1 = Robot(1, Grant1)`: an agent made from a template."""
+
+    name: Ident
+    template: Ident
+    args: tuple[Expr, ...]
+    span: Span
+
+
+@dataclass(frozen=True)
+class AgentsDecl:
+    """`agents r1 = Robot(1, Grant1), r2 = Robot(2, Grant2);`."""
+
+    instances: tuple[Instance, ...]
+    span: Span
 
 
 Decl = Union[ConstDecl, ParamDecl, VarDecl, ModeDecl, ActionDecl, HazardDecl, FormulaDecl,
-             LabelDecl, RewardsDecl, PropertyDecl, ComposeDecl, AgentDecl]
+             LabelDecl, RewardsDecl, PropertyDecl, ComposeDecl, AgentDecl, AgentsDecl]
 
 
 @dataclass(frozen=True)

@@ -215,14 +215,33 @@ class Builder(Transformer[Token, Any]):
         return ("writers", tuple(self._id(t) for t in c))
 
     # -- composition
-    def compose_decl(self, meta: Any, c: list[Token]) -> ast.ComposeDecl:
-        return ast.ComposeDecl(self._id(c[0]), self._id(c[1]) if len(c) > 1 else None,
-                               self._s(meta))
+    def compose_decl(self, meta: Any, c: list[Any]) -> ast.ComposeDecl:
+        words = dict(x for x in c[1:])
+        return ast.ComposeDecl(self._id(c[0]), words.get("ties"), self._s(meta),
+                               words.get("scheduler"))
+
+    def scheduler(self, meta: Any, c: list[Token]) -> tuple[str, ast.Ident]:
+        return ("scheduler", self._id(c[0]))
+
+    def ties(self, meta: Any, c: list[Token]) -> tuple[str, ast.Ident]:
+        return ("ties", self._id(c[0]))
 
     def agent_decl(self, meta: Any, c: list[Any]) -> ast.AgentDecl:
+        params = None
+        if len(c) > 1 and isinstance(c[1], tuple) and c[1] and c[1][0] == "params":
+            params, c = c[1][1], [c[0], *c[2:]]
         clock = self._id(c[1]) if len(c) > 1 and isinstance(c[1], Token) else None
         decls = tuple(x for x in c[1:] if not isinstance(x, Token))
-        return ast.AgentDecl(self._id(c[0]), clock, decls, self._s(meta))
+        return ast.AgentDecl(self._id(c[0]), clock, decls, self._s(meta), params)
+
+    def agent_params(self, meta: Any, c: list[Token]) -> tuple[str, tuple[ast.Ident, ...]]:
+        return ("params", tuple(self._id(t) for t in c))
+
+    def agents_decl(self, meta: Any, c: list[ast.Instance]) -> ast.AgentsDecl:
+        return ast.AgentsDecl(tuple(c), self._s(meta))
+
+    def instance(self, meta: Any, c: list[Any]) -> ast.Instance:
+        return ast.Instance(self._id(c[0]), self._id(c[1]), tuple(c[2:]), self._s(meta))
 
     def sync_action(self, meta: Any, c: list[Any]) -> ast.ActionDecl:
         a: ast.ActionDecl = c[0]
@@ -531,4 +550,13 @@ class Builder(Transformer[Token, Any]):
         return ast.Ite(c[0], c[1], c[2], self._s(meta))
 
     def mode_in(self, meta: Any, c: list[Any]) -> ast.ModeIn:
+        if len(c) == 2:  # `r1.mode in {...}`
+            return ast.ModeIn(c[1], self._s(meta), self._id(c[0]))
         return ast.ModeIn(c[0], self._s(meta))
+
+    def agent_mode_ref(self, meta: Any, c: list[Token]) -> ast.FieldRef:
+        """`r1.mode`: "mode" is a keyword, so the field a name of its own, at the last
+        four characters (the keyword's)."""
+        span = self._s(meta)
+        mode = Span.at_offset(self.source, span.end - 4, span.end)
+        return ast.FieldRef(self._id(c[0]), ast.Ident("mode", mode), span)

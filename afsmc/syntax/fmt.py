@@ -224,7 +224,8 @@ class _Formatter:
             return (f"{self.expr(e.cond, _IMPLIES)} ? {self.expr(e.then)} : "
                     f"{self.expr(e.other)}"), _ITE
         if isinstance(e, ast.ModeIn):
-            return "mode in " + self.mode_set(e.modes), _CMP
+            agent = f"{e.agent.text}." if e.agent is not None else ""
+            return f"{agent}mode in " + self.mode_set(e.modes), _CMP
         raise TypeError(type(e).__name__)
 
     def bound(self, e: ast.Expr) -> str:
@@ -293,7 +294,8 @@ class _Formatter:
             return [f"var {d.name.text}", text + ";"]
         if isinstance(d, ast.ComposeDecl):
             ties = f" ties {d.ties.text}" if d.ties is not None else ""
-            return [f"compose {d.kind.text}{ties};"]
+            how = f" {d.scheduler.text}" if d.scheduler is not None else ""
+            return [f"compose {d.kind.text}{how}{ties};"]
         if isinstance(d, ast.ModeDecl):
             attrs = " initial" * d.initial + " final" * d.final + ";"
             if d.number_span is None:
@@ -442,11 +444,16 @@ class _Formatter:
         elif isinstance(d, ast.AgentDecl):
             brace = self._next((d.clock or d.name).span.end, "LBRACE")
             clock = f" clock {d.clock.text}" if d.clock is not None else ""
+            params = "" if d.params is None else f"({', '.join(p.text for p in d.params)})"
             out.append(Unit(d.span.start, brace.end_pos or 0, depth,
-                            [f"{pad}agent {d.name.text}{clock} {{"], "open"))
+                            [f"{pad}agent {d.name.text}{params}{clock} {{"], "open"))
             for x in d.decls:
                 out.extend(self.decl_units(x, depth + 1))
             out.append(Unit(d.span.end - 1, d.span.end, depth, [pad + "}"], "close"))
+        elif isinstance(d, ast.AgentsDecl):
+            parts = [f"{i.name.text} = {i.template.text}({', '.join(self.expr(a) for a in i.args)})"
+                     for i in d.instances]
+            out.append(Unit(d.span.start, d.span.end, depth, self.fill("agents ", parts, depth)))
         elif isinstance(d, ast.RewardsDecl):
             brace = self._next(d.name.span.end, "LBRACE")
             out.append(Unit(d.span.start, brace.end_pos or 0, depth,

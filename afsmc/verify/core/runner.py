@@ -40,7 +40,7 @@ from afsmc.verify.engines.guard import (
     run_job,
     upper_bound,
 )
-from afsmc.verify.engines.jobs import choose_engine, make_job
+from afsmc.verify.engines.jobs import choose_engine, make_job, unfair
 from afsmc.verify.engines.storm import (
     DD_MEMORY_RETRY,
     Engine,
@@ -409,7 +409,8 @@ class ModelLoop:
         extra = tuple(n for n in first if n not in mine)
         job = make_job(self.low, group, o.via, self.job_engine, limit, self.what, o.bisimulation,
                        o.memory_budget, only=tuple(mine),
-                       hybrid_skip=tuple(n for n in mine if n not in first), hybrid_extra=extra)
+                       hybrid_skip=tuple(n for n in mine if n not in first), hybrid_extra=extra,
+                       exact=o.exact)
         job = dataclasses.replace(job, solver=o.solver, all_states=run.all_states,
                                   precision=run.precision, exact=o.exact)
         if applies(self.low, self.job_engine, o.solver,
@@ -418,6 +419,8 @@ class ModelLoop:
         # no scheduler for a step-bounded query, nor for the rounding's kappa (conditioning)
         ex = request(self.low, o.strategy, run.witness, mine, self.run.asked_as,
                      skip={n for p, n in unit if stepped(p) or p.name == conditioning.STEPS})
+        if ex is not None and job.fair is not None:
+            raise unfair("without strategies or witnesses", "leave out --strategy and --witness")
         if self.resolution == "nondet" and o.via == "prism" and ex is not None:
             job = dataclasses.replace(job, extract=ex, model_text=prism_emit(self.low, True).model)
         if self.job_engine == "auto":

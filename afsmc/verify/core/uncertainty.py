@@ -45,7 +45,8 @@ def sources(model: ir.Model) -> tuple[str, ...]:
     if model.interval_constants:
         out.append(INTERVAL_CONSTANTS)
     comp = model.composition
-    if comp is not None and comp.text in ("interleaving", "timed, ties nondet"):
+    if comp is not None and comp.text in ("interleaving", "interleaving, fair",
+                                          "timed, ties nondet"):
         out.append(AGENT_ORDER)
     if model.prob_intervals:
         out.append(INTERVAL_PROBABILITIES)

@@ -10,6 +10,7 @@ from typing import Any
 from afsmc.backends.prism import emit as prism_emit
 from afsmc.backends.prism import property_variants
 from afsmc.diagnostics import CompileError, Diagnostic, Severity, codes
+from afsmc.lower.compose import action_agents
 from afsmc.lower.lowering import Lowered
 from afsmc.model import ir
 from afsmc.text import count
@@ -32,11 +33,18 @@ def choose_engine(engine: Engine, bound: int) -> tuple[Engine, str]:
 
 
 
+def unfair(how: str, hint: str) -> CompileError:
+    """E404 for what min and max over fair schedulers are not computed with."""
+    return CompileError([Diagnostic(
+        codes.E404, Severity.ERROR, "min and max over fair schedulers ('compose interleaving "
+        f"fair') are computed {how}", None, hint=hint)])
+
+
 def make_job(low: Lowered, props: Sequence[ir.Property], via: Via, engine: Engine,
              max_states: int | None, what: str, bisimulation: bool = False,
              memory_budget: int | None = None, only: tuple[str, ...] | None = None,
              hybrid_skip: tuple[str, ...] = (),
-             hybrid_extra: tuple[str, ...] = ()) -> Job:
+             hybrid_extra: tuple[str, ...] = (), exact: bool = False) -> Job:
     """The Storm input for a lowered model whose `properties` are exactly `props`.
     `memory_budget`: what "auto" may give the sparse engine (default: 70% of free memory);
     `only`: check just these queries (property variants, e.g. `success_min`);
@@ -49,6 +57,15 @@ def make_job(low: Lowered, props: Sequence[ir.Property], via: Via, engine: Engin
     if budget is None:
         budget = int(avail * 0.7) if avail is not None else None
     skip, extra = (hybrid_skip, hybrid_extra) if engine == "auto" else ((), ())
+    net = low.network
+    if net is not None and net.ties == "fair":
+        if engine not in ("auto", "sparse") or via != "prism" or exact:
+            raise unfair("on the sparse engine via PRISM, in floating point",
+                         "leave --engine and --via at their defaults, without --exact")
+        out = prism_emit(low)
+        return Job("prism", out.model, out.properties, names, "sparse", max_states, what,
+                   False, budget, fair=tuple(sorted(action_agents(net).items())),
+                   agents=len(net.parts))
     if via == "prism":
         out = prism_emit(low)
         return Job("prism", out.model, out.properties, names, engine, max_states, what,

@@ -14,13 +14,13 @@ import os
 import tempfile
 import time
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any, Literal
 
 from afsmc.verify.engines import acyclic, explicit, strategy_arrays, umb
 from afsmc.verify.engines.storm_solvers import Solver, solver_for, value_iteration
 from afsmc.verify.engines.strategy_storm import Extract, Extracted, analyse, builder_options
-from afsmc.verify.plan import precision
+from afsmc.verify.plan import fairness, precision
 
 Engine = Literal["sparse", "dd", "hybrid", "auto"]
 ENGINES: tuple[Engine, ...] = ("auto", "sparse", "dd", "hybrid")
@@ -79,6 +79,10 @@ class Job:
     # the lowered model, for afsmc's own exploration and backward pass first
     # (afsmc.verify.engines.explicit); None: Storm only
     explicit: Any = None
+    # `compose interleaving fair;`: each action's agents (afsmc.verify.plan.fairness) and
+    # how many agents there are; None: every scheduler counts
+    fair: tuple[tuple[str, tuple[int, ...]], ...] | None = None
+    agents: int = 0
 
     @property
     def wanted(self) -> tuple[str, ...]:
@@ -192,6 +196,9 @@ def execute(job: Job, notify: Notify | None = None) -> JobResult:
 
 def _execute(job: Job, notify: Notify) -> JobResult:
     res = JobResult()
+    if job.fair is not None:  # Storm's sparse engine, its model with choice labels
+        assert not job.exact and job.extract is None  # refused (verify.engines.jobs.unfair)
+        job = replace(job, explicit=None, bisimulation=False)
     if job.explicit is not None:
         left = explicit.fill(job, res, notify, too_big)
         if left is None:
@@ -254,7 +261,8 @@ def _execute(job: Job, notify: Notify) -> JobResult:
     if job.bisimulation and not built.symbolic and not _bisimulation(built, res, notify):
         return res
     t0 = time.perf_counter()
-    if check_env is None and res.solver == "topological" and job.solver == "auto":
+    if check_env is None and res.solver == "topological" and job.solver == "auto" \
+            and job.fair is None:
         if job.extract is None:
             _acyclic(stormpy, built, res, notify, job, program)
         elif _lean(job, built.props):  # strategies from the backward pass, if acyclic
@@ -375,6 +383,10 @@ def _sparse(stormpy: Any, program: Any, props: list[Any], job: Job, lean: bool =
     answer (`lean`), one label per bit of each variable (strategy_arrays)."""
     if job.exact:
         return precision.build_exact(stormpy, program, _for_builder(props, job), job.extract)
+    if job.fair is not None:
+        opts = stormpy.BuilderOptions([p.get_raw_formula() for p in _for_builder(props, job)])
+        opts.set_build_choice_labels()
+        return stormpy.build_model(program, options=opts)
     if job.extract is not None:
         opts = strategy_arrays.options(stormpy, [p.get_raw_formula() for p in _for_builder(
             props, job)], program) if lean and _lean(job, props) else None
@@ -461,6 +473,10 @@ def _check_each(stormpy: Any, built: _Built, check_env: Any, res: JobResult,
                 wanted = job.extract is not None and name in job.extract.queries
                 r = stormpy.model_checking(model, prop, environment=check_env)
                 value = r.get_value(model.initial_states[0])
+                if job.fair is not None:
+                    fair = fairness.check(stormpy, model, prop, float(value), dict(job.fair),
+                                          job.agents, check_env)
+                    value = value if fair is None else fair
                 if wanted and res.kind == "mdp":
                     # Storm solves again to give a scheduler, by another method whose
                     # value differs in the last digits: the value stays the one asked
@@ -473,6 +489,9 @@ def _check_each(stormpy: Any, built: _Built, check_env: Any, res: JobResult,
                     analyse(stormpy, program, model, name, prop, r, job.extract, res.extracted)
         except RuntimeError as exc:
             res.failure = StormFailure("check", _message(exc), prop=name)
+            return False
+        except fairness.Refused as exc:
+            res.failure = StormFailure("check", str(exc), prop=name)
             return False
         if value is None:
             res.failure = StormFailure("check", f"the {built.engine} engine does not support "

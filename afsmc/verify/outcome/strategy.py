@@ -260,7 +260,8 @@ def turns_chosen(model: ir.Model) -> bool:
     """Whether a composed mission leaves its agents' turns to the scheduler (interleaving
     of two or more agents, timed with `ties nondet`), as `Lowered.kind` decides."""
     comp = model.composition
-    return comp is not None and ((comp.kind == "interleaving" and len(comp.agents) > 1)
+    return comp is not None and ((comp.kind == "interleaving" and len(comp.agents) > 1
+                                  and comp.ties != "uniform")
                                  or (comp.kind == "timed" and comp.ties == "nondet"))
 
 

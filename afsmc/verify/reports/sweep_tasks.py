@@ -295,7 +295,7 @@ def independent(path: str, text: str, consts: dict[str, str], variable: str,
                 values: Sequence[Number]) -> bool:
     """Whether the model (not its properties) is the same at every value. Every one is
     compared (about 0.015 s each for the UAV, the parse cached): a model can be equal at
-    both ends and differ between them (a range `[0..K * (2 - K)]` over K = 0..2)."""
+    both ends and differ between them (a range `[0..1 + K * (2 - K)]` over K = 0..2)."""
     if len(values) < 2:
         return False
     try:

@@ -20,7 +20,8 @@ from tests.conftest import ROOT
 EXAMPLES = os.path.join(ROOT, "examples")
 # small instances, so that each check takes about a second
 SMALL = {"two_uav.afsm": {"OBJECTS": 1, "T_LIMIT": 25},
-         "charging.afsm": {"ORDERS": 2, "T_LIMIT": 10}}
+         "charging.afsm": {"ORDERS": 2, "T_LIMIT": 10},
+         "charging_fleet.afsm": {"ORDERS": 2, "T_LIMIT": 10}}  # charging's robots as a template
 
 
 def _path(name: str) -> str:

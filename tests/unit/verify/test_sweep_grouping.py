@@ -28,11 +28,11 @@ label done = mode == Done;
 property by_deadline = P=? [ F "done" && t <= D ];
 """
 
-# K is read by the model between the ends of the sweep only: [0..0], [0..1], [0..0].
+# K is read by the model between the ends of the sweep only: [0..1], [0..2], [0..1].
 MIDDLE = """
 machine middle;
 param int K = 0;
-var x : [0..K * (2 - K)] init 0;
+var x : [0..1 + K * (2 - K)] init 0;
 mode A = 0 initial;
 mode B = 1 final;
 action Go in A { goto B; }

@@ -1,0 +1,115 @@
+"""Agent templates instantiated: `agent Robot(id, grant) { ... }` declares an agent once,
+`agents r1 = Robot(1, Grant1), r2 = Robot(2, Grant2);` makes one agent of it per instance
+(docs/language.md, "Templates").
+
+Each instance is the template's syntax tree with its parameters replaced by the
+instance's arguments, standing where the `agents` declaration stands, so that the rest of
+the composed mission's resolution (afsmc.resolve.compose) takes it as if written out. A
+parameter stands for what its argument is: an expression where it is read (a constant,
+a shared variable, the agent's index), and, when the argument is a name, that name
+wherever a name stands (a variable it writes, a synchronised action's name, another
+agent in `peer.mode`). The instance keeps the template's spans, so that a diagnostic
+about its text points at the template's line; the resolver names the instance in it.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from typing import Any
+
+from afsmc.diagnostics import Reporter, Span, codes
+from afsmc.resolve.compose import rewrite
+from afsmc.syntax import ast
+
+
+def expand(module: ast.Module, rep: Reporter) -> ast.Module:
+    """The module with each template left out and each instance an agent of its own."""
+    templates: dict[str, ast.AgentDecl] = {}
+    for d in module.decls:
+        if isinstance(d, ast.AgentDecl) and d.params is not None:
+            if d.name.text in templates:
+                rep.error(codes.E253, f"the agent template {d.name.text} is declared twice",
+                          d.name.span)
+                continue
+            templates[d.name.text] = d
+            _check_params(d, rep)
+    decls: list[ast.Decl] = []
+    for d in module.decls:
+        if isinstance(d, ast.AgentsDecl):
+            decls += [a for i in d.instances if (a := _instance(i, templates, rep)) is not None]
+        elif not (isinstance(d, ast.AgentDecl) and d.params is not None):
+            decls.append(d)
+    return dataclasses.replace(module, decls=tuple(decls))
+
+
+def _check_params(template: ast.AgentDecl, rep: Reporter) -> None:
+    seen: set[str] = set()
+    for p in template.params or ():
+        if p.text in seen:
+            rep.error(codes.E253, f"the template {template.name.text} has two parameters "
+                      f"named '{p.text}'", p.span)
+        seen.add(p.text)
+
+
+def _instance(inst: ast.Instance, templates: dict[str, ast.AgentDecl],
+              rep: Reporter) -> ast.AgentDecl | None:
+    template = templates.get(inst.template.text)
+    if template is None:
+        known = ", ".join(sorted(templates)) or "none is declared"
+        rep.error(codes.E253, f"'{inst.template.text}' is no agent template (templates: "
+                  f"{known})", inst.template.span,
+                  hint=f"declare it: 'agent {inst.template.text}(id) {{ ... }}'")
+        return None
+    params = template.params or ()
+    if len(inst.args) != len(params):
+        names = ", ".join(p.text for p in params)
+        rep.error(codes.E253, f"agent {inst.name.text}: the template {template.name.text}"
+                  f"({names}) takes {len(params)} argument{'' if len(params) == 1 else 's'}, "
+                  f"given {len(inst.args)}", inst.span)
+        return None
+    args = {p.text: a for p, a in zip(params, inst.args, strict=True)}
+    fn = _substitution(args, inst, template, rep)
+    clock = rewrite(template.clock, fn) if template.clock is not None else None
+    decls = rewrite(template.decls, fn)
+    return ast.AgentDecl(inst.name, clock, decls, template.span)
+
+
+def _substitution(args: dict[str, ast.Expr], inst: ast.Instance, template: ast.AgentDecl,
+                  rep: Reporter) -> Any:
+    """The rewriting of the template's tree for one instance (see the module's doc)."""
+    reported: set[str] = set()
+
+    def name_for(ident: ast.Ident) -> ast.Ident:
+        arg = args[ident.text]
+        if isinstance(arg, ast.Name):
+            return ast.Ident(arg.name.text, ident.span)
+        if ident.text not in reported:
+            reported.add(ident.text)
+            rep.error(codes.E253, f"agent {inst.name.text}: the parameter '{ident.text}' of "
+                      f"template {template.name.text} stands where a name must (a variable "
+                      "written, an action, a mode, an agent), but its argument is an "
+                      "expression", ident.span,
+                      hint=f"give '{ident.text}' a name in '{inst.name.text} = "
+                      f"{template.name.text}(...)'")
+        return ident
+
+    def go(n: Any) -> Any:
+        if isinstance(n, ast.Name) and n.name.text in args:
+            return _at(args[n.name.text], n.span)
+        if isinstance(n, ast.FieldRef) and n.base.text in args:
+            return dataclasses.replace(n, base=name_for(n.base))
+        if isinstance(n, ast.Ident) and n.text in args:
+            return name_for(n)
+        return None
+    return go
+
+
+def _at(expr: ast.Expr, span: Span) -> ast.Expr:
+    """An argument as it stands in the template: every span of it at the use, so that a
+    diagnostic about it points at the template's line."""
+    def go(n: Any) -> Any:
+        if isinstance(n, Span):
+            return span
+        return ast.Ident(n.text, span) if isinstance(n, ast.Ident) else None
+    out: ast.Expr = rewrite(expr, go)
+    return out
