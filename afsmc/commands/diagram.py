@@ -37,7 +37,7 @@ from afsmc.commands.render import diagram_strategy
 from afsmc.commands.verify import positive
 from afsmc.compiler import load
 from afsmc.diagnostics import CompileError, Diagnostic, Severity, codes
-from afsmc.files import write_atomic
+from afsmc.files import check_writable, write_atomic
 from afsmc.model import ir
 from afsmc.text import short
 
@@ -210,7 +210,7 @@ def output_path(args: argparse.Namespace) -> tuple[str, str]:
         stem = os.path.splitext(os.path.basename(args.file))[0]
         return stem + ".svg", "svg"
     fmt = os.path.splitext(args.output)[1].lstrip(".").lower()
-    if fmt not in FORMATS:
+    if fmt not in FORMATS and args.output.strip():  # an empty name: E003 in run
         usage_error(f"-o {args.output}: the picture must end in .svg, .png or .pdf")
     return args.output, fmt
 
@@ -229,6 +229,7 @@ def run(args: argparse.Namespace) -> int:
             usage_error(f"{' and '.join(given)} {verb} to --reach (the probabilities "
                         "Storm computes); add --reach, or leave them out")
     try:
+        check_writable(path, protect=(args.file,))  # before the model is built and drawn
         checked = load(args.file, overrides(args))
         report(checked.diagnostics)
         model = checked.model

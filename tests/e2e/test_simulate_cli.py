@@ -108,7 +108,7 @@ def test_traces_out_without_traces_is_a_usage_error(tmp_path: Path) -> None:
 def test_a_negative_seed_is_a_usage_error(command: str) -> None:
     # numpy takes no negative seed: it was a traceback (simulate) or blamed a simulator (E505)
     r = run_cli(command, str(PATROL), "--seed", "-1", "--runs", "10")
-    assert r.code == 2 and "--seed: expected an integer >= 0, got '-1'" in r.err, r.err
+    assert r.code == 2 and "--seed: expected an integer from 0 to" in r.err, r.err
 
 
 def test_options_that_would_be_ignored_are_refused_or_honoured() -> None:

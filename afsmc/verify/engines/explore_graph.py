@@ -123,10 +123,13 @@ class Frontiers:
 
 
 def explore_bucket(c: Compiled, table: ProbTable, start: I64, b: int | None,
-                   waiting: Frontiers, exclude: I64 | None = None) -> tuple[Block, I64, int]:
+                   waiting: Frontiers, exclude: I64 | None = None, *, counted: int = 0,
+                   max_states: int | None = None) -> tuple[Block, I64, int]:
     """The states of bucket `b` reachable from `start` (None: the late states, whose
     successors all stay late, but for those in `exclude`, explored already); successors
-    in other buckets go to `waiting`. The block, its sorted keys and the rounds taken."""
+    in other buckets go to `waiting`. The block, its sorted keys and the rounds taken.
+    Raises TooManyStates as soon as `counted` (the states of earlier buckets) and this
+    bucket's pass `max_states`: a bucket may be deep (a long chain, round after round)."""
     none = np.zeros(0, np.int64)
     skip = none if exclude is None else exclude
     known = _unique(start)
@@ -149,6 +152,8 @@ def explore_bucket(c: Compiled, table: ProbTable, start: I64, b: int | None,
         cand = _unique(x.target[same])
         frontier = cand[~_found(known, cand) & ~_found(skip, cand)]
         known = np.sort(np.concatenate([known, frontier]))  # disjoint
+        if max_states is not None and counted + len(known) > max_states:
+            raise TooManyStates(counted + len(known))
     return _block(c, table, known, parts), known, len(parts)
 
 
@@ -300,7 +305,8 @@ def explore(c: Compiled, notify: Notify | None = None, max_states: int | None = 
     while waiting.pending:
         b = min(waiting.pending)
         start = _unique(np.concatenate(waiting.pending.pop(b)))
-        block, known, took = explore_bucket(c, table, start, b, waiting)
+        block, known, took = explore_bucket(c, table, start, b, waiting, counted=count,
+                                            max_states=max_states)
         rounds += took
         sink, block = split_sinks(block)
         blocks.append(block)
@@ -323,7 +329,8 @@ def explore(c: Compiled, notify: Notify | None = None, max_states: int | None = 
     if waiting.late:
         absorbing = np.sort(np.concatenate([s.keys for s in sinks]))
         block, known, _ = explore_bucket(c, table, np.concatenate(waiting.late), None,
-                                         Frontiers(), absorbing)
+                                         Frontiers(), absorbing, counted=count,
+                                         max_states=max_states)
         if _found(np.concatenate(regular), known).any():
             raise GiveUp("a state reached both before and after its clock went back")
         blocks.append(block)
