@@ -200,7 +200,7 @@ E442 = Code("E442", Severity.ERROR, "--require is not a bounded P or R property"
 E443 = Code("E443", Severity.ERROR, "a property the parametric engine cannot check")
 E415 = Code("E415", Severity.ERROR, "no strategy or failure path for this request")
 E416 = Code("E416", Severity.ERROR, "a strategy needs the sparse engine, and the model does not fit")
-E420 = Code("E420", Severity.ERROR, "a variable's range is too large for a symbolic build without --max-states")
+E420 = Code("E420", Severity.ERROR, "a variable's range is too large for a build without a state limit")
 
 
 # E5xx: simulation and simulation-backed constants

@@ -1,5 +1,6 @@
-"""The guard of the symbolic engines without --max-states: a variable with more values
-than the default state limit is refused before Storm builds anything (E420).
+"""The guard of the builds that no state limit stops (the symbolic engines without
+--max-states, `diagram --reach` without it, `regions`' parametric build): a variable with
+more values than the default state limit is refused before Storm builds anything (E420).
 
 Storm's symbolic builder (engines dd and hybrid, and "auto" above its sparse bound)
 explores breadth-first, one step per level of the state graph, and reports nothing until
