@@ -40,6 +40,7 @@ from afsmc.diagnostics import CompileError, Diagnostic, Severity, codes
 from afsmc.files import check_writable, write_atomic
 from afsmc.model import ir
 from afsmc.text import short
+from afsmc.verify.engines.guard import MAX_STATES_LIMIT
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
@@ -53,8 +54,10 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                         "write it into the mode's box")
     add_resolve(p, default=None, extra="; with --reach")
     p.add_argument("--max-states", type=positive, metavar="N",
-                   help="with --reach: stop (exit 1) if the model has more states than N "
-                        "(default: what 70%% of the free memory holds, at most 50 M)")
+                   help="with --reach: stop (exit 1) if the model has more states than N, at "
+                        f"most {MAX_STATES_LIMIT:,} (default: what 70%% of the free memory "
+                        "holds, at most 50 M; without it, a counter wider than that is refused "
+                        "up front, E420)")
     p.add_argument("--results", metavar="JSON",
                    help="overlay the results of `afsmc verify --json` (a box of property values; "
                         "per-mode numbers from its \"modes\" list, if any)")
