@@ -85,12 +85,12 @@ def refuse_inputs(paths: list[str], protect: tuple[str, ...]) -> None:
                                                hint="choose another output path")])
 
 
-def check_writable(path: str, *, protect: tuple[str, ...] = (),
-                   suffixes: tuple[str, ...] = ()) -> None:
+def check_writable(path: str, *, protect: tuple[str, ...] = ()) -> None:
     """Raise now what `write_atomic(path, ...)` would raise later for the path itself
     (E002 an input, E003 not writable), for commands that compute for long before they
     write: an empty name, a directory, a missing directory above the file's own, a
-    directory that refuses new files, a read-only file, the always-full /dev/full, and (`suffixes`, e.g. (".png", ".svg")) a name in another format."""
+    directory that refuses new files, a read-only file, the always-full /dev/full. (A pipe
+    is not probed: see write_atomic.)"""
 
     def cannot(why: str, hint: str | None = None) -> CompileError:
         return CompileError([Diagnostic(codes.E003, Severity.ERROR,
@@ -99,9 +99,6 @@ def check_writable(path: str, *, protect: tuple[str, ...] = (),
 
     if not path.strip():
         raise cannot("the file name is empty", hint="give a file name")
-    if suffixes and os.path.splitext(path)[1].lower() not in suffixes:
-        raise cannot(f"the name must end in {' or '.join(suffixes)}",
-                     hint="the format follows the name's extension")
     refuse_inputs([path], protect)
     real = os.path.realpath(path)
     if os.path.isdir(real):

@@ -174,10 +174,13 @@ def check_params(low: Lowered, box: dict[str, tuple[float, float]]) -> None:
 def run(args: argparse.Namespace) -> int:
     t0 = time.perf_counter()
     refuse_jobs(args.jobs, args.dask)
+    if args.plot and os.path.splitext(args.plot)[1].lower() not in PLOT_SUFFIXES:
+        # matplotlib draws other formats, or fails after the whole computation
+        usage_error(f"--plot {args.plot}: the name must end in .png or .svg")
     say = None if args.json else (lambda s: print(f"afsmc: {s}", file=sys.stderr, flush=True))
     try:
         if args.plot is not None:  # said before the run, not after it
-            check_writable(args.plot, protect=(args.file,), suffixes=PLOT_SUFFIXES)
+            check_writable(args.plot, protect=(args.file,))
         req = R.parse_requirement(args.require)
         box = parse_params(args.param)
         loaded = load_with_formulas(args.file, overrides(args), [req.query()])

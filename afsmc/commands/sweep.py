@@ -132,6 +132,8 @@ def run(args: argparse.Namespace) -> int:
                         f"{MAX_POINTS:,}")
         ((variable, values),) = swept.items() if len(swept) == 1 else (("", []),)
         kind = "const"
+    if args.plot and os.path.splitext(args.plot)[1].lower() not in PLOT_SUFFIXES:
+        usage_error(f"--plot {args.plot}: the name must end in .png or .svg")
     if args.plot is not None and args.output and os.path.realpath(args.plot) == os.path.realpath(args.output):
         usage_error(f"-o and --plot name the same file ({args.output}): the plot would replace "
                     "the CSV")
@@ -162,7 +164,7 @@ def run(args: argparse.Namespace) -> int:
         if args.output:
             check_writable(args.output, protect=(args.file,))
         if args.plot is not None:
-            check_writable(args.plot, protect=(args.file,), suffixes=PLOT_SUFFIXES)
+            check_writable(args.plot, protect=(args.file,))
         res = sweep_file(args.file, variable if len(swept) <= 1 else swept, values, kind=kind,
                          consts=fixed, properties=args.property, formulas=args.formula,
                          jobs=args.jobs, dask=args.dask, progress=progress,
