@@ -133,8 +133,10 @@ def _unwritable_file(real: str) -> str | None:
     st = os.stat(real)
     if stat.S_ISREG(st.st_mode):
         # root may write anything; a file with no write bit is still meant to stay as is
-        if not st.st_mode & 0o222 or not os.access(real, os.W_OK):
+        if not st.st_mode & 0o222:
             return "the file is read-only (chmod u+w it to let afsmc replace it)"
+        if not os.access(real, os.W_OK):
+            return "permission denied (this user may not write the file)"
         return None
     if stat.S_ISCHR(st.st_mode) and (os.major(st.st_rdev), os.minor(st.st_rdev)) == DEV_FULL:
         return "the device is always full (No space left on device)"
