@@ -8,7 +8,9 @@ no more of it than afsmc reads (E004 past MAX_SOURCE_CHARS);
 from __future__ import annotations
 
 import contextlib
+import errno
 import os
+import stat
 import tempfile
 
 from afsmc.diagnostics import CompileError, Diagnostic, Severity, Source, Span, codes
@@ -86,20 +88,32 @@ def refuse_inputs(paths: list[str], protect: tuple[str, ...]) -> None:
 def check_writable(path: str, *, protect: tuple[str, ...] = ()) -> None:
     """Raise now what `write_atomic(path, ...)` would raise later for the path itself
     (E002 an input, E003 not writable), for commands that compute for long before they
-    write."""
+    write: an empty name, a directory, a missing directory above the file's own, a
+    directory that refuses new files, a read-only file, the always-full /dev/full. (A pipe
+    is not probed: see write_atomic.)"""
+
+    def cannot(why: str, hint: str | None = None) -> CompileError:
+        return CompileError([Diagnostic(codes.E003, Severity.ERROR,
+                                        f"cannot write {path!r}: {why}" if not path.strip()
+                                        else f"cannot write {path}: {why}", None, hint=hint)])
+
+    if not path.strip():
+        raise cannot("the file name is empty", hint="give a file name")
     refuse_inputs([path], protect)
     real = os.path.realpath(path)
-
-    def cannot(why: str) -> CompileError:
-        return CompileError([Diagnostic(codes.E003, Severity.ERROR, f"cannot write {path}: {why}",
-                                        None)])
-
     if os.path.isdir(real):
         raise cannot("it is a directory")
-    # write_atomic creates missing directories: the nearest existing one must allow it.
-    directory = _nearest_existing(real)
+    if os.path.exists(real):
+        why = _unwritable_file(real)
+        if why is not None:
+            raise cannot(why)
+    directory = os.path.dirname(real) or "."
     if not os.path.isdir(directory):
-        raise cannot(f"{directory} is not a directory")
+        # write_atomic creates the file's own directory, never the ones above it
+        why = _missing_directory(directory)
+        if why is not None:
+            raise cannot(why)
+        directory = os.path.dirname(directory)
     if not os.access(directory, os.W_OK | os.X_OK):
         raise cannot(f"permission denied in {directory}")
     # os.access does not know every refusal (root in /proc, a read-only mount): try it.
@@ -108,6 +122,42 @@ def check_writable(path: str, *, protect: tuple[str, ...] = ()) -> None:
         os.rmdir(probe)
     except OSError as exc:
         raise cannot(f"cannot create files in {directory} ({exc.strerror or exc})") from None
+
+
+PLOT_SUFFIXES = (".png", ".svg")  # the pictures of `sweep --plot` and `regions --plot`
+DEV_FULL = (1, 7)  # Linux's /dev/full: every write to it fails with "No space left on device"
+
+
+def _unwritable_file(real: str) -> str | None:
+    """Why the existing file `real` (not a directory) cannot take the output, or None."""
+    st = os.stat(real)
+    if stat.S_ISREG(st.st_mode):
+        # root may write anything; a file with no write bit is still meant to stay as is
+        if not st.st_mode & 0o222:
+            return "the file is read-only (chmod u+w it to let afsmc replace it)"
+        if not os.access(real, os.W_OK):
+            return "permission denied (this user may not write the file)"
+        return None
+    if stat.S_ISCHR(st.st_mode) and (os.major(st.st_rdev), os.minor(st.st_rdev)) == DEV_FULL:
+        return "the device is always full (No space left on device)"
+    # A pipe is not opened to look: its reader would take that for the end of the output.
+    if not os.access(real, os.W_OK):
+        return "permission denied"
+    return None
+
+
+def _missing_directory(directory: str) -> str | None:
+    """Why the file's directory `directory`, which does not exist, cannot be created (only
+    it, in an existing directory: a mistyped path makes no tree of directories), or None."""
+    if os.path.exists(directory):
+        return f"{directory} is not a directory"
+    parent = os.path.dirname(directory)
+    if not os.path.isdir(parent):
+        near = _nearest_existing(directory)
+        if not os.path.isdir(near):
+            return f"{near} is not a directory"
+        return f"the directory {parent} does not exist"
+    return None
 
 
 def _nearest_existing(real: str) -> str:
@@ -142,22 +192,30 @@ def write_atomic(path: str, content: str | bytes, *, protect: tuple[str, ...] = 
     other hard links to the old one keep the old text."""
     refuse_inputs([path], protect)
     real = os.path.realpath(path)
+    if not path.strip() or os.path.isfile(real):
+        check_writable(path)  # an empty name, a read-only file: E003, as said up front
     if os.path.exists(real) and not (os.path.isfile(real) or os.path.isdir(real)):
         # A device or a pipe (`-o /dev/null`, `/dev/stdout`): a file renamed over it would
         # replace the device node itself, for every program on the machine.
         try:
-            with open(real, "wb") as fb:
+            # not blocking: a pipe that no process reads is ENXIO, not a wait for ever
+            fd = os.open(real, os.O_WRONLY | os.O_NONBLOCK)
+            os.set_blocking(fd, True)
+            with open(fd, "wb") as fb:
                 fb.write(content if isinstance(content, bytes) else content.encode()
                          if newline is None else content.replace("\n", newline).encode())
         except OSError as exc:
+            why = ("a pipe that no process reads" if exc.errno == errno.ENXIO
+                   else exc.strerror or exc)
             raise CompileError([Diagnostic(codes.E003, Severity.ERROR,
-                                           f"cannot write {path}: {exc.strerror or exc}",
+                                           f"cannot write {path}: {why}",
                                            None)]) from None
         return
     directory = os.path.dirname(real) or "."
     tmp = ""
     try:
-        os.makedirs(directory, exist_ok=True)
+        if not os.path.isdir(directory) and _missing_directory(directory) is None:
+            os.mkdir(directory)  # the file's own directory only (check_writable)
         old = os.stat(real) if os.path.exists(real) else None
         # A fresh name, created exclusively (mode 600): no other user's file or link in a
         # shared directory is written through.
@@ -191,8 +249,7 @@ def write_atomic(path: str, content: str | bytes, *, protect: tuple[str, ...] = 
         if not isinstance(exc, OSError):
             raise
         why = exc.strerror or str(exc)
-        if isinstance(exc, (FileExistsError, NotADirectoryError)) and \
-                not os.path.isdir(near := _nearest_existing(real)):
-            why = f"{near} is not a directory"  # not makedirs' "File exists"
+        if not os.path.isdir(directory) and (missing := _missing_directory(directory)):
+            why = missing  # not mkstemp's "No such file or directory"
         raise CompileError([Diagnostic(codes.E003, Severity.ERROR,
                                        f"cannot write {path}: {why}", None)]) from None

@@ -83,6 +83,12 @@ def values_of(out: dict[str, object]) -> dict[str, float | None]:
             for k in ("min", "max", "uniform", "value") if p.get(k) is not None}
 
 
+def max_diff(mine: dict[str, float | None], theirs: dict[str, float | None]) -> float:
+    """The largest difference between two runs' values, over the values both have."""
+    return max((abs(a - b) for k, a in mine.items() if (b := theirs.get(k)) is not None
+                and a is not None), default=0.0)
+
+
 def run_one(instance: str, workload: str, solver: str, engine: list[str],
             timeout: float) -> dict[str, object]:
     args = ["verify", UAV, *INSTANCES[instance], *WORKLOADS[workload], "--json",

@@ -26,13 +26,14 @@ from afsmc.lower.lowering import Resolution
 from afsmc.model import expr as E
 from afsmc.model import ir
 from afsmc.text import short
-from afsmc.verify import upper_bound
+from afsmc.verify import default_max_states, upper_bound
 from afsmc.verify.core.api import ask
 from afsmc.verify.core.uncertainty import reach_bounds
 from afsmc.verify.engines.guard import Progress
 from afsmc.verify.engines.stopping import large_variables
 from afsmc.verify.engines.storm import StormFailure
 from afsmc.verify.outcome.strategy import turns_chosen
+from afsmc.verify.plan.deep import refuse_deep_build
 
 if TYPE_CHECKING:
     from afsmc.api.mission import Mission
@@ -143,6 +144,10 @@ def _reachability(model: ir.Model, resolution: Resolution, max_states: int | Non
                   ) -> tuple[dict[str, dict[int, tuple[float, float]]], bool]:
     """(min, max) of reaching each mode, per agent ("": a machine's own modes)."""
     low = lowered(model, resolution)  # the reductions keep every mode's reachability
+    if max_states is None:  # verify's up-front guard: a counter too deep for an unlimited build
+        refuse_deep_build(low, "Storm's build for --reach", default_max_states(),
+                          hint="--max-states N stops the build at N states (E405 if there "
+                               "are more); or draw a smaller instance with --const")
     mdp = low.kind == "mdp"
     comp = model.composition
     unreachable: set[int] = set() if comp is not None else set(analyse(model).unreachable)

@@ -4,8 +4,10 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
+import os
 import sys
-from collections.abc import Iterable
+from collections.abc import Callable, Iterable
 
 from afsmc.diagnostics import CompileError, Diagnostic, render_all
 from afsmc.diagnostics import to_json as diags_to_json
@@ -19,19 +21,67 @@ def add_file(p: argparse.ArgumentParser) -> None:
     p.add_argument("file", metavar="FILE", help="the .afsm file")
 
 
-def add_seed(p: argparse.ArgumentParser) -> None:
-    p.add_argument("--seed", type=_seed, default=0, metavar="S",
-                   help="random seed, an integer >= 0 (default 0)")
+MAX_SEED = 2**64 - 1  # numpy's generators take no negative seed; a larger one adds nothing
+MIN_JOBS_CAP = 4  # --jobs may be this many even on a machine with fewer cores
+MAX_JOB_TASKS = 4096  # --jobs with --dask: the tasks a cluster's work is cut into
 
 
-def _seed(text: str) -> int:
+def integer(lo: int, hi: int) -> Callable[[str], int]:
+    """An argparse type: an integer from `lo` to `hi` (`1_000` allowed); outside, a usage
+    error (exit 2) that states the bound. Every integer option of afsmc has one."""
+    def parse(text: str) -> int:
+        try:
+            n = int(text.replace("_", ""))
+        except ValueError:
+            n = lo - 1
+        if not lo <= n <= hi:
+            raise argparse.ArgumentTypeError(f"expected an integer from {lo:,} to {hi:,}, "
+                                             f"got {text!r}")
+        return n
+    return parse
+
+
+def number(lo: float, hi: float, *, open_lo: bool = True) -> Callable[[str], float]:
+    """An argparse type: a number in (lo, hi] (`open_lo=False`: [lo, hi]); outside, a usage
+    error that states the interval."""
+    def parse(text: str) -> float:
+        try:
+            x = float(text)
+        except ValueError:
+            x = math.nan
+        if not (math.isfinite(x) and (lo < x if open_lo else lo <= x) and x <= hi):
+            raise argparse.ArgumentTypeError(
+                f"expected a number in {'(' if open_lo else '['}{lo:g}, {hi:g}], got {text!r}")
+        return x
+    return parse
+
+
+def max_jobs() -> int:
+    """The most local worker processes --jobs may ask for: the cores this process may run
+    on, or MIN_JOBS_CAP if that is more (each worker holds its own model and Storm)."""
     try:
-        n = int(text.replace("_", ""))
-    except ValueError:
-        n = -1
-    if n < 0:  # numpy's generators take no negative seed
-        raise argparse.ArgumentTypeError(f"expected an integer >= 0, got {text!r}")
-    return n
+        cores = len(os.sched_getaffinity(0))
+    except (AttributeError, OSError):
+        cores = os.cpu_count() or 1
+    return max(MIN_JOBS_CAP, cores)
+
+
+def refuse_jobs(jobs: int | None, dask: str | None) -> None:
+    """Exit 2 if --jobs asks for more local processes than max_jobs() (with --dask the
+    cluster's workers run the tasks: --jobs only sizes them)."""
+    if jobs is not None and dask is None and jobs > max_jobs():
+        usage_error(f"--jobs {jobs:,}: at most {max_jobs()} local processes (the cores of "
+                    f"this machine, or {MIN_JOBS_CAP} if that is more): more would only "
+                    "share the cores, each with its own model in memory")
+
+
+JOBS_HELP = (f"at most the number of cores, or {MIN_JOBS_CAP} if that is more; with "
+             f"--dask at most {MAX_JOB_TASKS:,}")
+
+
+def add_seed(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--seed", type=integer(0, MAX_SEED), default=0, metavar="S",
+                   help="random seed, an integer from 0 to 2^64 - 1 (default 0)")
 
 
 def dask_address(text: str) -> str:

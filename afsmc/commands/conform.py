@@ -12,6 +12,7 @@ from afsmc.api.conform import Conformance, conform_file
 from afsmc.commands.common import add_consts, answer_json, fail, overrides, report
 from afsmc.commands.sim_check import add_judging, table
 from afsmc.diagnostics import CompileError
+from afsmc.files import check_writable
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
@@ -27,6 +28,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     try:
+        if args.update:  # a file it cannot rewrite is said before the logs are read
+            check_writable(args.file)
         res = conform_file(args.file, overrides(args), args.logs, update=args.update,
                            confidence=args.confidence)
     except CompileError as exc:

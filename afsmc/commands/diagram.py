@@ -37,9 +37,10 @@ from afsmc.commands.render import diagram_strategy
 from afsmc.commands.verify import positive
 from afsmc.compiler import load
 from afsmc.diagnostics import CompileError, Diagnostic, Severity, codes
-from afsmc.files import write_atomic
+from afsmc.files import check_writable, write_atomic
 from afsmc.model import ir
 from afsmc.text import short
+from afsmc.verify.engines.guard import MAX_STATES_LIMIT
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
@@ -53,8 +54,10 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                         "write it into the mode's box")
     add_resolve(p, default=None, extra="; with --reach")
     p.add_argument("--max-states", type=positive, metavar="N",
-                   help="with --reach: stop (exit 1) if the model has more states than N "
-                        "(default: what 70%% of the free memory holds, at most 50 M)")
+                   help="with --reach: stop (exit 1) if the model has more states than N, at "
+                        f"most {MAX_STATES_LIMIT:,} (default: what 70%% of the free memory "
+                        "holds, at most 50 M; without it, a counter wider than that is refused "
+                        "up front, E420)")
     p.add_argument("--results", metavar="JSON",
                    help="overlay the results of `afsmc verify --json` (a box of property values; "
                         "per-mode numbers from its \"modes\" list, if any)")
@@ -210,7 +213,7 @@ def output_path(args: argparse.Namespace) -> tuple[str, str]:
         stem = os.path.splitext(os.path.basename(args.file))[0]
         return stem + ".svg", "svg"
     fmt = os.path.splitext(args.output)[1].lstrip(".").lower()
-    if fmt not in FORMATS:
+    if fmt not in FORMATS and args.output.strip():  # an empty name: E003 in run
         usage_error(f"-o {args.output}: the picture must end in .svg, .png or .pdf")
     return args.output, fmt
 
@@ -229,6 +232,7 @@ def run(args: argparse.Namespace) -> int:
             usage_error(f"{' and '.join(given)} {verb} to --reach (the probabilities "
                         "Storm computes); add --reach, or leave them out")
     try:
+        check_writable(path, protect=(args.file,))  # before the model is built and drawn
         checked = load(args.file, overrides(args))
         report(checked.diagnostics)
         model = checked.model

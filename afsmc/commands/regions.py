@@ -12,29 +12,37 @@ import time
 from typing import Literal
 
 from afsmc.commands.common import (
+    JOBS_HELP,
+    MAX_JOB_TASKS,
     add_consts,
     add_file,
     answer_json,
     dask_address,
     fail,
+    integer,
+    number,
     overrides,
+    refuse_jobs,
     usage_error,
 )
-from afsmc.commands.verify import positive
 from afsmc.compiler import lowered
 from afsmc.diagnostics import CompileError, Diagnostic, Severity, codes
-from afsmc.files import check_writable, write_atomic
+from afsmc.files import PLOT_SUFFIXES, check_writable, write_atomic
 from afsmc.lower.lowering import Lowered
 from afsmc.model import expr as E
 from afsmc.model import ir
 from afsmc.text import num
 from afsmc.verify.core.api import load_with_formulas
 from afsmc.verify.core.uncertainty import bound_error
+from afsmc.verify.engines.guard import default_max_states
 from afsmc.verify.engines.parametric import extreme_queries, extremes_on, with_parameters
 from afsmc.verify.engines.storm import VIAS
 from afsmc.verify.outcome.verdicts import judge
+from afsmc.verify.plan.deep import refuse_deep_build
 from afsmc.verify.plan.precision import PARAMETER_PRECISION
 from afsmc.verify.reports import regions as R
+
+MAX_ROUNDS = 24  # rounds of halving; each may double the undecided boxes checked in the next
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
@@ -47,15 +55,16 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                         "interval as further parameters (the output names them)")
     p.add_argument("--require", required=True, metavar="PROPERTY",
                    help="a bounded property in .afsm syntax, e.g. 'P>=0.6 [ F \"success\" ]'")
-    p.add_argument("--coverage", type=float, default=0.95,
-                   help="refine until this fraction of the box's volume is decided "
-                        "(default 0.95)")
-    p.add_argument("--max-rounds", type=positive, default=12,
-                   help="stop refining after this many rounds of halving (default 12)")
-    p.add_argument("--jobs", "-j", type=positive, default=1,
-                   help="local processes checking the boxes of a round (default 1); each "
-                        "builds the parametric model once, which on the UAV costs more than "
-                        "the checks it shares out")
+    p.add_argument("--coverage", type=number(0, 1), default=0.95,
+                   help="refine until this fraction of the box's volume is decided, in "
+                        "(0, 1] (default 0.95)")
+    p.add_argument("--max-rounds", type=integer(1, MAX_ROUNDS), default=12,
+                   help="stop refining after this many rounds of halving, 1 to "
+                        f"{MAX_ROUNDS} (default 12)")
+    p.add_argument("--jobs", "-j", type=integer(1, MAX_JOB_TASKS), default=1,
+                   help="local processes checking the boxes of a round (default 1; "
+                        f"{JOBS_HELP}); each builds the parametric model once, which on the "
+                        "UAV costs more than the checks it shares out")
     p.add_argument("--dask", metavar="ADDRESS", type=dask_address,
                    help="check the boxes on a Dask cluster (scheduler address) instead")
     p.add_argument("--via", choices=VIAS, default="prism",
@@ -164,11 +173,13 @@ def check_params(low: Lowered, box: dict[str, tuple[float, float]]) -> None:
 
 def run(args: argparse.Namespace) -> int:
     t0 = time.perf_counter()
-    if not 0.0 < args.coverage <= 1.0:
-        usage_error(f"--coverage {args.coverage}: a fraction in (0, 1]")
+    refuse_jobs(args.jobs, args.dask)
+    if args.plot and os.path.splitext(args.plot)[1].lower() not in PLOT_SUFFIXES:
+        # matplotlib draws other formats, or fails after the whole computation
+        usage_error(f"--plot {args.plot}: the name must end in .png or .svg")
     say = None if args.json else (lambda s: print(f"afsmc: {s}", file=sys.stderr, flush=True))
     try:
-        if args.plot:  # said before the run, not after it
+        if args.plot is not None:  # said before the run, not after it
             check_writable(args.plot, protect=(args.file,))
         req = R.parse_requirement(args.require)
         box = parse_params(args.param)
@@ -183,9 +194,13 @@ def run(args: argparse.Namespace) -> int:
             raise _error(codes.E441, "no parameters: pass --param NAME=LO:HI",
                          hint="or declare an interval probability, const prob P = [lo, hi]")
         low = lowered(model, "nondet")
+        # the parametric build has no state limit: a counter too deep is refused before it
+        refuse_deep_build(low, "Storm's parametric build", default_max_states(),
+                          hint="check a smaller instance with --const",
+                          limit_name="the state limit (what the free memory holds)")
         check_params(low, box)
         axes = args.axes.split(",") if args.axes else list(box)[:2]
-        if args.plot and (not 1 <= len(axes) <= 2 or any(a not in box for a in axes)
+        if args.plot is not None and (not 1 <= len(axes) <= 2 or any(a not in box for a in axes)
                           or len(set(axes)) < len(axes)):
             usage_error(f"--axes {args.axes}: name one or two different parameters of "
                         + ", ".join(box))
@@ -193,7 +208,7 @@ def run(args: argparse.Namespace) -> int:
         res = solve(args, low, req, prop, box, say)
         res.from_file = from_file
         res.seconds = time.perf_counter() - t0
-        if args.plot:
+        if args.plot is not None:
             from afsmc.commands.render.regions_plot import plot
 
             write_atomic(args.plot, plot(res, axes, os.path.splitext(args.plot)[1].lstrip(".")),

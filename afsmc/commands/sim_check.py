@@ -10,22 +10,37 @@ import os
 import sys
 
 from afsmc.api.sim_check import sim_check_file
-from afsmc.commands.common import add_consts, add_seed, fail, overrides, print_json, report
+from afsmc.commands.common import (
+    add_consts,
+    add_seed,
+    fail,
+    integer,
+    overrides,
+    print_json,
+    report,
+)
 from afsmc.diagnostics import CompileError
+from afsmc.files import check_writable
 from afsmc.sim.evidence import Evidence
 from afsmc.simlib import registry, sandbox
+
+MAX_RUNS = 10**9  # runs per simulator; the free memory usually bounds them sooner
+MAX_TIMEOUT = 86_400.0  # seconds per simulator: a day
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("file", metavar="FILE", nargs="?", help="the .afsm file")
     add_consts(p)
-    p.add_argument("--runs", type=int, default=10_000, metavar="N",
-                   help="simulation runs per simulator (default 10000)")
+    p.add_argument("--runs", type=integer(2, MAX_RUNS), default=10_000, metavar="N",
+                   help=f"simulation runs per simulator, 2 to {MAX_RUNS:,}, and no more than "
+                        f"the samples of which ({sandbox.BYTES_PER_RUN} bytes a run) fit in "
+                        f"{sandbox.MEMORY_SHARE:.0%} of the free memory (default 10000)")
     add_seed(p)
     p.add_argument("--timeout", type=_seconds, default=sandbox.DEFAULT_TIMEOUT,
                    metavar="SECONDS",
-                   help="stop a simulator that runs longer than this, per constant; each runs "
-                        f"in its own process (default {sandbox.DEFAULT_TIMEOUT:g})")
+                   help="stop a simulator that runs longer than this, per constant, at most "
+                        f"{MAX_TIMEOUT:g}; each runs in its own process (default "
+                        f"{sandbox.DEFAULT_TIMEOUT:g})")
     add_judging(p, "runs'")
     p.add_argument("--data-root", metavar="DIR",
                    help="the folder `from data` files must lie under (default: the spec's "
@@ -52,9 +67,6 @@ def run(args: argparse.Namespace) -> int:
     if args.file is None:
         print("afsmc sim-check: error: FILE is required (or --list)", file=sys.stderr)
         return 2
-    if args.runs < 2:
-        print("afsmc sim-check: error: --runs must be at least 2", file=sys.stderr)
-        return 2
     if args.data_root is not None and not os.path.isdir(args.data_root):
         print(f"afsmc sim-check: error: --data-root {args.data_root} is not a folder",
               file=sys.stderr)
@@ -72,6 +84,8 @@ def run(args: argparse.Namespace) -> int:
         print(line, file=sys.stderr)
 
     try:
+        if args.update:  # a file it cannot rewrite is said before the runs, not after them
+            check_writable(args.file)
         res = sim_check_file(args.file, overrides(args), runs=args.runs, seed=args.seed,
                              timeout=args.timeout, update=args.update, budget=budget,
                              confidence=args.confidence, progress=say,
@@ -108,8 +122,9 @@ def _seconds(text: str) -> float:
         value = float(text)
     except ValueError:
         value = math.nan
-    if not (math.isfinite(value) and value > 0):
-        raise argparse.ArgumentTypeError(f"expected a positive number of seconds, got {text!r}")
+    if not (math.isfinite(value) and 0 < value <= MAX_TIMEOUT):
+        raise argparse.ArgumentTypeError(f"expected a number of seconds in (0, {MAX_TIMEOUT:g}], "
+                                         f"got {text!r}")
     return value
 
 

@@ -15,17 +15,22 @@ from typing import Any
 from afsmc.api.simulate import Estimates, Simulation, estimates, prepare
 from afsmc.api.simulate import run as run_simulation
 from afsmc.commands.common import (
+    JOBS_HELP,
+    MAX_JOB_TASKS,
     add_consts,
     add_file,
     add_seed,
     answer_json,
     dask_address,
     fail,
+    integer,
     overrides,
+    refuse_jobs,
     report,
     usage_error,
 )
 from afsmc.commands.render.simulate_strategy import followed_text
+from afsmc.commands.sim_check import level
 from afsmc.diagnostics import CompileError, codes
 from afsmc.files import check_writable, read_source, write_atomic
 from afsmc.interrupt import Stopped
@@ -41,12 +46,17 @@ from afsmc.sim.run import (
 )
 from afsmc.text import literal, num
 
+MAX_RUNS = MAX_BATCHES * MAX_BATCH_SIZE
+MAX_STEPS = 10**9  # steps of one run: past it, a run that has not ended is undecided
+MAX_TRACES = 1000  # sample runs kept, each of up to --max-steps states
+
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
     add_file(p)
     add_consts(p)
-    p.add_argument("--runs", type=int, default=100_000, metavar="N",
-                   help="number of runs (default 100000)")
+    p.add_argument("--runs", type=integer(1, MAX_RUNS), default=100_000, metavar="N",
+                   help=f"number of runs, 1 to {MAX_RUNS:,} (default 100000); more than "
+                        f"{MAX_BATCHES:,} batches of --batch-size runs are refused")
     add_seed(p)
     p.add_argument("--resolve", type=_strategy, default="uniform",
                    metavar="{" + ",".join(STRATEGIES) + "}",
@@ -58,19 +68,22 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                         "its own p, uniform in [lo, hi], when it starts (draw, the default); "
                         "or every run at the midpoint (mid), the lower end (min) or the upper "
                         "end (max)")
-    p.add_argument("--confidence", type=float, default=0.999, metavar="C",
-                   help="confidence level of the intervals (default 0.999)")
-    p.add_argument("--max-steps", type=int, default=100_000, metavar="K",
-                   help="stop a run after K steps; undecided runs widen the interval "
-                        "(default 100000)")
-    p.add_argument("--jobs", "-j", type=int, default=1, metavar="J",
-                   help="worker processes (default 1); the estimate does not depend on it")
+    p.add_argument("--confidence", type=level, default=0.999, metavar="C",
+                   help="confidence level of the intervals, in (0, 1) (default 0.999)")
+    p.add_argument("--max-steps", type=integer(1, MAX_STEPS), default=100_000, metavar="K",
+                   help=f"stop a run after K steps, 1 to {MAX_STEPS:,}; undecided runs widen "
+                        "the interval (default 100000)")
+    p.add_argument("--jobs", "-j", type=integer(1, MAX_JOB_TASKS), default=1, metavar="J",
+                   help=f"worker processes (default 1; {JOBS_HELP}); the estimate does not "
+                        "depend on it")
     p.add_argument("--dask", metavar="ADDRESS", type=dask_address,
                    help="spread the batches over the Dask cluster at ADDRESS")
-    p.add_argument("--batch-size", type=int, default=BATCH, metavar="B",
-                   help=f"runs per batch, each with its own seed (default {BATCH})")
-    p.add_argument("--traces", type=int, default=0, metavar="K",
-                   help="print K sample runs in mission terms (modes, actions, variables)")
+    p.add_argument("--batch-size", type=integer(1, MAX_BATCH_SIZE), default=BATCH, metavar="B",
+                   help=f"runs per batch, each with its own seed, 1 to {MAX_BATCH_SIZE:,} "
+                        f"(default {BATCH})")
+    p.add_argument("--traces", type=integer(0, MAX_TRACES), default=0, metavar="K",
+                   help="print K sample runs in mission terms (modes, actions, variables), "
+                        f"0 to {MAX_TRACES:,}")
     p.add_argument("--traces-out", metavar="PATH",
                    help="save the traces to PATH: as the robot's log (docs/robot.md) for a "
                         "name ending in .jsonl (one step a line) or .csv, else as JSON (a "
@@ -83,15 +96,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    if args.runs < 1 or args.jobs < 1 or args.max_steps < 1 or args.batch_size < 1:
-        print("afsmc simulate: error: --runs, --jobs, --max-steps and --batch-size must be "
-              "positive", file=sys.stderr)
-        return 2
-    if args.batch_size > MAX_BATCH_SIZE:
-        print(f"afsmc simulate: error: --batch-size {args.batch_size:,} is more than "
-              f"{MAX_BATCH_SIZE:,} runs (a batch holds each variable of every run of it in "
-              "memory)", file=sys.stderr)
-        return 2
+    refuse_jobs(args.jobs, args.dask)
     count = batch_count(args.runs, args.batch_size)
     if count > MAX_BATCHES:
         print(f"afsmc simulate: error: --runs {args.runs:,} in batches of {args.batch_size:,} "
@@ -103,12 +108,9 @@ def run(args: argparse.Namespace) -> int:
         print(f"afsmc simulate: error: --traces-out {args.traces_out!r}: give a file name "
               "(--traces K prints the sample runs)", file=sys.stderr)
         return 2
-    if args.traces < 0 or (args.traces_out and not args.traces):
-        print("afsmc simulate: error: --traces K needs K >= 0, and --traces-out needs "
-              "--traces K with K >= 1 (the number of runs to save)", file=sys.stderr)
-        return 2
-    if not 0.0 < args.confidence < 1.0:
-        print("afsmc simulate: error: --confidence must be in (0, 1)", file=sys.stderr)
+    if args.traces_out and not args.traces:
+        print("afsmc simulate: error: --traces-out needs --traces K with K >= 1 (the number "
+              "of runs to save)", file=sys.stderr)
         return 2
     if args.traces > args.runs:
         print(f"afsmc simulate: error: --traces {args.traces} asks for more sample runs than "

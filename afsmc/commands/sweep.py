@@ -15,16 +15,25 @@ import sys
 from collections.abc import Callable
 
 from afsmc.api.sweep import sweep_file
-from afsmc.commands.common import add_file, answer_json, dask_address, fail, usage_error
+from afsmc.commands.common import (
+    JOBS_HELP,
+    MAX_JOB_TASKS,
+    add_file,
+    answer_json,
+    dask_address,
+    fail,
+    integer,
+    refuse_jobs,
+    usage_error,
+)
 from afsmc.commands.verify import (
     add_storm_options,
-    positive,
     progress_printer,
     refuse_bisim_on_symbolic,
     storm_options,
 )
 from afsmc.diagnostics import CompileError, Diagnostic, Severity, codes
-from afsmc.files import check_writable, write_atomic
+from afsmc.files import PLOT_SUFFIXES, check_writable, write_atomic
 from afsmc.verify.reports import sweep_verdicts
 from afsmc.verify.reports.sweep import without_kept_note
 from afsmc.verify.reports.sweep_result import SweepResult
@@ -48,8 +57,9 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--plot", metavar="FILE.png|FILE.svg",
                    help="draw min, max and uniform curves (matplotlib); for several constants, "
                         "heat maps of the first two (small multiples over the others)")
-    p.add_argument("--jobs", "-j", type=positive, metavar="N",
-                   help="parallel processes on this machine (default: the number of cores); "
+    p.add_argument("--jobs", "-j", type=integer(1, MAX_JOB_TASKS), metavar="N",
+                   help="parallel processes on this machine (default: the number of cores; "
+                        f"{JOBS_HELP}); "
                         "with --dask, it sizes the tasks instead: points that share one model "
                         "go out in N chunks (4 x N for a time bound), others one per point")
     p.add_argument("--dask", metavar="ADDRESS", type=dask_address,
@@ -101,6 +111,7 @@ def split_consts(items: list[str]) -> tuple[dict[str, str], dict[str, list[Numbe
 
 def run(args: argparse.Namespace) -> int:
     refuse_bisim_on_symbolic(args)
+    refuse_jobs(args.jobs, args.dask)
     fixed, swept = split_consts(args.const)
     if args.bound is not None:
         if swept:
@@ -121,9 +132,9 @@ def run(args: argparse.Namespace) -> int:
                         f"{MAX_POINTS:,}")
         ((variable, values),) = swept.items() if len(swept) == 1 else (("", []),)
         kind = "const"
-    if args.plot and os.path.splitext(args.plot)[1].lower() not in (".png", ".svg"):
+    if args.plot and os.path.splitext(args.plot)[1].lower() not in PLOT_SUFFIXES:
         usage_error(f"--plot {args.plot}: the name must end in .png or .svg")
-    if args.plot and args.output and os.path.realpath(args.plot) == os.path.realpath(args.output):
+    if args.plot is not None and args.output and os.path.realpath(args.plot) == os.path.realpath(args.output):
         usage_error(f"-o and --plot name the same file ({args.output}): the plot would replace "
                     "the CSV")
     to_stdout = args.output == "-"
@@ -143,16 +154,17 @@ def run(args: argparse.Namespace) -> int:
             write_atomic(args.output, text, protect=(args.file,))
             if progress:
                 progress(f"wrote {args.output}")
-        if args.plot:
+        if args.plot is not None:
             res.plot(args.plot, protect=(args.file,))
             if progress:
                 progress(f"wrote {args.plot}")
 
     try:
         # A sweep can take hours: an output it could not write is said before it starts.
-        for out in (args.output, args.plot):
-            if out:
-                check_writable(out, protect=(args.file,))
+        if args.output:
+            check_writable(args.output, protect=(args.file,))
+        if args.plot is not None:
+            check_writable(args.plot, protect=(args.file,))
         res = sweep_file(args.file, variable if len(swept) <= 1 else swept, values, kind=kind,
                          consts=fixed, properties=args.property, formulas=args.formula,
                          jobs=args.jobs, dask=args.dask, progress=progress,

@@ -15,6 +15,7 @@ from afsmc.commands.common import (
     add_reductions,
     answer_json,
     fail,
+    integer,
     overrides,
     reductions,
     report,
@@ -36,21 +37,15 @@ from afsmc.text import literal, num
 from afsmc.verify import VerifyResult
 from afsmc.verify.core.options import VerifyOptions
 from afsmc.verify.core.uncertainty import INTERVAL_CONSTANTS, described
+from afsmc.verify.engines.guard import MAX_STATES_LIMIT
 from afsmc.verify.engines.storm import ENGINES, VIAS
 from afsmc.verify.engines.storm_solvers import SOLVERS
 from afsmc.verify.outcome.results import ModelStats, PropertyResult
 from afsmc.verify.outcome.verdicts import failing
 from afsmc.verify.reports.junit import write_junit
 
-
-def positive(text: str) -> int:
-    try:
-        n = int(text.replace("_", ""))
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a positive integer, got {text!r}") from None
-    if n <= 0:
-        raise argparse.ArgumentTypeError(f"expected a positive integer, got {text!r}")
-    return n
+# --max-states N: 1 to MAX_STATES_LIMIT (the memory guard stops a build sooner)
+positive = integer(1, MAX_STATES_LIMIT)
 
 
 def add_storm_options(p: argparse.ArgumentParser) -> None:
@@ -86,7 +81,8 @@ def add_storm_options(p: argparse.ArgumentParser) -> None:
                         "the memory is that of one check")
     add_reductions(p)
     p.add_argument("--max-states", type=positive, metavar="N",
-                   help="stop (exit 1) if the model has more states than N (default, for "
+                   help="stop (exit 1) if the model has more states than N, at most "
+                        f"{MAX_STATES_LIMIT:,} (default, for "
                         "the sparse engine only: what 70%% of the free memory holds as sparse "
                         "matrices, at most 50 M; the symbolic engines are stopped by the "
                         "memory guard instead)")
@@ -246,7 +242,7 @@ def run(args: argparse.Namespace) -> int:
     refuse_requirement_options(args)
     if (args.strategy or args.witness is not None) and args.bisim:
         usage_error("--strategy and --witness need the built model's states: not with --bisim")
-    if args.traces_out and args.witness is None:
+    if args.traces_out is not None and args.witness is None:
         usage_error("--traces-out writes the --witness paths: give --witness K as well")
     try:
         options = dataclasses.replace(
@@ -257,16 +253,16 @@ def run(args: argparse.Namespace) -> int:
                            formulas=args.formula, progress=progress_printer(args),
                            options=options)
         res = done.raw
-        if args.traces_out:
+        if args.traces_out is not None:
             extras.write_traces(args.traces_out, res, args.file)
         splits = split_file(args.file, overrides(args), args.property, args.formula) \
             if args.causes else {}
         comparison = base.compare(base.read(args.baseline, res.machine), res.to_json(),
                                   args.tolerance, args.baseline) if args.baseline else None
+        if args.junit is not None:
+            write_junit(args.junit, res)
     except CompileError as exc:
         return fail(exc, args.json, wrapped=True)
-    if args.junit:
-        write_junit(args.junit, res)
     if args.json:
         print(answer_json("verify", changes.with_changes(done.to_json(), splits, comparison)))
     else:

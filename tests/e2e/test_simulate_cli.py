@@ -108,7 +108,7 @@ def test_traces_out_without_traces_is_a_usage_error(tmp_path: Path) -> None:
 def test_a_negative_seed_is_a_usage_error(command: str) -> None:
     # numpy takes no negative seed: it was a traceback (simulate) or blamed a simulator (E505)
     r = run_cli(command, str(PATROL), "--seed", "-1", "--runs", "10")
-    assert r.code == 2 and "--seed: expected an integer >= 0, got '-1'" in r.err, r.err
+    assert r.code == 2 and "--seed: expected an integer from 0 to" in r.err, r.err
 
 
 def test_options_that_would_be_ignored_are_refused_or_honoured() -> None:
@@ -120,8 +120,12 @@ def test_options_that_would_be_ignored_are_refused_or_honoured() -> None:
     assert r.code == 2 and "takes no FILE" in r.err
     # usage errors, before any run: --runs 10^14 (1.5e9 seeds, out of memory), a huge
     # --batch-size (an array per variable), and '' or '-' as the traces' file
-    for argv, said in ((["--runs", str(10**14)], "1,525,878,907 batches, more than 100,000"),
-                       (["--batch-size", str(10**8)], "--batch-size 100,000,000 is more"),
+    for argv, said in ((["--runs", str(10**14)], "--runs: expected an integer from 1 to "
+                        "100,000,000,000"),
+                       (["--runs", str(10**9), "--batch-size", "1"],
+                        "1,000,000,000 batches, more than 100,000"),
+                       (["--batch-size", str(10**8)], "--batch-size: expected an integer "
+                        "from 1 to 1,000,000"),
                        (["--traces", "1", "--traces-out", ""], "--traces-out '': give a file"),
                        (["--traces", "1", "--traces-out", "-"], "--traces-out '-': give a")):
         r = run_cli("simulate", str(PATROL), *argv)

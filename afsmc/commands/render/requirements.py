@@ -50,11 +50,12 @@ def refuse_requirement_options(args: argparse.Namespace) -> None:
     if args.precision is not None and args.engine == "dd":
         usage_error("the dd engine has no sound method, so --precision cannot hold: use "
                     "--engine sparse, hybrid or auto")
-    if args.junit:
-        try:
-            check_writable(args.junit, protect=(args.file,))
-        except CompileError as exc:
-            raise SystemExit(fail(exc, args.json)) from None
+    try:  # said before the checks, not after them
+        for out in (args.junit, args.traces_out):
+            if out is not None:
+                check_writable(out, protect=(args.file,))
+    except CompileError as exc:
+        raise SystemExit(fail(exc, args.json, wrapped=True)) from None
 
 
 def with_verdicts(rows: list[list[str]], results: Sequence[PropertyResult]) -> list[list[str]]:

@@ -6,11 +6,12 @@ import argparse
 import json
 import math
 
+from afsmc.commands.common import integer
 from afsmc.files import write_atomic
 from afsmc.text import literal, num, plural
 from afsmc.verify import VerifyResult
 from afsmc.verify.outcome.results import PropertyResult
-from afsmc.verify.outcome.strategy import DIRECTIONS
+from afsmc.verify.outcome.strategy import DIRECTIONS, MAX_WITNESSES
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
@@ -19,9 +20,9 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    help="for an MDP, show Storm's min and max strategies in the mission's "
                         "terms: which interval constant takes its floor or its ceiling, in "
                         "which action and mode, in how many states (sparse engine)")
-    g.add_argument("--witness", type=int, metavar="K",
+    g.add_argument("--witness", type=integer(1, MAX_WITNESSES), metavar="K",
                    help="the K most probable paths into the target of the property (name "
-                        "it with -p NAME), as mission traces")
+                        f"it with -p NAME), as mission traces; K from 1 to {MAX_WITNESSES:,}")
     g.add_argument("--witness-dir", choices=DIRECTIONS, metavar="{min,max}",
                    help="for an MDP, the strategy the --witness paths follow (default: "
                         "max, or the property's own Pmin/Pmax)")

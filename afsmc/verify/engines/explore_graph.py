@@ -107,6 +107,41 @@ def _found(sorted_keys: I64, keys: I64) -> Bools:
     return out
 
 
+class _Keys:
+    """The keys a bucket has found so far, as a few sorted runs whose sizes at least halve
+    from one to the next (merged like the digits of a binary counter): adding a round's
+    keys costs about their number times the log of the total, not a sort of everything
+    found so far, which made a long chain (a round or two of new states per step)
+    quadratic."""
+
+    def __init__(self, first: I64) -> None:
+        self.runs: list[I64] = [first]
+        self.size = len(first)
+
+    def add(self, keys: I64) -> None:
+        """Add sorted keys, none of them present already."""
+        self.runs.append(keys)
+        self.size += len(keys)
+        while len(self.runs) > 1 and len(self.runs[-2]) <= 2 * len(self.runs[-1]):
+            last = self.runs.pop()
+            # two sorted runs: the stable sort (timsort) merges them in linear time
+            self.runs[-1] = np.sort(np.concatenate([self.runs[-1], last]), kind="stable")
+
+    def found(self, keys: I64) -> Bools:
+        out = np.zeros(len(keys), bool)
+        for run in self.runs:
+            if len(run):
+                out |= _found(run, keys)
+        return out
+
+    def sorted(self) -> I64:
+        """Every key, sorted."""
+        while len(self.runs) > 1:
+            last = self.runs.pop()
+            self.runs[-1] = np.sort(np.concatenate([self.runs[-1], last]), kind="stable")
+        return self.runs[0]
+
+
 @dataclass
 class Frontiers:
     """What waits to be explored: keys by bucket, and the late ones."""
@@ -123,15 +158,22 @@ class Frontiers:
 
 
 def explore_bucket(c: Compiled, table: ProbTable, start: I64, b: int | None,
-                   waiting: Frontiers, exclude: I64 | None = None) -> tuple[Block, I64, int]:
+                   waiting: Frontiers, exclude: I64 | None = None, *, counted: int = 0,
+                   max_states: int | None = None, rounds: int | None = None
+                   ) -> tuple[Block, I64, int]:
     """The states of bucket `b` reachable from `start` (None: the late states, whose
     successors all stay late, but for those in `exclude`, explored already); successors
-    in other buckets go to `waiting`. The block, its sorted keys and the rounds taken."""
+    in other buckets go to `waiting`. The block, its sorted keys and the rounds taken.
+    Raises TooManyStates as soon as `counted` (the states of earlier buckets) and this
+    bucket's pass `max_states`: a bucket may be deep (a long chain, round after round);
+    with `rounds` (those of earlier buckets), GiveUp as soon as the states come too few
+    per round (see NARROW_ROUNDS), rather than at the end of the chain."""
     none = np.zeros(0, np.int64)
     skip = none if exclude is None else exclude
-    known = _unique(start)
-    known = known[~_found(skip, known)]
-    frontier = known
+    first = _unique(start)
+    first = first[~_found(skip, first)]
+    frontier = first
+    found = _Keys(first)
     parts: list[tuple[I64, Expansion]] = []
     while frontier.size:
         x = expand(c, frontier)
@@ -147,8 +189,13 @@ def explore_bucket(c: Compiled, table: ProbTable, start: I64, b: int | None,
             if earlier.any():
                 waiting.late.append(_unique(x.target[earlier]))
         cand = _unique(x.target[same])
-        frontier = cand[~_found(known, cand) & ~_found(skip, cand)]
-        known = np.sort(np.concatenate([known, frontier]))  # disjoint
+        frontier = cand[~found.found(cand) & ~_found(skip, cand)]
+        found.add(frontier)  # disjoint from what it has
+        if max_states is not None and counted + found.size > max_states:
+            raise TooManyStates(counted + found.size)
+        if rounds is not None:
+            narrow(counted + found.size, rounds + len(parts))
+    known = found.sorted()
     return _block(c, table, known, parts), known, len(parts)
 
 
@@ -271,6 +318,12 @@ class Explored:
 NARROW_ROUNDS = 5000
 NARROW_STATES = 50
 PROGRESS_EVERY = 2.0  # seconds between two progress lines
+
+
+def narrow(count: int, rounds: int) -> None:
+    """GiveUp if `count` states in `rounds` rounds is a long chain (Storm is quicker)."""
+    if rounds > NARROW_ROUNDS and count < NARROW_STATES * rounds:
+        raise GiveUp(f"its states come a few at a time ({count:,} in {rounds:,} rounds)")
 TRIM_BUCKETS = 32  # buckets explored between two trim_heap()
 
 # The explored blocks times this is about the peak of the whole (the arrays assembled and
@@ -300,7 +353,8 @@ def explore(c: Compiled, notify: Notify | None = None, max_states: int | None = 
     while waiting.pending:
         b = min(waiting.pending)
         start = _unique(np.concatenate(waiting.pending.pop(b)))
-        block, known, took = explore_bucket(c, table, start, b, waiting)
+        block, known, took = explore_bucket(c, table, start, b, waiting, counted=count,
+                                            max_states=max_states, rounds=rounds)
         rounds += took
         sink, block = split_sinks(block)
         blocks.append(block)
@@ -310,8 +364,7 @@ def explore(c: Compiled, notify: Notify | None = None, max_states: int | None = 
         held += _nbytes(block) + _nbytes(sink) + known.nbytes
         if max_states is not None and count > max_states:
             raise TooManyStates(count)
-        if rounds > NARROW_ROUNDS and count < NARROW_STATES * rounds:
-            raise GiveUp(f"its states come a few at a time ({count:,} in {rounds:,} rounds)")
+        narrow(count, rounds)
         if max_bytes is not None and held * PEAK_FACTOR > max_bytes:
             raise GiveUp(f"{count:,} states explored so far would need more than the "
                          f"{max_bytes / 1e9:.1f} GB available")
@@ -323,7 +376,8 @@ def explore(c: Compiled, notify: Notify | None = None, max_states: int | None = 
     if waiting.late:
         absorbing = np.sort(np.concatenate([s.keys for s in sinks]))
         block, known, _ = explore_bucket(c, table, np.concatenate(waiting.late), None,
-                                         Frontiers(), absorbing)
+                                         Frontiers(), absorbing, counted=count,
+                                         max_states=max_states)
         if _found(np.concatenate(regular), known).any():
             raise GiveUp("a state reached both before and after its clock went back")
         blocks.append(block)

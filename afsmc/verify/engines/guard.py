@@ -49,6 +49,7 @@ BUDGET_SLACK = 128 << 20
 # Default --max-states: a sparse build plus one check at ~250 bytes per state in 70% of the
 # memory available now, capped so a default run cannot occupy a shared machine for hours.
 DEFAULT_CAP = 50_000_000
+MAX_STATES_LIMIT = 10**10  # the largest --max-states: 1.5 TB of sparse matrices
 
 Progress = Callable[[str], None]
 

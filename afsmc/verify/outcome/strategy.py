@@ -271,6 +271,9 @@ def has_choices(model: ir.Model) -> bool:
     return model.is_nondeterministic or turns_chosen(model)
 
 
+MAX_WITNESSES = 1000  # --witness K: the paths are found one by one and all kept
+
+
 def refuse(message: str, hint: str | None = None) -> CompileError:
     return CompileError([Diagnostic(codes.E415, Severity.ERROR, message, None, hint=hint)])
 
@@ -286,8 +289,9 @@ def check_request(model: ir.Model, props: Sequence[ir.Property], strategy: bool,
     if witness is None:
         return
     name, k = witness
-    if k <= 0:
-        raise refuse(f"--witness {k}: the number of paths must be at least 1")
+    if not 1 <= k <= MAX_WITNESSES:
+        raise refuse(f"--witness {k:,}: the number of paths must be from 1 to {MAX_WITNESSES:,}",
+                     hint="each path is searched for and kept: ask for the few most probable")
     if name is None and len(props) != 1:
         raise refuse(f"--witness {k}: the paths are of one property, and {len(props)} are "
                      "checked", hint="name the property with -p NAME (or give one --formula)")

@@ -166,3 +166,33 @@ def test_a_long_chain_of_single_states_is_left_to_storm(tmp_path: Path) -> None:
     assert any("a few at a time" in s for s in said), said
     r = run(str(spec), engine="sparse", isolate=False, uniform=False)
     assert r.model.engine == "sparse" and r.properties[0].value == 1.0
+
+
+@pytest.mark.timeout(120)
+def test_the_state_limit_stops_a_deep_bucket_within_its_rounds() -> None:
+    """Patrol's corridor of 10^9 cells is one bucket explored round after round: the limit
+    is checked each round, so the exploration stops just past it, not at the bucket's end."""
+    low = lowered(load(str(EXAMPLES / "patrol.afsm"), {"CELLS": "1000000000"}).model, "nondet")
+    names = tuple(n for p in low.model.properties for n, _ in property_variants(low, p))
+    with pytest.raises(explicit.TooMany) as exc:
+        explicit.answer(low, names, "MDP", lambda _e, _d: None, max_states=1000)
+    # a round adds the successors of the last one: a few dozen states in patrol
+    assert 1000 < exc.value.states < 2000
+
+
+def test_a_buckets_keys_grow_in_sorted_runs_that_agree_with_a_set() -> None:
+    """The explorer's key set (sorted runs merged like a binary counter) answers as a
+    Python set does, round after round, and gives every key sorted at the end."""
+    rng = np.random.default_rng(7)
+    pool = rng.permutation(200_000).astype(np.int64)
+    first, at = np.sort(pool[:3]), 3
+    keys, oracle = explore_graph._Keys(first), set(first.tolist())
+    for size in rng.integers(0, 300, 400).tolist():
+        new = np.sort(pool[at:at + size])
+        at += size
+        probe = rng.integers(0, 200_000, 50).astype(np.int64)
+        assert keys.found(probe).tolist() == [int(k) in oracle for k in probe]
+        keys.add(new)
+        oracle |= set(new.tolist())
+        assert keys.size == len(oracle) and len(keys.runs) <= 2 + keys.size.bit_length()
+    assert keys.sorted().tolist() == sorted(oracle)
