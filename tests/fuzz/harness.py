@@ -15,6 +15,7 @@ look slow, and it leaves SIGALRM to pytest-timeout.
 
 from __future__ import annotations
 
+import argparse
 import contextlib
 import io
 import os
@@ -55,13 +56,26 @@ class Verdict:
 
 
 @cache
-def _fast_main() -> None:
-    """afsmc.cli.main builds its argparse parser anew on every call (importing each
-    command); the fuzzer calls it 100,000s of times, so the parser is built once."""
+def _parser() -> argparse.ArgumentParser:
     from afsmc import cli
 
-    parser = cli.build_parser()
-    cli.build_parser = lambda: parser  # type: ignore[assignment]
+    return cli.build_parser()
+
+
+@contextlib.contextmanager
+def _fast_main() -> Iterator[None]:
+    """afsmc.cli.main builds its argparse parser anew on every call (importing each
+    command); the fuzzer calls it 100,000s of times, so the parser is built once, and used
+    only for the fuzzer's own calls: a parser kept for good would hold the commands'
+    functions as they were, and a later test that replaces one would not reach it."""
+    from afsmc import cli
+
+    real = cli.build_parser
+    cli.build_parser = _parser  # type: ignore[assignment]
+    try:
+        yield
+    finally:
+        cli.build_parser = real  # type: ignore[method-assign]
 
 
 @contextlib.contextmanager
@@ -83,7 +97,6 @@ def run_main(argv: list[str], cpu_limit: float = CPU_LIMIT) -> tuple[int | None,
     and what went wrong if anything did."""
     from afsmc.cli import main
 
-    _fast_main()
     out, err = io.StringIO(), io.StringIO()
     code: int | None = None
     failure = None
@@ -91,7 +104,7 @@ def run_main(argv: list[str], cpu_limit: float = CPU_LIMIT) -> tuple[int | None,
     os.environ["AFSMC_TRACEBACK"] = "1"
     try:
         with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err), \
-                _cpu_limit(cpu_limit):
+                _fast_main(), _cpu_limit(cpu_limit):
             try:
                 code = main(argv)
             except SystemExit as exc:  # argparse's usage errors
