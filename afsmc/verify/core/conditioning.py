@@ -72,9 +72,10 @@ def ask(model: ir.Model, props: Sequence[ir.Property]) -> Asked:
     """kappa's query beside `props` (asked in sound mode: requirements or --precision): a
     state reward of 1 and its expected total until the run ends (`_end`). A mission with a
     machine without a final mode has none."""
+    # its query's names (afsmc_steps, and _min, _max for an MDP) must be no one else's
     taken = {p.name for p in props} | {r.name for r in model.rewards}
     end = _end(model)
-    if end is None or STEPS in taken:
+    if end is None or any(n.startswith(STEPS) for n in taken):
         return Asked(model, None)
     span = Span.at_offset(model.source, 0, 0)
     reward = ir.RewardStruct(STEPS, (ir.RewardItem(None, E.TRUE, E.lit(1), span),), span)
