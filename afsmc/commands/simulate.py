@@ -48,7 +48,7 @@ from afsmc.text import literal, num
 
 MAX_RUNS = MAX_BATCHES * MAX_BATCH_SIZE
 MAX_STEPS = 10**9  # steps of one run: past it, a run that has not ended is undecided
-MAX_TRACES = 1000  # sample runs kept, each of up to --max-steps states
+MAX_TRACES = 100_000  # sample runs kept (a robot log for `conform`), each of up to --max-steps states
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:

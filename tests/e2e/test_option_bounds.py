@@ -34,7 +34,7 @@ def _usage_error(argv: list[str], said: str) -> None:
     (["simulate", PATROL, "--jobs", "100000"], "--jobs/-j: expected an integer from 1 to 4,096"),
     (["simulate", PATROL, "--runs", "1000000000000"], "--runs: expected an integer from 1 to"),
     (["simulate", PATROL, "--max-steps", "10000000000"], "--max-steps: expected an integer"),
-    (["simulate", PATROL, "--traces", "5000"], "--traces: expected an integer from 0 to 1,000"),
+    (["simulate", PATROL, "--traces", "200000"], "--traces: expected an integer from 0 to 100,000"),
     (["simulate", PATROL, "--batch-size", "2000000"], "--batch-size: expected an integer"),
     (["simulate", PATROL, "--confidence", "1"], "expected a confidence in (0, 1)"),
     (["simulate", PATROL, "--seed", str(2**64)], "--seed: expected an integer from 0 to"),

@@ -6,6 +6,7 @@ ahead of its states is built again rather than refused."""
 from __future__ import annotations
 
 import json
+import re
 import resource
 import subprocess
 import sys
@@ -96,11 +97,17 @@ def test_auto_with_max_states_builds_explicitly_where_the_symbolic_build_would_c
 @pytest.mark.slow
 @pytest.mark.storm
 @pytest.mark.parametrize("engine", ["auto", "hybrid", "sparse"])
-def test_e405_counts_exactly_and_names_the_large_variables(engine: str) -> None:
+def test_e405_counts_the_states_and_names_the_large_variables(engine: str) -> None:
     r = run_cli("verify", PATROL, "--engine", engine, "--max-states", "100")
     assert r.code == 1
-    assert ("error[E405]: the MDP has 319 states, more than --max-states 100; the largest "
-            "ranges: battery (21 values), cell (5 values), rounds (4 values), 4 modes") in r.err
+    # Storm's build counts all 319; afsmc's explorer stops within its round, past the
+    # limit, and says "at least"
+    said = re.search(r"error\[E405\]: the MDP has (at least )?([0-9,]+) states, more than "
+                     r"--max-states 100; the largest ranges: battery \(21 values\), cell \(5 "
+                     r"values\), rounds \(4 values\), 4 modes", r.err)
+    assert said is not None, r.err
+    n = int(said.group(2).replace(",", ""))
+    assert n == 319 if said.group(1) is None else 100 < n <= 319
     assert "raise --max-states" in r.err
 
 

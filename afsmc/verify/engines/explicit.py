@@ -95,9 +95,10 @@ class Answer:
 
 
 class TooMany(Exception):
-    def __init__(self, states: int) -> None:
+    def __init__(self, states: int, partial: bool = False) -> None:
         super().__init__(states)
         self.states = states
+        self.partial = partial  # at least `states`: the exploration stopped in a round
 
 
 def answer(low: Lowered, names: tuple[str, ...], what: str, notify: Notify,
@@ -124,7 +125,7 @@ def answer(low: Lowered, names: tuple[str, ...], what: str, notify: Notify,
                "Storm builds it")
         return None
     except explore.TooManyStates as exc:
-        raise TooMany(exc.states) from None
+        raise TooMany(exc.states, exc.partial) from None
     built = time.perf_counter() - started
     notify("built", (found.states, found.transitions, built))
     notify("solver", f"the {what} explored by afsmc, acyclic but for self-loops "
@@ -173,7 +174,7 @@ def _view(a: acyclic.Arrays, low: Lowered, layout: explore.Layout,
                                 lambda choice, _row: int(commands[choice]))
 
 
-def fill(job: Any, res: Any, notify: Notify, too_big: Callable[[Any, int], Any]) -> Any:
+def fill(job: Any, res: Any, notify: Notify, too_big: Callable[[Any, int, bool], Any]) -> Any:
     """Answer what the exploration can of a Storm job (afsmc.verify.engines.storm.Job) into its
     result `res`; the job of what is left for Storm, or None if nothing is (or the model
     has too many states: `res.failure` says so)."""
@@ -181,7 +182,7 @@ def fill(job: Any, res: Any, notify: Notify, too_big: Callable[[Any, int], Any])
         ans = answer(job.explicit, job.names, job.what, notify, job.max_states,
                      job.memory_budget, job.extract)
     except TooMany as exc:
-        res.states, res.failure = exc.states, too_big(job, exc.states)
+        res.states, res.failure = exc.states, too_big(job, exc.states, exc.partial)
         return None
     if ans is None:
         return replace(job, explicit=None)

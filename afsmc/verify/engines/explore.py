@@ -53,9 +53,13 @@ class GiveUp(Exception):
 
 
 class TooManyStates(Exception):
-    def __init__(self, states: int) -> None:
+    """More states than the limit; `partial`: counted in a round the explorer stopped, so
+    the model has at least `states`."""
+
+    def __init__(self, states: int, partial: bool = False) -> None:
         super().__init__(states)
         self.states = states
+        self.partial = partial
 
 
 @dataclass(frozen=True)

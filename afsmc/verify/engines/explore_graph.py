@@ -192,7 +192,7 @@ def explore_bucket(c: Compiled, table: ProbTable, start: I64, b: int | None,
         frontier = cand[~found.found(cand) & ~_found(skip, cand)]
         found.add(frontier)  # disjoint from what it has
         if max_states is not None and counted + found.size > max_states:
-            raise TooManyStates(counted + found.size)
+            raise TooManyStates(counted + found.size, partial=True)
         if rounds is not None:
             narrow(counted + found.size, rounds + len(parts))
     known = found.sorted()

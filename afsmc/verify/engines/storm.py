@@ -277,9 +277,11 @@ def _execute(job: Job, notify: Notify) -> JobResult:
     return res
 
 
-def too_big(job: Job, states: int) -> StormFailure:
-    return StormFailure("too-big", f"the {job.what} has {states:,} states, more than "
-                        f"--max-states {job.max_states:,}", states=states)
+def too_big(job: Job, states: int, partial: bool = False) -> StormFailure:
+    """`partial`: `states` were found before the exploration stopped, the model has more."""
+    return StormFailure("too-big", f"the {job.what} has {'at least ' if partial else ''}"
+                        f"{states:,} states, more than --max-states {job.max_states:,}",
+                        states=states)
 
 
 def _parse(stormpy: Any, job: Job) -> tuple[Any, list[Any]] | StormFailure:
