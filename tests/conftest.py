@@ -2,11 +2,14 @@
 
 from __future__ import annotations
 
+import importlib.util
 import io
+import sys
 from collections.abc import Iterator
 from contextlib import redirect_stderr, redirect_stdout
 from dataclasses import dataclass
 from pathlib import Path
+from types import ModuleType
 
 import pytest
 
@@ -48,3 +51,13 @@ def run_cli(*argv: str) -> Result:
 @pytest.fixture
 def cli() -> Iterator[object]:
     yield run_cli
+
+
+def script_module(name: str) -> ModuleType:
+    """scripts/NAME.py imported as module NAME (the generators the docs tests check)."""
+    spec = importlib.util.spec_from_file_location(name, ROOT / "scripts" / f"{name}.py")
+    assert spec is not None and spec.loader is not None
+    module = importlib.util.module_from_spec(spec)
+    sys.modules.setdefault(name, module)
+    spec.loader.exec_module(module)
+    return module

@@ -8,28 +8,15 @@ which takes every examples/*.afsm; `test_the_backend_tests_take_every_example` k
 
 from __future__ import annotations
 
-import importlib.util
 import shutil
-import sys
 from pathlib import Path
-from types import ModuleType
 
 import pytest
 
 import afsmc
-from tests.conftest import EXAMPLES, ROOT, run_cli
+from tests.conftest import EXAMPLES, ROOT, run_cli, script_module
 
-
-def _generator() -> ModuleType:
-    spec = importlib.util.spec_from_file_location("gen_gallery", ROOT / "scripts" / "gen_gallery.py")
-    assert spec is not None and spec.loader is not None
-    module = importlib.util.module_from_spec(spec)
-    sys.modules.setdefault("gen_gallery", module)
-    spec.loader.exec_module(module)
-    return module
-
-
-gen = _generator()
+gen = script_module("gen_gallery")
 FILES = sorted(EXAMPLES.glob("*.afsm"))
 IDS = [p.stem for p in FILES]
 GALLERY = {ex.stem: ex for ex in gen.examples(ROOT)}

@@ -5,25 +5,12 @@ as it is (its hash), the slow one makes them again and compares every byte."""
 from __future__ import annotations
 
 import hashlib
-import importlib.util
-import sys
-from types import ModuleType
 
 import pytest
 
-from tests.conftest import ROOT
+from tests.conftest import ROOT, script_module
 
-
-def _generator() -> ModuleType:
-    spec = importlib.util.spec_from_file_location("gen_report", ROOT / "scripts" / "gen_report.py")
-    assert spec is not None and spec.loader is not None
-    module = importlib.util.module_from_spec(spec)
-    sys.modules.setdefault("gen_report", module)
-    spec.loader.exec_module(module)
-    return module
-
-
-gen = _generator()
+gen = script_module("gen_report")
 
 
 def test_the_report_in_docs_is_of_the_spec_as_it_is() -> None:

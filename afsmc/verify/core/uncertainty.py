@@ -152,11 +152,16 @@ def reach_bounds(model: ir.Model, targets: Sequence[tuple[str, E.Expr]], *,
     return {e.name: (e.min_attained, e.max_attained) for e in found}
 
 
+def _midpoint(r: PropertyResult) -> Reference:
+    """`r`'s answer, made with the interval probabilities at their midpoint, as a reference."""
+    return Reference("midpoint", r.min, r.max, r.value, r.uniform, dict(r.exact))
+
+
 def _widened(r: PropertyResult, e: parametric.Extreme) -> PropertyResult:
     """`r` with its midpoint answer as its reference and the bounds of `e` as its min and
     max."""
     return dataclasses.replace(
-        r, reference=Reference("midpoint", r.min, r.max, r.value, r.uniform, dict(r.exact)),
+        r, reference=_midpoint(r),
         min=e.min_attained, max=e.max_attained, value=None, uniform=None, exact={},
         attained_at={"min": dict(e.min_at), "max": dict(e.max_at)})
 
@@ -166,7 +171,7 @@ def kept_at_midpoint(checks: Checks) -> tuple[list[Diagnostic], Partial]:
     already made at their midpoint: each answer as its reference (never as the bounds,
     which are what failed), and a note that says them."""
     props = [dataclasses.replace(
-        r, reference=Reference("midpoint", r.min, r.max, r.value, r.uniform, dict(r.exact)),
+        r, reference=_midpoint(r),
         min=None, max=None, value=None, uniform=None, exact={}) for r in checks.properties]
     said = "; ".join(
         f"{r.name} " + ", ".join(f"{k} {num(v)}" for k in ("min", "max", "value", "uniform")
