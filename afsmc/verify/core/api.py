@@ -55,7 +55,6 @@ class Loaded:
     model: ir.Model
     warnings: list[Diagnostic]
     adhoc: list[str]
-    checked: Checked
 
 
 def parse_formulas(formulas: Sequence[str], text: str,
@@ -88,7 +87,7 @@ def load_with_formulas(path: str, overrides: Mapping[str, str] | None = None,
     else:
         queries = parse_formulas(formulas, checked.model.source.text)
     full = with_properties(checked, queries, run_checks=run_checks)
-    return Loaded(full.model, list(full.diagnostics), [n for n, _ in queries], full)
+    return Loaded(full.model, list(full.diagnostics), [n for n, _ in queries])
 
 
 def select(model: ir.Model, names: Sequence[str], adhoc: Sequence[str] = ()) -> list[ir.Property]:
