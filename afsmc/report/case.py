@@ -14,6 +14,7 @@ import platform
 import re
 import shlex
 from collections.abc import Callable, Mapping, Sequence
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
 
 from afsmc import __version__
@@ -32,11 +33,15 @@ from afsmc.report.sensitivity import Sensitivity, sensitivities
 from afsmc.sim.evidence import Evidence
 from afsmc.verify.core.api import load_with_formulas, select, sound_mode
 from afsmc.verify.core.options import VerifyOptions
+from afsmc.verify.engines.guard import mem_available
 from afsmc.verify.outcome.results import PropertyResult, VerifyResult
 from afsmc.verify.outcome.strategy import StrategyEntry, has_choices
 
 Say = Callable[[str], None]
 PATHS = 3  # the most probable paths shown into each failure property's largest cause
+# the shares of the free memory the verification and the causes, which run side by
+# side, may take (verify alone takes 70%: afsmc.verify.engines.jobs)
+VERIFY_SHARE, CAUSES_SHARE = 0.45, 0.3
 
 
 @dataclass(frozen=True)
@@ -187,12 +192,12 @@ def drawn(model: ir.Model, res: VerifyResult) -> tuple[str, str]:
     return re.sub(r"<!--.*?-->\n?", "", svg, flags=re.S), ""
 
 
-def causes_of(model: ir.Model, res: VerifyResult, say: Say) -> tuple[dict[str, list[Split]],
-                                                                     list[str]]:
-    """The causes of every failure property (for the report's "How it fails"), and why
-    the other reachability properties are not there."""
+def causes_of(model: ir.Model, checked_names: set[str], say: Say,
+              max_bytes: int | None = None) -> tuple[dict[str, list[Split]], list[str]]:
+    """The causes of every failure property among those verified (`checked_names`, for
+    the report's "How it fails"), and why the other reachability properties are not
+    there. `max_bytes`: the memory their model may take (afsmc.report.causes)."""
     notes = []
-    checked_names = {p.name for p in res.properties}
     wanted = []
     for prop in model.properties:
         if not splittable(prop) or prop.name not in checked_names:
@@ -206,7 +211,7 @@ def causes_of(model: ir.Model, res: VerifyResult, say: Say) -> tuple[dict[str, l
         return {}, notes
     say("causes of " + ", ".join(p.name for p in wanted))
     try:
-        splits = split_all(model, wanted, paths=PATHS)
+        splits = split_all(model, wanted, paths=PATHS, max_bytes=max_bytes)
     except CompileError as exc:
         return {}, [*notes, exc.diagnostics[0].message]
     out: dict[str, list[Split]] = {}
@@ -251,10 +256,25 @@ def build(path: str, consts: Mapping[str, str] | None = None, *,
     # .conditioning): there the strategies come from a run of their own
     sound = not opts.exact and sound_mode(select(full.model, properties, full.adhoc),
                                           opts.precision, opts.exact, opts.engine)[0] is not None
+    # the causes come from a model of their own (afsmc.report.causes), so they are split
+    # while the verification runs (in its own process, when the model may be large),
+    # each with a share of the free memory
+    names = {p.name for p in select(full.model, properties, full.adhoc)}
+    pool = ThreadPoolExecutor(1) if causes else None
+    free = mem_available()
+    if pool is not None and free is not None and opts.memory_budget is None:
+        opts = dataclasses.replace(opts, memory_budget=int(free * VERIFY_SHARE))
+    split_later = pool.submit(causes_of, full.model, names, say,
+                              None if free is None else int(free * CAUSES_SHARE)) \
+        if pool else None
     say("verifying")
-    res = verify_file(path, list(properties), text=text, consts=consts, checked=checked,
-                      options=dataclasses.replace(opts, strategy=plays and not sound),
-                      formulas=list(formulas), progress=progress).raw
+    try:
+        res = verify_file(path, list(properties), text=text, consts=consts, checked=checked,
+                          options=dataclasses.replace(opts, strategy=plays and not sound),
+                          formulas=list(formulas), progress=progress).raw
+    finally:
+        if pool is not None:
+            pool.shutdown(wait=True)
     plans = res
     if plays and sound:
         say("the strategies")
@@ -263,7 +283,7 @@ def build(path: str, consts: Mapping[str, str] | None = None, *,
                             formulas=list(formulas)).raw
     strategies = {p.name: p.strategy for p in plans.properties if p.strategy is not None}
     svg, svg_note = drawn(model, res)
-    split, notes = causes_of(full.model, res, say) if causes else (None, [])
+    split, notes = split_later.result() if split_later is not None else (None, [])
     evidence: list[Evidence] = []
     if recheck:
         say(f"sim-check, {recheck:,} runs per constant")

@@ -35,6 +35,7 @@ from afsmc.lower.lowering import Branch, Command, Lowered
 from afsmc.model import expr as E
 from afsmc.model import ir
 from afsmc.model.semantics import inline
+from afsmc.report import causes_pass
 from afsmc.verify.core.api import load_with_formulas, select
 from afsmc.verify.engines.strategy_storm import Extract, Extracted, WitnessRequest
 from afsmc.verify.outcome.strategy import extract_for
@@ -242,14 +243,18 @@ class _Asked:
     prop: ir.Property
     whole: dict[Under, str]
     parts: dict[tuple[Kind, str, str, int], str]
+    var: str  # the cause variable
+    numbers: dict[tuple[Kind, str, str, int], int]  # each part's value of it
 
 
 def split_all(model: ir.Model, props: Sequence[ir.Property], *,
-              low: Lowered | None = None, paths: int = 0) -> dict[str, list[Split]]:
+              low: Lowered | None = None, paths: int = 0,
+              max_bytes: int | None = None) -> dict[str, list[Split]]:
     """:func:`split` of several properties on one model: each gets a cause variable of
     its own, and Storm builds the model once for all. `paths`: with each property's
     split under its max (a DTMC: its only one), the `paths` most probable paths into its
-    largest cause."""
+    largest cause. `max_bytes`: the most memory afsmc's own exploration of the
+    instrumented model may take (E417 past it; None: no limit)."""
     bad = [p for p in props if why_not(model, p) is not None]
     if bad:
         raise CompileError([d for p in bad for d in _refusal(model, p).diagnostics])
@@ -278,9 +283,11 @@ def split_all(model: ir.Model, props: Sequence[ir.Property], *,
                                 E.Binary("==", cause, E.lit(k), E.Type.BOOL))
             path = dataclasses.replace(prop.path, target=restricted)
             parts[key] = formula_text(dataclasses.replace(prop, path=path), "", p)
-        asked.append(_Asked(prop, whole, parts))
+        asked.append(_Asked(prop, whole, parts, var, dict(numbering.keys)))
     extract = extract_for(inst, (), None, None) if paths else None
-    values = _storm(emit(inst, variant_labels=bool(paths)).model, asked, paths, extract)
+    values = _explored(inst, model, asked, opts, paths, extract, max_bytes)
+    if values is None:
+        values = _storm(emit(inst, variant_labels=bool(paths)).model, asked, paths, extract)
     names = model.mode_names
     out: dict[str, list[Split]] = {}
     for a, (got, found) in zip(asked, values, strict=True):
@@ -301,6 +308,29 @@ def split_all(model: ir.Model, props: Sequence[ir.Property], *,
                                 bool(model.prob_intervals)))
         out[a.prop.name] = splits
     return out
+
+
+def _explored(inst: Lowered, model: ir.Model, asked: Sequence[_Asked], opts: list[Under],
+              paths: int, extract: Extract | None, max_bytes: int | None
+              ) -> list[tuple[Shares, Extracted | None]] | None:
+    """The shares by afsmc's own exploration and backward pass (causes_pass), as
+    :func:`_storm` gives them; None where it does not apply: a property with a step bound
+    or of the form `ψ U φ`, or a model the explorer does not take."""
+    wholes = []
+    for a in asked:
+        path = a.prop.path
+        assert isinstance(path, ir.Path)
+        if path.kind != "F" or path.bound is not None:
+            return None
+        wholes.append(inline(path.target, model))
+    got = causes_pass.explored(inst, wholes, [(a.var, [a.numbers[key] for key in a.parts])
+                                              for a in asked], opts, paths, extract,
+                                     max_bytes)
+    if got is None:
+        return None
+    return [({u: (total, dict(zip(a.parts, values, strict=True)))
+              for u, (total, values) in shares.items()}, traced)
+            for a, (shares, traced) in zip(asked, got, strict=True)]
 
 
 def _without(w: Witness, hidden: set[str]) -> Witness:

@@ -72,7 +72,8 @@ def strategy_lines(p: PropertyResult) -> list[str]:
             rows.append([opt, e.constant, f"{e.value} ({e.end})", e.action, e.mode,
                          f"{e.states:,}", f"{e.indifferent:,}", e.when or "-"])
     if len(rows) == 1:
-        out.append("  (no choice: no state the strategies reach resolves an interval constant)")
+        out.append("  (no choice matters: in every state the strategies reach, both ends of "
+                   "each interval constant give the same value)")
         return out
     out += ["  " + line for line in table(rows, {5, 6})]
     return out

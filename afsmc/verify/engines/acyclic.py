@@ -289,12 +289,69 @@ def solve(a: Arrays, q: Query) -> float:
     return solve_many(a, [q])[q.name]
 
 
+@dataclass(frozen=True)
+class Policy:
+    """Memoryless schedulers: `offsets[s, i]` is the choice (number within state s) of
+    scheduler i; `columns[j]` is the scheduler query j follows."""
+
+    offsets: npt.NDArray[np.integer[Any]]
+    columns: I64
+
+
+def schedulers(a: Arrays, queries: list[Query]) -> tuple[list[float], npt.NDArray[np.int32]]:
+    """Each query's value in the initial state (one kind, min and max alike) and its
+    optimal choices (n x queries, each state's first optimal choice, its number within
+    the state), as many queries per pass as GROUP_BYTES allows."""
+    n = len(a.states) - 1
+    best = np.zeros((n, len(queries)), np.int32)
+    out: list[float] = []
+    most = _most(a, n, 12)
+    for i in range(0, len(queries), most):
+        part = queries[i:i + most]
+        got = np.zeros((n, len(part)), np.int32)
+        out += _pass(a, part, got)
+        best[:, i:i + len(part)] = got
+        del got
+    return out, best
+
+
+def evaluate(a: Arrays, queries: list[Query], policy: Policy) -> list[float]:
+    """Each query's value in the initial state under the scheduler of `policy` it
+    follows (`policy.columns`, one per query), as many per pass as GROUP_BYTES allows."""
+    n = len(a.states) - 1
+    most = _most(a, n, 8)
+    out: list[float] = []
+    for i in range(0, len(queries), most):
+        out += _pass(a, queries[i:i + most],
+                     policy=Policy(policy.offsets, policy.columns[i:i + most]))
+    return out
+
+
+def _most(a: Arrays, n: int, per_state: int) -> int:
+    """How many queries one pass takes, at `per_state` bytes per state and query."""
+    return max(1, min(max(a.nbytes, GROUP_BYTES[0]), GROUP_BYTES[1]) // (per_state * max(n, 1)))
+
+
+def scheduler(a: Arrays, q: Query, policy: Policy | None = None) -> tuple[float, I64, F64]:
+    """Query `q`'s value in the initial state, each state's optimal choice (its number in
+    `a`: the first optimal one, as Storm's topological solver keeps) and every state's
+    value; with `policy` (one scheduler), its choices and values under it."""
+    n = len(a.states) - 1
+    best = np.zeros(n, np.int64)
+    value = np.zeros((n, 1))
+    result = _pass(a, [q], None if policy is not None else best, value, policy)[0]
+    if policy is not None:
+        best[:] = policy.offsets[:, int(policy.columns[0])]
+    best += a.states[:-1]
+    return result, best, value[:, 0]
+
+
 def solve_many(a: Arrays, queries: list[Query]) -> dict[str, float]:
     """Each query's value in the initial state. Queries of the same kind share their
     passes (the values of each state side by side, a min and a max alike), as many at a
     time as GROUP_BYTES allows."""
     n = len(a.states) - 1
-    most = max(1, min(max(a.nbytes, GROUP_BYTES[0]), GROUP_BYTES[1]) // (8 * max(n, 1)))
+    most = _most(a, n, 8)
     groups: dict[str, list[Query]] = {}
     for q in queries:
         groups.setdefault(q.kind, []).append(q)
@@ -306,14 +363,16 @@ def solve_many(a: Arrays, queries: list[Query]) -> dict[str, float]:
     return {q.name: out[q.name] for q in queries}
 
 
-def _pass(a: Arrays, qs: list[Query], best: npt.NDArray[np.int64] | None = None,
-          value: F64 | None = None) -> list[float]:
+def _pass(a: Arrays, qs: list[Query], best: npt.NDArray[np.integer[Any]] | None = None,
+          value: F64 | None = None, policy: Policy | None = None) -> list[float]:
     """One pass over the layers for queries of one kind, from the absorbing states back
     to the initial one: per layer, the choices' values are one sparse product (its
     branches' probabilities times their successors' values), then each state's is the
-    min or max over its choices. With `best` (one query): each state's first choice
-    (number within the state) whose value is the optimum, which is the choice Storm's
-    topological solver keeps; with `value` (n x 1): every state's value."""
+    min or max over its choices. With `best` (n, or n x queries): each state's first
+    choice (number within the state) whose value is the optimum of each query, which is
+    the choice Storm's topological solver keeps; with `value` (n x queries): every
+    state's value. With `policy`, no optimum: each query's states take the choices of
+    its policy."""
     from scipy.sparse import csr_matrix
 
     k, n = len(qs), len(a.states) - 1
@@ -340,7 +399,10 @@ def _pass(a: Arrays, qs: list[Query], best: npt.NDArray[np.int64] | None = None,
             if s.any():
                 with np.errstate(divide="ignore", invalid="ignore"):
                     per_choice = np.where(s >= 1.0, stuck, per_choice / (1.0 - s))
-        if c1 - c0 == hi - lo:
+        if policy is not None:
+            picked = (a.states[lo:hi] - c0)[:, None] + policy.offsets[lo:hi][:, policy.columns]
+            per_state = per_choice[picked, np.arange(k)]
+        elif c1 - c0 == hi - lo:
             per_state = per_choice
         else:
             # the optimum of each state's j-th choice (its last, past its count) over j:
@@ -354,7 +416,12 @@ def _pass(a: Arrays, qs: list[Query], best: npt.NDArray[np.int64] | None = None,
             if not low.all():
                 per_state *= sign
         if best is not None:
-            best[lo:hi] = _first_best(per_choice[:, 0], per_state[:, 0], a.states[lo:hi + 1] - c0)
+            offsets = a.states[lo:hi + 1] - c0
+            if best.ndim == 1:
+                best[lo:hi] = _first_best(per_choice[:, 0], per_state[:, 0], offsets)
+            else:
+                for j in range(k):
+                    best[lo:hi, j] = _first_best(per_choice[:, j], per_state[:, j], offsets)
         value[lo:hi] = np.where(np.stack([t[lo:hi] for t in on_target], axis=1), reached,
                                 per_state)
     return [float(v) for v in value[a.initial]]
@@ -433,3 +500,15 @@ def prepare(stormpy: Any, model: Any, p: Plan) -> Arrays | None:
     export is not of the expected form)."""
     raw = read(stormpy, model, p)
     return None if raw is None else arrange(raw)
+
+
+def pick(v: Vec, at: I64) -> F64:
+    """The entries `at` of a vector (a Sparse one's by a search in its sorted non-zeros)."""
+    if isinstance(v, Sparse):
+        out = np.zeros(len(at))
+        if len(v.at):
+            pos = np.minimum(np.searchsorted(v.at, at), len(v.at) - 1)
+            hit = v.at[pos] == at
+            out[hit] = v.values[pos[hit]]
+        return out
+    return np.asarray(v[at], np.float64)

@@ -138,7 +138,7 @@ def answer(low: Lowered, names: tuple[str, ...], what: str, notify: Notify,
     else:  # one query at a time, with its strategies and paths
         out = Extracted()
         values = strategy_arrays.solve(found.arrays, p.queries, extract,
-                                       _view(found.arrays, low, compiled.layout, extract), out,
+                                       view(found.arrays, low, compiled.layout, extract), out,
                                        notify)
     secs = (time.perf_counter() - t0) / len(p.queries)
     for q in p.queries:
@@ -147,7 +147,7 @@ def answer(low: Lowered, names: tuple[str, ...], what: str, notify: Notify,
                   found.transitions, built, p.left, out)
 
 
-def _view(a: acyclic.Arrays, low: Lowered, layout: explore.Layout,
+def view(a: acyclic.Arrays, low: Lowered, layout: explore.Layout,
           extract: Extract) -> strategy_arrays.View:
     """The explored states' values from their keys, the choices' commands as explored;
     the variables in the order of Storm's valuations (the mode, the integers, the

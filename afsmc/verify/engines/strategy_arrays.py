@@ -21,8 +21,9 @@ The arrays come from one of two places, each read through a :class:`View`:
   each variable, which Storm builds at a byte per 8 states, instead of its state
   valuations (a vector per state: 1.7 GB more on scenario 2).
 
-Only what this route covers is sent here (:func:`covers`): probabilities of `F target`
-without a bound, no witness into other target states. The rest, and a model with cycles,
+Only what this route covers is sent here (:func:`covers`): strategies of probabilities
+and expected rewards of `F target` without a bound, witnesses of those probabilities (not
+into other target states). The rest, and a model with cycles,
 stays on Storm's route (:mod:`afsmc.verify.engines.strategy_storm`).
 """
 
@@ -56,8 +57,10 @@ def covers(extract: Extract, queries: list[acyclic.Query]) -> bool:
     w = extract.witness
     if w is not None and (w.target is not None or w.avoid):
         return False
-    return all(kinds.get(q) == "P" and (q in extract.strategies or q == extract.policy
-                                        or (w is not None and q == w.query))
+    # a strategy (or the policy) of a probability or an expected reward: the pass's first
+    # optimal choice; a witness: paths into the target of a probability only
+    return all(kinds.get(q) == "P" if w is not None and q == w.query
+               else kinds.get(q) in ("P", "R") and (q in extract.strategies or q == extract.policy)
                for q in extract.queries)
 
 
@@ -244,15 +247,11 @@ def solve(a: acyclic.Arrays, queries: list[acyclic.Query], extract: Extract, vie
 def extract_query(a: acyclic.Arrays, q: acyclic.Query, extract: Extract, view: View,
                   out: Extracted) -> float:
     """Query `q`'s value, and its strategy and paths as `extract` asks, into `out`."""
-    n = len(a.states) - 1
-    best = np.zeros(n, np.int64)
-    value = np.zeros((n, 1))
-    result = acyclic._pass(a, [q], best, value)[0]
-    chosen = a.states[:-1] + best  # each state's choice (the pass's numbering)
-    del best
+    result, chosen, value = acyclic.scheduler(a, q)  # chosen: each state's choice
     name = q.name
     if name in extract.strategies or name == extract.policy:
-        _tables(a, name, chosen, value[:, 0], extract, view, out)
+        reward = a.rewards[q.reward] if q.kind == "R" else None
+        _tables(a, name, chosen, value, reward, extract, view, out)
     w = extract.witness
     if w is not None and w.query == name:
         out.witness_query = name
@@ -262,12 +261,12 @@ def extract_query(a: acyclic.Arrays, q: acyclic.Query, extract: Extract, view: V
             out.witness_note = f"the {what} is 0: no path reaches a target state{under}"
             return result
         target = a.labels[umb.LABEL + str(q.target)]
-        _Paths(a, chosen, value[:, 0] > 0, target, view).collect(w.k, out)
+        _Paths(a, chosen, value > 0, target, view).collect(w.k, out)
     return result
 
 
 def _tables(a: acyclic.Arrays, name: str, chosen: I64, value: npt.NDArray[np.float64],
-            extract: Extract, view: View, out: Extracted) -> None:
+            reward: acyclic.Vec | None, extract: Extract, view: View, out: Extracted) -> None:
     """The strategy's decisions in the states it reaches: summarised (groups) or whole
     (the policy)."""
     assert a.order is not None
@@ -280,7 +279,7 @@ def _tables(a: acyclic.Arrays, name: str, chosen: I64, value: npt.NDArray[np.flo
         for i in range(0, len(states), CHUNK):
             part = states[i:i + CHUNK]
             for g in _groups(view.variant(chosen[part]), view.values(part),
-                             _matters(a, value, part), view.variables):
+                             _matters(a, value, reward, part), view.variables):
                 _merge(merged, g)
         out.groups[name] = [merged[k] for k in sorted(merged)]
     if name == extract.policy:
@@ -318,17 +317,20 @@ def _reached(a: acyclic.Arrays, chosen: I64) -> I64:
     return out
 
 
-def _matters(a: acyclic.Arrays, value: npt.NDArray[np.float64], states: I64) -> Any:
-    """Whether the choices of `states` differ in value: their one-step values (sum of
-    probability x successor's value) differ by more than SAME."""
+def _matters(a: acyclic.Arrays, value: npt.NDArray[np.float64], reward: acyclic.Vec | None,
+             states: I64) -> Any:
+    """Whether the choices of `states` differ in value: their one-step values (the
+    choice's reward of an expected-reward query, plus the sum of probability x
+    successor's value) differ by more than SAME."""
     w = np.where(np.isfinite(value), value, 1e300)
     out = np.zeros(len(states), bool)
     for i in range(0, len(states), acyclic.SPAN):  # a span at a time: bounded temporaries
-        out[i:i + acyclic.SPAN] = _differ(a, w, states[i:i + acyclic.SPAN])
+        out[i:i + acyclic.SPAN] = _differ(a, w, reward, states[i:i + acyclic.SPAN])
     return out
 
 
-def _differ(a: acyclic.Arrays, w: npt.NDArray[np.float64], states: I64) -> Any:
+def _differ(a: acyclic.Arrays, w: npt.NDArray[np.float64], reward: acyclic.Vec | None,
+            states: I64) -> Any:
     c0, c1 = a.states[states], a.states[states + 1]
     choices = acyclic._ranges(c0, c1)
     b0, b1 = a.choices[choices], a.choices[choices + 1]
@@ -336,10 +338,21 @@ def _differ(a: acyclic.Arrays, w: npt.NDArray[np.float64], states: I64) -> Any:
     per_branch = a.prob[branches] * w[a.target[branches]]
     starts = np.concatenate(([0], np.cumsum(b1 - b0)[:-1]))
     per_choice = np.add.reduceat(per_branch, starts) if len(branches) else per_branch
+    if reward is not None and len(choices):
+        per_choice = per_choice + acyclic.pick(reward, choices)
     sstarts = np.concatenate(([0], np.cumsum(c1 - c0)[:-1]))
     lo = np.minimum.reduceat(per_choice, sstarts) if len(choices) else per_choice
     hi = np.maximum.reduceat(per_choice, sstarts) if len(choices) else per_choice
     return np.abs(hi - lo) > SAME * np.maximum(1.0, np.maximum(np.abs(hi), np.abs(lo)))
+
+
+def paths_into(a: acyclic.Arrays, chosen: I64, alive: npt.NDArray[np.bool_], target: Any,
+               view: View, k: int, out: Extracted) -> None:
+    """The `k` most probable paths into the states `target` under the choices `chosen`
+    (through the states `alive` only, from which the target is reached), into `out` as
+    a witness's paths are."""
+    out.variables = view.variables
+    _Paths(a, chosen, alive, target, view).collect(k, out)
 
 
 class _Paths:

@@ -196,3 +196,41 @@ def test_with_interval_probabilities_the_causes_are_the_midpoints(tmp_path: obje
         assert splits[under].summed == pytest.approx(want, abs=1e-9)
     # the bounds over the box are wider than the midpoint's: not what the causes add to
     assert p.min < splits["min"].summed and p.max > splits["max"].summed
+
+
+def test_the_explorers_causes_and_paths_equal_storms(monkeypatch: pytest.MonkeyPatch) -> None:
+    """afsmc's own exploration and backward pass (afsmc.report.causes_pass, the route of
+    a mission whose clock only grows: the UAV's) and Storm's sparse engine on the same
+    instrumented model give the same causes (20 of them into `emergency`), each to
+    1e-12, and the same most probable paths into the largest cause, to the
+    probabilities' last digits. (Patrol has cycles: Storm splits it.)"""
+    from afsmc.report import causes, causes_pass
+
+    model = load(str(EXAMPLES / "uav.afsm"), {"T_LIMIT": "90", "DEADLINE": "90"}).model
+    props = [p for p in model.properties if why_not(model, p) is None]
+    taken: list[bool] = []
+    real = causes_pass.explored
+
+    def spy(*args: object, **kw: object) -> object:
+        got = real(*args, **kw)  # type: ignore[arg-type]
+        taken.append(got is not None)
+        return got
+
+    monkeypatch.setattr(causes_pass, "explored", spy)
+    ours = split_all(model, props, paths=3)
+    assert taken == [True]
+    monkeypatch.setattr(causes, "_explored", lambda *_a, **_k: None)
+    storms = split_all(model, props, paths=3)
+    assert ours.keys() == storms.keys()
+    for name in ours:
+        for a, b in zip(ours[name], storms[name], strict=True):
+            assert a.under == b.under
+            assert a.total == pytest.approx(b.total, abs=1e-12)
+            assert [(c.kind, c.event, c.during, c.mode) for c in a.causes] == [
+                (c.kind, c.event, c.during, c.mode) for c in b.causes]
+            for x, y in zip(a.causes, b.causes, strict=True):
+                assert x.probability == pytest.approx(y.probability, abs=1e-12)
+            assert a.summed == pytest.approx(a.total, abs=1e-12)
+            assert [w.probability for w in a.paths] == pytest.approx(
+                [w.probability for w in b.paths], rel=1e-9)
+            assert a.paths_note == b.paths_note

@@ -340,3 +340,18 @@ def test_storm_s_model_gives_storm_s_strategies_and_paths(monkeypatch: Any) -> N
     assert (ours.model.engine, ours.model.solver) == ("sparse", "acyclic")
     assert _entries(ours, "success") == _entries(storms, "success")
     assert ours.property("success").strategy
+
+
+def test_an_expected_reward_s_strategies_come_from_the_backward_pass_as_storm_s() -> None:
+    """A strategy of an expected reward (`drops`, R [F T]) also comes from afsmc's own
+    exploration and backward pass, and equals Storm's (its topological solver's
+    scheduler): the same ends in the same states, the same counts where they matter."""
+    consts = {"T_LIMIT": 90, "DEADLINE": 90}
+    ours = run(UAV, consts=consts, properties=["drops"], strategy=True, uniform=False,
+               isolate=False)
+    storms = run(UAV, consts=consts, properties=["drops"], strategy=True, uniform=False,
+                 solver="topological", isolate=False)
+    assert (ours.model.engine, ours.model.solver) == ("explicit", "acyclic")
+    assert storms.model.solver == "topological"
+    assert ours.property("drops").strategy
+    assert _entries(ours, "drops", 12) == _entries(storms, "drops", 12)
