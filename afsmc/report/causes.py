@@ -36,6 +36,7 @@ from afsmc.model import expr as E
 from afsmc.model import ir
 from afsmc.model.semantics import inline
 from afsmc.report import causes_pass
+from afsmc.sim.compile import Scope, fold, static
 from afsmc.verify.core.api import load_with_formulas, select
 from afsmc.verify.engines.strategy_storm import Extract, Extracted, WitnessRequest
 from afsmc.verify.outcome.strategy import extract_for
@@ -143,19 +144,41 @@ class _Numbering:
         return self.keys.setdefault((kind, event, during, mode), len(self.keys) + 1)
 
 
-def _entered(cmd: Command, b: Branch, low: Lowered, numbering: _Numbering,
+def _entries(cmd: Command, b: Branch, low: Lowered, target: E.Expr, base: Scope) -> list[int]:
+    """The modes branch `b` of `cmd` may enter `target` in: those where, from a mode of
+    `cmd` in which the target may be false, the target after the branch's updates may be
+    true, as far as the constants and the modes tell (folded); the others cannot be a
+    cause, so they are not numbered (fewer causes: fewer bits in a state, fewer queries)."""
+    dest = dict(b.updates).get("mode")
+    rest = [(v, x) for v, x in b.updates if v != "mode"]
+    out: set[int] = set()
+    for m in dict.fromkeys(cmd.modes):
+        sc = dataclasses.replace(base, mode=m)
+        if _folded(target, sc) is True:  # inside already: no first entry from m
+            continue
+        into = [m] if dest is None else [dest.number] if isinstance(dest, E.ModeVal) \
+            else sorted(low.model.mode_names)
+        for n in into:
+            after = _post(target, [*rest, ("mode", E.ModeVal(low.model.mode_names[n], n))])
+            if _folded(after, sc) is not False:
+                out.add(n)
+    return sorted(out)
+
+
+def _folded(e: E.Expr, sc: Scope) -> object:
+    """`e`'s value when the constants and the mode decide it, else None (also where it
+    reads a constant without a value here: an interval probability's)."""
+    try:
+        return static(fold(e, sc))
+    except KeyError:
+        return None
+
+
+def _entered(modes: list[int], b: Branch, low: Lowered, numbering: _Numbering,
              kind: Kind, event: str, during: str) -> E.Expr:
-    """The number of the cause this branch is, by the mode it enters."""
-    new = dict(b.updates)
-    target = new.get("mode")
-    if target is None:
-        modes = list(dict.fromkeys(cmd.modes))
-        after: E.Expr = E.CurrentMode()
-    elif isinstance(target, E.ModeVal):
-        return E.lit(numbering.of(kind, event, during, target.number))
-    else:
-        modes = sorted(low.model.mode_names)
-        after = target
+    """The number of the cause this branch is, by the mode it enters (one of `modes`)."""
+    dest = dict(b.updates).get("mode")
+    after: E.Expr = E.CurrentMode() if dest is None else dest
     out: E.Expr = E.lit(numbering.of(kind, event, during, modes[-1]))
     for m in reversed(modes[:-1]):
         here = E.Binary("==", after, E.ModeVal(low.model.mode_names[m], m), E.Type.BOOL)
@@ -169,6 +192,9 @@ def instrument(low: Lowered, target: E.Expr, var: str) -> tuple[Lowered, _Number
     numbering = _Numbering()
     was = E.VarRef(var, E.Type.INT)
     fresh = E.Binary("==", was, E.lit(0), E.Type.BOOL)
+    consts: dict[str, object] = {**low.model.const_values,
+                                 **{gen: value for gen, (_, value) in low.bounds.items()}}
+    base = Scope(consts, {}, {}, low.weights)
     commands = []
     for cmd in low.commands:
         if cmd.kind in ("final", "deadlock"):  # self-loops: they enter nothing
@@ -176,6 +202,10 @@ def instrument(low: Lowered, target: E.Expr, var: str) -> tuple[Lowered, _Number
             continue
         branches = []
         for b in cmd.branches:
+            modes = _entries(cmd, b, low, target, base)
+            if not modes:
+                branches.append(b)
+                continue
             # a probabilistic hazard is a branch of the action it strikes; a preemptive
             # one (`hazard H from S when φ`) is a command of its own
             kind: Kind = "hazard" if b.hazard is not None or cmd.kind == "preemptive" \
@@ -183,7 +213,7 @@ def instrument(low: Lowered, target: E.Expr, var: str) -> tuple[Lowered, _Number
             event = b.hazard if b.hazard is not None else cmd.action
             enters = E.conj(fresh, E.neg(target), _post(target, b.updates))
             during = cmd.action if b.hazard is not None else ""
-            value = E.Ite(enters, _entered(cmd, b, low, numbering, kind, event, during), was,
+            value = E.Ite(enters, _entered(modes, b, low, numbering, kind, event, during), was,
                           E.Type.INT)
             branches.append(dataclasses.replace(b, updates=(*b.updates, (var, value))))
         commands.append(dataclasses.replace(cmd, branches=tuple(branches)))
