@@ -50,7 +50,7 @@ def _module(p: PrismPrinter, low: Lowered, net: Network, i: int) -> list[str]:
     out = ["", f"module {agent.name} // {where(agent.span)}"]
     modes = ", ".join(f"{m.name}={m.number}" for m in agent.model.modes)
     out.append(f"  // modes: {modes}")
-    mine = {agent.mode_var, *(agent.prefix + v for v in agent.own)}
+    mine = {agent.mode_var, *(agent.prefix + v for v in agent.own)} - net.global_locals
     for v in model.variables:
         if v.name in mine:
             out.append(_variable(v, "  "))
@@ -99,7 +99,7 @@ def emit_network(low: Lowered) -> PrismOutput:
         out.append(f"formula {f.name} = {p(f.value)}; // {where(f.span)}")
     owned = {part.agent.mode_var for part in net.parts} | {
         part.agent.prefix + v for part in net.parts for v in part.agent.own}
-    shared = [v for v in model.variables if v.name not in owned]
+    shared = [v for v in model.variables if v.name not in owned or v.name in net.global_locals]
     if shared:
         out += ["", "// ---- shared variables"]
     out += [_variable(v, "global ") for v in shared]
