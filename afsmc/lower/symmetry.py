@@ -272,27 +272,24 @@ def _shifted(b: Branch, agents: list[ir.Agent], g: Group, slot: int, model: ir.M
     new = {v: cur(agents[slot], v) for v in g.local}
     new.update({mine[v]: x for v, x in b.updates if v in mine})
     key_new = _key(model, agents[slot], g.local, new)
-    others = [m for m in range(len(agents)) if m != slot]
-    place: E.Expr = E.Lit(0, Type.INT)
-    for m in others:
-        below = E.Binary("<", _key(model, agents[m], g.local,
-                                   {v: cur(agents[m], v) for v in g.local}), key_new, Type.BOOL)
-        place = E.Binary("+", place, E.Ite(below, E.Lit(1, Type.INT), E.Lit(0, Type.INT),
-                                           Type.INT), Type.INT)
+    others = [agents[m] for m in range(len(agents)) if m != slot]
+
+    def below(other: ir.Agent) -> E.Expr:
+        """The other member's local state comes before the moved one's new state."""
+        key = _key(model, other, g.local, {v: cur(other, v) for v in g.local})
+        return E.Binary("<", key, key_new, Type.BOOL)
+
+    # The others are in order, so the new state's place p (how many of them come before
+    # it) exceeds m exactly when the m-th of them comes before it.
     ups = [(v, x) for v, x in b.updates if v not in mine]
     n = len(agents)
     for m in range(n):
         for v in g.local:
             x = _var(model, agents[m], v)
-            after = cur(agents[others[m]], v) if m <= n - 2 else None  # p > m
-            before = cur(agents[others[m - 1]], v) if m >= 1 else None  # p < m
-            here = E.Binary("==", place, E.Lit(m, Type.INT), Type.BOOL)
             value: E.Expr = new[v]
-            if after is not None:
-                value = E.Ite(E.Binary(">", place, E.Lit(m, Type.INT), Type.BOOL), after,
-                              value if before is None else E.Ite(here, value, before, x.type),
-                              x.type)
-            elif before is not None:
-                value = E.Ite(here, value, before, x.type)
+            if m >= 1:  # p <= m: the new state here if p == m, else the (m-1)-th other
+                value = E.Ite(below(others[m - 1]), value, cur(others[m - 1], v), x.type)
+            if m <= n - 2:  # p > m: the m-th other
+                value = E.Ite(below(others[m]), cur(others[m], v), value, x.type)
             ups.append((x.name, value))
     return tuple(ups)
