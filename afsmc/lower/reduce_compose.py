@@ -58,9 +58,9 @@ def reduce_composed(low: Lowered, options: Reductions) -> Lowered:
         low = _reorder(low)
         low = replace(low, reductions=(*low.reductions, "variable order"))
     if options.symmetry:
-        done = reduce_symmetric(low)
-        low = done.lowered if done.refused is None else replace(
-            low, reductions=(*low.reductions, f"no symmetry: {done.refused}"))
+        sym = reduce_symmetric(low)
+        low = sym.lowered if sym.refused is None else replace(
+            low, reductions=(*low.reductions, f"no symmetry: {sym.refused}"))
     return low
 
 

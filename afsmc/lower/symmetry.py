@@ -34,6 +34,7 @@ from __future__ import annotations
 from collections import Counter
 from dataclasses import dataclass, replace
 
+from afsmc.diagnostics import Span
 from afsmc.lower.compose import Network, Part, assemble
 from afsmc.lower.lowering import Branch, Command, Lowered
 from afsmc.model import expr as E
@@ -61,6 +62,7 @@ class Outcome:
     lowered: Lowered
     applied: tuple[str, ...]  # "r1, r2, r3, r4" per group reduced
     refused: str | None  # why not, naming what breaks the symmetry
+    where: Span | None = None  # the property, label or reward that breaks it
 
 
 def reduce_symmetric(low: Lowered) -> Outcome:
@@ -77,7 +79,7 @@ def reduce_symmetric(low: Lowered) -> Outcome:
     for g in groups:
         why = breaks(low, net, g)
         if why is not None:
-            return Outcome(low, (), why)
+            return Outcome(low, (), *why)
     parts = list(net.parts)
     moved: set[str] = set()
     for g in groups:
@@ -195,33 +197,39 @@ def _property(low: Lowered, p: ir.Property, names: dict[str, str]) -> tuple[str,
     return tuple(norm(x, names, low.model) if x is not None else "" for x in parts)
 
 
-def breaks(low: Lowered, net: Network, g: Group) -> str | None:
-    """Why exchanging members of `g` changes the mission or what it asks, or None."""
+def breaks(low: Lowered, net: Network, g: Group) -> tuple[str, Span | None] | None:
+    """Why exchanging members of `g` changes the mission or what it asks (and where that
+    is declared), or None."""
     agents = [net.parts[i].agent for i in g.members]
     who = ", ".join(a.name for a in agents)
     if agents[0].syncs:
         return (f"the agents {who} take part in synchronised actions "
-                f"({', '.join(agents[0].syncs)}), which name each agent's partner")
+                f"({', '.join(agents[0].syncs)}), which name each agent's partner", None)
     same: dict[str, str] = {}
-    base = _commands(low, same, same)
-    for a, b in zip(g.members, g.members[1:], strict=False):
-        names, actions = _swap(net, g, a, b)
+    pairs = [(a, b, _swap(net, g, a, b)) for a, b in zip(g.members, g.members[1:],
+                                                         strict=False)]
+    # what is asked first: a property that reads one agent also keeps that agent's
+    # variables live where the others' are reset, so the commands would differ too
+    for a, b, (names, actions) in pairs:
         pair = f"{net.parts[a].agent.name} and {net.parts[b].agent.name}"
+        for lb in low.model.labels:
+            if norm(lb.value, names, low.model) != norm(lb.value, same, low.model):
+                return f"the label {lb.name} tells {pair} apart", lb.span
+        for r in low.model.rewards:
+            if _rewards(low, r, names, actions) != _rewards(low, r, same, same):
+                return f"the reward structure {r.name} tells {pair} apart", r.span
+        for p in low.model.properties:
+            if _property(low, p, names) != _property(low, p, same):
+                return f"the property {p.name} tells {pair} apart", p.span
+    base = _commands(low, same, same)
+    for a, b, (names, actions) in pairs:
         if _commands(low, names, actions) != base:
+            pair = f"{net.parts[a].agent.name} and {net.parts[b].agent.name}"
             why = ("agents that may move at once move in declaration order ('ties order')"
                    if net.kind == "timed" and net.ties == "order" else
                    "their moves read or are read differently (a guard, an update or another "
                    "agent names one of them)")
-            return f"the mission does not treat {pair} alike: {why}"
-        for lb in low.model.labels:
-            if norm(lb.value, names, low.model) != norm(lb.value, same, low.model):
-                return f"the label {lb.name} tells {pair} apart"
-        for r in low.model.rewards:
-            if _rewards(low, r, names, actions) != _rewards(low, r, same, same):
-                return f"the reward structure {r.name} tells {pair} apart"
-        for p in low.model.properties:
-            if _property(low, p, names) != _property(low, p, same):
-                return f"the property {p.name} tells {pair} apart"
+            return f"the mission does not treat {pair} alike: {why}", None
     return None
 
 

@@ -7,6 +7,8 @@ compiled header, where the mission or a property tells the agents apart."""
 from __future__ import annotations
 
 import os
+import tempfile
+from pathlib import Path
 
 import pytest
 
@@ -19,6 +21,7 @@ from afsmc.verify.outcome.results import VerifyResult
 HERE = os.path.dirname(__file__)
 FLEET4 = os.path.join(HERE, "fleet4.afsm")
 SYMMETRY = Reductions(symmetry=True)
+TEXT = Path(FLEET4).read_text(encoding="utf-8")
 
 
 def _values(r: VerifyResult) -> dict[str, tuple[float | None, float | None, float | None]]:
@@ -38,19 +41,12 @@ def _assert_same(full: VerifyResult, reduced: VerifyResult) -> None:
 
 
 def _header(text: str, reductions: Reductions = SYMMETRY) -> str:
-    model = load(FLEET4).model if text == "" else _load_text(text)
-    out = emit(lowered(model, reductions=reductions)).model
-    return next(line for line in out.splitlines() if line.startswith("// Exact reductions"))
-
-
-def _load_text(text: str) -> object:
-    import tempfile
-
+    """The compiled PRISM header's line of reductions for the mission `text`."""
     with tempfile.TemporaryDirectory() as tmp:
-        path = os.path.join(tmp, "m.afsm")
-        with open(path, "w", encoding="utf-8") as f:
-            f.write(text)
-        return load(path).model
+        path = Path(tmp) / "m.afsm"
+        path.write_text(text, encoding="utf-8")
+        out = emit(lowered(load(str(path)).model, reductions=reductions)).model
+    return next(line for line in out.splitlines() if line.startswith("// Exact reductions"))
 
 
 @pytest.mark.storm
@@ -63,17 +59,12 @@ def test_four_alike_robots_fold_into_a_twelfth_with_the_same_values() -> None:
 
 
 @pytest.mark.storm
-def test_the_uniform_interleaving_keeps_its_values() -> None:
-    text = open(FLEET4, encoding="utf-8").read().replace("compose interleaving;",
-                                                         "compose interleaving uniform;")
-    import tempfile
-
-    with tempfile.TemporaryDirectory() as tmp:
-        path = os.path.join(tmp, "u.afsm")
-        with open(path, "w", encoding="utf-8") as f:
-            f.write(text)
-        full = run(path, isolate=False)
-        reduced = run(path, isolate=False, reductions=SYMMETRY)
+def test_the_uniform_interleaving_keeps_its_values(tmp_path: Path) -> None:
+    path = tmp_path / "u.afsm"
+    path.write_text(TEXT.replace("compose interleaving;", "compose interleaving uniform;"),
+                    encoding="utf-8")
+    full = run(str(path), isolate=False)
+    reduced = run(str(path), isolate=False, reductions=SYMMETRY)
     assert full.model.type == reduced.model.type == "dtmc"
     assert reduced.model.states < full.model.states
     _assert_same(full, reduced)
@@ -88,24 +79,24 @@ def test_the_jani_route_agrees_on_the_quotient() -> None:
 
 
 def test_the_header_names_the_reduction() -> None:
-    assert "symmetry (r1, r2, r3, r4)" in _header("")
-    assert "symmetry" not in _header("", Reductions())
+    assert "symmetry (r1, r2, r3, r4)" in _header(TEXT)
+    assert "symmetry" not in _header(TEXT, Reductions())
 
 
 def test_a_property_naming_one_robot_is_refused_by_name() -> None:
-    text = open(FLEET4, encoding="utf-8").read() + \
+    text = TEXT + \
         "property one = P=? [ F r1.mode == Finished ];\n"
     assert "no symmetry: the property one tells r1 and r2 apart" in _header(text)
 
 
 def test_a_label_naming_one_robot_is_refused_by_name() -> None:
-    text = open(FLEET4, encoding="utf-8").read().replace(
+    text = TEXT.replace(
         "label finished = r1.mode == Finished &&", "label finished = r1.mode == Stranded &&")
     assert "no symmetry: the label finished tells r1 and r2 apart" in _header(text)
 
 
 def test_a_robot_that_starts_apart_stays_out_of_the_group() -> None:
-    text = open(FLEET4, encoding="utf-8").read().replace(
+    text = TEXT.replace(
         "agent Robot() {", "agent Robot(b0) {").replace(
         "init B_FULL clamp", "init b0 clamp").replace(
         "r1 = Robot()", "r1 = Robot(B_FULL - 1)").replace("= Robot()", "= Robot(B_FULL)")
@@ -126,6 +117,21 @@ def test_the_charger_pair_is_refused_with_its_reason() -> None:
 
 
 def test_fairness_is_refused() -> None:
-    text = open(FLEET4, encoding="utf-8").read().replace("compose interleaving;",
+    text = TEXT.replace("compose interleaving;",
                                                          "compose interleaving fair;")
     assert "no symmetry: fairness" in _header(text)
+
+
+@pytest.mark.storm
+def test_verify_notes_a_refusal_at_the_property_and_checks_the_mission_whole(
+        tmp_path: Path) -> None:
+    text = TEXT + "property one = P=? [ F r1.mode == Finished ];\n"
+    path = tmp_path / "one.afsm"
+    path.write_text(text, encoding="utf-8")
+    asked = run(str(path), isolate=False, reductions=SYMMETRY, properties=["one", "shift"])
+    whole = run(str(path), isolate=False, properties=["one", "shift"])
+    notes = [d for d in asked.warnings if d.code == "N421"]
+    assert len(notes) == 1 and "the property one tells r1 and r2 apart" in notes[0].message
+    assert notes[0].span is not None and notes[0].span.line == text.count("\n")
+    assert asked.model.states == whole.model.states
+    _assert_same(whole, asked)
