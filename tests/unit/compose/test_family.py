@@ -93,3 +93,25 @@ def test_a_template_of_two_parameters_is_refused() -> None:
 def test_fmt_prints_a_family_back() -> None:
     assert "agent r[1..N] : Robot;" in format_text(FAMILY)
     assert format_text(format_text(FAMILY)) == format_text(FAMILY)
+
+
+def test_prism_renames_the_module_of_an_alike_instance() -> None:
+    text = _prism(FAMILY)
+    assert "module r2" in text.splitlines()
+    for r in ("r3", "r4"):
+        assert (f"module {r} = r2 [r2_mode={r}_mode, r2_b={r}_b, r2_done={r}_done, "
+                f"r2_Pick={r}_Pick,") in text
+    # the first module holds the mission's self-loop, so it is written out
+    assert "module r1" in text.splitlines()
+
+
+@pytest.mark.storm
+def test_the_renamed_prism_and_the_jani_network_agree() -> None:
+    from afsmc.verify.core.api import run
+
+    prism = run(str(HERE / "fleet4.afsm"), isolate=False)
+    jani = run(str(HERE / "fleet4.afsm"), isolate=False, via="jani")
+    assert prism.model.states == jani.model.states == 60_368
+    for a, b in zip(prism.properties, jani.properties, strict=True):
+        assert a.min is not None and b.min is not None and a.max is not None and b.max is not None
+        assert abs(a.min - b.min) <= 1e-9 and abs(a.max - b.max) <= 1e-9, a.name
