@@ -3,8 +3,9 @@
 For every example: the paragraphs of its leading comment, its mission diagram (`afsmc
 diagram`) and its verified results (`afsmc verify`: min, max and the verdict of each
 property). An example is verified at its default constants, or at those of an optional
-`examples/<name>.gallery.args` (`--const NAME=VALUE` lines, `#` comments, the format of
-`afsmc verify FILE @ARGS`) for one whose default instance takes too long for the page.
+`examples/<name>.gallery.args` (`--const NAME=VALUE` lines and `--symmetry`, `#` comments,
+the format of `afsmc verify FILE @ARGS`) for one whose default instance takes too long for
+the page, or that the page shows larger, reduced by its symmetry.
 
 Usage: python scripts/gen_gallery.py [--check]
 --check writes nothing and exits 1 if the page or a diagram differs from what it would write.
@@ -25,6 +26,7 @@ sys.path.insert(0, str(ROOT))
 
 import afsmc  # noqa: E402
 from afsmc.api.results import Results  # noqa: E402
+from afsmc.lower.reduce import Reductions  # noqa: E402
 from afsmc.text import short  # noqa: E402
 
 PAGE = "docs/gallery.md"
@@ -41,6 +43,7 @@ class Example:
     path: Path
     consts: dict[str, str]
     why: str  # the args file's leading comment: why this instance ("" for the defaults)
+    symmetry: bool = False  # the args file says --symmetry (docs/language.md, "Symmetry")
 
     @property
     def stem(self) -> str:
@@ -60,12 +63,18 @@ def examples(root: Path = ROOT) -> list[Example]:
     out = []
     for path in sorted((root / "examples").glob("*.afsm")):
         consts, why = read_args(args_file(path))
-        out.append(Example(path, consts, why))
+        out.append(Example(path, consts, why, _symmetric(args_file(path))))
     return out
 
 
+def _symmetric(path: Path) -> bool:
+    return path.exists() and "--symmetry" in shlex.split(path.read_text(encoding="utf-8"),
+                                                         comments=True)
+
+
 def read_args(path: Path) -> tuple[dict[str, str], str]:
-    """The `--const NAME=VALUE` of an args file and its leading `#` comment; none if absent."""
+    """The `--const NAME=VALUE` of an args file and its leading `#` comment; none if absent.
+    A `--symmetry` there is read by `_symmetric`."""
     if not path.exists():
         return {}, ""
     text = path.read_text(encoding="utf-8")
@@ -74,7 +83,7 @@ def read_args(path: Path) -> tuple[dict[str, str], str]:
         if not line.startswith("#"):
             break
         why.append(line[1:].strip())
-    tokens = shlex.split(text, comments=True)
+    tokens = [t for t in shlex.split(text, comments=True) if t != "--symmetry"]
     consts: dict[str, str] = {}
     for i in range(0, len(tokens), 2):
         flag, value = tokens[i], tokens[i + 1] if i + 1 < len(tokens) else ""
@@ -117,11 +126,13 @@ def results_table(res: Results) -> list[str]:
 
 def model_line(ex: Example, res: Results) -> str:
     m = res.raw.model
-    args = f" @{ex.args_file.relative_to(ex.path.parent.parent).as_posix()}" if ex.consts else ""
+    args = (f" @{ex.args_file.relative_to(ex.path.parent.parent).as_posix()}"
+            if ex.consts or ex.symmetry else "")
     what = ("an MDP: min and max range over the interval constants' floor/ceil choices"
             if res.kind == "mdp" else "a DTMC: one value per property")
+    sym = " (its alike agents in a canonical order, `--symmetry`)" if ex.symmetry else ""
     return (f"`afsmc verify examples/{ex.path.name}{args}` builds {m.states:,} states and "
-            f"{m.transitions:,} transitions, {what}.")
+            f"{m.transitions:,} transitions{sym}, {what}.")
 
 
 def instance_line(ex: Example, mission: afsmc.Mission) -> str:
@@ -135,7 +146,8 @@ def instance_line(ex: Example, mission: afsmc.Mission) -> str:
 def section(ex: Example) -> tuple[list[str], bytes]:
     """An example's part of the page, and its diagram as SVG."""
     mission = afsmc.load(str(ex.path), consts=ex.consts)
-    res = mission.verify()
+    res = mission.verify(reductions=Reductions(symmetry=True)) if ex.symmetry \
+        else mission.verify()
     svg = mission.diagram().render("svg")
     text = ex.path.read_text(encoding="utf-8")
     lines = [f"## {ex.stem}", "", f"[`examples/{ex.path.name}`](../examples/{ex.path.name})", ""]

@@ -201,7 +201,7 @@ class Results:
         body = "".join("<tr>" + "".join(f"<td>{html.escape(_cell(r[k]))}</td>" for k in shown)
                        + "</tr>" for r in rows)
         m = self.raw.model
-        over = described(self.raw.uncertainty, self.raw.probability)
+        over = described(self.raw.uncertainty, self.raw.probability, self.raw.composition)
         what = (f"min and max bound each property over {html.escape(over)}" if over
                 else "one value per property")
         caption = (f"{html.escape(self.raw.path)}: {what}; {m.states:,} states, "

@@ -5,6 +5,7 @@ parallel composition then takes them together: the product the lowering describe
 from __future__ import annotations
 
 import os
+import re
 
 from afsmc import __version__
 from afsmc.backends.prism import (
@@ -50,7 +51,7 @@ def _module(p: PrismPrinter, low: Lowered, net: Network, i: int) -> list[str]:
     out = ["", f"module {agent.name} // {where(agent.span)}"]
     modes = ", ".join(f"{m.name}={m.number}" for m in agent.model.modes)
     out.append(f"  // modes: {modes}")
-    mine = {agent.mode_var, *(agent.prefix + v for v in agent.own)}
+    mine = {agent.mode_var, *(agent.prefix + v for v in agent.own)} - net.global_locals
     for v in model.variables:
         if v.name in mine:
             out.append(_variable(v, "  "))
@@ -72,6 +73,54 @@ def _module(p: PrismPrinter, low: Lowered, net: Network, i: int) -> list[str]:
         out += _command(p, "", net.stay, E.TRUE)
     out.append("endmodule")
     return out
+
+
+def _names(net: Network, base: int, i: int) -> dict[str, str]:
+    """What renames agent `base`'s module into agent `i`'s: its variables and its own
+    actions' labels (a synchronised action's label, in declaration order)."""
+    a, b = net.parts[base], net.parts[i]
+    names = {a.agent.mode_var: b.agent.mode_var}
+    names.update({a.agent.prefix + v: b.agent.prefix + v for v in a.agent.own})
+    names.update({c.action: c.action.replace(a.agent.prefix, b.agent.prefix, 1)
+                  for c in a.local})
+    if len(a.sync) == len(b.sync):
+        names.update({x: y for (x, _), (y, _) in zip(a.sync, b.sync, strict=True) if x != y})
+    return names
+
+
+def _body(lines: list[str]) -> list[str]:
+    """A module's lines without its header and comments: what a renaming must reproduce."""
+    out = [re.sub(r"\s*//.*$", "", line) for line in lines[2:]]
+    return [line for line in out if line.strip()]
+
+
+def _renaming(net: Network, modules: list[list[str]], i: int) -> list[str] | None:
+    """Agent `i`'s module as PRISM's module renaming of an earlier instance of its
+    template, if renaming that one's variables and labels gives exactly its text (the
+    first module, which also holds the mission's self-loop, is never renamed)."""
+    agent = net.parts[i].agent
+    for base in range(1, i):
+        if net.parts[base].agent.own != agent.own:
+            continue
+        names = _names(net, base, i)
+        if any(v in names.values() for v in _words(modules[base])):
+            continue  # the base reads the agent's own names: no renaming maps onto them
+        renamed = _renamed(_body(modules[base]), names)
+        if renamed == _body(modules[i]) and not _renaming(net, modules, base):
+            pairs = ", ".join(f"{x}={y}" for x, y in names.items())
+            return ["", f"// {agent.name}: {net.parts[base].agent.name} with its names "
+                    f"renamed ({where(agent.span)})",
+                    f"module {agent.name} = {net.parts[base].agent.name} [{pairs}] endmodule"]
+    return None
+
+
+def _renamed(lines: list[str], names: dict[str, str]) -> list[str]:
+    pattern = re.compile(r"\b(" + "|".join(map(re.escape, names)) + r")\b")
+    return [pattern.sub(lambda m: names[m.group(1)], line) for line in lines]
+
+
+def _words(lines: list[str]) -> set[str]:
+    return {w for line in _body(lines) for w in re.findall(r"\w+", line)}
 
 
 def emit_network(low: Lowered) -> PrismOutput:
@@ -99,12 +148,13 @@ def emit_network(low: Lowered) -> PrismOutput:
         out.append(f"formula {f.name} = {p(f.value)}; // {where(f.span)}")
     owned = {part.agent.mode_var for part in net.parts} | {
         part.agent.prefix + v for part in net.parts for v in part.agent.own}
-    shared = [v for v in model.variables if v.name not in owned]
+    shared = [v for v in model.variables if v.name not in owned or v.name in net.global_locals]
     if shared:
         out += ["", "// ---- shared variables"]
     out += [_variable(v, "global ") for v in shared]
-    for i in range(len(net.parts)):
-        out += _module(p, low, net, i)
+    modules = [_module(p, low, net, i) for i in range(len(net.parts))]
+    for i, lines in enumerate(modules):
+        out += _renaming(net, modules, i) or lines
     if model.labels:
         out.append("")
     for lb in model.labels:

@@ -8,6 +8,7 @@ import math
 import os
 import sys
 from collections.abc import Callable, Iterable
+from dataclasses import replace
 
 from afsmc.diagnostics import CompileError, Diagnostic, render_all
 from afsmc.diagnostics import to_json as diags_to_json
@@ -120,14 +121,19 @@ def add_reductions(p: argparse.ArgumentParser) -> None:
                    help="keep the declaration order of variables")
     g.add_argument("--no-saturate", action="store_true",
                    help="keep the full range of growing counters (e.g. mission time)")
+    g.add_argument("--symmetry", action="store_true",
+                   help="keep alike agents of a composed mission in a canonical order (one "
+                   "state per set of their local states), when the mission and every "
+                   "property treat them alike; the header says why not otherwise")
 
 
 def reductions(args: argparse.Namespace) -> Reductions:
+    symmetry = bool(getattr(args, "symmetry", False))
     if getattr(args, "no_reduce", False):
-        return Reductions.none()
+        return replace(Reductions.none(), symmetry=symmetry)
     return Reductions(dead_reset=not getattr(args, "no_dead_reset", False),
                       reorder=not getattr(args, "no_reorder", False),
-                      saturate=not getattr(args, "no_saturate", False))
+                      saturate=not getattr(args, "no_saturate", False), symmetry=symmetry)
 
 
 def overrides(args: argparse.Namespace) -> dict[str, str]:

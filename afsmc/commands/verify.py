@@ -137,9 +137,11 @@ def table(rows: list[list[str]], right: set[int]) -> list[str]:
 
 def _header(res: VerifyResult) -> str:
     """What the table's values are: the bounds over what is uncertain, or one value each."""
-    over = described(res.uncertainty, res.probability)
+    over = described(res.uncertainty, res.probability, res.composition)
     if not over:
-        return f"{res.path}: a DTMC: one value per property"
+        who = (" (who moves next is uniform among the agents that can move)"
+               if res.composition == "interleaving, uniform" else "")
+        return f"{res.path}: a DTMC{who}: one value per property"
     refs = []
     if res.probability is not None:
         refs.append("midpoint has every interval probability at the middle of its interval")

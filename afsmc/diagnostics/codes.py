@@ -203,6 +203,7 @@ E416 = Code("E416", Severity.ERROR, "a strategy needs the sparse engine, and the
 E417 = Code("E417", Severity.ERROR, "a property cannot be split by cause")
 E418 = Code("E418", Severity.ERROR, "the --baseline file cannot be used")
 E420 = Code("E420", Severity.ERROR, "a variable's range is too large for a build without a state limit")
+N421 = Code("N421", Severity.NOTE, "--symmetry was not applied: something tells alike agents apart")
 
 
 # E5xx: simulation and simulation-backed constants

@@ -52,6 +52,9 @@ class Network:
     ties: str
     parts: tuple[Part, ...]
     stay: Command  # the mission's self-loop where no agent can move
+    # agents' own variables that other agents' commands write (the symmetry reduction's
+    # canonical order, afsmc.lower.symmetry): PRISM declares them global
+    global_locals: frozenset[str] = frozenset()
 
 
 def _renamer(agent: ir.Agent) -> Callable[[E.Expr], E.Expr]:

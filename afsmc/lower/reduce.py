@@ -34,6 +34,9 @@ class Reductions:
     dead_reset: bool = True
     reorder: bool = True
     saturate: bool = True
+    # agents alike kept in a canonical order (afsmc.lower.symmetry); asked for, never a
+    # default: it changes which agent a strategy or a path names
+    symmetry: bool = False
 
     @staticmethod
     def none() -> Reductions:
@@ -41,7 +44,7 @@ class Reductions:
 
     def describe(self) -> str:
         on = [n for n, v in (("dead-reset", self.dead_reset), ("saturate", self.saturate),
-                             ("reorder", self.reorder)) if v]
+                             ("reorder", self.reorder), ("symmetry", self.symmetry)) if v]
         return ", ".join(on) if on else "none"
 
 

@@ -112,7 +112,8 @@ def _decides(case: Case, p: PropertyResult) -> str:
     res = case.result
     if name in ("", "value"):
         return "nothing uncertain: one value"
-    over = described(res.uncertainty, res.probability) or "the model's choices"
+    over = described(res.uncertainty, res.probability, res.composition) or \
+        "the model's choices"
     where = ""
     if p.attained_at and name in p.attained_at:
         where = " (attained at " + ", ".join(f"{k} = {number(v)}" for k, v in

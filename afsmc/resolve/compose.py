@@ -28,7 +28,7 @@ MISSION_MODE = "_mission"
 
 
 def is_composed(module: ast.Module) -> bool:
-    return any(isinstance(d, (ast.AgentDecl, ast.AgentsDecl, ast.ComposeDecl))
+    return any(isinstance(d, (ast.AgentDecl, ast.AgentsDecl, ast.FamilyDecl, ast.ComposeDecl))
                for d in module.decls)
 
 

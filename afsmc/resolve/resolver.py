@@ -115,7 +115,7 @@ def _resolve_composed(module: ast.Module, overrides: Mapping[str, str] | None,
     """A mission of several agents: each agent's view and the mission's own module,
     resolved as single machines (afsmc.resolve.compose says how they are made)."""
     rep = Reporter()
-    module = templates.expand(module, rep)
+    module = templates.expand(module, rep, overrides)
     if rep.has_errors:  # an instance not made: what names it would be errors of its own
         raise CompileError(rep.sorted())
     kw, agents, mission = compose.split(module, rep)

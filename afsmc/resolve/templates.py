@@ -15,15 +15,23 @@ about its text points at the template's line; the resolver names the instance in
 from __future__ import annotations
 
 import dataclasses
+from collections.abc import Mapping
 from typing import Any
 
 from afsmc.diagnostics import Reporter, Span, codes
 from afsmc.resolve.compose import rewrite
 from afsmc.syntax import ast
 
+# More agents than a family may make: each is a module of the PRISM output and a factor of
+# the state space; a typo in N should not make a million agents.
+MAX_FAMILY = 64
 
-def expand(module: ast.Module, rep: Reporter) -> ast.Module:
-    """The module with each template left out and each instance an agent of its own."""
+
+def expand(module: ast.Module, rep: Reporter,
+           overrides: Mapping[str, str] | None = None) -> ast.Module:
+    """The module with each template left out and each instance an agent of its own (an
+    indexed family `agent r[1..N] : Robot;` the instances r1 .. rN; `overrides`: the
+    `--const` values its bounds may read)."""
     templates: dict[str, ast.AgentDecl] = {}
     for d in module.decls:
         if isinstance(d, ast.AgentDecl) and d.params is not None:
@@ -35,11 +43,77 @@ def expand(module: ast.Module, rep: Reporter) -> ast.Module:
             _check_params(d, rep)
     decls: list[ast.Decl] = []
     for d in module.decls:
+        if isinstance(d, ast.FamilyDecl):
+            d = _family(d, module, templates, rep, overrides or {})
         if isinstance(d, ast.AgentsDecl):
             decls += [a for i in d.instances if (a := _instance(i, templates, rep)) is not None]
         elif not (isinstance(d, ast.AgentDecl) and d.params is not None):
             decls.append(d)
     return dataclasses.replace(module, decls=tuple(decls))
+
+
+def _family(d: ast.FamilyDecl, module: ast.Module, templates: dict[str, ast.AgentDecl],
+            rep: Reporter, overrides: Mapping[str, str]) -> ast.AgentsDecl:
+    """The family's instances as an `agents` declaration: r1 .. rN, each given its index
+    if the template has a parameter."""
+    lo, hi = (_value(e, module, overrides, d, rep) for e in (d.lo, d.hi))
+    if lo is None or hi is None:
+        return ast.AgentsDecl((), d.span)
+    if not 0 <= lo <= hi or hi - lo + 1 > MAX_FAMILY:
+        rep.error(codes.E253, f"the family {d.name.text}[{lo}..{hi}] must have from 1 to "
+                  f"{MAX_FAMILY} agents, indices from 0 up", d.span,
+                  hint=f"write 'agent {d.name.text}[1..N] : {d.template.text};' with N >= 1")
+        return ast.AgentsDecl((), d.span)
+    template = templates.get(d.template.text)
+    params = () if template is None else template.params or ()
+    if template is not None and len(params) > 1:
+        rep.error(codes.E253, f"the family {d.name.text} gives each agent its index, but the "
+                  f"template {d.template.text} takes {len(params)} parameters", d.span,
+                  hint=f"give {d.template.text} one parameter (the index) or none, or "
+                  "instantiate it with 'agents r1 = ..., r2 = ...;'")
+        return ast.AgentsDecl((), d.span)
+    return ast.AgentsDecl(tuple(
+        ast.Instance(ast.Ident(f"{d.name.text}{i}", d.name.span), d.template,
+                     (ast.Num(i, str(i), d.span),) if params else (), d.span)
+        for i in range(lo, hi + 1)), d.span)
+
+
+def _value(e: ast.Expr, module: ast.Module, overrides: Mapping[str, str],
+           d: ast.FamilyDecl, rep: Reporter) -> int | None:
+    """A family's bound: an integer from numbers, constants and params (`--const` given
+    first) with + - *; None, reported, otherwise."""
+    values: dict[str, ast.Expr | None] = {}
+    for c in module.decls:
+        if isinstance(c, ast.ConstDecl) and not isinstance(c.value, ast.Interval):
+            values[c.name.text] = c.value
+        elif isinstance(c, ast.ParamDecl):
+            values[c.name.text] = c.default
+
+    def go(x: ast.Expr, depth: int) -> int | None:
+        if depth > 32:
+            return None
+        if isinstance(x, ast.Num) and isinstance(x.value, int):
+            return x.value
+        if isinstance(x, ast.Name):
+            name = x.name.text
+            if name in overrides:
+                text = overrides[name].strip()
+                return int(text) if text.lstrip("-").isdigit() else None
+            got = values.get(name)
+            return None if got is None else go(got, depth + 1)
+        if isinstance(x, ast.Binary) and x.op in ("+", "-", "*"):
+            a, b = go(x.left, depth + 1), go(x.right, depth + 1)
+            if a is None or b is None:
+                return None
+            return a + b if x.op == "+" else a - b if x.op == "-" else a * b
+        return None
+    out = go(e, 0)
+    if out is None:
+        rep.error(codes.E253, f"the bounds of the family {d.name.text} must be integers from "
+                  "numbers, constants and params with + - *", e.span,
+                  hint=f"for example 'agent {d.name.text}[1..N] : {d.template.text};' with "
+                  "'param int N = 4;'")
+    return out
 
 
 def _check_params(template: ast.AgentDecl, rep: Reporter) -> None:

@@ -457,8 +457,21 @@ class AgentsDecl:
     span: Span
 
 
+@dataclass(frozen=True)
+class FamilyDecl:
+    """`agent r[1..N] : Robot;`: the agents r1 .. rN, each an instance of the template
+    (its index the template's one parameter, if it has one)."""
+
+    name: Ident
+    lo: Expr
+    hi: Expr
+    template: Ident
+    span: Span
+
+
 Decl = Union[ConstDecl, ParamDecl, VarDecl, ModeDecl, ActionDecl, HazardDecl, FormulaDecl,
-             LabelDecl, RewardsDecl, PropertyDecl, ComposeDecl, AgentDecl, AgentsDecl]
+             LabelDecl, RewardsDecl, PropertyDecl, ComposeDecl, AgentDecl, AgentsDecl,
+             FamilyDecl]
 
 
 @dataclass(frozen=True)

@@ -240,6 +240,9 @@ class Builder(Transformer[Token, Any]):
     def agents_decl(self, meta: Any, c: list[ast.Instance]) -> ast.AgentsDecl:
         return ast.AgentsDecl(tuple(c), self._s(meta))
 
+    def family_decl(self, meta: Any, c: list[Any]) -> ast.FamilyDecl:
+        return ast.FamilyDecl(self._id(c[0]), c[1], c[2], self._id(c[3]), self._s(meta))
+
     def instance(self, meta: Any, c: list[Any]) -> ast.Instance:
         return ast.Instance(self._id(c[0]), self._id(c[1]), tuple(c[2:]), self._s(meta))
 

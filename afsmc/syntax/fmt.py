@@ -450,6 +450,10 @@ class _Formatter:
             for x in d.decls:
                 out.extend(self.decl_units(x, depth + 1))
             out.append(Unit(d.span.end - 1, d.span.end, depth, [pad + "}"], "close"))
+        elif isinstance(d, ast.FamilyDecl):
+            out.append(Unit(d.span.start, d.span.end, depth, [
+                f"{pad}agent {d.name.text}[{self.expr(d.lo)}..{self.expr(d.hi)}] : "
+                f"{d.template.text};"]))
         elif isinstance(d, ast.AgentsDecl):
             parts = [f"{i.name.text} = {i.template.text}({', '.join(self.expr(a) for a in i.args)})"
                      for i in d.instances]

@@ -108,3 +108,11 @@ def test_an_example_at_its_args_is_verified_at_them(tmp_path: Path) -> None:
     assert f"| finish | `P=? [ F \"done\" ]` | {gen.short(finish.min, gen.DIGITS)} | " \
            f"{gen.short(finish.max, gen.DIGITS)} | – |" in text
     assert svg.lstrip().startswith(b"<?xml")
+
+
+def test_an_args_file_may_ask_for_symmetry(tmp_path: Path) -> None:
+    path = tmp_path / "m.gallery.args"
+    path.write_text("# Six.\n--const N=6\n--symmetry\n")
+    assert gen.read_args(path) == ({"N": "6"}, "Six.")
+    assert gen._symmetric(path)
+    assert not gen._symmetric(tmp_path / "none.gallery.args")

@@ -15,9 +15,11 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from afsmc.backends.prism import emit as prism_emit
-from afsmc.compiler import Checked, load, with_properties
+from afsmc.compiler import Checked, load, lowered, with_properties
 from afsmc.diagnostics import CompileError, Diagnostic, Severity, codes
 from afsmc.lower.lowering import Lowered
+from afsmc.lower.reduce import Reductions
+from afsmc.lower.symmetry import reduce_symmetric
 from afsmc.model import ir
 from afsmc.model.names import did_you_mean
 from afsmc.stack import deep
@@ -262,9 +264,25 @@ def run(path: str, options: VerifyOptions | None = None, *,
     consts_used: dict[str, object] = {c.name: c.value for c in model.constants if c.is_param}
     return VerifyResult(path, model.name, consts_used, o.via, o.engine, bound, limit, checks.model,
                         checks.uniform_model, checks.properties, load_time,
-                        time.perf_counter() - t0, loaded.warnings,
+                        time.perf_counter() - t0,
+                        [*loaded.warnings, *symmetry_refused(model, o.reductions)],
                         None if model.composition is None else model.composition.text,
                         checks.uncertainty, checks.probability)
+
+
+def symmetry_refused(model: ir.Model, reductions: Reductions | None) -> list[Diagnostic]:
+    """N421 where `--symmetry` was asked and the mission or a property tells its alike
+    agents apart (afsmc.lower.symmetry): the model was checked without it."""
+    if reductions is None or not reductions.symmetry or model.composition is None:
+        return []
+    out = reduce_symmetric(lowered(model, reductions=dataclasses.replace(reductions,
+                                                                         symmetry=False)))
+    if out.refused is None:
+        return []
+    return [Diagnostic(codes.N421, Severity.NOTE, "no symmetry reduction (the model was "
+                       f"checked whole): {out.refused}", out.where,
+                       hint="docs/language.md, \"Symmetry\": every label, reward and "
+                       "property must treat the alike agents alike")]
 
 
 @dataclass

@@ -183,11 +183,17 @@ def kept_at_midpoint(checks: Checks) -> tuple[list[Diagnostic], Partial]:
     return [note], Partial(checks.model, checks.uniform_model, props)
 
 
-def described(over: Sequence[str], box: ProbabilityBox | None) -> str:
+def described(over: Sequence[str], box: ProbabilityBox | None,
+              composition: str | None = None) -> str:
     """What min and max range over, in words for the front-ends' headers (empty: nothing,
-    a DTMC's one value)."""
+    a DTMC's one value). `composition` (VerifyResult.composition): a fair interleaving
+    says that only fair schedulers count."""
+    order = "the order in which the agents move"
+    if composition == "interleaving, fair":
+        order += (" (fair schedulers only: every agent that stays able to move eventually "
+                  "moves)")
     words = {INTERVAL_CONSTANTS: "the interval constants' floor/ceil choices",
-             AGENT_ORDER: "the order in which the agents move"}
+             AGENT_ORDER: order}
     parts = [words[s] for s in over if s in words]
     if INTERVAL_PROBABILITIES in over and box is not None:
         parts.append("every fixed " + ", ".join(f"{n} in [{lo:g}, {hi:g}]"

@@ -30,7 +30,7 @@ def _storm_builds(monkeypatch: pytest.MonkeyPatch) -> None:
     monkeypatch.setattr("afsmc.verify.core.runner.applies", lambda *_a: False)
 
 EXAMPLE_FILES = sorted(EXAMPLES.glob("*.afsm"))
-CYCLIC = {"patrol", "warehouse"}  # examples with a cycle of more than one state
+CYCLIC = {"fleet", "patrol", "warehouse"}  # examples with a cycle of more than one state
 
 
 def _both(path: str, consts: dict[str, str]) -> tuple[Any, Any]:

@@ -26,7 +26,7 @@ from tests.unit.verify.test_engine_choice import FOREVER, _close, _values
 pytestmark = pytest.mark.storm
 
 EXAMPLE_FILES = sorted(EXAMPLES.glob("*.afsm"))
-CYCLIC = {"patrol", "warehouse"}  # examples with a cycle of more than one state
+CYCLIC = {"fleet", "patrol", "warehouse"}  # examples with a cycle of more than one state
 
 
 def _both(path: str, consts: dict[str, str]) -> tuple[Any, Any]:
