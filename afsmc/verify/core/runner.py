@@ -32,6 +32,7 @@ from afsmc.verify.engines.failures import (
     one_query,
     refuse_symbolic,
     symbolic_gap,
+    writes_shared,
 )
 from afsmc.verify.engines.guard import (
     Interrupted,
@@ -133,7 +134,13 @@ class CheckRun:
         preserve = [dual(p) if bounded_globally(p) else p for p in preserve]
         self.bound = upper_bound(model)
         self.engine, self.reason = choose_engine(engine, self.bound)
-        refuse_symbolic(self.props, model, self.engine)
+        if self.engine == "auto" and options.given.via == "prism" and writes_shared(model):
+            # "auto" would count the states with Storm's symbolic builder, which builds
+            # such a mission's PRISM wrongly (afsmc.verify.engines.failures.writes_shared)
+            self.engine, self.reason = "sparse", (
+                "the agents write shared variables, which Storm's symbolic builder gets "
+                "wrong in PRISM: the sparse engine, under the memory guard")
+        refuse_symbolic(self.props, model, self.engine, options.given.via)
         # Only the hybrid engine needs them ("auto" may still pick it after counting states).
         self.comp = complements(model, self.props) if self.engine in ("hybrid", "auto") else {}
         self.model = dataclasses.replace(model, properties=tuple(self.props) + tuple(
@@ -388,7 +395,7 @@ class ModelLoop:
         errors = self.run.errors
         try:
             refuse_symbolic(list(dict.fromkeys(p for p, _ in unit)), self.run.model,
-                            self.job_engine)
+                            self.job_engine, self.run.options.given.via)
         except CompileError as exc:
             errors.extend(d for d in exc.diagnostics if d not in errors)
         self.failed.update(gaps)

@@ -198,12 +198,14 @@ def symbolic_gap(p: ir.Property, model: ir.Model, engine: Engine) -> str | None:
     return None
 
 
-def refuse_symbolic(props: Sequence[ir.Property], model: ir.Model, engine: Engine) -> None:
+def refuse_symbolic(props: Sequence[ir.Property], model: ir.Model, engine: Engine,
+                    via: str = "prism") -> None:
     """E404 before any build, for what Storm's symbolic engines cannot check (symbolic_gap),
     which they would say only after building, or not at all ("auto" learns its engine in
     the Storm process: Job.symbolic_refused); and, on every engine, for a total reward that
     may be negative, which Storm refuses on an MDP and may answer with the wrong sign on a
-    DTMC (+inf where the runs lose without end)."""
+    DTMC (+inf where the runs lose without end). Also E404 for a symbolic engine via
+    PRISM on a mission whose agents write shared variables (writes_shared)."""
     signed = [(p, name) for p in props if (name := signed_total(p, model)) is not None]
     if signed:
         raise CompileError([Diagnostic(
@@ -215,12 +217,28 @@ def refuse_symbolic(props: Sequence[ir.Property], model: ir.Model, engine: Engin
             for p, name in signed])
     if engine not in ("hybrid", "dd"):
         return
+    if via == "prism" and writes_shared(model):
+        raise CompileError([Diagnostic(
+            codes.E404, Severity.ERROR, f"the {engine} engine cannot check this mission: its "
+            "agents write shared variables, which afsmc's PRISM writes as global variables "
+            "updated by labelled commands, and Storm's symbolic builder builds those wrongly "
+            "(too few states)", model.composition.span if model.composition else None,
+            hint="use --engine sparse (or auto, which builds it sparse), or --via jani")])
     bad = [(p, why) for p in props if (why := symbolic_gap(p, model, engine)) is not None]
     if bad:
         raise CompileError([Diagnostic(
             codes.E404, Severity.ERROR, f"the {engine} engine cannot check '{p.name}', {why}",
             p.span, hint=_symbolic_hint(p)) for p, why in bad])
 
+
+
+def writes_shared(model: ir.Model) -> bool:
+    """Whether a composed mission's agents write shared variables, which its PRISM
+    declares global and updates in labelled commands: Storm's sparse builder builds those
+    right, its symbolic one (dd, hybrid, and the count before "auto" picks) with too few
+    states. (The symmetry reduction's own globals: afsmc.verify.core.runner.)"""
+    c = model.composition
+    return c is not None and any(who for _, who in c.writers)
 
 
 def _symbolic_hint(p: ir.Property) -> str:
