@@ -32,6 +32,7 @@ from afsmc.verify.engines.failures import (
     one_query,
     refuse_symbolic,
     symbolic_gap,
+    symbolic_globals,
     writes_shared,
 )
 from afsmc.verify.engines.guard import (
@@ -147,6 +148,17 @@ class CheckRun:
             p for n, p in sorted(self.comp.items())) + tuple(preserve))
         self.lows: list[tuple[str, Lowered, str]] = []
         first = lowered(self.model, "nondet", reductions)
+        if first.network is not None and first.network.global_locals \
+                and options.given.via == "prism" and self.engine != "sparse":
+            # the symmetry reduction's agents write each other's variables: as shared ones
+            if self.engine == "auto":
+                self.engine, self.reason = "sparse", (
+                    "under the symmetry reduction the agents write each other's variables, "
+                    "which Storm's symbolic builder gets wrong in PRISM: the sparse engine, "
+                    "under the memory guard")
+            else:
+                raise symbolic_globals(self.engine, first.model.composition,
+                                       "each other's variables (--symmetry)")
         self.lows.append(("nondet", first, "MDP" if first.kind == "mdp" else "DTMC"))
         if self.model.is_nondeterministic and uniform:
             # (a composed mission's interleaving stays an MDP: no uniform model then)

@@ -218,18 +218,24 @@ def refuse_symbolic(props: Sequence[ir.Property], model: ir.Model, engine: Engin
     if engine not in ("hybrid", "dd"):
         return
     if via == "prism" and writes_shared(model):
-        raise CompileError([Diagnostic(
-            codes.E404, Severity.ERROR, f"the {engine} engine cannot check this mission: its "
-            "agents write shared variables, which afsmc's PRISM writes as global variables "
-            "updated by labelled commands, and Storm's symbolic builder builds those wrongly "
-            "(too few states)", model.composition.span if model.composition else None,
-            hint="use --engine sparse (or auto, which builds it sparse), or --via jani")])
+        raise symbolic_globals(engine, model.composition)
     bad = [(p, why) for p in props if (why := symbolic_gap(p, model, engine)) is not None]
     if bad:
         raise CompileError([Diagnostic(
             codes.E404, Severity.ERROR, f"the {engine} engine cannot check '{p.name}', {why}",
             p.span, hint=_symbolic_hint(p)) for p, why in bad])
 
+
+
+def symbolic_globals(engine: str, composition: ir.Composition | None,
+                     what: str = "shared variables") -> CompileError:
+    """E404: the symbolic `engine` via PRISM on a mission whose agents write `what`."""
+    return CompileError([Diagnostic(
+        codes.E404, Severity.ERROR, f"the {engine} engine cannot check this mission: its "
+        f"agents write {what}, which afsmc's PRISM writes as global variables updated by "
+        "labelled commands, and Storm's symbolic builder builds those wrongly (too few "
+        "states)", composition.span if composition else None,
+        hint="use --engine sparse (or auto, which builds it sparse), or --via jani")])
 
 
 def writes_shared(model: ir.Model) -> bool:

@@ -7,6 +7,7 @@ by "auto", and via JANI the hybrid engine's values equal the sparse engine's."""
 from __future__ import annotations
 
 import json
+from pathlib import Path
 
 import pytest
 
@@ -44,3 +45,41 @@ def test_auto_builds_such_a_mission_sparse_and_via_jani_hybrid_agrees() -> None:
             continue
         assert jani[name][0] == pytest.approx(lo, rel=1e-5, abs=1e-8)
         assert jani[name][1] == pytest.approx(hi, rel=1e-5, abs=1e-8)
+
+
+TRIO = """machine trio;
+compose interleaving;
+const prob P_GRASP = 0.9;
+agent Robot() {
+    var done : [0..2] init 0;
+    mode Work = 0 initial;
+    mode Finished = 1 final;
+    action Pick in Work when done < 2 { P_GRASP: done += 1; 1 - P_GRASP: goto Finished; }
+    action Stop in Work when done == 2 { goto Finished; }
+}
+agents r1 = Robot(), r2 = Robot(), r3 = Robot();
+label all = r1.done == 2 && r2.done == 2 && r3.done == 2;
+property all = P=? [ F "all" ];
+"""
+
+
+def test_under_symmetry_the_agents_write_each_others_variables_so_the_same_holds(
+        tmp_path: Path) -> None:
+    """Three robots without a shared variable: under --symmetry each robot's move writes
+    the others' variables (the canonical order), which the compiled PRISM declares global;
+    a symbolic engine via PRISM is refused there (and not without --symmetry), auto builds
+    sparse, and the value is the mission's whole (0.9^6)."""
+    path = tmp_path / "trio.afsm"
+    path.write_text(TRIO, encoding="utf-8")
+    refused = run_cli("verify", str(path), "--symmetry", "--engine", "hybrid")
+    assert refused.code == 1 and "E404" in refused.out + refused.err
+    assert "each other's variables" in refused.out + refused.err
+    whole = run_cli("verify", str(path), "--engine", "hybrid", "--json")
+    assert whole.code == 0, whole.err
+    for args in (["--symmetry"], ["--symmetry", "--via", "jani", "--engine", "hybrid"]):
+        r = run_cli("verify", str(path), "--json", *args)
+        assert r.code == 0, r.err
+        (p,) = json.loads(r.out)["properties"]
+        assert (p["min"], p["max"]) == pytest.approx((0.9 ** 6, 0.9 ** 6), rel=1e-6)
+    (p,) = json.loads(whole.out)["properties"]
+    assert (p["min"], p["max"]) == pytest.approx((0.9 ** 6, 0.9 ** 6), rel=1e-6)
