@@ -1,0 +1,140 @@
+"""The backward passes of parameter lifting on the explored model (afsmc.verify.lifting).
+
+One pass visits the layers from the absorbing states back to the initial one, as the
+exact pass does (afsmc.verify.engines.acyclic), with each branch's probability given per
+column of a table (afsmc.verify.lifting.model.Lifted.values_at):
+
+* **at points** (`lift=False`): each query with its own valuation of the parameters; the
+  values are those of the model there, exactly as a point-valued run computes them
+  (attained values);
+* **lifted** (`lift=True`): the columns the corners of a box; each state takes, for each
+  of its choices, the worst corner for its own distribution in the query's direction
+  (a minimum: the least value), independently of every other state, and then the
+  scheduler's best choice. This is a relaxation of one fixed valuation for all states,
+  hence an outer bound: by induction over the layers, a state's lifted value is at most
+  (for a minimum) its value at any valuation in the box, because its value there is its
+  successors' values weighted by probabilities at that valuation, the weighting is
+  monotone in the successors' values, and over the box a choice's value for fixed
+  successor values is extreme at a corner (multilinear in the parameters; with a
+  self-loop of probability s, the ratio (rest) / (1 - s) is a ratio of functions affine
+  in each parameter separately, so monotone in each, hence again extreme at a corner).
+"""
+
+from __future__ import annotations
+
+import itertools
+from collections.abc import Sequence
+
+import numpy as np
+import numpy.typing as npt
+
+from afsmc.verify.engines import acyclic, umb
+from afsmc.verify.engines.acyclic import F64, I64
+from afsmc.verify.lifting.model import Lifted, Query
+
+TRIM_STATES = 1 << 20  # a model of more states gives its heap back now and then in a pass
+
+
+def attained(lifted: Lifted, qs: Sequence[Query], probs: F64) -> F64:
+    """Each query's value at the initial state with the branch probabilities of its own
+    column of `probs` (distinct probabilities x queries): values at valuations, attained."""
+    values, _, _ = sweep(lifted, qs, probs, lift=False)
+    return values
+
+
+def lifted_bounds(lifted: Lifted, qs: Sequence[Query], probs: F64
+                  ) -> tuple[F64, I64, npt.NDArray[np.bool_]]:
+    """Each query's lifted bound at the initial state over the box whose corners are the
+    columns of `probs`; the corner the choices' votes pick (`_votes`); and per parameter
+    and query, whether the choices disagree on its end (the value may not be monotone in
+    it: splitting the box along it may tighten the bound, along the others not)."""
+    return sweep(lifted, qs, probs, lift=True)
+
+
+def sweep(lifted: Lifted, qs: Sequence[Query], probs: F64, *, lift: bool
+          ) -> tuple[F64, I64, npt.NDArray[np.bool_]]:
+    """The pass: the initial state's value of each query and, lifted, the corner the
+    choices' votes pick for each and the parameters they disagree on. Lifted, every column of `probs` is a corner for every
+    query; else column j gives query j's probabilities."""
+    a = lifted.arrays
+    n, q = len(a.states) - 1, len(qs)
+    value = np.zeros((n, 1, q))
+    kind = qs[0].kind
+    if any(x.kind != kind for x in qs):
+        raise ValueError("one pass answers queries of one kind")
+    on_target = np.stack([a.labels[umb.LABEL + str(x.target)] for x in qs], axis=1)
+    reward = (np.stack([_dense(a.rewards[x.reward]) for x in qs], axis=1)
+              if kind == "R" else None)
+    stuck, reached = (0.0, 1.0) if kind == "P" else (np.inf, 0.0)
+    psign = np.array([1.0 if x.end == "min" else -1.0 for x in qs])
+    ssign = np.array([-1.0 if x.sched == "max" else 1.0 for x in qs])
+    votes = np.zeros((2, len(lifted.names), q))
+    trim = n > TRIM_STATES
+    for i, (lo, hi) in enumerate(_spans(a.layers)):
+        if trim and i % acyclic.TRIM_EVERY == acyclic.TRIM_EVERY - 1:
+            acyclic.trim_heap()
+        c0, c1 = int(a.states[lo]), int(a.states[hi])
+        b0, b1 = int(a.choices[c0]), int(a.choices[c1])
+        rows = a.choices[c0:c1] - b0
+        target = a.target[b0:b1]
+        loop = lifted.loop[b0:b1]
+        # branches x corners x 1 (lifted), or branches x 1 x queries
+        p = probs[lifted.codes[b0:b1]][:, :, None] if lift else probs[lifted.codes[b0:b1]][:, None, :]
+        succ = value[target]  # branches x 1 x q
+        succ[loop] = 0.0
+        contrib = p * succ  # the probabilities are positive: no 0 times infinity
+        per_choice = np.add.reduceat(contrib, rows, axis=0)
+        if reward is not None:
+            per_choice += reward[c0:c1][:, None, :]
+        if loop.any():
+            s = np.add.reduceat(np.where(loop[:, None, None], p, 0.0), rows, axis=0)
+            with np.errstate(divide="ignore", invalid="ignore"):
+                per_choice = np.where(s >= 1.0, stuck, np.where(s > 0.0, per_choice / (1.0 - s),
+                                                                 per_choice))
+        if lift:
+            signed = per_choice * psign
+            votes += _votes(signed, len(lifted.names))
+            per_choice = (signed.min(axis=1) * psign)[:, None, :]
+        per_state = np.minimum.reduceat(per_choice * ssign, a.states[lo:hi] - c0, axis=0) * ssign
+        value[lo:hi] = np.where(on_target[lo:hi][:, None, :], reached, per_state)
+    # each parameter at the end most choices prefer: the corner of the first parameter's
+    # bit most significant
+    bits = (votes[1] > votes[0]).astype(np.int64)
+    picks = (bits * (1 << np.arange(len(lifted.names) - 1, -1, -1))[:, None]).sum(axis=0)
+    mixed: npt.NDArray[np.bool_] = np.all(votes > 0, axis=0)
+    return value[a.initial, 0], picks, mixed
+
+
+def _votes(signed: F64, k: int) -> F64:
+    """Per parameter and query: how many choices prefer its lower end over its upper end
+    ([0]) and the converse ([1]), comparing the best corner of either side (`signed`:
+    choices x corners x queries, least is best). The corner these votes pick is where the
+    refinement looks for an attained value: for a value monotone in each parameter, every
+    choice that depends on a parameter prefers the same end."""
+    grid = signed.reshape(signed.shape[0], *([2] * k), signed.shape[2])
+    out = np.zeros((2, k, signed.shape[2]))
+    for i in range(k):
+        others = tuple(1 + j for j in range(k) if j != i)
+        lo = grid.take(0, axis=1 + i).min(axis=tuple(a - (a > 1 + i) for a in others)) \
+            if others else grid.take(0, axis=1)
+        hi = grid.take(1, axis=1 + i).min(axis=tuple(a - (a > 1 + i) for a in others)) \
+            if others else grid.take(1, axis=1)
+        with np.errstate(invalid="ignore"):
+            d = hi - lo
+            out[0, i] = (d > 0).sum(axis=0)
+            out[1, i] = (d < 0).sum(axis=0)
+    return out
+
+
+def _dense(v: acyclic.Vec) -> F64:
+    out: F64 = np.asarray(v[0:len(v)], np.float64)
+    return out
+
+
+def _spans(layers: I64) -> list[tuple[int, int]]:
+    """The layers as ranges of states, the large ones cut (their states are independent)."""
+    span = acyclic.SPAN // 8
+    out = []
+    for lo, hi in itertools.pairwise(layers.tolist()):
+        out += [(x, min(x + span, hi)) for x in range(lo, hi, span)]
+    return out
