@@ -22,6 +22,7 @@ value monotone in each parameter, where every state picks the same corner.
 
 from __future__ import annotations
 
+import dataclasses
 import heapq
 import math
 from collections.abc import Mapping, Sequence
@@ -131,20 +132,26 @@ def extremes(lifted: Lifted, qs: Sequence[Query], precision: float
     return out, gaps
 
 
-def decide(lifted: Lifted, q: Query, box: Mapping[str, tuple[float, float]], op: str,
-           threshold: float, margin: float) -> str:
-    """A region's verdict by one lifted pass per side: "holds" if every valuation in
-    `box` meets `value op threshold` with the margin against it, "fails" if none meets
-    it with the margin the other way, else "unknown". `q.end`: the side the requirement
-    reads ("min" for >= and >, "max" for <= and <); the other side's query is its
-    mirror."""
-    worst, _, _ = _lift(lifted, q, box)
+def decide(lifted: Lifted, q: Query, boxes: Sequence[Mapping[str, tuple[float, float]]],
+           op: str, threshold: float, margin: float) -> list[str]:
+    """Each region's verdict by one lifted pass for all of them, both sides at once:
+    "holds" if every valuation in the box meets `value op threshold` with the margin
+    against it, "fails" if none meets it with the margin the other way, else "unknown".
+    `q.end`: the side the requirement reads ("min" for >= and >, "max" for <= and <);
+    the other side is its mirror."""
+    if not boxes:
+        return []
+    other = dataclasses.replace(q, end="max" if q.end == "min" else "min")
+    corners = [c for b in boxes for c in corners_of(lifted.names, b)]
+    values, _, _ = lifted_bounds(lifted, [q, other], lifted.values_at(corners))
+    values = values.reshape(len(boxes), 2)
     lower = op in (">=", ">")
-    if (worst > threshold + margin) if lower else (worst < threshold - margin):
-        return "holds"
-    other = Query(q.prop, "max" if q.end == "min" else "min", q.kind, q.sched, q.target,
-                  q.reward)
-    best, _, _ = _lift(lifted, other, box)
-    if (best < threshold - margin) if lower else (best > threshold + margin):
-        return "fails"
-    return "unknown"
+    out = []
+    for worst, best in values.tolist():
+        if (worst >= threshold + margin) if lower else (worst <= threshold - margin):
+            out.append("holds")
+        elif (best <= threshold - margin) if lower else (best >= threshold + margin):
+            out.append("fails")
+        else:
+            out.append("unknown")
+    return out

@@ -32,6 +32,9 @@ from afsmc.verify.engines import acyclic, umb
 from afsmc.verify.engines.acyclic import F64, I64
 from afsmc.verify.lifting.model import Lifted, Query
 
+# the most elements (branches x boxes x corners x queries) a span of states computes at a
+# time: a layer of more is cut (its states do not depend on each other)
+SPAN_ELEMENTS = 1 << 21
 TRIM_STATES = 1 << 20  # a model of more states gives its heap back now and then in a pass
 
 
@@ -53,12 +56,16 @@ def lifted_bounds(lifted: Lifted, qs: Sequence[Query], probs: F64
 
 def sweep(lifted: Lifted, qs: Sequence[Query], probs: F64, *, lift: bool
           ) -> tuple[F64, I64, npt.NDArray[np.bool_]]:
-    """The pass: the initial state's value of each query and, lifted, the corner the
-    choices' votes pick for each and the parameters they disagree on. Lifted, every column of `probs` is a corner for every
-    query; else column j gives query j's probabilities."""
+    """The pass: the initial state's value of each query and, lifted over one box, the
+    corner the choices' votes pick for each and the parameters they disagree on.
+    Lifted, the columns of `probs` are the corners of one box or of several, box after
+    box (then the values are boxes x queries); else column j gives query j's
+    probabilities."""
     a = lifted.arrays
     n, q = len(a.states) - 1, len(qs)
-    value = np.zeros((n, 1, q))
+    k = 1 << len(lifted.names) if lift else 1
+    boxes = probs.shape[1] // k if lift else 1
+    value = np.zeros((n, boxes, q))
     kind = qs[0].kind
     if any(x.kind != kind for x in qs):
         raise ValueError("one pass answers queries of one kind")
@@ -70,7 +77,8 @@ def sweep(lifted: Lifted, qs: Sequence[Query], probs: F64, *, lift: bool
     ssign = np.array([-1.0 if x.sched == "max" else 1.0 for x in qs])
     votes = np.zeros((2, len(lifted.names), q))
     trim = n > TRIM_STATES
-    for i, (lo, hi) in enumerate(_spans(a.layers)):
+    per_span = max(64, SPAN_ELEMENTS // (boxes * k * q * 4))
+    for i, (lo, hi) in enumerate(_spans(a.layers, per_span)):
         if trim and i % acyclic.TRIM_EVERY == acyclic.TRIM_EVERY - 1:
             acyclic.trim_heap()
         c0, c1 = int(a.states[lo]), int(a.states[hi])
@@ -78,23 +86,24 @@ def sweep(lifted: Lifted, qs: Sequence[Query], probs: F64, *, lift: bool
         rows = a.choices[c0:c1] - b0
         target = a.target[b0:b1]
         loop = lifted.loop[b0:b1]
-        # branches x corners x 1 (lifted), or branches x 1 x queries
-        p = probs[lifted.codes[b0:b1]][:, :, None] if lift else probs[lifted.codes[b0:b1]][:, None, :]
-        succ = value[target]  # branches x 1 x q
+        # branches x boxes x corners x queries (lifted: x 1 query; else x 1 box x 1 corner)
+        p = probs[lifted.codes[b0:b1]]
+        p = p.reshape(len(p), boxes, k, 1) if lift else p[:, None, None, :]
+        succ = value[target][:, :, None, :]  # branches x boxes x 1 x q
         succ[loop] = 0.0
         contrib = p * succ  # the probabilities are positive: no 0 times infinity
         per_choice = np.add.reduceat(contrib, rows, axis=0)
         if reward is not None:
-            per_choice += reward[c0:c1][:, None, :]
+            per_choice += reward[c0:c1][:, None, None, :]
         if loop.any():
-            s = np.add.reduceat(np.where(loop[:, None, None], p, 0.0), rows, axis=0)
+            s = np.add.reduceat(np.where(loop[:, None, None, None], p, 0.0), rows, axis=0)
             with np.errstate(divide="ignore", invalid="ignore"):
                 per_choice = np.where(s >= 1.0, stuck, np.where(s > 0.0, per_choice / (1.0 - s),
                                                                  per_choice))
-        if lift:
-            signed = per_choice * psign
-            votes += _votes(signed, len(lifted.names))
-            per_choice = (signed.min(axis=1) * psign)[:, None, :]
+        signed = per_choice * psign
+        if lift and boxes == 1:
+            votes += _votes(signed[:, 0], len(lifted.names))
+        per_choice = signed.min(axis=2) * psign  # choices x boxes x q
         per_state = np.minimum.reduceat(per_choice * ssign, a.states[lo:hi] - c0, axis=0) * ssign
         value[lo:hi] = np.where(on_target[lo:hi][:, None, :], reached, per_state)
     # each parameter at the end most choices prefer: the corner of the first parameter's
@@ -102,7 +111,7 @@ def sweep(lifted: Lifted, qs: Sequence[Query], probs: F64, *, lift: bool
     bits = (votes[1] > votes[0]).astype(np.int64)
     picks = (bits * (1 << np.arange(len(lifted.names) - 1, -1, -1))[:, None]).sum(axis=0)
     mixed: npt.NDArray[np.bool_] = np.all(votes > 0, axis=0)
-    return value[a.initial, 0], picks, mixed
+    return value[a.initial] if boxes > 1 else value[a.initial, 0], picks, mixed
 
 
 def _votes(signed: F64, k: int) -> F64:
@@ -131,9 +140,9 @@ def _dense(v: acyclic.Vec) -> F64:
     return out
 
 
-def _spans(layers: I64) -> list[tuple[int, int]]:
-    """The layers as ranges of states, the large ones cut (their states are independent)."""
-    span = acyclic.SPAN // 8
+def _spans(layers: I64, span: int) -> list[tuple[int, int]]:
+    """The layers as ranges of states, those of more than `span` cut (their states are
+    independent)."""
     out = []
     for lo, hi in itertools.pairwise(layers.tolist()):
         out += [(x, min(x + span, hi)) for x in range(lo, hi, span)]

@@ -6,6 +6,7 @@ route (the same extremes within the precision)."""
 
 from __future__ import annotations
 
+import itertools
 import random
 from pathlib import Path
 
@@ -18,9 +19,10 @@ from afsmc.verify import run
 from afsmc.verify.core.uncertainty import LIFTING, PARAMETRIC
 from afsmc.verify.engines.parametric import Extreme, extremes, interval_box
 from afsmc.verify.lifting import route
-from afsmc.verify.lifting.model import NotLiftable
+from afsmc.verify.lifting.model import NotLiftable, build, queries
 from afsmc.verify.lifting.symbolic import multilinear
 from afsmc.verify.plan.precision import PARAMETER_PRECISION, PARAMETER_SOLVER_ERROR
+from afsmc.verify.reports import regions as R
 from tests.conftest import EXAMPLES
 from tests.unit.verify.points import value
 
@@ -198,3 +200,33 @@ def test_agrees_with_storm_parametric_route(uav: Path) -> None:
         # sound: our outer bounds contain what Storm attained
         assert ours.min <= theirs.min_attained + 1e-9
         assert ours.max >= theirs.max_attained - 1e-9
+
+
+@pytest.mark.storm
+def test_regions_by_lifting_are_confirmed_at_their_corners_and_centre(uav: Path) -> None:
+    model = load(str(uav), SMALL).model
+    low = lowered(model, "nondet")
+    prop = next(p for p in model.properties if p.name == "success")
+    box = {"P_INIT_FAIL": UAV_BOX["P_INIT_FAIL"], "P_DROP": (0.005, 0.2)}
+    lifted = build(low, box, [prop.path.target], [])  # type: ignore[list-item]
+    bound = 0.17
+    req = R.parse_requirement(f'P>={bound} [ F "success" ]')
+    qs, _, _, _ = queries(low, [prop])
+    q = R.lifted_query(req, qs[0], mdp=True)
+    assert (q.end, q.sched) == ("min", "min")
+    regions, rounds = R.refine_lifted(lifted, q, req, box, coverage=0.9, max_rounds=8)
+    assert sum(r.volume(box) for r in regions) == pytest.approx(1.0)
+    decided = [r for r in regions if r.verdict != "unknown"]
+    assert {r.verdict for r in decided} == {"holds", "fails"}
+    assert sum(r.volume(box) for r in decided) >= 0.9 or rounds == 8
+    # a sample of the regions, each of both verdicts among them (each point a Storm model)
+    sample = [next(r for r in decided if r.verdict == v) for v in ("holds", "fails")]
+    sample += random.Random(49).sample(decided, min(4, len(decided)))
+    for r in sample:
+        names = sorted(r.bounds)
+        pts = [dict(zip(names, c, strict=True))
+               for c in itertools.product(*(r.bounds[n] for n in names))]
+        pts.append({n: (lo + hi) / 2 for n, (lo, hi) in r.bounds.items()})
+        for pt in pts:
+            v = value(model, {**pt, "P_DROP_LIFT": 0.0495}, 'Pmin=? [ F "success" ]')
+            assert (v >= bound) == (r.verdict == "holds"), (r, pt, v)
