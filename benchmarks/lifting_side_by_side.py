@@ -39,12 +39,15 @@ print(f"parametric route {time.perf_counter() - t:.1f} s")
 
 
 def timed(cmd: list[str]) -> tuple[str, str]:
-    """The command's stdout, and its wall time and peak RSS as /usr/bin/time -v says."""
+    """The command's stdout, and its wall time, CPU time (user) and peak RSS as
+    /usr/bin/time -v says (on a shared machine the CPU time is the steadier figure)."""
     out = subprocess.run(["/usr/bin/time", "-v", *cmd], capture_output=True, text=True,
                          env={"PYTHONPATH": str(ROOT), "PATH": "/usr/bin:/bin"}, check=False)
     wall = re.search(r"Elapsed \(wall clock\) time.*: (\S+)", out.stderr)
     rss = re.search(r"Maximum resident set size \(kbytes\): (\d+)", out.stderr)
-    return out.stdout, (f"wall {wall.group(1) if wall else '?'}, peak RSS "
+    user = re.search(r"User time \(seconds\): (\S+)", out.stderr)
+    return out.stdout, (f"wall {wall.group(1) if wall else '?'}, CPU (user) "
+                        f"{user.group(1) if user else '?'} s, peak RSS "
                         f"{int(rss.group(1)) // 1024 if rss else 0} MB")
 
 

@@ -77,33 +77,49 @@ def sweep(lifted: Lifted, qs: Sequence[Query], probs: F64, *, lift: bool
     ssign = np.array([-1.0 if x.sched == "max" else 1.0 for x in qs])
     votes = np.zeros((2, len(lifted.names), q))
     trim = n > TRIM_STATES
-    per_span = max(64, SPAN_ELEMENTS // (boxes * k * q * 4))
+    # a probability the same in every column is summed once, not per corner: most of a
+    # model's branches do not read an interval probability
+    varies = (probs != probs[:, :1]).any(axis=1)
+    fixed = np.where(varies, 0.0, probs[:, 0])
+    per_span = max(64, SPAN_ELEMENTS // (boxes * q * 4))
     for i, (lo, hi) in enumerate(_spans(a.layers, per_span)):
         if trim and i % acyclic.TRIM_EVERY == acyclic.TRIM_EVERY - 1:
             acyclic.trim_heap()
         c0, c1 = int(a.states[lo]), int(a.states[hi])
         b0, b1 = int(a.choices[c0]), int(a.choices[c1])
         rows = a.choices[c0:c1] - b0
-        target = a.target[b0:b1]
+        codes = lifted.codes[b0:b1]
         loop = lifted.loop[b0:b1]
-        # branches x boxes x corners x queries (lifted: x 1 query; else x 1 box x 1 corner)
-        p = probs[lifted.codes[b0:b1]]
-        p = p.reshape(len(p), boxes, k, 1) if lift else p[:, None, None, :]
-        succ = value[target][:, :, None, :]  # branches x boxes x 1 x q
+        succ = value[a.target[b0:b1]]  # branches x boxes x q
         succ[loop] = 0.0
-        contrib = p * succ  # the probabilities are positive: no 0 times infinity
-        per_choice = np.add.reduceat(contrib, rows, axis=0)
+        vb = np.flatnonzero(varies[codes])
+        if 2 * vb.size > len(codes):  # mostly varying: every branch per corner
+            vb = np.arange(len(codes))
+            base = np.zeros((c1 - c0, boxes, q))
+            stay = np.zeros(c1 - c0)
+        else:
+            pf = fixed[codes]
+            with np.errstate(invalid="ignore"):
+                contrib = pf[:, None, None] * succ
+            contrib[vb] = 0.0  # a varying branch's placeholder 0 times an infinite value
+            base = np.add.reduceat(contrib, rows, axis=0)  # choices x boxes x q
+            stay = np.add.reduceat(np.where(loop, pf, 0.0), rows)
         if reward is not None:
-            per_choice += reward[c0:c1][:, None, None, :]
-        if loop.any():
-            s = np.add.reduceat(np.where(loop[:, None, None, None], p, 0.0), rows, axis=0)
-            with np.errstate(divide="ignore", invalid="ignore"):
-                per_choice = np.where(s >= 1.0, stuck, np.where(s > 0.0, per_choice / (1.0 - s),
-                                                                 per_choice))
-        signed = per_choice * psign
-        if lift and boxes == 1:
-            votes += _votes(signed[:, 0], len(lifted.names))
-        per_choice = signed.min(axis=2) * psign  # choices x boxes x q
+            base += reward[c0:c1][:, None, :]
+        per_choice = _ratio(base, stay[:, None, None], stuck)
+        if vb.size:
+            # the choices with a branch that varies: each corner (or point) separately
+            owner = np.repeat(np.arange(c1 - c0), np.diff(a.choices[c0:c1 + 1]))[vb]
+            u, first = np.unique(owner, return_index=True)
+            pv = probs[codes[vb]]
+            pv = pv.reshape(len(vb), boxes, k, 1) if lift else pv[:, None, None, :]
+            var = np.add.reduceat(pv * succ[vb][:, :, None, :], first, axis=0)
+            s_u = stay[u][:, None, None, None] + np.add.reduceat(
+                np.where(loop[vb][:, None, None, None], pv, 0.0), first, axis=0)
+            signed = _ratio(base[u][:, :, None, :] + var, s_u, stuck) * psign
+            if lift and boxes == 1:
+                votes += _votes(signed[:, 0], len(lifted.names))
+            per_choice[u] = signed.min(axis=2) * psign
         per_state = np.minimum.reduceat(per_choice * ssign, a.states[lo:hi] - c0, axis=0) * ssign
         value[lo:hi] = np.where(on_target[lo:hi][:, None, :], reached, per_state)
     # each parameter at the end most choices prefer: the corner of the first parameter's
@@ -112,6 +128,14 @@ def sweep(lifted: Lifted, qs: Sequence[Query], probs: F64, *, lift: bool
     picks = (bits * (1 << np.arange(len(lifted.names) - 1, -1, -1))[:, None]).sum(axis=0)
     mixed: npt.NDArray[np.bool_] = np.all(votes > 0, axis=0)
     return value[a.initial] if boxes > 1 else value[a.initial, 0], picks, mixed
+
+
+def _ratio(total: F64, stay: F64, stuck: float) -> F64:
+    """A choice's value from its other branches' `total` and its self-loop's probability
+    `stay`: total / (1 - stay), and `stuck` for a choice that only loops."""
+    with np.errstate(divide="ignore", invalid="ignore"):
+        out: F64 = np.where(stay >= 1.0, stuck, np.where(stay > 0.0, total / (1.0 - stay), total))
+    return out
 
 
 def _votes(signed: F64, k: int) -> F64:
