@@ -185,8 +185,8 @@ class Compiled:
     # With valuations of the interval probabilities (compile_model's `points`): the model is
     # explored at the first, and each distinct branch probability there (a code of the
     # explored arrays) maps to its values at the others, merged as the branches are
-    # (afsmc.verify.lifting): {value at the first point: values at the others}.
-    at: dict[float, tuple[float, ...]] | None = None
+    # (afsmc.verify.lifting; PointTable).
+    at: PointTable | None = None
 
 
 def storm_order(low: Lowered) -> dict[int, tuple[int, int, int]]:
@@ -247,7 +247,8 @@ def compile_model(low: Lowered, targets: list[E.Expr], rewards: list[str],
     init = {"mode": model.initial_mode.number} | {v.name: int(v.init) for v in model.variables}
     key = sum((init[f.name] - f.lo) * f.stride for f in lay.fields.values())
     return Compiled(lay, modes, [compile_expr(fold(t, base)) for t in targets], state,
-                    int(key), low.kind == "dtmc", list(rewards), keep, {} if points else None)
+                    int(key), low.kind == "dtmc", list(rewards), keep,
+                    PointTable() if points else None)
 
 
 def _branch(prob: E.Expr, updates: tuple[tuple[str, E.Expr], ...], sc: Scope, lay: Layout,
@@ -341,7 +342,7 @@ def _merge(tk: I64, pr: F64, others: F64 | None = None
 
 
 def _command(cmd: CCommand, base: I64, sub: dict[str, Any],
-             at: dict[float, tuple[float, ...]] | None = None
+             at: PointTable | None = None
              ) -> tuple[I64, I64, F64, list[F64]]:
     """The command's choices in the states `base` (their frame `sub`): (row, successor,
     prob) per branch and the action rewards per choice; with `at` (Compiled.at), each
@@ -373,7 +374,7 @@ def _command(cmd: CCommand, base: I64, sub: dict[str, Any],
     rewards = [np.zeros(n) if r is None else full(r(sub), n, np.float64) for r in cmd.rewards]
     row, tk, pr, of = _merge(tks, prs, others)
     if at is not None and of is not None:
-        _record(at, pr, of)
+        at.record(pr, of)
     return row, tk, pr, rewards
 
 
@@ -382,18 +383,37 @@ def _command(cmd: CCommand, base: I64, sub: dict[str, Any],
 SAME_FUNCTION = 1e-12
 
 
-def _record(at: dict[float, tuple[float, ...]], pr: F64, others: F64) -> None:
-    """Each distinct value of `pr` with its values at the other points (`others`, one row
-    per branch) into `at`; GiveUp if one value stands for two functions (the point is
-    meant to be generic: this should not happen)."""
-    values, first, inverse = np.unique(pr, return_index=True, return_inverse=True)
-    rows = others[first]
-    if others.size and np.abs(others - rows[inverse.ravel()]).max() > SAME_FUNCTION:
-        raise GiveUp("two branch probabilities agree at the point explored but not elsewhere")
-    for v, row in zip(values.tolist(), rows.tolist(), strict=True):
-        known = at.setdefault(v, tuple(row))
-        if known != tuple(row) and max(abs(a - b) for a, b in zip(known, row, strict=True)) \
-                > SAME_FUNCTION:
+class PointTable:
+    """Each distinct branch probability at the exploration's point (`Compiled.at`) and its
+    values at the further points, kept sorted by the first so that a batch's probabilities
+    are looked up (as ProbTable encodes them) rather than sorted."""
+
+    def __init__(self) -> None:
+        self.values = np.zeros(0)  # sorted
+        self.rows = np.zeros((0, 0))  # values x further points
+
+    def row(self, v: float) -> tuple[float, ...]:
+        i = int(np.searchsorted(self.values, v))
+        return tuple(self.rows[i].tolist())
+
+    def record(self, pr: F64, others: F64) -> None:
+        """Each value of `pr` with its values at the other points (`others`, one row per
+        branch); GiveUp if one value stands for two functions (the point is meant to be
+        generic: this should not happen)."""
+        if not len(pr):
+            return
+        pos = np.searchsorted(self.values, pr)
+        hit = (self.values[np.minimum(pos, len(self.values) - 1)] == pr) \
+            if len(self.values) else np.zeros(len(pr), bool)
+        if not hit.all():
+            new, first = np.unique(pr[~hit], return_index=True)
+            rows = others[~hit][first]
+            values = np.concatenate([self.values, new])
+            order = np.argsort(values, kind="stable")
+            self.values = values[order]
+            self.rows = np.concatenate([self.rows.reshape(-1, others.shape[1]), rows])[order]
+            pos = np.searchsorted(self.values, pr)
+        if np.abs(others - self.rows[pos]).max(initial=0.0) > SAME_FUNCTION:
             raise GiveUp("two branch probabilities agree at the point explored but not "
                          "elsewhere")
 

@@ -129,7 +129,7 @@ def build(low: Lowered, box: Box, targets: Sequence[E.Expr], rewards: Sequence[s
     a = found.arrays
     assert compiled.at is not None and isinstance(a.prob, acyclic.Coded)
     table = a.prob.table
-    rows = np.array([compiled.at[float(v)] for v in table.tolist()]).reshape(len(table), -1)
+    rows = np.array([compiled.at.row(float(v)) for v in table.tolist()]).reshape(len(table), -1)
     owner = acyclic._state_of_branches(a.states, a.choices)
     loop = a.target == owner
     del owner

@@ -106,7 +106,10 @@ def sweep(lifted: Lifted, qs: Sequence[Query], probs: F64, *, lift: bool
             stay = np.add.reduceat(np.where(loop, pf, 0.0), rows)
         if reward is not None:
             base += reward[c0:c1][:, None, :]
-        per_choice = _ratio(base, stay[:, None, None], stuck)
+        per_choice = base.copy()
+        loops = np.flatnonzero(stay > 0.0)  # few choices loop: solved where they do
+        if loops.size:
+            per_choice[loops] = _ratio(base[loops], stay[loops][:, None, None], stuck)
         if vb.size:
             # the choices with a branch that varies: each corner (or point) separately
             owner = np.repeat(np.arange(c1 - c0), np.diff(a.choices[c0:c1 + 1]))[vb]
@@ -120,8 +123,15 @@ def sweep(lifted: Lifted, qs: Sequence[Query], probs: F64, *, lift: bool
             if lift and boxes == 1:
                 votes += _votes(signed[:, 0], len(lifted.names))
             per_choice[u] = signed.min(axis=2) * psign
-        per_state = np.minimum.reduceat(per_choice * ssign, a.states[lo:hi] - c0, axis=0) * ssign
-        value[lo:hi] = np.where(on_target[lo:hi][:, None, :], reached, per_state)
+        if c1 - c0 == hi - lo:  # one choice a state (a DTMC, or this span of an MDP)
+            per_state = per_choice
+        else:
+            per_state = np.minimum.reduceat(per_choice * ssign, a.states[lo:hi] - c0,
+                                            axis=0) * ssign
+        hit = on_target[lo:hi]
+        value[lo:hi] = per_state
+        if hit.any():
+            value[lo:hi][np.broadcast_to(hit[:, None, :], per_state.shape)] = reached
     # each parameter at the end most choices prefer: the corner of the first parameter's
     # bit most significant
     bits = (votes[1] > votes[0]).astype(np.int64)

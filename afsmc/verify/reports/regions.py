@@ -2,8 +2,9 @@
 where a requirement holds for every value, fails for every value, or is not decided.
 
 Each sub-box is analysed by parameter lifting (sound: it over-approximates the box): on
-afsmc's explored model where the explorer takes the mission (`refine_lifted`; two
-backward passes a box, afsmc.verify.lifting), else by Storm's region checker,
+afsmc's explored model where the explorer takes the mission (`refine_lifted`: one lifted
+backward pass a round, for all its boxes and both sides; afsmc.verify.lifting), else by
+Storm's region checker,
 which proves the requirement for every value of the box (holds), proves its negation for
 every value (fails), or neither. Each proof keeps a margin (`margin`): the requirement is
 proved with its threshold moved by the margin against it (`P>=b` as `P>=b+m`) and its
