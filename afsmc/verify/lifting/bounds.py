@@ -32,6 +32,7 @@ from afsmc.verify.engines.parametric import Extreme
 from afsmc.verify.lifting.model import Box, Lifted, Query, corners_of
 from afsmc.verify.lifting.passes import attained, lifted_bounds
 
+VALUE_BYTES = 1 << 29  # the most a region pass's values take (states x boxes x 2 sides)
 MAX_BOXES = 1000  # sub-boxes lifted per bound before the refinement gives up on the gap
 
 
@@ -134,7 +135,8 @@ def extremes(lifted: Lifted, qs: Sequence[Query], precision: float
 
 def decide(lifted: Lifted, q: Query, boxes: Sequence[Mapping[str, tuple[float, float]]],
            op: str, threshold: float, margin: float) -> list[str]:
-    """Each region's verdict by one lifted pass for all of them, both sides at once:
+    """Each region's verdict by one lifted pass for all of them (or as many as
+    VALUE_BYTES allows), both sides at once:
     "holds" if every valuation in the box meets `value op threshold` with the margin
     against it, "fails" if none meets it with the margin the other way, else "unknown".
     `q.end`: the side the requirement reads ("min" for >= and >, "max" for <= and <);
@@ -142,12 +144,18 @@ def decide(lifted: Lifted, q: Query, boxes: Sequence[Mapping[str, tuple[float, f
     if not boxes:
         return []
     other = dataclasses.replace(q, end="max" if q.end == "min" else "min")
-    corners = [c for b in boxes for c in corners_of(lifted.names, b)]
-    values, _, _ = lifted_bounds(lifted, [q, other], lifted.values_at(corners))
-    values = values.reshape(len(boxes), 2)
+    # the pass keeps a value per state, box and side: as many boxes at a time as
+    # VALUE_BYTES holds
+    per = max(1, VALUE_BYTES // (16 * max(lifted.states, 1)))
+    pairs: list[list[float]] = []
+    for i in range(0, len(boxes), per):
+        part = boxes[i:i + per]
+        corners = [c for b in part for c in corners_of(lifted.names, b)]
+        values, _, _ = lifted_bounds(lifted, [q, other], lifted.values_at(corners))
+        pairs += values.reshape(len(part), 2).tolist()
     lower = op in (">=", ">")
     out = []
-    for worst, best in values.tolist():
+    for worst, best in pairs:
         if (worst >= threshold + margin) if lower else (worst <= threshold - margin):
             out.append("holds")
         elif (best <= threshold - margin) if lower else (best >= threshold + margin):

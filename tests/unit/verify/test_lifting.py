@@ -18,7 +18,7 @@ from afsmc.model import ir
 from afsmc.verify import run
 from afsmc.verify.core.uncertainty import LIFTING, PARAMETRIC
 from afsmc.verify.engines.parametric import Extreme, extremes, interval_box
-from afsmc.verify.lifting import route
+from afsmc.verify.lifting import bounds, route
 from afsmc.verify.lifting.model import NotLiftable, build, queries
 from afsmc.verify.lifting.symbolic import multilinear
 from afsmc.verify.plan.precision import PARAMETER_PRECISION, PARAMETER_SOLVER_ERROR
@@ -230,3 +230,21 @@ def test_regions_by_lifting_are_confirmed_at_their_corners_and_centre(uav: Path)
         for pt in pts:
             v = value(model, {**pt, "P_DROP_LIFT": 0.0495}, 'Pmin=? [ F "success" ]')
             assert (v >= bound) == (r.verdict == "holds"), (r, pt, v)
+
+
+def test_regions_decided_a_box_at_a_time_as_all_at_once(two_steps: Path,
+                                                          monkeypatch: pytest.MonkeyPatch) -> None:
+    model = load(str(two_steps)).model
+    low = lowered(model, "nondet")
+    box = interval_box(model)
+    prop = next(p for p in model.properties if p.name == "done")
+    lifted = build(low, box, [prop.path.target], [])  # type: ignore[list-item]
+    req = R.parse_requirement('P>=0.2 [ F "done" ]')
+    q = R.lifted_query(req, queries(low, [prop])[0][0], mdp=False)
+    boxes = [{"PA": pa, "QB": (0.1, 0.12)} for pa in ((0.2, 0.25), (0.48, 0.52), (0.3, 0.5))]
+    together = bounds.decide(lifted, q, boxes, req.cmp, req.bound, R.margin(req))
+    monkeypatch.setattr(bounds, "VALUE_BYTES", 1)
+    assert bounds.decide(lifted, q, boxes, req.cmp, req.bound, R.margin(req)) == together
+    # PA(1 - PA)(1 - QB): at most 0.25 * 0.8 * 0.9 = 0.18 on the first box; at least
+    # 0.48 * 0.48 * 0.88 = 0.2028 by lifting on the second; the third straddles 0.2
+    assert together == ["fails", "holds", "unknown"]
