@@ -9,7 +9,7 @@ import os
 import re
 import sys
 import time
-from typing import Literal
+from typing import Any, Literal
 
 from afsmc.commands.common import (
     JOBS_HELP,
@@ -33,10 +33,12 @@ from afsmc.model import expr as E
 from afsmc.model import ir
 from afsmc.text import num
 from afsmc.verify.core.api import load_with_formulas
-from afsmc.verify.core.uncertainty import bound_error
+from afsmc.verify.core.uncertainty import LIFTING, bound_error
 from afsmc.verify.engines.guard import default_max_states
 from afsmc.verify.engines.parametric import extreme_queries, extremes_on, with_parameters
 from afsmc.verify.engines.storm import VIAS
+from afsmc.verify.lifting import bounds as lifting_bounds
+from afsmc.verify.lifting import model as lifting_model
 from afsmc.verify.outcome.verdicts import judge
 from afsmc.verify.plan.deep import refuse_deep_build
 from afsmc.verify.plan.precision import PARAMETER_PRECISION
@@ -228,9 +230,47 @@ def run(args: argparse.Namespace) -> int:
     return 0
 
 
+def solve_lifted(args: argparse.Namespace, low: Lowered, req: R.Requirement,
+                 prop: ir.Property, box: dict[str, tuple[float, float]], say: Any
+                 ) -> R.RegionResult | None:
+    """The regions and the verdict over the whole box by parameter lifting on afsmc's
+    explorer (afsmc.verify.lifting); None where it does not take the mission (Storm's
+    parametric engine then answers, `solve`)."""
+    qs, targets, rewards, left = lifting_model.queries(low, [prop])
+    if left:
+        return None
+    try:
+        lifted = lifting_model.build(low, box, targets, rewards)
+    except lifting_model.NotLiftable as why:
+        if say is not None:
+            say(f"parameter lifting on afsmc's explorer does not take it ({why}): Storm's "
+                "parametric engine checks the regions")
+        return None
+    if say is not None:
+        say(f"afsmc's explorer: {lifted.states:,} states; each box decided by parameter "
+            "lifting")
+    regions, rounds = R.refine_lifted(lifted, R.lifted_query(req, qs[0], low.kind == "mdp"),
+                                      req, box, coverage=args.coverage,
+                                      max_rounds=args.max_rounds, progress=say)
+    res = R.RegionResult(req.text, box, regions, 0.0, args.coverage, rounds,
+                         states=lifted.states, engine=LIFTING)
+    (e,), gaps = lifting_bounds.extremes(lifted, qs, PARAMETER_PRECISION)
+    error = max(bound_error(None), gaps[prop.name])
+    res.bounds = (e.min_attained, e.max_attained, error)
+    res.judged = judge(threshold_of(req), e.min_attained, e.max_attained, error)
+    return res
+
+
 def solve(args: argparse.Namespace, low: Lowered, req: R.Requirement, prop: ir.Property,
-          box: dict[str, tuple[float, float]], say: object) -> R.RegionResult:
+          box: dict[str, tuple[float, float]], say: Any) -> R.RegionResult:
     from afsmc.backends.prism import PrismPrinter, formula_text
+
+    lifted = solve_lifted(args, low, req, prop, box, say)
+    if lifted is not None:
+        _meaning(lifted, low, req)
+        if args.feasible:
+            lifted.feasible, lifted.feasible_how = feasible(None, "", lifted)
+        return lifted
 
     query = formula_text(prop, prop.opt, PrismPrinter({}, low))
     # the requirement's bounds over the whole box are asked of the same parametric build
@@ -242,13 +282,7 @@ def solve(args: argparse.Namespace, low: Lowered, req: R.Requirement, prop: ir.P
                                max_rounds=args.max_rounds, progress=say)
     res = R.RegionResult(req.text, box, regions, 0.0, args.coverage, rounds,
                          states=built.model.nr_states)
-    res.coverage = res.fraction("holds") + res.fraction("fails")
-    if low.kind == "mdp" and not req.opt:
-        worst, best = ("min", "max") if req.cmp in (">=", ">") else ("max", "min")
-        res.meaning = (f"on this MDP a region holds where every floor/ceil choice meets the "
-                       f"requirement (its {worst} does) and fails where some choice misses "
-                       f"it: there `afsmc verify` says fails or depends, as its {best} "
-                       "decides")
+    _meaning(res, low, req)
     # the verdict over the whole box: the requirement's bounds over it, judged as verify
     # judges (docs/verification.md, "What a result means")
     (e,) = extremes_on(built, bound_queries, [prop], box, PARAMETER_PRECISION)
@@ -258,6 +292,17 @@ def solve(args: argparse.Namespace, low: Lowered, req: R.Requirement, prop: ir.P
     if args.feasible:
         res.feasible, res.feasible_how = feasible(built, formulas[0], res)
     return res
+
+
+def _meaning(res: R.RegionResult, low: Lowered, req: R.Requirement) -> None:
+    """The coverage, and what a region's verdict means on an MDP with a bare requirement."""
+    res.coverage = res.fraction("holds") + res.fraction("fails")
+    if low.kind == "mdp" and not req.opt:
+        worst, best = ("min", "max") if req.cmp in (">=", ">") else ("max", "min")
+        res.meaning = (f"on this MDP a region holds where every floor/ceil choice meets the "
+                       f"requirement (its {worst} does) and fails where some choice misses "
+                       f"it: there `afsmc verify` says fails or depends, as its {best} "
+                       "decides")
 
 
 def threshold_of(req: R.Requirement) -> ir.Threshold:
@@ -270,16 +315,18 @@ def threshold_of(req: R.Requirement) -> ir.Threshold:
 def feasible(built: object, formula: str, res: R.RegionResult
              ) -> tuple[dict[str, float], str]:
     """One valuation meeting the requirement: Storm's feasibility check, or, where Storm
-    refuses the box (its graph-preservation test fails on several parameters), the
-    centre of the largest region proven to hold."""
+    refuses the box (its graph-preservation test fails on several parameters) or the
+    regions came from afsmc's explorer (`built` None), the centre of the largest region
+    proven to hold."""
     from afsmc.verify.engines.parametric import Parametric
 
-    assert isinstance(built, Parametric)
-    try:
-        found = built.feasible(formula, res.box)
-        return (found, "Storm's feasibility check (parameter lifting)") if found else ({}, "")
-    except CompileError:
-        pass
+    if isinstance(built, Parametric):
+        try:
+            found = built.feasible(formula, res.box)
+            return (found, "Storm's feasibility check (parameter lifting)") if found \
+                else ({}, "")
+        except CompileError:
+            pass
     holds = [r for r in res.regions if r.verdict == "holds"]
     if not holds:
         return {}, ""
@@ -313,7 +360,7 @@ def render(res: R.RegionResult, fixed: list[str] | None = None, *,
     if res.bounds is not None:
         lo, hi, error = res.bounds
         lines.append(f"over the whole box: min {num(lo)}, max {num(hi)}, each within "
-                     f"{num(error)} (Storm's parametric engine, as `afsmc verify`)")
+                     f"{num(error)} ({res.engine}, as `afsmc verify`)")
     lines.append(f"over the whole box: {verdict} ({reason})")
     if res.feasible == {}:
         lines.append("feasible: Storm found no valuation that meets the requirement")

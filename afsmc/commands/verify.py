@@ -222,7 +222,7 @@ def render(res: VerifyResult) -> str:
         if m.engine_reason and res.engine == "auto":
             lines.append(f"{name}: engine {m.engine} ({m.engine_reason})")
     if res.probability is not None:
-        lines.append("the bounds over the interval probabilities: Storm's parametric engine, "
+        lines.append(f"the bounds over the interval probabilities: {res.probability.engine}, "
                      f"{res.probability.seconds:.3f} s")
     consts = ", ".join(f"{k}={literal(v)}" for k, v in res.constants.items())
     lines.append("")

@@ -80,9 +80,9 @@ def verdict_lines(results: Sequence[PropertyResult]) -> list[str]:
         if error == 0:
             lines.append(f"values exact (rational arithmetic){who}")
         elif error is not None and over_box:
-            lines.append(f"min and max within {num(error)} of the true extremes{who} (Storm's "
-                         f"parametric engine refines to {PARAMETER_PRECISION:g}, sound value "
-                         "iteration)")
+            lines.append(f"min and max within {num(error)} of the true extremes{who} (refined "
+                         f"to {PARAMETER_PRECISION:g} over the interval probabilities, by the "
+                         "engine named below)")
         elif error is not None:
             lines.append(f"every value within {num(error)} of the true one{who} (sound value "
                          "iteration)")

@@ -25,11 +25,14 @@ from dataclasses import dataclass, field
 
 from afsmc.compiler import lowered
 from afsmc.diagnostics import Diagnostic, Severity, Span, codes
+from afsmc.lower.lowering import Lowered
 from afsmc.lower.reduce import Reductions
 from afsmc.model import expr as E
 from afsmc.model import ir
 from afsmc.text import num
 from afsmc.verify.engines import parametric
+from afsmc.verify.lifting import route
+from afsmc.verify.lifting.model import NotLiftable
 from afsmc.verify.outcome.results import Checks, Partial, PropertyResult
 from afsmc.verify.plan.precision import PARAMETER_PRECISION, PARAMETER_SOLVER_ERROR
 
@@ -87,7 +90,8 @@ class ProbabilityBox:
     box: dict[str, tuple[float, float]]
     extremes: tuple[parametric.Extreme, ...]
     precision: float
-    seconds: float = 0.0  # the parametric engine's time, build and refinement
+    seconds: float = 0.0  # the bounds' time, build and refinement
+    engine: str = "Storm's parametric engine"  # what computed them
 
     def to_json(self) -> dict[str, object]:
         return parametric.to_json(self.box, self.extremes, self.precision)
@@ -113,28 +117,58 @@ def over_probabilities(checks: Checks, model: ir.Model, props: Sequence[ir.Prope
     points), so that the model bounded is the model checked. `beside`: further queries
     bounded with them that are not the mission's (the conditioning's expected steps).
 
-    The bounds are the values Storm attained (`Extreme.min_attained`): the true extreme
-    lies within `error` of each, beyond it (below a min, above a max)."""
+    The bounds are attained values (`Extreme.min_attained`: by afsmc's parameter lifting
+    where it takes the mission, else Storm's parametric engine): the true extreme lies
+    within `error` of each, beyond it (below a min, above a max)."""
     box = parametric.interval_box(model)
     if not box:
         return checks, None, {}
-    if progress is not None:
-        progress(f"bounding {len(props)} propert{'y' if len(props) == 1 else 'ies'} over "
-                 + ", ".join(f"{n} in [{lo:g}, {hi:g}]" for n, (lo, hi) in box.items())
-                 + " with Storm's parametric engine")
     t0 = time.perf_counter()
     asked = [*props, *beside]
     kept = dataclasses.replace(model, properties=tuple(asked) + tuple(preserve))
-    found = parametric.extremes(lowered(kept, "nondet", reductions), asked, via=via,
-                                precision=PARAMETER_PRECISION)
+    low = lowered(kept, "nondet", reductions)
+    found, gaps, engine = _lifted(low, asked, box, progress)
+    left = [p for p in asked if p.name not in {e.name for e in found}]
+    if left:
+        if progress is not None:
+            progress(f"bounding {len(left)} propert{'y' if len(left) == 1 else 'ies'} over "
+                     + ", ".join(f"{n} in [{lo:g}, {hi:g}]" for n, (lo, hi) in box.items())
+                     + " with Storm's parametric engine")
+        found += parametric.extremes(low, left, via=via, precision=PARAMETER_PRECISION)
+        engine = PARAMETRIC if not gaps else f"{LIFTING} and {PARAMETRIC}"
     seconds = time.perf_counter() - t0
     by_name = {e.name: e for e in found}
     error = bound_error(precision)
-    errors = {r.name: error for r in checks.properties if r.name in by_name}
+    errors = {r.name: max(error, gaps.get(r.name, 0.0)) for r in checks.properties
+              if r.name in by_name}
     widened = [_widened(r, by_name[r.name]) if r.name in by_name else r
                for r in checks.properties]
     return (dataclasses.replace(checks, properties=widened),
-            ProbabilityBox(box, tuple(found), PARAMETER_PRECISION, seconds), errors)
+            ProbabilityBox(box, tuple(found), PARAMETER_PRECISION, seconds, engine), errors)
+
+
+LIFTING = "afsmc's explorer, parameter lifting"
+PARAMETRIC = "Storm's parametric engine"
+
+
+def _lifted(low: Lowered, props: Sequence[ir.Property], box: dict[str, tuple[float, float]],
+            progress: Callable[[str], None] | None
+            ) -> tuple[list[parametric.Extreme], dict[str, float], str]:
+    """The bounds afsmc's explorer and parameter lifting give (afsmc.verify.lifting), each
+    one's gap; none where it does not take the mission (Storm's parametric engine then
+    bounds every property)."""
+    if progress is not None:
+        progress(f"bounding {len(props)} propert{'y' if len(props) == 1 else 'ies'} over "
+                 + ", ".join(f"{n} in [{lo:g}, {hi:g}]" for n, (lo, hi) in box.items())
+                 + " by parameter lifting on afsmc's explorer")
+    try:
+        found, gaps, _ = route.extremes(low, props, box, PARAMETER_PRECISION)
+    except NotLiftable as why:
+        if progress is not None:
+            progress(f"parameter lifting does not take it ({why}): Storm's parametric "
+                     "engine bounds it")
+        return [], {}, PARAMETRIC
+    return found, gaps, LIFTING
 
 
 def reach_bounds(model: ir.Model, targets: Sequence[tuple[str, E.Expr]], *,

@@ -24,8 +24,9 @@ pass. Everything is vectorised per bucket, per mode and per command.
 
 from __future__ import annotations
 
-from collections.abc import Callable
-from dataclasses import dataclass
+import dataclasses
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
@@ -158,6 +159,8 @@ class CBranch:
     updates: list[tuple[Field, Fn, bool]]  # (variable, new value, checked against its range)
     clear: int = 0  # the bits of the variables set to constants ...
     bits: int = 0  # ... and their new bits
+    # its probability at further valuations of the interval probabilities (`Compiled.at`)
+    others: list[Fn] = field(default_factory=list)
 
 
 @dataclass
@@ -179,6 +182,11 @@ class Compiled:
     dtmc: bool
     reward_names: list[str]
     keep: bool = False  # keep each state's key and each choice's command (a strategy's)
+    # With valuations of the interval probabilities (compile_model's `points`): the model is
+    # explored at the first, and each distinct branch probability there (a code of the
+    # explored arrays) maps to its values at the others, merged as the branches are
+    # (afsmc.verify.lifting; PointTable).
+    at: PointTable | None = None
 
 
 def storm_order(low: Lowered) -> dict[int, tuple[int, int, int]]:
@@ -195,13 +203,17 @@ def storm_order(low: Lowered) -> dict[int, tuple[int, int, int]]:
 
 
 def compile_model(low: Lowered, targets: list[E.Expr], rewards: list[str],
-                  keep: bool = False) -> Compiled:
+                  keep: bool = False, points: Sequence[Mapping[str, float]] = ()) -> Compiled:
+    """`points`: valuations of some constants (the interval probabilities), explored at
+    the first; each branch's probability also at the others (`Compiled.at`)."""
     model = low.model
     if low.parameters or low.network is not None:
         raise GiveUp("undefined constants or a composed mission")
     consts: dict[str, Any] = dict(model.const_values)
     for gen, (_, value) in low.bounds.items():
         consts[gen] = value
+    if points:
+        consts |= points[0]
     formulas = {f.name: f.value for f in model.formulas}
     labels = {lb.name: lb.value for lb in model.labels}
     base = Scope(consts, formulas, labels, low.weights)
@@ -221,6 +233,9 @@ def compile_model(low: Lowered, targets: list[E.Expr], rewards: list[str],
                 continue
             branches = [_branch(b.prob, b.updates, sc, lay, low, compile_expr)
                         for b in cmd.branches]
+            for b, cb in zip(cmd.branches, branches, strict=True):
+                cb.others = [compile_expr(fold(b.prob, dataclasses.replace(sc, consts={**consts, **p})))
+                             for p in points[1:]]
             acts: list[Fn | None] = []
             for r in structs:
                 items = [] if cmd.silent else [it for it in r.items if it.action == cmd.action]
@@ -232,7 +247,8 @@ def compile_model(low: Lowered, targets: list[E.Expr], rewards: list[str],
     init = {"mode": model.initial_mode.number} | {v.name: int(v.init) for v in model.variables}
     key = sum((init[f.name] - f.lo) * f.stride for f in lay.fields.values())
     return Compiled(lay, modes, [compile_expr(fold(t, base)) for t in targets], state,
-                    int(key), low.kind == "dtmc", list(rewards), keep)
+                    int(key), low.kind == "dtmc", list(rewards), keep,
+                    PointTable() if points else None)
 
 
 def _branch(prob: E.Expr, updates: tuple[tuple[str, E.Expr], ...], sc: Scope, lay: Layout,
@@ -298,35 +314,49 @@ class Expansion:
     command: npt.NDArray[np.int32]  # choice -> its lowered command's index
 
 
-def _merge(tk: I64, pr: F64) -> tuple[I64, I64, F64]:
+def _merge(tk: I64, pr: F64, others: F64 | None = None
+           ) -> tuple[I64, I64, F64, F64 | None]:
     """Rows of (successor, probability): zero probabilities dropped, equal successors of
-    a row merged (summed); (row of each branch, successor, probability)."""
+    a row merged (summed); (row of each branch, successor, probability), and `others`
+    (the probabilities at further points, n x k x points) dropped and merged alike."""
     n, k = tk.shape
     if k <= 4 and (pr != 0).all() and not any(
             (tk[:, i] == tk[:, j]).any() for i in range(k) for j in range(i + 1, k)):
-        return np.repeat(np.arange(n, dtype=np.int64), k), tk.ravel(), pr.ravel()
+        return (np.repeat(np.arange(n, dtype=np.int64), k), tk.ravel(), pr.ravel(),
+                None if others is None else others.reshape(n * k, -1))
     order = np.argsort(tk, axis=1, kind="stable")
     tk = np.take_along_axis(tk, order, axis=1)
     pr = np.take_along_axis(pr, order, axis=1)
     keep = (pr != 0).ravel()
     row = np.repeat(np.arange(n, dtype=np.int64), k)[keep]
     tkf, prf = tk.ravel()[keep], pr.ravel()[keep]
+    of = None if others is None else np.take_along_axis(
+        others, order[:, :, None], axis=1).reshape(n * k, -1)[keep]
     if tkf.size == 0:
-        return row, tkf, prf
+        return row, tkf, prf, of
     start = np.ones(tkf.size, bool)
     start[1:] = (tkf[1:] != tkf[:-1]) | (row[1:] != row[:-1])
     at = np.flatnonzero(start)
-    return row[at], tkf[at], np.add.reduceat(prf, at)
+    return (row[at], tkf[at], np.add.reduceat(prf, at),
+            None if of is None else np.add.reduceat(of, at, axis=0))
 
 
-def _command(cmd: CCommand, base: I64, sub: dict[str, Any]) -> tuple[I64, I64, F64, list[F64]]:
+def _command(cmd: CCommand, base: I64, sub: dict[str, Any],
+             at: PointTable | None = None
+             ) -> tuple[I64, I64, F64, list[F64]]:
     """The command's choices in the states `base` (their frame `sub`): (row, successor,
-    prob) per branch and the action rewards per choice."""
+    prob) per branch and the action rewards per choice; with `at` (Compiled.at), each
+    merged probability's values at the further points recorded there."""
     n = len(base)
     tks = np.empty((n, len(cmd.branches)), np.int64)
     prs = np.empty((n, len(cmd.branches)))
+    others = None if at is None else np.empty((n, len(cmd.branches),
+                                                len(cmd.branches[0].others)))
     for j, b in enumerate(cmd.branches):
         prs[:, j] = b.prob(sub)
+        if others is not None:
+            for i, fn in enumerate(b.others):
+                others[:, j, i] = fn(sub)
         tk = (base & ~b.clear) | b.bits if b.clear else base.copy()
         for f, fn, check in b.updates:
             new = fn(sub)
@@ -342,8 +372,50 @@ def _command(cmd: CCommand, base: I64, sub: dict[str, Any]) -> tuple[I64, I64, F
     if n and not np.abs(prs.sum(axis=1) - 1.0).max() <= SUM_TOLERANCE:  # NaN too
         raise GiveUp("a command's probabilities do not sum to 1")
     rewards = [np.zeros(n) if r is None else full(r(sub), n, np.float64) for r in cmd.rewards]
-    row, tk, pr = _merge(tks, prs)
+    row, tk, pr, of = _merge(tks, prs, others)
+    if at is not None and of is not None:
+        at.record(pr, of)
     return row, tk, pr, rewards
+
+
+# Two branch probabilities equal at the exploration's point must be the same function of
+# the interval probabilities: their values at the other points may differ by rounding only.
+SAME_FUNCTION = 1e-12
+
+
+class PointTable:
+    """Each distinct branch probability at the exploration's point (`Compiled.at`) and its
+    values at the further points, kept sorted by the first so that a batch's probabilities
+    are looked up (as ProbTable encodes them) rather than sorted."""
+
+    def __init__(self) -> None:
+        self.values = np.zeros(0)  # sorted
+        self.rows = np.zeros((0, 0))  # values x further points
+
+    def row(self, v: float) -> tuple[float, ...]:
+        i = int(np.searchsorted(self.values, v))
+        return tuple(self.rows[i].tolist())
+
+    def record(self, pr: F64, others: F64) -> None:
+        """Each value of `pr` with its values at the other points (`others`, one row per
+        branch); GiveUp if one value stands for two functions (the point is meant to be
+        generic: this should not happen)."""
+        if not len(pr):
+            return
+        pos = np.searchsorted(self.values, pr)
+        hit = (self.values[np.minimum(pos, len(self.values) - 1)] == pr) \
+            if len(self.values) else np.zeros(len(pr), bool)
+        if not hit.all():
+            new, first = np.unique(pr[~hit], return_index=True)
+            rows = others[~hit][first]
+            values = np.concatenate([self.values, new])
+            order = np.argsort(values, kind="stable")
+            self.values = values[order]
+            self.rows = np.concatenate([self.rows.reshape(-1, others.shape[1]), rows])[order]
+            pos = np.searchsorted(self.values, pr)
+        if np.abs(others - self.rows[pos]).max(initial=0.0) > SAME_FUNCTION:
+            raise GiveUp("two branch probabilities agree at the point explored but not "
+                         "elsewhere")
 
 
 def expand(c: Compiled, keys: I64) -> Expansion:
@@ -371,7 +443,7 @@ def expand(c: Compiled, keys: I64) -> Expansion:
                 sel, sub = hit
                 if sel.size == 0:
                     continue
-                row, tk, pr, rw = _command(cmd, keys[part][sel], sub)
+                row, tk, pr, rw = _command(cmd, keys[part][sel], sub, c.at)
                 states.append(part[sel])
                 rows.append(row + choices)
                 tks.append(tk)

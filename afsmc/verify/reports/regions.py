@@ -1,7 +1,10 @@
 """Parameter regions (`afsmc regions`): a box of parameter values split into sub-boxes
 where a requirement holds for every value, fails for every value, or is not decided.
 
-Each sub-box is analysed by Storm's parameter lifting (sound: it over-approximates the box),
+Each sub-box is analysed by parameter lifting (sound: it over-approximates the box): on
+afsmc's explored model where the explorer takes the mission (`refine_lifted`: one lifted
+backward pass a round, for all its boxes and both sides; afsmc.verify.lifting), else by
+Storm's region checker,
 which proves the requirement for every value of the box (holds), proves its negation for
 every value (fails), or neither. Each proof keeps a margin (`margin`): the requirement is
 proved with its threshold moved by the margin against it (`P>=b` as `P>=b+m`) and its
@@ -39,12 +42,14 @@ import re
 from collections.abc import Mapping, Sequence
 from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, Literal
 
 from afsmc.diagnostics import CompileError, Diagnostic, Severity, codes
 from afsmc.lifetime import die_with_parent
 from afsmc.lower.lowering import Lowered
 from afsmc.verify.engines.parametric import Parametric, Source, check_box, source, with_parameters
+from afsmc.verify.lifting.bounds import decide
+from afsmc.verify.lifting.model import Lifted, Query
 from afsmc.verify.outcome.verdicts import Verdict
 from afsmc.verify.plan.precision import PARAMETER_SOLVER_ERROR
 
@@ -137,6 +142,8 @@ class RegionResult:
     # what a region's verdict means where it is not verify's word for its values (an MDP
     # with a bare requirement: the regions decide the worst choice only); "" where it is
     meaning: str = ""
+    # what decided the regions and bounded the whole box
+    engine: str = "Storm's parametric engine"
 
     def fraction(self, verdict: str) -> float:
         return sum(r.volume(self.box) for r in self.regions if r.verdict == verdict)
@@ -300,6 +307,43 @@ def _round(todo: list[Bounds], src: Source, formulas: tuple[str, str], built: Pa
         return list(pool.map(_check, todo))
     _WORKER["built"], _WORKER["formulas"] = built, formulas
     return [_check(b) for b in todo]
+
+
+# ---- the same rounds by parameter lifting on afsmc's explorer ---------------------------
+
+
+def lifted_query(req: Requirement, q: Query, mdp: bool) -> Query:
+    """The query a region is decided by: the requirement's side ("min" for >= and >),
+    under the scheduler it names (on an MDP, a bare requirement under every choice: the
+    min for >= and >, the max for <= and <)."""
+    lower = req.cmp in (">=", ">")
+    sched: Literal["min", "max", ""] = (
+        "" if not mdp else "min" if req.opt == "min" or (not req.opt and lower) else "max")
+    return dataclasses.replace(q, end="min" if lower else "max", sched=sched)
+
+
+def refine_lifted(lifted: Lifted, q: Query, req: Requirement, box: Bounds, *,
+                  coverage: float = 0.95, max_rounds: int = 12, progress: Any = None
+                  ) -> tuple[list[Region], int]:
+    """The regions of `box` as `refine` makes them, each sub-box decided by parameter
+    lifting on afsmc's explored model (afsmc.verify.lifting.bounds.decide: one lifted
+    pass a round for all its boxes, both sides, with the same margin)."""
+    done: list[Region] = []
+    todo: list[Bounds] = [dict(box)]
+    rounds = 0
+    while todo and rounds < max_rounds:
+        rounds += 1
+        verdicts = decide(lifted, q, todo, req.cmp, req.bound, margin(req))
+        unknown = [b for b, v in zip(todo, verdicts, strict=True) if v == "unknown"]
+        done += [Region(b, v) for b, v in zip(todo, verdicts, strict=True) if v != "unknown"]
+        decided = sum(r.volume(box) for r in done)
+        if progress is not None:
+            progress(f"round {rounds}: {len(todo)} boxes lifted, {decided:.1%} of the volume "
+                     "decided")
+        if decided >= coverage or not unknown:
+            return done + [Region(b, "unknown") for b in unknown], rounds
+        todo = [h for b in unknown for h in split(b, box)]
+    return done + [Region(b, "unknown") for b in todo], rounds
 
 
 def point_bounds(values: Mapping[str, float]) -> Bounds:
