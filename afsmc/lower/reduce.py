@@ -99,22 +99,31 @@ def observable_by_mode(model: ir.Model, modes: Sequence[int]) -> dict[int, set[s
     folded in every mode. Folding every expression in every mode was quadratic: the
     labels of 12,000 modes took minutes to compile."""
     out: dict[int, set[str]] = {m: set() for m in modes}
+    everywhere: set[str] = set()  # read in every mode
+    # a number no mode has: a comparison with any named mode folds as for the others
+    other = E.ModeVal("", min(m.number for m in model.modes) - 1)
     for e, where in _observed(model):
         inlined = inline(e, model)
-        read = E.vars_read(inlined)
-        if not read:
+        if not E.vars_read(inlined):
             continue
-        at = list(out) if where is None else [m for m in where if m in out]
         named = _modes_compared(inlined)
         if named is None:  # the mode read otherwise: each mode on its own
-            for m in at:
+            for m in out if where is None else [m for m in where if m in out]:
                 out[m] |= E.vars_read(_fold_at(inlined, _mode_val(model, m)))
             continue
-        # a number no mode has: a comparison with any named mode folds as for the others
-        other = E.ModeVal("", min(m.number for m in model.modes) - 1)
+        for m in named & set(out if where is None else where) & out.keys():
+            out[m] |= E.vars_read(_fold_at(inlined, _mode_val(model, m)))
         rest = E.vars_read(_fold_at(inlined, other))
-        for m in at:
-            out[m] |= E.vars_read(_fold_at(inlined, _mode_val(model, m))) if m in named else rest
+        if not rest:  # `x == 3 && mode == M17` elsewhere: nothing
+            continue
+        if where is None and not named:
+            everywhere |= rest
+            continue
+        for m in out if where is None else [m for m in where if m in out]:
+            if m not in named:
+                out[m] |= rest
+    for m in out:
+        out[m] |= everywhere
     return out
 
 
