@@ -49,6 +49,14 @@ def off_loop() -> ThreadPoolExecutor:
     return _DECODER
 
 
+async def in_thread(fn: Callable[..., Any], *args: Any) -> Any:
+    """`fn(*args)` in the decoding thread: work on a whole document (the outline, the
+    semantic tokens, the folds of a 2 MB document take seconds) that the event loop then
+    only sends. Python code there gives the loop's thread the interpreter every few
+    milliseconds."""
+    return await asyncio.get_running_loop().run_in_executor(off_loop(), fn, *args)
+
+
 class Failed:
     """The message a job sends when its work raised: the traceback, for the server's log."""
 

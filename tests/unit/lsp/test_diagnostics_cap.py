@@ -1,8 +1,15 @@
 """A document's diagnostics published by the language server: at most MAX_SHOWN, errors
 before warnings before notes, in the order reported, and N901 counting the rest; and the
-line index of a document is built once, whatever the number of positions converted."""
+line index of a document is built once, whatever the number of positions converted, and
+its client units are counted as pygls counts them (in C, not per character)."""
 
 from __future__ import annotations
+
+import json
+
+import pytest
+from lsprotocol import types as T
+from pygls.workspace.position_codec import PositionCodec
 
 from afsmc.diagnostics import Diagnostic, Severity, Source, Span, codes
 from afsmc.lsp.documents import MAX_SHOWN, shown
@@ -43,3 +50,28 @@ def test_positions_go_through_one_line_index() -> None:
         r = to_range(doc, off, off)
         assert text.count("\n", 0, off) == r.start.line
     assert doc.lines is lines  # not rebuilt per conversion
+
+
+@pytest.mark.parametrize("encoding", list(T.PositionEncodingKind))
+def test_client_units_are_pygls_s_at_c_speed(encoding: T.PositionEncodingKind) -> None:
+    text = "machine m; // é\n  x = \"😋 ab\"\r\nüñî😋😋 z\rplain\n"
+    codec = PositionCodec(encoding)
+    doc = Doc("file:///m.afsm", text, position_codec=codec)
+    for off in range(len(text) + 1):
+        pos = doc.server_position_at_offset(off)
+        assert doc.position_to_client_units(pos) == codec.position_to_client_units(doc.lines, pos)
+
+
+def test_a_big_reply_is_encoded_item_by_item_to_the_same_json() -> None:
+    from pygls.protocol.json_rpc import JsonRPCResponseMessage
+
+    from afsmc.lsp.state import BIG_REPLY, AfsmServer
+
+    proto = AfsmServer().protocol
+    r = T.Range(start=T.Position(line=1, character=2), end=T.Position(line=1, character=5))
+    symbols = [T.DocumentSymbol(name=f"C{i}", kind=T.SymbolKind.Constant, range=r,
+                                selection_range=r, detail="constant")
+               for i in range(BIG_REPLY + 1)]
+    reply = JsonRPCResponseMessage(id=7, result=symbols, jsonrpc="2.0")
+    whole = json.dumps(reply, default=proto._serialize_message)
+    assert json.loads(proto._encode(reply)) == json.loads(whole)
