@@ -11,6 +11,22 @@ Three shapes of input, each generated at a base size (x1) and ten times it (x10)
 - **long expression**: one guard that sums n terms, in groups of 100 in brackets (an
   expression nests at most 5,000 levels, E113, so a longer one is a sum of sums).
 
+With `--four`, the issue-51 table: each stage at four sizes (x1, x2, x4, x8) and the slope
+of log(time) against log(size) (1.0: linear; 2.0: quadratic):
+
+- **check / compile (PRISM)**: `afsmc check` and `afsmc compile` of the declarations
+  file, as commands (CPU time of the child process, start-up included);
+- **JANI**: `afsmc compile -t jani` of examples/overtake.afsm with an n-term sum in a guard
+  (CPU time and the file's bytes);
+- **fmt**: `afsmc fmt` of the declarations file;
+- **explorer**: `verify examples/patrol.afsm --const CELLS=n` by the default route and with
+  `--solver topological` (benchmarks/patrol_chain.py's runs);
+- **language server**: a document of n unused constants (n W304 warnings) opened in the
+  real server: the time to its diagnostics, and the hover round trips on a small document
+  meanwhile (median and max).
+
+`--only` picks stages by name there too.
+
 With `--mb`, only the issue's goal: `check`'s work on a declarations file of 1 MB
 (MB_MODES modes, 1,019,904 characters), to be answered in under 10 s.
 
@@ -28,9 +44,13 @@ it). docs/benchmarks.md ("Input size scaling") records the figures.
 from __future__ import annotations
 
 import argparse
+import asyncio
+import math
 import os
 import statistics
+import subprocess
 import sys
+import tempfile
 import time
 from collections.abc import Callable
 
@@ -155,13 +175,107 @@ def measure(stage: Callable[[str], None], text: str, repeat: int) -> tuple[float
     return statistics.median(times), answer
 
 
+def _command(argv: list[str]) -> float:
+    """CPU seconds (user + system) of `python -m afsmc ARGV` in a child process."""
+    before = os.times()
+    subprocess.run([sys.executable, "-m", "afsmc", *argv], cwd=ROOT, stdout=subprocess.DEVNULL,
+                   stderr=subprocess.DEVNULL, check=False)
+    after = os.times()
+    return (after.children_user - before.children_user) + (after.children_system
+                                                           - before.children_system)
+
+
+def slope(sizes: list[float], times: list[float]) -> float:
+    """The least-squares slope of log(time) against log(size)."""
+    xs = [math.log(x) for x in sizes]
+    ys = [math.log(max(t, 1e-3)) for t in times]
+    mx, my = statistics.fmean(xs), statistics.fmean(ys)
+    return sum((x - mx) * (y - my) for x, y in zip(xs, ys, strict=True)) / sum(
+        (x - mx) ** 2 for x in xs)
+
+
+def _guarded(n: int) -> str:
+    """examples/overtake.afsm with an n-term sum in Continue's guard."""
+    with open(os.path.join(ROOT, "examples", "overtake.afsm"), encoding="utf-8") as f:
+        src = f.read()
+    key = "action Continue in Pass when "
+    return src.replace(key, key + "(" + " + ".join(
+        "left" if k % 2 else "clear" for k in range(n)) + ") >= 0 && ")
+
+
+def _on_file(text: str, argv: Callable[[str, str], list[str]]) -> tuple[float, int]:
+    """CPU seconds of the command `argv(path, out dir)` on `text` written to a file, and
+    the bytes it wrote to the out dir."""
+    with tempfile.TemporaryDirectory() as tmp:
+        path = os.path.join(tmp, "bench.afsm")
+        with open(path, "w", encoding="utf-8") as f:
+            f.write(text)
+        out = os.path.join(tmp, "out")
+        os.mkdir(out)
+        t = _command(argv(path, out))
+        return t, sum(os.path.getsize(os.path.join(out, x)) for x in os.listdir(out))
+
+
+def _patrol(cells: int) -> dict[str, float]:
+    from benchmarks.patrol_chain import run_one
+    out = {}
+    for solver in ("topological", "auto"):
+        row = run_one(cells, solver, 3600)
+        out[solver] = float(str(row["cpu_s"]))
+    return out
+
+
+def _lsp(n: int) -> dict[str, float]:
+    from benchmarks.lsp_latency import while_big_document
+    text = "machine big;\nmode A = 0 initial final;\n" + "".join(
+        f"const int C{i} = {i % 97};\n" for i in range(n))
+    return asyncio.run(while_big_document(text))
+
+
+FOUR: dict[str, tuple[list[int], str, Callable[[int], dict[str, float]]]] = {
+    "check": ([750, 1500, 3000, 6000], "modes", lambda n: {
+        "CPU s": _on_file(declarations(n), lambda p, o: ["check", p])[0]}),
+    "compile (PRISM)": ([750, 1500, 3000, 6000], "modes", lambda n: {
+        "CPU s": _on_file(declarations(n), lambda p, o: ["compile", p, "-o", o])[0]}),
+    "JANI": ([500, 1000, 2000, 4000], "terms", lambda n: dict(zip(("CPU s", "bytes"), _on_file(
+        _guarded(n), lambda p, o: ["compile", "-t", "jani", p, "-o", o]), strict=True))),
+    "fmt": ([750, 1500, 3000, 6000], "modes", lambda n: {
+        "CPU s": _on_file(declarations(n), lambda p, o: ["fmt", p])[0]}),
+    "explorer (patrol)": ([500, 1000, 2000, 4000], "CELLS", _patrol),
+    "language server": ([11_250, 22_500, 45_000, 90_000], "constants", _lsp),
+}
+
+
+def four(only: str | None) -> None:
+    """The table; the slope counts the commands' start-up (about a second of imports, the
+    same at every size), so x8 / x4 (2.0: linear, 4.0: quadratic) says more of the large end."""
+    start = _on_file("machine m;\nmode A = 0 initial final;\n", lambda p, o: ["check", p])[0]
+    print(f"start-up: `afsmc check` of a two-line file takes {start:.2f} s of CPU\n")
+    print("| stage | size | measure | x1 | x2 | x4 | x8 | slope | x8 / x4 |")
+    print("|---|---|---|---:|---:|---:|---:|---:|---:|")
+    for stage, (sizes, unit, run) in FOUR.items():
+        if only and only not in stage:
+            continue
+        got = [run(n) for n in sizes]
+        for key in got[0]:
+            vals = [g[key] for g in got]
+            cells = " | ".join(f"{v:,.0f}" if key == "bytes" else f"{v:.2f}" for v in vals)
+            print(f"| {stage} | {sizes[0]:,}-{sizes[-1]:,} {unit} | {key} | {cells} | "
+                  f"{slope([float(x) for x in sizes], vals):.2f} | "
+                  f"{vals[3] / max(vals[2], 1e-9):.2f} |", flush=True)
+
+
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--four", action="store_true", help="each stage at four sizes, and slopes")
     ap.add_argument("--repeat", type=int, default=3)
     ap.add_argument("--scale", type=float, default=1.0, help="multiply the x1 sizes")
     ap.add_argument("--only", help="measure only the shapes whose name contains this")
     ap.add_argument("--mb", action="store_true", help="only check a 1 MB declarations file")
     args = ap.parse_args()
+    if args.four:
+        four(args.only)
+        return 0
     if args.mb:
         one_megabyte(args.repeat)
         return 0

@@ -118,6 +118,43 @@ async def server(text: str, repeat: int) -> None:
     await client.stop()
 
 
+SMALL = "machine m;\nconst int N = 3;\nvar x : [0..N] init 0;\nmode A initial final;\n"
+
+
+async def while_big_document(text: str) -> dict[str, float]:
+    """Open `text` in a fresh server and hover on a small document until the big one's
+    diagnostics arrive: the seconds to them, and the hover round trips meanwhile (ms)."""
+    client = LanguageClient("afsmc-bench", "0")
+    published: dict[str, float] = {}
+
+    @client.feature(T.TEXT_DOCUMENT_PUBLISH_DIAGNOSTICS)
+    def _diags(params: T.PublishDiagnosticsParams) -> None:
+        published.setdefault(params.uri, time.perf_counter())
+
+    await client.start_io(sys.executable, "-m", "afsmc.cli", "lsp")
+    await client.initialize_async(T.InitializeParams(capabilities=T.ClientCapabilities()))
+    client.initialized(T.InitializedParams())
+    small, big = "file:///tmp/bench_small.afsm", "file:///tmp/bench_big.afsm"
+    for uri, body in ((small, SMALL), (big, text)):
+        client.text_document_did_open(T.DidOpenTextDocumentParams(text_document=T.TextDocumentItem(
+            uri=uri, language_id="afsm", version=1, text=body)))
+        if uri == small:
+            while small not in published:
+                await asyncio.sleep(0.01)
+    opened, times = time.perf_counter(), []
+    while big not in published:
+        t = time.perf_counter()
+        await client.text_document_hover_async(T.HoverParams(
+            text_document=T.TextDocumentIdentifier(uri=small), position=T.Position(2, 12)))
+        times.append(time.perf_counter() - t)
+        await asyncio.sleep(0.02)
+    await client.shutdown_async(None)
+    client.exit(None)
+    await client.stop()
+    return {"to diagnostics s": published[big] - opened,
+            "hover median ms": statistics.median(times) * 1000, "hover max ms": max(times) * 1000}
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawTextHelpFormatter)
     ap.add_argument("--repeat", type=int, default=5)

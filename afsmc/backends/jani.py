@@ -383,9 +383,30 @@ def emit(low: Lowered) -> dict[str, Any]:
     }
 
 
+# Nesting levels written one item a line, indented; anything deeper is written on one line.
+INDENTED_LEVELS = 24
+
+
 def dumps(model: dict[str, Any]) -> str:
-    """Deterministic JSON text: insertion order, indent 2, UTF-8 operators, final newline."""
-    return json.dumps(model, indent=2, ensure_ascii=False, allow_nan=False) + "\n"
+    """Deterministic JSON text: insertion order, indent 2, UTF-8 operators, final newline;
+    a value nested deeper than INDENTED_LEVELS on one line. JANI has only binary operators,
+    so a sum of n terms nests n levels: indented all the way, each level's lines carried
+    the indentation of every level above (a 4,000-term guard became 300 MB of JANI, its
+    PRISM 150 KB); on one line, the text grows with the expression."""
+    return _dump(model, 0) + "\n"
+
+
+def _dump(value: Any, level: int) -> str:
+    """`json.dumps(value, indent=2)` at nesting `level`, down to INDENTED_LEVELS."""
+    if level >= INDENTED_LEVELS or not isinstance(value, (dict, list)) or not value:
+        return json.dumps(value, ensure_ascii=False, allow_nan=False)
+    inner = "\n" + "  " * (level + 1)
+    if isinstance(value, dict):
+        items = [json.dumps(str(k), ensure_ascii=False) + ": " + _dump(v, level + 1)
+                 for k, v in value.items()]
+        return "{" + inner + ("," + inner).join(items) + "\n" + "  " * level + "}"
+    items = [_dump(v, level + 1) for v in value]
+    return "[" + inner + ("," + inner).join(items) + "\n" + "  " * level + "]"
 
 
 def property_names(low: Lowered) -> list[str]:

@@ -257,6 +257,7 @@ E721 = Code("E721", Severity.ERROR, "a constant has drifted from the logs")
 # E9xx: the language server
 
 E999 = Code("E999", Severity.ERROR, "the language server could not process the file")
+N901 = Code("N901", Severity.NOTE, "the editor is shown the first 1,000 diagnostics of a file")
 
 
 # The groups of docs/diagnostics.md and of `afsmc explain`: a heading and the prefixes
@@ -272,7 +273,7 @@ GROUPS: tuple[tuple[str, tuple[str, ...]], ...] = (
     ("E6xx: diagrams", ("E6",)),
     ("W6xx: the mode graph", ("W6",)),
     ("E7xx: controllers for the robot, and conformance of the robot's logs", ("E7",)),
-    ("E9xx: the language server", ("E9",)),
+    ("E9xx: the language server", ("E9", "N9")),
 )
 
 REGISTRY: dict[str, Code] = {str(c): c for c in list(globals().values()) if isinstance(c, Code)}

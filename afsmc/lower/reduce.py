@@ -20,6 +20,7 @@
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass, replace
 
 from afsmc.lower.lowering import Branch, Command, Lowered
@@ -69,33 +70,95 @@ def reduce(low: Lowered, options: Reductions = Reductions()) -> Lowered:
 # ---- live variables ------------------------------------------------------------------
 
 
+def _observed(model: ir.Model) -> list[tuple[E.Expr, tuple[int, ...] | None]]:
+    """What labels, rewards and properties read, each with the modes it is read in (None:
+    every mode): an action's reward is read in the states its action leaves."""
+    out: list[tuple[E.Expr, tuple[int, ...] | None]] = [(lb.value, None) for lb in model.labels]
+    for r in model.rewards:
+        for it in r.items:
+            where = None if it.action is None else tuple(model.action(it.action).modes)
+            out += [(it.guard, where), (it.value, where)]
+    for p in model.properties:
+        out += [(x, None) for x in (getattr(p.path, "target", None), getattr(p.path, "left", None),
+                                    getattr(p.path, "bound", None)) if x is not None]
+    return out
+
+
 def observable(model: ir.Model, mode: int | None = None) -> set[str]:
     """Variables that labels, rewards or properties read: never reset. With `mode`, those
     they read in a state of that mode: `mode == Done && obj == 0` reads nothing elsewhere,
     so a final EmergencyLand keeps no mission variables and is one state, not one per
     (obj, t, ...) it was entered with."""
-    exprs: list[E.Expr] = [lb.value for lb in model.labels]
-    for r in model.rewards:
-        # an action's reward is read in the states its action leaves
-        exprs += [x for it in r.items for x in (it.guard, it.value)
-                  if mode is None or it.action is None or mode in model.action(it.action).modes]
-    for p in model.properties:
-        exprs += [x for x in (getattr(p.path, "target", None), getattr(p.path, "left", None),
-                              getattr(p.path, "bound", None)) if x is not None]
-    out: set[str] = set()
-    for e in exprs:
-        out |= E.vars_read(inline(e, model) if mode is None else at_mode(e, mode, model))
+    if mode is None:
+        return set().union(*(E.vars_read(inline(e, model)) for e, _ in _observed(model)))
+    return observable_by_mode(model, (mode,))[mode]
+
+
+def observable_by_mode(model: ir.Model, modes: Sequence[int]) -> dict[int, set[str]]:
+    """`observable(model, m)` for each of `modes`, in time linear in the model: an
+    expression whose only use of the mode is `mode == M` or `mode != M` (a label
+    `x == 3 && mode == M17`) is folded once for each mode it names and once for all the
+    others (it reads the same there); only another use of the mode (`mode < 3`) has it
+    folded in every mode. Folding every expression in every mode was quadratic: the
+    labels of 12,000 modes took minutes to compile."""
+    out: dict[int, set[str]] = {m: set() for m in modes}
+    everywhere: set[str] = set()  # read in every mode
+    # a number no mode has: a comparison with any named mode folds as for the others
+    other = E.ModeVal("", min(m.number for m in model.modes) - 1)
+    for e, where in _observed(model):
+        inlined = inline(e, model)
+        if not E.vars_read(inlined):
+            continue
+        named = _modes_compared(inlined)
+        if named is None:  # the mode read otherwise: each mode on its own
+            for m in out if where is None else [m for m in where if m in out]:
+                out[m] |= E.vars_read(_fold_at(inlined, _mode_val(model, m)))
+            continue
+        for m in named & set(out if where is None else where) & out.keys():
+            out[m] |= E.vars_read(_fold_at(inlined, _mode_val(model, m)))
+        rest = E.vars_read(_fold_at(inlined, other))
+        if not rest:  # `x == 3 && mode == M17` elsewhere: nothing
+            continue
+        if where is None and not named:
+            everywhere |= rest
+            continue
+        for m in out if where is None else [m for m in where if m in out]:
+            if m not in named:
+                out[m] |= rest
+    for m in out:
+        out[m] |= everywhere
     return out
+
+
+def _modes_compared(e: E.Expr) -> set[int] | None:
+    """The modes `e` compares the current mode with (`mode == M`, `M != mode`); None if it
+    reads the mode in any other way."""
+    named: set[int] = set()
+    seen = 0
+    for n in E.walk(e):
+        if isinstance(n, E.CurrentMode):
+            seen += 1
+        elif isinstance(n, E.Binary) and n.op in ("==", "!="):
+            for a, b in ((n.left, n.right), (n.right, n.left)):
+                if isinstance(a, E.CurrentMode) and isinstance(b, E.ModeVal):
+                    named.add(b.number)
+                    seen -= 1
+    return named if seen == 0 else None
+
+
+def _mode_val(model: ir.Model, mode: int) -> E.ModeVal:
+    m = model.mode_by_number(mode)
+    return E.ModeVal(m.name, m.number)
+
+
+def _fold_at(inlined: E.Expr, mode: E.ModeVal) -> E.Expr:
+    """An inlined expression in a state of `mode`, folded as far as that goes."""
+    return fold(E.transform(inlined, lambda n: mode if isinstance(n, E.CurrentMode) else None))
 
 
 def at_mode(e: E.Expr, mode: int, model: ir.Model) -> E.Expr:
     """`e` (formulas and labels inlined) in a state of `mode`, folded as far as that goes."""
-    m = model.mode_by_number(mode)
-
-    def fn(n: E.Expr) -> E.Expr | None:
-        return E.ModeVal(m.name, m.number) if isinstance(n, E.CurrentMode) else None
-
-    return fold(E.transform(inline(e, model), fn))
+    return _fold_at(inline(e, model), _mode_val(model, mode))
 
 
 _CMP = {"==": lambda a, b: a == b, "!=": lambda a, b: a != b, "<": lambda a, b: a < b,
@@ -170,7 +233,7 @@ def live_variables(low: Lowered) -> dict[int, set[str]]:
     model = low.model
     everything = {v.name for v in model.variables}
     modes = [m.number for m in model.modes]
-    reads = {m: observable(model, m) for m in modes}
+    reads = observable_by_mode(model, modes)
     for cmd in low.commands:
         r = _reads(cmd, model)
         for m in cmd.modes:

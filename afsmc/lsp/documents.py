@@ -2,7 +2,13 @@
 syntax and name errors published (or their absence, once fixed); the semantic checks then run
 in a child process, at once when they are quick and after a pause in typing (DEBOUNCE) when
 they are slow, exactly as `afsmc check` runs them, and replace the diagnostics. A newer
-version of a document cancels the work on the older one; each document has its own."""
+version of a document cancels the work on the older one; each document has its own.
+
+At most MAX_SHOWN diagnostics of a document are published (errors first), with one more,
+N901, that says how many are left out: a 2 MB file of unused constants has 90,000
+warnings, which no editor lists usefully and whose conversion and sending held up the
+server. They are converted to LSP's lines and characters off the event loop, through the
+document's one line index (positions.indexed)."""
 
 from __future__ import annotations
 
@@ -18,15 +24,16 @@ from afsmc.diagnostics import Diagnostic, Severity, codes
 from afsmc.lsp import index as I
 from afsmc.lsp.actions import fixes
 from afsmc.lsp.analysis import analyse_fast, analyse_full
-from afsmc.lsp.positions import snapshot, to_range
+from afsmc.lsp.positions import Doc, indexed, keep_index, to_range
 from afsmc.lsp.state import AfsmServer, DocState, guarded
-from afsmc.lsp.worker import Failed, Job, Send, Work, release_memory
+from afsmc.lsp.worker import Failed, Job, Send, Work, off_loop, release_memory
 from afsmc.model import ir
 
 DEBOUNCE = 0.3  # seconds of quiet before the full checks run, when they are slow
 FAST_CHECK = 0.1  # a full check this quick runs at once
 SMALL = 64 * 1024  # characters: a bigger document is parsed in a child process too
 FAST, FULL = "fast", "full"
+MAX_SHOWN = 1000  # diagnostics published per document; N901 counts the rest
 
 
 def _to_lsp(d: Diagnostic, doc: TextDocument, uri: str, index: I.Index | None) -> T.Diagnostic:
@@ -44,15 +51,46 @@ def _to_lsp(d: Diagnostic, doc: TextDocument, uri: str, index: I.Index | None) -
                         related_information=related or None, data=quick or None)
 
 
-def _publish(ls: AfsmServer, uri: str, version: int | None, text: str,
-             diags: list[Diagnostic]) -> None:
-    doc = snapshot(ls, uri, text)
+def shown(diags: list[Diagnostic]) -> list[Diagnostic]:
+    """The diagnostics published for a document: all of them up to MAX_SHOWN; beyond, the
+    first MAX_SHOWN by severity (errors, then warnings, then notes; each kind in the order
+    reported), in the order reported, and N901 saying how many of each kind are left out."""
+    if len(diags) <= MAX_SHOWN:
+        return diags
+    rank = {Severity.ERROR: 0, Severity.WARNING: 1, Severity.NOTE: 2}
+    order = sorted(range(len(diags)), key=lambda i: rank[diags[i].severity])
+    kept = sorted(order[:MAX_SHOWN])
+    left: dict[Severity, int] = {}
+    for i in order[MAX_SHOWN:]:
+        left[diags[i].severity] = left.get(diags[i].severity, 0) + 1
+    counts = ", ".join(f"{n:,} {kind.value}{'s' if n > 1 else ''}"
+                       for kind, n in sorted(left.items(), key=lambda kv: rank[kv[0]]))
+    note = Diagnostic(codes.N901, Severity.NOTE,
+                      f"{len(diags) - MAX_SHOWN:,} more diagnostics are not shown ({counts}): "
+                      f"the editor is given the first {MAX_SHOWN:,}", None,
+                      hint="`afsmc check FILE` lists them all")
+    return [diags[i] for i in kept] + [note]
+
+
+def _params(ls: AfsmServer, uri: str, version: int | None, text: str, diags: list[Diagnostic],
+            index: I.Index | None) -> tuple[T.PublishDiagnosticsParams, Doc]:
+    """What is published for `text` (off the event loop), and the line index it used."""
+    doc = indexed(ls, uri, text, keep=False)
+    return T.PublishDiagnosticsParams(
+        uri=uri, diagnostics=[_to_lsp(d, doc, uri, index) for d in shown(diags)],
+        version=version), doc
+
+
+async def _publish(ls: AfsmServer, uri: str, version: int | None, text: str,
+                   diags: list[Diagnostic]) -> None:
     st = ls.docs.get(uri)
     index = st.index if st is not None and st.index is not None and st.index.text == text else None
+    params, doc = await asyncio.get_running_loop().run_in_executor(
+        off_loop(), _params, ls, uri, version, text, diags, index)
+    keep_index(ls, uri, doc)
     if st is not None:
         st.published = text
-    ls.text_document_publish_diagnostics(T.PublishDiagnosticsParams(
-        uri=uri, diagnostics=[_to_lsp(d, doc, uri, index) for d in diags], version=version))
+    ls.text_document_publish_diagnostics(params)
 
 
 def _internal_diag(what: str) -> Diagnostic:
@@ -123,10 +161,11 @@ async def _analyse(ls: AfsmServer, uri: str, st: DocState, version: int | None,
         if msg is None:
             return
         if msg[1] is None:
-            _publish(ls, uri, version, text, [_internal_diag("parse")])
+            await _publish(ls, uri, version, text, [_internal_diag("parse")])
             return
         diags, model, index = msg[1]
         if index is not None:
+            index.text = text  # the same text (the child's copy of it is let go)
             st.index = index
             st.recovered = None
             _refresh_tokens(ls)
@@ -135,7 +174,7 @@ async def _analyse(ls: AfsmServer, uri: str, st: DocState, version: int | None,
         # text keeps none rather than show a constant's old value beside its new declaration.
         st.model = model
         if diags or st.shows_fast:  # new parse or name errors, or old ones now fixed
-            _publish(ls, uri, version, text, diags)
+            await _publish(ls, uri, version, text, diags)
         st.shows_fast = bool(diags)
         if diags:
             return
@@ -148,10 +187,10 @@ async def _analyse(ls: AfsmServer, uri: str, st: DocState, version: int | None,
         if msg is None:
             return
         if msg[1] is None:
-            _publish(ls, uri, version, text, [_internal_diag("check")])
+            await _publish(ls, uri, version, text, [_internal_diag("check")])
             return
         diags, st.last_check = msg[1]
-        _publish(ls, uri, version, text, diags)
+        await _publish(ls, uri, version, text, diags)
     finally:
         parsed.set()  # cancelled: a newer version's own event is waited for next
         job.cancel()

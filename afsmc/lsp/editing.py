@@ -3,6 +3,7 @@ refused with the reason, in words for the user."""
 
 from __future__ import annotations
 
+import asyncio
 import functools
 import logging
 import traceback
@@ -86,9 +87,10 @@ def refusing(fn: F) -> F:
     refused in general terms (never a traceback in the answer)."""
 
     @functools.wraps(fn)
-    def wrapper(ls: AfsmServer, params: Any) -> Any:
+    async def wrapper(ls: AfsmServer, params: Any) -> Any:
         try:
-            return fn(ls, params)
+            result = fn(ls, params)
+            return await result if asyncio.iscoroutine(result) else result
         except RequestFailed:
             raise
         except Exception:
@@ -168,14 +170,16 @@ def refusal(idx: I.Index, d: I.Definition, new: str, path: str) -> str | None:
 
 
 @refusing
-def rename(ls: AfsmServer, params: T.RenameParams) -> T.WorkspaceEdit | None:
+async def rename(ls: AfsmServer, params: T.RenameParams) -> T.WorkspaceEdit | None:
     uri = params.text_document.uri
     target = _rename_target(ls, uri, params.position)
     if target is None:
         raise RequestFailed(_why_not_renameable(ls, uri, params.position)
                             or "there is no name to rename here")
     idx, d, _ = target
-    why = refusal(idx, d, params.new_name, to_fs_path(uri) or uri)
+    # off the event loop: the renamed text is parsed and resolved (seconds for 2 MB)
+    why = await call(refusal, idx, d, params.new_name, to_fs_path(uri) or uri,
+                     process=len(idx.text) > SMALL)
     if why is not None:
         raise RequestFailed(f"cannot rename {d.kind} '{d.name}' to '{params.new_name}': {why}")
     doc = snapshot(ls, uri, idx.text)

@@ -8,6 +8,7 @@ from lsprotocol import types as T
 from afsmc.lsp import index as I
 from afsmc.lsp.positions import Doc, Shift, new_range, shift_of
 from afsmc.lsp.state import AfsmServer, guarded
+from afsmc.lsp.worker import in_thread
 from afsmc.syntax import ast
 
 
@@ -76,7 +77,13 @@ _SYMBOL_KINDS = {
 
 
 @guarded
-def document_symbols(ls: AfsmServer, params: T.DocumentSymbolParams) -> list[T.DocumentSymbol]:
+async def document_symbols(ls: AfsmServer, params: T.DocumentSymbolParams
+                           ) -> list[T.DocumentSymbol]:
+    """The outline, made off the event loop (90,000 symbols: seconds)."""
+    return list(await in_thread(_document_symbols, ls, params))
+
+
+def _document_symbols(ls: AfsmServer, params: T.DocumentSymbolParams) -> list[T.DocumentSymbol]:
     uri = params.text_document.uri
     st = ls.docs.get(uri)
     if st is None or st.index is None:

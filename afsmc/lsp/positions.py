@@ -11,6 +11,7 @@ from collections.abc import Sequence
 
 from lsprotocol import types as T
 from pygls.workspace import ServerTextPosition, TextDocument
+from pygls.workspace.position_codec import UnitCounter, Utf8, Utf16, Utf32
 
 from afsmc.diagnostics import split_lines
 from afsmc.lsp import index as I
@@ -24,7 +25,9 @@ class Doc(TextDocument):
     splits at form feeds and U+2028 too (which puts diagnostics lines too low), fails on an
     empty document, walks every line for each position, and puts the end of a last line
     without a newline on a line that does not exist. (`afsmc check` reads '\r' as a line end
-    too.)"""
+    too.) The line index is built once per document: pygls converts every position to the
+    client's units through `lines`, and 100,000 diagnostics of a 2 MB document each rebuilt
+    the list of its lines."""
 
     @functools.cached_property
     def _eols(self) -> list[tuple[int, int]]:
@@ -34,7 +37,7 @@ class Doc(TextDocument):
     def _starts(self) -> list[int]:
         return [0, *(end for _, end in self._eols)]
 
-    @property
+    @functools.cached_property
     def lines(self) -> Sequence[str]:
         s, starts = self.source, self._starts
         return tuple(s[a:b] for a, b in zip(starts, [*starts[1:], len(s)], strict=True))
@@ -44,10 +47,31 @@ class Doc(TextDocument):
         line = bisect.bisect_right(self._starts, offset) - 1
         return ServerTextPosition(line, offset - self._starts[line])
 
+    def position_to_client_units(self, position: ServerTextPosition | T.Position) -> T.Position:
+        """As pygls's, counting the client's code units of the line's prefix at C speed:
+        pygls adds them up one character at a time in Python (10 s for the 720,000
+        positions of a 2 MB document's outline)."""
+        lines = self.lines
+        if position.line >= len(lines):
+            return T.Position(line=len(lines), character=0)  # as pygls answers
+        prefix = lines[position.line][:position.character]
+        return T.Position(line=position.line, character=_units(prefix, self.position_codec.impl))
+
     def offset_at_server_position(self, server_position: ServerTextPosition) -> int:
         line = min(max(server_position.line, 0), len(self._starts) - 1)
         end = self._eols[line][0] if line < len(self._eols) else len(self.source)
         return min(self._starts[line] + max(server_position.character, 0), end)
+
+
+def _units(text: str, counter: UnitCounter) -> int:
+    """The code units of `text` in the client's encoding (LSP's UTF-16 by default)."""
+    if text.isascii() or isinstance(counter, Utf32):
+        return len(text)
+    if isinstance(counter, Utf16):
+        return len(text.encode("utf-16-le", "surrogatepass")) // 2
+    if isinstance(counter, Utf8):
+        return len(text.encode("utf-8", "surrogatepass"))
+    return int(counter.num_units(text))
 
 
 class Shift:
@@ -103,16 +127,29 @@ def snapshot(ls: AfsmServer, uri: str, text: str) -> Doc:
 
 
 def current(ls: AfsmServer, uri: str) -> Doc:
-    """The editor's current text, with afsmc's positions (kept while the text is the same:
-    the line starts of a 2 MB text take a tenth of a second to find)."""
-    source = ls.workspace.get_text_document(uri).source
+    """The editor's current text, with afsmc's positions."""
+    return indexed(ls, uri, ls.workspace.get_text_document(uri).source)
+
+
+def indexed(ls: AfsmServer, uri: str, text: str, keep: bool = True) -> Doc:
+    """`text` of `uri` with afsmc's positions, one line index per version of the document:
+    the one kept for it if `text` is that version's text (the line starts of a 2 MB text
+    take a tenth of a second to find), else a new one, kept if `keep` (off the event loop,
+    the index is made with `keep=False` and kept by the loop with `keep_index`)."""
     st = ls.docs.get(uri)
-    if st is not None and isinstance(st.current, Doc) and st.current.source is source:
+    if st is not None and isinstance(st.current, Doc) and st.current.source is text:
         return st.current
-    doc = snapshot(ls, uri, source)
-    if st is not None:
-        st.current = doc
+    doc = snapshot(ls, uri, text)
+    if keep:
+        keep_index(ls, uri, doc)
     return doc
+
+
+def keep_index(ls: AfsmServer, uri: str, doc: Doc) -> None:
+    """Keep `doc`'s line index for its text while that text is the document's."""
+    st = ls.docs.get(uri)
+    if st is not None and doc.source is st.text:
+        st.current = doc
 
 
 def to_range(doc: TextDocument, start: int, end: int) -> T.Range:

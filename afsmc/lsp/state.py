@@ -5,14 +5,16 @@ from __future__ import annotations
 
 import asyncio
 import functools
+import json
 import traceback
 import types
 from collections.abc import Callable
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 from typing import Any, TypeVar
 
 from lsprotocol import types as T
-from pygls.exceptions import JsonRpcException, JsonRpcInvalidRequest
+from pygls.exceptions import JsonRpcException, JsonRpcInternalError, JsonRpcInvalidRequest
 from pygls.lsp.server import LanguageServer
 from pygls.protocol import LanguageServerProtocol
 from pygls.protocol.json_rpc import RPCRequest
@@ -44,10 +46,48 @@ class DocState:
 
 
 
+BIG_REPLY = 1000  # items in a reply's result: encoded to JSON off the event loop
+_ENCODER: ThreadPoolExecutor | None = None
+
+
 class _Protocol(LanguageServerProtocol):
     """pygls only logs a request whose params do not fit its method (a negative position,
     no params at all), and a client waiting for the answer would hang: answer it with the
-    error."""
+    error. A reply of more than BIG_REPLY items (the outline of a 2 MB document: 90,000
+    symbols, 21 MB of JSON) is encoded in a thread of its own, not on the event loop, where
+    it held every other request for seconds; replies may come in any order (JSON-RPC
+    matches them by id), notifications keep theirs (they are never encoded there)."""
+
+    def _send_data(self, data: Any) -> None:
+        result = getattr(data, "result", None)
+        if not (isinstance(result, (list, tuple)) and len(result) > BIG_REPLY):
+            super()._send_data(data)
+            return
+        global _ENCODER
+        if _ENCODER is None:
+            _ENCODER = ThreadPoolExecutor(1, thread_name_prefix="afsmc-lsp-encode")
+        asyncio.get_running_loop().run_in_executor(_ENCODER, self._encode, data
+                                                   ).add_done_callback(self._write)
+
+    def _encode(self, data: Any) -> str:
+        """The reply's JSON, its result's items encoded one by one: one `json.dumps` of
+        the whole holds the interpreter's lock throughout (in C), and the event loop's
+        thread with it."""
+        msg = self._serialize_message(data)
+        items = msg.pop("result")
+        head = json.dumps(msg)
+        return head[:-1] + ', "result": [' + ", ".join(json.dumps(x) for x in items) + "]}"
+
+    def _write(self, encoded: asyncio.Future[str]) -> None:
+        """Send a reply encoded off the loop, framed as pygls frames its own."""
+        try:
+            body = encoded.result()
+            header = (f"Content-Length: {len(body)}\r\n"
+                      f"Content-Type: {self.CONTENT_TYPE}; charset={self.CHARSET}\r\n\r\n")
+            if self.writer is not None:
+                self.writer.write((header + body).encode(self.CHARSET))
+        except Exception as error:
+            self._server._report_server_error(error, JsonRpcInternalError)
 
     def structure_message(self, data: dict[str, Any]) -> Any:
         try:

@@ -18,6 +18,7 @@ from lsprotocol import types as T
 from afsmc.lsp import index as I
 from afsmc.lsp.positions import Doc, Shift, shift_of
 from afsmc.lsp.state import AfsmServer, DocState, guarded
+from afsmc.lsp.worker import in_thread
 from afsmc.model.expr import FUNCTIONS
 from afsmc.syntax import ast
 
@@ -97,10 +98,15 @@ async def semantic_tokens(ls: AfsmServer, params: T.SemanticTokensParams) -> T.S
     if st is None:
         return T.SemanticTokens(data=[])
     await _parsed(st)
-    if st.index is None:
+    idx = st.index
+    if idx is None:
         return T.SemanticTokens(data=[])
-    shift, doc = shift_of(ls, uri, st.index)
-    return T.SemanticTokens(data=encode(spans(st.index), shift, doc))
+
+    def tokens() -> list[int]:  # off the event loop: a 2 MB document's take a second or more
+        shift, doc = shift_of(ls, uri, idx)
+        return encode(spans(idx), shift, doc)
+
+    return T.SemanticTokens(data=await in_thread(tokens))
 
 
 WAIT = 5.0  # seconds a token request waits for the parse of the current text

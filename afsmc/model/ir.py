@@ -375,11 +375,16 @@ class Model:
 
     @property
     def mode_names(self) -> dict[int, str]:
-        return {m.number: m.name for m in self.modes}
+        """Mode number -> name, built once per model (lowering asks for it per action); the
+        one dict is shared: read it, do not change it."""
+        return cast("dict[int, str]", self._index(
+            "mode_names", self.modes, lambda: {m.number: m.name for m in self.modes}))
 
     @property
     def interval_constants(self) -> tuple[Constant, ...]:
-        return tuple(c for c in self.constants if c.is_interval)
+        return cast("tuple[Constant, ...]", self._index(
+            "interval_constants", self.constants,
+            lambda: tuple(c for c in self.constants if c.is_interval)))
 
     @property
     def prob_intervals(self) -> tuple[Constant, ...]:

@@ -28,10 +28,11 @@ from typing import Any
 import lark
 from lark.exceptions import LarkError
 
-from afsmc.diagnostics import BOM, CompileError, Diagnostic, Severity, Span, codes
+from afsmc.diagnostics import BOM, CompileError, Diagnostic, Severity, Source, Span, codes
 from afsmc.syntax import ast
 from afsmc.syntax.fmt_layout import INDENT, Unit, lay_out
 from afsmc.syntax.grammar import grammar_text
+from afsmc.syntax.limits import MAX_SOURCE_CHARS
 from afsmc.syntax.parser import parse
 
 WIDTH = 100
@@ -63,8 +64,23 @@ def format_text(text: str, path: str = "<input>") -> str:
     except LarkError:  # the parser accepted it, so this would be a lexer disagreement
         raise CompileError([_internal(path, "cannot find the comments of this file")]) from None
     out = _Formatter(text, module, toks).run()
+    if len(out) > MAX_SOURCE_CHARS:
+        raise CompileError([_too_large(text, out, path)])
     _verify(text, out, module, toks, path)
     return out
+
+
+def _too_large(text: str, out: str, path: str) -> Diagnostic:
+    """E004 for a layout longer than afsmc reads: one declaration a line and bodies on
+    lines of their own add a few per cent to a dense file, and a file written past the
+    limit could no longer be checked (its parse would refuse it: the formatter reported
+    that as its own fault, E190)."""
+    return Diagnostic(
+        codes.E004, Severity.ERROR, f"{path}: formatted, the text would have {len(out):,} "
+        f"characters, more than the {MAX_SOURCE_CHARS:,} afsmc reads; the file is left "
+        "unchanged", Span.at_offset(Source(path, text), 0, 0),
+        hint="split the model, or generate it in afsmc's layout (`afsmc fmt` of a smaller "
+        "part shows it)")
 
 
 def _internal(path: str, why: str) -> Diagnostic:
