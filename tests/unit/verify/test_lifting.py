@@ -10,6 +10,7 @@ import itertools
 import random
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from afsmc.compiler import load, lowered
@@ -17,8 +18,9 @@ from afsmc.model import expr as E
 from afsmc.model import ir
 from afsmc.verify import run
 from afsmc.verify.core.uncertainty import LIFTING, PARAMETRIC
+from afsmc.verify.engines import explore, explore_graph
 from afsmc.verify.engines.parametric import Extreme, extremes, interval_box
-from afsmc.verify.lifting import bounds, route
+from afsmc.verify.lifting import bounds, passes, route
 from afsmc.verify.lifting.model import NotLiftable, build, queries
 from afsmc.verify.lifting.symbolic import multilinear
 from afsmc.verify.plan.precision import PARAMETER_PRECISION, PARAMETER_SOLVER_ERROR
@@ -248,3 +250,56 @@ def test_regions_decided_a_box_at_a_time_as_all_at_once(two_steps: Path,
     # PA(1 - PA)(1 - QB): at most 0.25 * 0.8 * 0.9 = 0.18 on the first box; at least
     # 0.48 * 0.48 * 0.88 = 0.2028 by lifting on the second; the third straddles 0.2
     assert together == ["fails", "holds", "unknown"]
+
+
+def test_votes_compare_each_parameters_best_corner_on_either_side() -> None:
+    # few distinct values, so that ties (no vote) occur; checked against the definition
+    # corner by corner, the first parameter's bit the most significant
+    rng = np.random.default_rng(49)
+    for k in (1, 2, 3):
+        signed = rng.integers(0, 4, size=(40, 1 << k, 2)).astype(float)
+        want = np.zeros((2, k, 2))
+        for c, q, i in itertools.product(range(40), range(2), range(k)):
+            ends = [min(signed[c, x, q] for x in range(1 << k) if (x >> (k - 1 - i)) & 1 == b)
+                    for b in (0, 1)]
+            want[0, i, q] += ends[1] > ends[0]
+            want[1, i, q] += ends[1] < ends[0]
+        assert (passes._votes(signed, k) == want).all()
+
+
+HALF = """machine half;
+
+const prob PX = [0.4, 0.6];
+
+mode A    = 0 initial;
+mode Done = 1 final;
+mode Fail = 2 final;
+
+action Go in A {
+    OUTCOMES
+}
+
+property done = P=? [ F mode == Done ];
+"""
+
+
+@pytest.mark.parametrize("outcomes", [
+    "PX: goto Done; 0.5: goto Fail;",  # sums to 1 at PX = 0.5 only
+    "1.5 - PX: goto Done; PX - 0.5: goto Fail;",  # 0 at PX = 0.5, dropped there
+])
+def test_a_distribution_off_one_at_a_further_point_is_refused_while_exploring(
+        tmp_path: Path, outcomes: str) -> None:
+    path = tmp_path / "half.afsm"
+    path.write_text(HALF.replace("OUTCOMES", outcomes), encoding="utf-8")
+    model = load(str(path)).model
+    low = lowered(model, "nondet")
+    targets = [model.properties[0].path.target]
+    for further, fine in ((0.5, True), (0.6, False)):
+        compiled = explore.compile_model(low, targets, [], points=[{"PX": 0.5}, {"PX": further}])
+        if fine:
+            # Fail is not reached where its probability is 0 at the point explored
+            states = 2 if "PX - 0.5" in outcomes else 3
+            assert explore_graph.explore(compiled, None, None, None).states == states
+        else:
+            with pytest.raises(explore.GiveUp, match="further valuation"):
+                explore_graph.explore(compiled, None, None, None)
