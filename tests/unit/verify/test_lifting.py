@@ -6,9 +6,11 @@ route (the same extremes within the precision)."""
 
 from __future__ import annotations
 
+import dataclasses
 import itertools
 import random
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pytest
@@ -303,3 +305,31 @@ def test_a_distribution_off_one_at_a_further_point_is_refused_while_exploring(
         else:
             with pytest.raises(explore.GiveUp, match="further valuation"):
                 explore_graph.explore(compiled, None, None, None)
+
+
+def test_regions_second_side_only_where_the_first_does_not_hold(
+        two_steps: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    model = load(str(two_steps)).model
+    low = lowered(model, "nondet")
+    prop = next(p for p in model.properties if p.name == "done")
+    lifted = build(low, interval_box(model), [prop.path.target], [])  # type: ignore[list-item]
+    req = R.parse_requirement('P>=0.2 [ F "done" ]')
+    q = R.lifted_query(req, queries(low, [prop])[0][0], mdp=False)
+    boxes = [{"PA": pa, "QB": (0.1, 0.12)} for pa in ((0.2, 0.25), (0.48, 0.52), (0.3, 0.5))]
+    asked: list[tuple[str, int]] = []
+    real = bounds._lifted_values
+
+    def counted(lf: Any, qq: Any, bs: Any) -> list[float]:
+        asked.append((qq.end, len(bs)))
+        return real(lf, qq, bs)
+
+    monkeypatch.setattr(bounds, "_lifted_values", counted)
+    verdicts = bounds.decide(lifted, q, boxes, req.cmp, req.bound, R.margin(req))
+    assert verdicts == ["fails", "holds", "unknown"]
+    assert asked == [("min", 3), ("max", 2)]  # the box that holds is not lifted again
+    # each verdict as each box's own lifted bounds on either side say
+    for b, v in zip(boxes, verdicts, strict=True):
+        worst = bounds._lift(lifted, q, b)[0]
+        best = bounds._lift(lifted, dataclasses.replace(q, end="max"), b)[0]
+        assert v == ("holds" if worst >= 0.2 + R.margin(req) else
+                     "fails" if best <= 0.2 - R.margin(req) else "unknown")
