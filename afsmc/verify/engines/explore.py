@@ -350,13 +350,11 @@ def _command(cmd: CCommand, base: I64, sub: dict[str, Any],
     n = len(base)
     tks = np.empty((n, len(cmd.branches)), np.int64)
     prs = np.empty((n, len(cmd.branches)))
-    others = None if at is None else np.empty((n, len(cmd.branches),
-                                                len(cmd.branches[0].others)))
+    uniform = True  # every branch probability the same in every state
     for j, b in enumerate(cmd.branches):
-        prs[:, j] = b.prob(sub)
-        if others is not None:
-            for i, fn in enumerate(b.others):
-                others[:, j, i] = fn(sub)
+        p = b.prob(sub)
+        uniform = uniform and np.ndim(p) == 0
+        prs[:, j] = p
         tk = (base & ~b.clear) | b.bits if b.clear else base.copy()
         for f, fn, check in b.updates:
             new = fn(sub)
@@ -371,11 +369,37 @@ def _command(cmd: CCommand, base: I64, sub: dict[str, Any],
         tks[:, j] = tk
     if n and not np.abs(prs.sum(axis=1) - 1.0).max() <= SUM_TOLERANCE:  # NaN too
         raise GiveUp("a command's probabilities do not sum to 1")
+    others = None
+    if at is not None and n:
+        others, uniform = _at_points(cmd, sub, prs, uniform)
     rewards = [np.zeros(n) if r is None else full(r(sub), n, np.float64) for r in cmd.rewards]
     row, tk, pr, of = _merge(tks, prs, others)
     if at is not None and of is not None:
-        at.record(pr, of)
+        k = len(cmd.branches)
+        # nothing merged or dropped from rows all alike: each row holds the first's
+        # probabilities (in its successors' order), so the first is recorded alone
+        at.record(*((pr[:k], of[:k]) if uniform and len(pr) == n * k else (pr, of)))
     return row, tk, pr, rewards
+
+
+def _at_points(cmd: CCommand, sub: dict[str, Any], prs: F64, uniform: bool
+               ) -> tuple[F64, bool]:
+    """The command's branch probabilities at the further points (states x branches x
+    points; `prs` those at the point explored), and whether they are the same in every
+    state (`uniform`: so are those of `prs`). GiveUp where a distribution does not sum to
+    1 at a point, or a branch the merge drops (probability 0 at the point explored) is
+    not 0 at another, so that the merged distributions sum to 1 wherever these do."""
+    others = np.empty((len(prs), len(cmd.branches), len(cmd.branches[0].others)))
+    for j, b in enumerate(cmd.branches):
+        for i, fn in enumerate(b.others):
+            v = fn(sub)
+            uniform = uniform and np.ndim(v) == 0
+            others[:, j, i] = v
+    rows, at = (others[:1], prs[:1]) if uniform else (others, prs)  # alike: one checked
+    if not np.abs(rows.sum(axis=1) - 1.0).max() <= SUM_TOLERANCE or (rows[at == 0.0] != 0.0).any():
+        raise GiveUp("a command's probabilities do not sum to 1 at a further valuation of "
+                     "the interval probabilities")
+    return others, uniform
 
 
 # Two branch probabilities equal at the exploration's point must be the same function of

@@ -32,7 +32,7 @@ from afsmc.verify.engines.parametric import Extreme
 from afsmc.verify.lifting.model import Box, Lifted, Query, corners_of
 from afsmc.verify.lifting.passes import attained, lifted_bounds
 
-VALUE_BYTES = 1 << 29  # the most a region pass's values take (states x boxes x 2 sides)
+VALUE_BYTES = 1 << 29  # the most a region pass's values take (states x boxes)
 MAX_BOXES = 1000  # sub-boxes lifted per bound before the refinement gives up on the gap
 
 
@@ -135,31 +135,40 @@ def extremes(lifted: Lifted, qs: Sequence[Query], precision: float
 
 def decide(lifted: Lifted, q: Query, boxes: Sequence[Mapping[str, tuple[float, float]]],
            op: str, threshold: float, margin: float) -> list[str]:
-    """Each region's verdict by one lifted pass for all of them (or as many as
-    VALUE_BYTES allows), both sides at once:
-    "holds" if every valuation in the box meets `value op threshold` with the margin
-    against it, "fails" if none meets it with the margin the other way, else "unknown".
-    `q.end`: the side the requirement reads ("min" for >= and >, "max" for <= and <);
-    the other side is its mirror."""
+    """Each region's verdict by lifted passes for all of them (or as many as VALUE_BYTES
+    allows): "holds" if every valuation in the box meets `value op threshold` with the
+    margin against it, "fails" if none meets it with the margin the other way, else
+    "unknown". `q.end`: the side the requirement reads ("min" for >= and >, "max" for <=
+    and <), computed first for every box; its mirror, the other side, only for the boxes
+    the first does not show to hold."""
     if not boxes:
         return []
+    lower = op in (">=", ">")
+    worst = _lifted_values(lifted, q, boxes)
+    holds = [(w >= threshold + margin) if lower else (w <= threshold - margin) for w in worst]
+    open_ = [b for b, h in zip(boxes, holds, strict=True) if not h]
     other = dataclasses.replace(q, end="max" if q.end == "min" else "min")
-    # the pass keeps a value per state, box and side: as many boxes at a time as
-    # VALUE_BYTES holds
-    per = max(1, VALUE_BYTES // (16 * max(lifted.states, 1)))
-    pairs: list[list[float]] = []
+    best = iter(_lifted_values(lifted, other, open_))
+    out = []
+    for h in holds:
+        if h:
+            out.append("holds")
+            continue
+        b = next(best)
+        fails = (b <= threshold - margin) if lower else (b >= threshold + margin)
+        out.append("fails" if fails else "unknown")
+    return out
+
+
+def _lifted_values(lifted: Lifted, q: Query, boxes: Sequence[Mapping[str, tuple[float, float]]]
+                   ) -> list[float]:
+    """`q`'s lifted bound over each box, by one pass for as many boxes as VALUE_BYTES
+    allows (the pass keeps a value per state and box)."""
+    per = max(1, VALUE_BYTES // (8 * max(lifted.states, 1)))
+    out: list[float] = []
     for i in range(0, len(boxes), per):
         part = boxes[i:i + per]
         corners = [c for b in part for c in corners_of(lifted.names, b)]
-        values, _, _ = lifted_bounds(lifted, [q, other], lifted.values_at(corners))
-        pairs += values.reshape(len(part), 2).tolist()
-    lower = op in (">=", ">")
-    out = []
-    for worst, best in pairs:
-        if (worst >= threshold + margin) if lower else (worst <= threshold - margin):
-            out.append("holds")
-        elif (best <= threshold - margin) if lower else (best >= threshold + margin):
-            out.append("fails")
-        else:
-            out.append("unknown")
+        values, _, _ = lifted_bounds(lifted, [q], lifted.values_at(corners))
+        out += values.reshape(len(part)).tolist()
     return out

@@ -22,6 +22,7 @@ column of a table (afsmc.verify.lifting.model.Lifted.values_at):
 
 from __future__ import annotations
 
+import functools
 import itertools
 from collections.abc import Sequence
 
@@ -154,14 +155,13 @@ def _votes(signed: F64, k: int) -> F64:
     choices x corners x queries, least is best). The corner these votes pick is where the
     refinement looks for an attained value: for a value monotone in each parameter, every
     choice that depends on a parameter prefers the same end."""
-    grid = signed.reshape(signed.shape[0], *([2] * k), signed.shape[2])
     out = np.zeros((2, k, signed.shape[2]))
     for i in range(k):
-        others = tuple(1 + j for j in range(k) if j != i)
-        lo = grid.take(0, axis=1 + i).min(axis=tuple(a - (a > 1 + i) for a in others)) \
-            if others else grid.take(0, axis=1)
-        hi = grid.take(1, axis=1 + i).min(axis=tuple(a - (a > 1 + i) for a in others)) \
-            if others else grid.take(1, axis=1)
+        # the corners with the parameter's bit 0 and 1 (the first parameter's the most
+        # significant), their least values by elementwise minima of the corners' columns
+        bit = 1 << (k - 1 - i)
+        ends = [[c for c in range(1 << k) if bool(c & bit) == side] for side in (False, True)]
+        lo, hi = (functools.reduce(np.minimum, [signed[:, c] for c in cs]) for cs in ends)
         with np.errstate(invalid="ignore"):
             d = hi - lo
             out[0, i] = (d > 0).sum(axis=0)

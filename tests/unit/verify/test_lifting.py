@@ -6,10 +6,13 @@ route (the same extremes within the precision)."""
 
 from __future__ import annotations
 
+import dataclasses
 import itertools
 import random
 from pathlib import Path
+from typing import Any
 
+import numpy as np
 import pytest
 
 from afsmc.compiler import load, lowered
@@ -17,8 +20,9 @@ from afsmc.model import expr as E
 from afsmc.model import ir
 from afsmc.verify import run
 from afsmc.verify.core.uncertainty import LIFTING, PARAMETRIC
+from afsmc.verify.engines import explore, explore_graph
 from afsmc.verify.engines.parametric import Extreme, extremes, interval_box
-from afsmc.verify.lifting import bounds, route
+from afsmc.verify.lifting import bounds, passes, route
 from afsmc.verify.lifting.model import NotLiftable, build, queries
 from afsmc.verify.lifting.symbolic import multilinear
 from afsmc.verify.plan.precision import PARAMETER_PRECISION, PARAMETER_SOLVER_ERROR
@@ -248,3 +252,84 @@ def test_regions_decided_a_box_at_a_time_as_all_at_once(two_steps: Path,
     # PA(1 - PA)(1 - QB): at most 0.25 * 0.8 * 0.9 = 0.18 on the first box; at least
     # 0.48 * 0.48 * 0.88 = 0.2028 by lifting on the second; the third straddles 0.2
     assert together == ["fails", "holds", "unknown"]
+
+
+def test_votes_compare_each_parameters_best_corner_on_either_side() -> None:
+    # few distinct values, so that ties (no vote) occur; checked against the definition
+    # corner by corner, the first parameter's bit the most significant
+    rng = np.random.default_rng(49)
+    for k in (1, 2, 3):
+        signed = rng.integers(0, 4, size=(40, 1 << k, 2)).astype(float)
+        want = np.zeros((2, k, 2))
+        for c, q, i in itertools.product(range(40), range(2), range(k)):
+            ends = [min(signed[c, x, q] for x in range(1 << k) if (x >> (k - 1 - i)) & 1 == b)
+                    for b in (0, 1)]
+            want[0, i, q] += ends[1] > ends[0]
+            want[1, i, q] += ends[1] < ends[0]
+        assert (passes._votes(signed, k) == want).all()
+
+
+HALF = """machine half;
+
+const prob PX = [0.4, 0.6];
+
+mode A    = 0 initial;
+mode Done = 1 final;
+mode Fail = 2 final;
+
+action Go in A {
+    OUTCOMES
+}
+
+property done = P=? [ F mode == Done ];
+"""
+
+
+@pytest.mark.parametrize("outcomes", [
+    "PX: goto Done; 0.5: goto Fail;",  # sums to 1 at PX = 0.5 only
+    "1.5 - PX: goto Done; PX - 0.5: goto Fail;",  # 0 at PX = 0.5, dropped there
+])
+def test_a_distribution_off_one_at_a_further_point_is_refused_while_exploring(
+        tmp_path: Path, outcomes: str) -> None:
+    path = tmp_path / "half.afsm"
+    path.write_text(HALF.replace("OUTCOMES", outcomes), encoding="utf-8")
+    model = load(str(path)).model
+    low = lowered(model, "nondet")
+    targets = [model.properties[0].path.target]
+    for further, fine in ((0.5, True), (0.6, False)):
+        compiled = explore.compile_model(low, targets, [], points=[{"PX": 0.5}, {"PX": further}])
+        if fine:
+            # Fail is not reached where its probability is 0 at the point explored
+            states = 2 if "PX - 0.5" in outcomes else 3
+            assert explore_graph.explore(compiled, None, None, None).states == states
+        else:
+            with pytest.raises(explore.GiveUp, match="further valuation"):
+                explore_graph.explore(compiled, None, None, None)
+
+
+def test_regions_second_side_only_where_the_first_does_not_hold(
+        two_steps: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    model = load(str(two_steps)).model
+    low = lowered(model, "nondet")
+    prop = next(p for p in model.properties if p.name == "done")
+    lifted = build(low, interval_box(model), [prop.path.target], [])  # type: ignore[list-item]
+    req = R.parse_requirement('P>=0.2 [ F "done" ]')
+    q = R.lifted_query(req, queries(low, [prop])[0][0], mdp=False)
+    boxes = [{"PA": pa, "QB": (0.1, 0.12)} for pa in ((0.2, 0.25), (0.48, 0.52), (0.3, 0.5))]
+    asked: list[tuple[str, int]] = []
+    real = bounds._lifted_values
+
+    def counted(lf: Any, qq: Any, bs: Any) -> list[float]:
+        asked.append((qq.end, len(bs)))
+        return real(lf, qq, bs)
+
+    monkeypatch.setattr(bounds, "_lifted_values", counted)
+    verdicts = bounds.decide(lifted, q, boxes, req.cmp, req.bound, R.margin(req))
+    assert verdicts == ["fails", "holds", "unknown"]
+    assert asked == [("min", 3), ("max", 2)]  # the box that holds is not lifted again
+    # each verdict as each box's own lifted bounds on either side say
+    for b, v in zip(boxes, verdicts, strict=True):
+        worst = bounds._lift(lifted, q, b)[0]
+        best = bounds._lift(lifted, dataclasses.replace(q, end="max"), b)[0]
+        assert v == ("holds" if worst >= 0.2 + R.margin(req) else
+                     "fails" if best <= 0.2 - R.margin(req) else "unknown")
