@@ -27,6 +27,7 @@ from __future__ import annotations
 import contextlib
 import ctypes
 import itertools
+from collections.abc import Iterator
 from dataclasses import dataclass, field
 from typing import Any, Literal, Protocol
 
@@ -313,6 +314,27 @@ def schedulers(a: Arrays, queries: list[Query]) -> tuple[list[float], npt.NDArra
         best[:, i:i + len(part)] = got
         del got
     return out, best
+
+
+def with_schedulers(a: Arrays, queries: list[Query]
+                    ) -> Iterator[tuple[list[Query], list[float], npt.NDArray[np.int32], F64]]:
+    """The queries in passes of one kind, as many per pass as GROUP_BYTES allows: each
+    pass's queries, their values in the initial state, each state's optimal choice for
+    each (n x queries, its number within the state) and every state's value (n x
+    queries)."""
+    n = len(a.states) - 1
+    most = _most(a, n, 12)
+    groups: dict[str, list[Query]] = {}
+    for q in queries:
+        groups.setdefault(q.kind, []).append(q)
+    for group in groups.values():
+        for i in range(0, len(group), most):
+            part = group[i:i + most]
+            best = np.zeros((n, len(part)), np.int32)
+            value = np.zeros((n, len(part)))
+            totals = _pass(a, part, best, value)
+            yield part, totals, best, value
+            del best, value
 
 
 def evaluate(a: Arrays, queries: list[Query], policy: Policy) -> list[float]:

@@ -230,24 +230,30 @@ def _give_back() -> None:
 
 def solve(a: acyclic.Arrays, queries: list[acyclic.Query], extract: Extract, view: View,
           out: Extracted, notify: Callable[[str, Any], None]) -> dict[str, float]:
-    """Each query's value: those `extract` asks of one at a time, with their strategies
-    and paths (into `out`), the others together."""
+    """Each query's value: those `extract` asks of side by side in passes of one kind
+    (each with every state's value and optimal choice), then their strategies and paths
+    one at a time (into `out`); the others together."""
     out.variables = view.variables
     plain = [q for q in queries if q.name not in extract.queries]
     values = acyclic.solve_many(a, plain) if plain else {}
-    for q in queries:
-        if q.name in extract.queries:
-            notify("phase", f"check {q.name}")
-            t0 = time.perf_counter()
-            values[q.name] = extract_query(a, q, extract, view, out)
-            out.seconds += time.perf_counter() - t0
+    asked = [q for q in queries if q.name in extract.queries]
+    for part, totals, best, value in acyclic.with_schedulers(a, asked):
+        notify("phase", "check " + ", ".join(q.name for q in part))
+        t0 = time.perf_counter()
+        for j, q in enumerate(part):
+            chosen = a.states[:-1] + best[:, j]
+            values[q.name] = extract_query(a, q, extract, view, out,
+                                           (totals[j], chosen, value[:, j]))
+            del chosen
+        out.seconds += time.perf_counter() - t0
     return values
 
 
 def extract_query(a: acyclic.Arrays, q: acyclic.Query, extract: Extract, view: View,
-                  out: Extracted) -> float:
-    """Query `q`'s value, and its strategy and paths as `extract` asks, into `out`."""
-    result, chosen, value = acyclic.scheduler(a, q)  # chosen: each state's choice
+                  out: Extracted, solved: tuple[float, I64, npt.NDArray[np.float64]]) -> float:
+    """Query `q`'s value, and its strategy and paths as `extract` asks, into `out`, from
+    `solved`: its value, each state's choice (its number in `a`) and every state's."""
+    result, chosen, value = solved
     name = q.name
     if name in extract.strategies or name == extract.policy:
         reward = a.rewards[q.reward] if q.kind == "R" else None
