@@ -33,7 +33,7 @@ from afsmc.report.sensitivity import Sensitivity, sensitivities
 from afsmc.sim.evidence import Evidence
 from afsmc.verify.core.api import load_with_formulas, select, sound_mode
 from afsmc.verify.core.options import VerifyOptions
-from afsmc.verify.engines.guard import mem_available
+from afsmc.verify.engines.guard import default_max_states, mem_available
 from afsmc.verify.outcome.results import PropertyResult, VerifyResult
 from afsmc.verify.outcome.strategy import StrategyEntry, has_choices
 
@@ -193,10 +193,12 @@ def drawn(model: ir.Model, res: VerifyResult) -> tuple[str, str]:
 
 
 def causes_of(model: ir.Model, checked_names: set[str], say: Say,
-              max_bytes: int | None = None) -> tuple[dict[str, list[Split]], list[str]]:
+              max_bytes: int | None = None, max_states: int | None = None
+              ) -> tuple[dict[str, list[Split]], list[str]]:
     """The causes of every failure property among those verified (`checked_names`, for
     the report's "How it fails"), and why the other reachability properties are not
-    there. `max_bytes`: the memory their model may take (afsmc.report.causes)."""
+    there. `max_bytes`, `max_states`: the memory and states their model may take
+    (afsmc.report.causes)."""
     notes = []
     wanted = []
     for prop in model.properties:
@@ -211,7 +213,8 @@ def causes_of(model: ir.Model, checked_names: set[str], say: Say,
         return {}, notes
     say("causes of " + ", ".join(p.name for p in wanted))
     try:
-        splits = split_all(model, wanted, paths=PATHS, max_bytes=max_bytes)
+        splits = split_all(model, wanted, paths=PATHS, max_bytes=max_bytes,
+                           max_states=max_states)
     except CompileError as exc:
         return {}, [*notes, exc.diagnostics[0].message]
     out: dict[str, list[Split]] = {}
@@ -264,9 +267,11 @@ def build(path: str, consts: Mapping[str, str] | None = None, *,
     free = mem_available()
     if pool is not None and free is not None and opts.memory_budget is None:
         opts = dataclasses.replace(opts, memory_budget=int(free * VERIFY_SHARE))
+    # their states limited as verify's are (--max-states, else what the free memory
+    # holds), so that a model verify refuses as too large is not explored here for long
     split_later = pool.submit(causes_of, full.model, names, say,
-                              None if free is None else int(free * CAUSES_SHARE)) \
-        if pool else None
+                              None if free is None else int(free * CAUSES_SHARE),
+                              opts.max_states or default_max_states()) if pool else None
     say("verifying")
     try:
         res = verify_file(path, list(properties), text=text, consts=consts, checked=checked,

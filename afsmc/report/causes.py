@@ -279,12 +279,13 @@ class _Asked:
 
 def split_all(model: ir.Model, props: Sequence[ir.Property], *,
               low: Lowered | None = None, paths: int = 0,
-              max_bytes: int | None = None) -> dict[str, list[Split]]:
+              max_bytes: int | None = None, max_states: int | None = None
+              ) -> dict[str, list[Split]]:
     """:func:`split` of several properties on one model: each gets a cause variable of
     its own, and Storm builds the model once for all. `paths`: with each property's
     split under its max (a DTMC: its only one), the `paths` most probable paths into its
-    largest cause. `max_bytes`: the most memory afsmc's own exploration of the
-    instrumented model may take (E417 past it; None: no limit)."""
+    largest cause. `max_bytes`, `max_states`: the most memory and states afsmc's own
+    exploration of the instrumented model may take (E417 past either; None: no limit)."""
     bad = [p for p in props if why_not(model, p) is not None]
     if bad:
         raise CompileError([d for p in bad for d in _refusal(model, p).diagnostics])
@@ -315,7 +316,7 @@ def split_all(model: ir.Model, props: Sequence[ir.Property], *,
             parts[key] = formula_text(dataclasses.replace(prop, path=path), "", p)
         asked.append(_Asked(prop, whole, parts, var, dict(numbering.keys)))
     extract = extract_for(inst, (), None, None) if paths else None
-    values = _explored(inst, model, asked, opts, paths, extract, max_bytes)
+    values = _explored(inst, model, asked, opts, paths, extract, (max_bytes, max_states))
     if values is None:
         values = _storm(emit(inst, variant_labels=bool(paths)).model, asked, paths, extract)
     names = model.mode_names
@@ -341,7 +342,7 @@ def split_all(model: ir.Model, props: Sequence[ir.Property], *,
 
 
 def _explored(inst: Lowered, model: ir.Model, asked: Sequence[_Asked], opts: list[Under],
-              paths: int, extract: Extract | None, max_bytes: int | None
+              paths: int, extract: Extract | None, limits: tuple[int | None, int | None]
               ) -> list[tuple[Shares, Extracted | None]] | None:
     """The shares by afsmc's own exploration and backward pass (causes_pass), as
     :func:`_storm` gives them; None where it does not apply: a property with a step bound
@@ -355,7 +356,7 @@ def _explored(inst: Lowered, model: ir.Model, asked: Sequence[_Asked], opts: lis
         wholes.append(inline(path.target, model))
     got = causes_pass.explored(inst, wholes, [(a.var, [a.numbers[key] for key in a.parts])
                                               for a in asked], opts, paths, extract,
-                                     max_bytes)
+                                     *limits)
     if got is None:
         return None
     return [({u: (total, dict(zip(a.parts, values, strict=True)))

@@ -35,25 +35,28 @@ Split = tuple[dict[Under, tuple[float, list[float]]], Extracted | None]
 
 def explored(inst: Lowered, wholes: Sequence[E.Expr], causes: Sequence[tuple[str, list[int]]],
              opts: Sequence[Under], paths: int = 0, extract: Extract | None = None,
-             max_bytes: int | None = None) -> list[Split] | None:
+             max_bytes: int | None = None, max_states: int | None = None
+             ) -> list[Split] | None:
     """Each property's whole target `wholes[i]` and its causes (`causes[i]`: the cause
     variable and the value of each part) on the instrumented model `inst`, under each
     scheduler of `opts`; None if afsmc's explorer does not take the model (Storm then
     does). With `paths` (and `extract`, the commands' labels), the most probable paths
     into the largest part under the last scheduler, as verify's `--witness` finds them.
-    Raises CompileError (E417) when the model's arrays outgrow `max_bytes`."""
+    Raises CompileError (E417) when the model's arrays outgrow `max_bytes` or it has
+    more than `max_states` states."""
     try:
         compiled = explore.compile_model(inst, list(wholes), [], extract is not None)
-        found = explore_graph.explore(compiled, None, None, max_bytes)
+        found = explore_graph.explore(compiled, None, max_states, max_bytes)
     except (explore.GiveUp, SimError):
         return None
     except explore.TooManyStates as exc:
-        assert max_bytes is not None
+        room = f"the {max_bytes / 2**30:.1f} GB set aside for it hold" \
+            if max_bytes is not None else f"--max-states {max_states:,}"
         raise CompileError([Diagnostic(
             codes.E417, Severity.ERROR,
             f"the causes are not split: their model (the mission with a cause variable per "
             f"property) has {'at least ' if exc.partial else ''}{exc.states:,} states, more "
-            f"than the {max_bytes / 2**30:.1f} GB set aside for it hold", None)]) from None
+            f"than {room}", None)]) from None
     a = found.arrays
     if a.order is None or any(var not in compiled.layout.fields for var, _ in causes):
         return None

@@ -234,3 +234,14 @@ def test_the_explorers_causes_and_paths_equal_storms(monkeypatch: pytest.MonkeyP
             assert [w.probability for w in a.paths] == pytest.approx(
                 [w.probability for w in b.paths], rel=1e-9)
             assert a.paths_note == b.paths_note
+
+
+def test_a_causes_model_past_its_state_limit_is_e417_not_explored_on() -> None:
+    """The report splits the causes beside the verification, each within its limits: a
+    model past `max_states` stops the exploration with E417 and the count reached."""
+    model = load(str(EXAMPLES / "uav.afsm"), {"T_LIMIT": "90", "DEADLINE": "90"}).model
+    props = [p for p in model.properties if why_not(model, p) is None]
+    with pytest.raises(CompileError) as err:
+        split_all(model, props, max_states=500)
+    (d,) = err.value.diagnostics
+    assert d.code == "E417" and "more than --max-states 500" in d.message
