@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from pathlib import Path
+
 # Four states to a final mode: the smallest machine with a label and a property.
 SMALL = """machine small;
 var x : [0..3] init 0;
@@ -27,3 +29,16 @@ property p = P=? [ F "done" ];
 """
 
 BOM = "\ufeff"
+
+
+def patrol_with_requirements(folder: Path) -> Path:
+    """examples/patrol.afsm with two requirements (one bounds a failure from above, one
+    asks for success), written into `folder`: the report's and the sensitivities' tests."""
+    from tests.conftest import EXAMPLES
+
+    path = folder / "patrol_req.afsm"
+    path.write_text((EXAMPLES / "patrol.afsm").read_text(encoding="utf-8") + """
+property fault_low = P<=0.2 [ F "halted" ];
+property finish_ok = P>=0.8 [ F "done" ];
+""", encoding="utf-8")
+    return path

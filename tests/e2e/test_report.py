@@ -13,15 +13,12 @@ from pathlib import Path
 import pytest
 
 from tests.conftest import EXAMPLES, ROOT, run_cli
+from tests.specs import patrol_with_requirements
 
 pytestmark = [pytest.mark.storm, pytest.mark.slow]  # full reports: 4-8 s each
 
 SECTIONS = ["mission", "requirements", "what-matters-most", "how-it-fails", "worst-case",
             "figures", "reproducibility"]
-REQUIREMENTS = """
-property fault_low = P<=0.2 [ F "halted" ];
-property finish_ok = P>=0.8 [ F "done" ];
-"""
 
 
 class Page(HTMLParser):
@@ -69,10 +66,7 @@ class Page(HTMLParser):
 
 @pytest.fixture(scope="module")
 def spec(tmp_path_factory: pytest.TempPathFactory) -> Path:
-    path = tmp_path_factory.mktemp("report") / "patrol_req.afsm"
-    path.write_text((EXAMPLES / "patrol.afsm").read_text(encoding="utf-8") + REQUIREMENTS,
-                    encoding="utf-8")
-    return path
+    return patrol_with_requirements(tmp_path_factory.mktemp("report"))
 
 
 @pytest.fixture(scope="module")

@@ -15,21 +15,15 @@ from afsmc.sim.evidence import value_spans
 from afsmc.verify.core.options import VerifyOptions
 from afsmc.verify.outcome.results import PropertyResult
 from tests.conftest import EXAMPLES
+from tests.specs import patrol_with_requirements
 
 pytestmark = [pytest.mark.storm, pytest.mark.slow]  # ~20 verifications: 6 s
 
-REQUIREMENTS = """
-property fault_low = P<=0.2 [ F "halted" ];
-property finish_ok = P>=0.8 [ F "done" ];
-"""
 
 
 @pytest.fixture(scope="module")
 def spec(tmp_path_factory: pytest.TempPathFactory) -> Path:
-    path = tmp_path_factory.mktemp("sens") / "patrol_req.afsm"
-    path.write_text((EXAMPLES / "patrol.afsm").read_text(encoding="utf-8") + REQUIREMENTS,
-                    encoding="utf-8")
-    return path
+    return patrol_with_requirements(tmp_path_factory.mktemp("sens"))
 
 
 def _with(text: str, path: str, name: str, value: float) -> str:
