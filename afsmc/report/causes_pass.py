@@ -111,7 +111,7 @@ def _traced(a: acyclic.Arrays, policy: acyclic.Policy, inst: Lowered, layout: ex
     """The `k` most probable paths under the scheduler `policy` into the target states
     of `target` (a part's label), as verify's `--witness` finds them."""
     out = Extracted()
-    _, chosen, reach = acyclic.scheduler(a, _query("part", "", target), policy)
+    _, chosen, reach = acyclic.under(a, _query("part", "", target), policy)
     strategy_arrays.paths_into(a, chosen, reach > 0, a.labels[LABEL + str(target)],
                                explicit.view(a, inst, layout, extract), k, out)
     return out

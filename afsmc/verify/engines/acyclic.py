@@ -300,19 +300,16 @@ class Policy:
 
 
 def schedulers(a: Arrays, queries: list[Query]) -> tuple[list[float], npt.NDArray[np.int32]]:
-    """Each query's value in the initial state (one kind, min and max alike) and its
-    optimal choices (n x queries, each state's first optimal choice, its number within
-    the state), as many queries per pass as GROUP_BYTES allows."""
-    n = len(a.states) - 1
-    best = np.zeros((n, len(queries)), np.int32)
-    out: list[float] = []
-    most = _most(a, n, 12)
-    for i in range(0, len(queries), most):
-        part = queries[i:i + most]
-        got = np.zeros((n, len(part)), np.int32)
-        out += _pass(a, part, got)
-        best[:, i:i + len(part)] = got
-        del got
+    """Each query's value in the initial state and its optimal choices (n x queries, each
+    state's first optimal choice, its number within the state), in the queries' order
+    (the passes of :func:`with_schedulers`)."""
+    best = np.zeros((len(a.states) - 1, len(queries)), np.int32)
+    out = [0.0] * len(queries)
+    column = {q.name: j for j, q in enumerate(queries)}
+    for part, totals, got, _ in with_schedulers(a, queries):
+        for j, (q, total) in enumerate(zip(part, totals, strict=True)):
+            out[column[q.name]] = total
+            best[:, column[q.name]] = got[:, j]
     return out, best
 
 
@@ -354,18 +351,14 @@ def _most(a: Arrays, n: int, per_state: int) -> int:
     return max(1, min(max(a.nbytes, GROUP_BYTES[0]), GROUP_BYTES[1]) // (per_state * max(n, 1)))
 
 
-def scheduler(a: Arrays, q: Query, policy: Policy | None = None) -> tuple[float, I64, F64]:
-    """Query `q`'s value in the initial state, each state's optimal choice (its number in
-    `a`: the first optimal one, as Storm's topological solver keeps) and every state's
-    value; with `policy` (one scheduler), its choices and values under it."""
+def under(a: Arrays, q: Query, policy: Policy) -> tuple[float, I64, F64]:
+    """Query `q`'s value in the initial state under the one scheduler of `policy`, that
+    scheduler's choice in each state (its number in `a`) and every state's value."""
     n = len(a.states) - 1
-    best = np.zeros(n, np.int64)
     value = np.zeros((n, 1))
-    result = _pass(a, [q], None if policy is not None else best, value, policy)[0]
-    if policy is not None:
-        best[:] = policy.offsets[:, int(policy.columns[0])]
-    best += a.states[:-1]
-    return result, best, value[:, 0]
+    result = _pass(a, [q], None, value, policy)[0]
+    chosen: I64 = policy.offsets[:, int(policy.columns[0])] + a.states[:-1]
+    return result, chosen, value[:, 0]
 
 
 def solve_many(a: Arrays, queries: list[Query]) -> dict[str, float]:
@@ -390,11 +383,11 @@ def _pass(a: Arrays, qs: list[Query], best: npt.NDArray[np.integer[Any]] | None 
     """One pass over the layers for queries of one kind, from the absorbing states back
     to the initial one: per layer, the choices' values are one sparse product (its
     branches' probabilities times their successors' values), then each state's is the
-    min or max over its choices. With `best` (n, or n x queries): each state's first
-    choice (number within the state) whose value is the optimum of each query, which is
-    the choice Storm's topological solver keeps; with `value` (n x queries): every
-    state's value. With `policy`, no optimum: each query's states take the choices of
-    its policy."""
+    min or max over its choices. With `best` (n x queries): each state's first choice
+    (number within the state) whose value is the optimum of each query, which is the
+    choice Storm's topological solver keeps; with `value` (n x queries): every state's
+    value. With `policy`, no optimum: each query's states take the choices of its
+    policy."""
     from scipy.sparse import csr_matrix
 
     k, n = len(qs), len(a.states) - 1
@@ -439,11 +432,8 @@ def _pass(a: Arrays, qs: list[Query], best: npt.NDArray[np.integer[Any]] | None 
                 per_state *= sign
         if best is not None:
             offsets = a.states[lo:hi + 1] - c0
-            if best.ndim == 1:
-                best[lo:hi] = _first_best(per_choice[:, 0], per_state[:, 0], offsets)
-            else:
-                for j in range(k):
-                    best[lo:hi, j] = _first_best(per_choice[:, j], per_state[:, j], offsets)
+            for j in range(k):
+                best[lo:hi, j] = _first_best(per_choice[:, j], per_state[:, j], offsets)
         value[lo:hi] = np.where(np.stack([t[lo:hi] for t in on_target], axis=1), reached,
                                 per_state)
     return [float(v) for v in value[a.initial]]
