@@ -9,8 +9,9 @@ from pathlib import Path
 
 import pytest
 
-from tests.conftest import EXAMPLES, run_cli
-from tests.e2e.test_report import REQUIREMENTS, SECTIONS
+from tests.conftest import run_cli
+from tests.e2e.test_report import SECTIONS
+from tests.specs import patrol_with_requirements
 
 pytestmark = [pytest.mark.storm, pytest.mark.slow]  # a report and a browser: 8 s
 
@@ -30,9 +31,7 @@ def _browser(p: object) -> object:
 def test_the_report_renders_in_chromium(tmp_path: Path) -> None:
     sync = pytest.importorskip("playwright.sync_api",
                                reason="playwright is not installed (pip install -e '.[dev]')")
-    spec = tmp_path / "patrol_req.afsm"
-    spec.write_text((EXAMPLES / "patrol.afsm").read_text(encoding="utf-8") + REQUIREMENTS,
-                    encoding="utf-8")
+    spec = patrol_with_requirements(tmp_path)
     out = tmp_path / "report.html"
     assert run_cli("report", str(spec), "-o", str(out)).code == 0
     with sync.sync_playwright() as p:
