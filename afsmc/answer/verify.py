@@ -27,8 +27,9 @@ class ModelStats(Answer):
                     "ceil), uniform (drawn at random)")
     engine: str = Field(description="the engine that checked it: sparse, hybrid, dd, or "
                                     "explicit (afsmc's own exploration)")
-    processes: int = Field(ge=1, description="Storm processes that built it (--split: one "
-                                             "per query)")
+    processes: int = Field(ge=0, description="Storm processes that built it (--split: one "
+                                             "per query); 0 for a uniform DTMC answered by "
+                                             "the MDP's exploration")
     solver: str | Absent = Field(
         None, description="how the equations were solved: acyclic, topological, "
                           "value-iteration, sound-value-iteration, exact; absent on the dd "

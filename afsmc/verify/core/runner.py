@@ -177,6 +177,9 @@ class CheckRun:
         # --exact: each model's (by resolution) values as `num/den`, by query
         self.exact: dict[str, dict[str, str]] = {}
         self.extracted: list[Extracted] = []  # schedulers and paths (Options.strategy)
+        # a later model's answers given by an earlier one's process, by resolution: the
+        # uniform DTMC's from the MDP's exploration (explicit.Uniform), with its stats
+        self.beside: dict[str, tuple[dict[str, float], dict[str, float], ModelStats]] = {}
 
     def kept(self, what: str, vals: dict[str, float]) -> list[Diagnostic]:
         """The note of what the finished models and this one have answered."""
@@ -278,11 +281,15 @@ class ModelLoop:
         # query -> its property's name (a complementary Pmin: that of the Pmax it gives)
         self.owner = {n: p.name for p, n in queries} | {
             self.use[n].name: p.name for p, n in queries if n in self.use}
-        self.units = self.plan(queries, run.engine == "hybrid")
-        self.i = 0  # the unit of the next process
         self.merged: ModelStats | None = None
         self.vals: dict[str, float] = {}
         self.secs: dict[str, float] = {}
+        given = run.beside.pop(resolution, None)
+        if given is not None:  # answered beside an earlier model: only the rest are asked
+            self.vals, self.secs, self.merged = dict(given[0]), dict(given[1]), given[2]
+            queries = [q for q in queries if q[1] not in self.vals]
+        self.units = self.plan(queries, run.engine == "hybrid")
+        self.i = 0  # the unit of the next process
         self.job_engine = run.engine
         # Once the guard reran one complementary Pmin query with full tables, the later ones
         # start with them: they share their shape, Pmin [F final & !target] (on scenario 1
@@ -434,7 +441,7 @@ class ModelLoop:
                                   precision=run.precision, exact=o.exact)
         if applies(self.low, self.job_engine, o.solver,
                    o.bisimulation or o.exact or run.precision is not None):
-            job = dataclasses.replace(job, explicit=self.low)  # afsmc's own exploration first
+            job = dataclasses.replace(job, explicit=self.low, uniform=self.uniform_beside())
         # no scheduler for a step-bounded query, nor for the rounding's kappa (conditioning)
         ex = request(self.low, o.strategy, run.witness, mine, self.run.asked_as,
                      skip={n for p, n in unit if stepped(p) or p.name == conditioning.STEPS})
@@ -457,6 +464,15 @@ class ModelLoop:
             # should they fall back to a process each, they keep the larger tables
             self.rest_full_tables = True
         return job, complementary, big_tables
+
+    def uniform_beside(self) -> tuple[str, ...]:
+        """The uniform DTMC's queries this MDP's exploration answers too (Job.uniform):
+        all of them, when one process explores the MDP for every query (not --split)."""
+        lows = self.run.lows
+        if self.resolution != "nondet" or len(lows) < 2 or lows[1][0] != "uniform" \
+                or len(self.units) != 1 or self.run.options.given.split:
+            return ()
+        return tuple(n for p in self.run.props for n, _ in property_variants(lows[1][1], p))
 
     def fresh_process(self, group: list[ir.Property]) -> bool | None:
         """A fresh process per unit when there are several, except where no child process
@@ -568,6 +584,13 @@ class ModelLoop:
             res.engine_reason = run.reason
         one = stats_of(res, self.resolution)
         self.merged = one if self.merged is None else add_runs(self.merged, one)
+        if res.uniform is not None:
+            u = res.uniform
+            run.beside["uniform"] = (u.values, u.seconds, ModelStats(
+                "dtmc", "uniform", res.states, u.transitions, res.states, 0.0, 0.0,
+                sum(u.seconds.values()), "explicit", "afsmc's exploration of the MDP: each "
+                "state's value the mean of its floor/ceil choices, by one more backward pass",
+                processes=0, solver="acyclic"))
         self.vals |= res.values
         self.secs |= res.seconds
         self.i += 1

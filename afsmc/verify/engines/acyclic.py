@@ -49,7 +49,10 @@ class Query:
 
     name: str
     kind: Literal["P", "R"]
-    opt: Literal["min", "max", ""]  # "" on a DTMC
+    # "" on a DTMC; "mean" on an MDP: the DTMC that picks each state's choices uniformly
+    # (the uniform resolution of interval constants, whose floor/ceil combinations are
+    # exactly a state's choices), solved on the MDP's arrays
+    opt: Literal["min", "max", "", "mean"]
     target: int  # index into the plan's target formulas
     reward: str  # the reward model's name ("" for P, or Storm's only reward model)
 
@@ -367,9 +370,9 @@ def solve_many(a: Arrays, queries: list[Query]) -> dict[str, float]:
     time as GROUP_BYTES allows."""
     n = len(a.states) - 1
     most = _most(a, n, 8)
-    groups: dict[str, list[Query]] = {}
+    groups: dict[tuple[str, bool], list[Query]] = {}
     for q in queries:
-        groups.setdefault(q.kind, []).append(q)
+        groups.setdefault((q.kind, q.opt == "mean"), []).append(q)
     out: dict[str, float] = {}
     for group in groups.values():
         for i in range(0, len(group), most):
@@ -397,6 +400,9 @@ def _pass(a: Arrays, qs: list[Query], best: npt.NDArray[np.integer[Any]] | None 
     reward = [a.rewards[q.reward] for q in qs] if qs[0].kind == "R" else None
     stuck = 0.0 if qs[0].kind == "P" else np.inf  # a choice that only loops
     reached = 1.0 if qs[0].kind == "P" else 0.0  # on the target
+    mean = qs[0].opt == "mean"  # (a pass's queries are all means or none)
+    assert all((q.opt == "mean") == mean for q in qs) and not (mean and (best is not None
+                                                                       or policy is not None))
     low = np.array([q.opt == "min" for q in qs])
     sign = np.where(low, 1.0, -1.0)  # a max as the min of the negated values
     for i, (lo, hi) in enumerate(_spans(a.layers)):
@@ -409,6 +415,13 @@ def _pass(a: Arrays, qs: list[Query], best: npt.NDArray[np.integer[Any]] | None 
         per_choice = np.asarray(step @ value)
         if reward is not None:
             per_choice += np.stack([r[c0:c1] for r in reward], axis=1)
+        if mean:
+            per_state = _mean(per_choice, None if a.stay is None else
+                              np.asarray(a.stay[c0:c1], np.float64), a.states[lo:hi + 1] - c0,
+                              stuck)
+            value[lo:hi] = np.where(np.stack([t[lo:hi] for t in on_target], axis=1), reached,
+                                    per_state)
+            continue
         if a.stay is not None:
             s = a.stay[c0:c1][:, None]
             if s.any():
@@ -437,6 +450,38 @@ def _pass(a: Arrays, qs: list[Query], best: npt.NDArray[np.integer[Any]] | None 
         value[lo:hi] = np.where(np.stack([t[lo:hi] for t in on_target], axis=1), reached,
                                 per_state)
     return [float(v) for v in value[a.initial]]
+
+
+def _mean(per_choice: F64, stay: F64 | None, offsets: I64, stuck: float) -> F64:
+    """Each state's value in the DTMC that picks its choices uniformly: the mean of its
+    choices' values (`per_choice`: each one's reward and branches' probabilities times
+    their successors' values, its self-loop left out; `offsets`: the states' first
+    choices, and the end). With self-loops the state's value v solves v = mean(o) +
+    mean(s) v, so v = sum(o) / (k - sum(s)) for k choices of self-loop probabilities s; a
+    state that only loops is `stuck` (0 for P, infinite for R)."""
+    sizes = np.diff(offsets)[:, None]
+    total = np.add.reduceat(per_choice, offsets[:-1], axis=0)
+    if stay is None or not stay.any():
+        out: F64 = total / sizes
+        return out
+    leave = sizes - np.add.reduceat(stay, offsets[:-1])[:, None]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        out = np.where(leave <= 0.0, stuck, total / leave)
+    return out
+
+
+def mean_transitions(a: Arrays) -> int:
+    """The transitions of the DTMC that picks each state's choices uniformly (queries
+    "mean"): each state's distinct successors over all its choices, a span at a time."""
+    total = 0
+    n = len(a.states) - 1
+    for lo, hi in _spans(a.layers):
+        c0, c1 = int(a.states[lo]), int(a.states[hi])
+        b0, b1 = int(a.choices[c0]), int(a.choices[c1])
+        per_choice = np.repeat(np.arange(hi - lo, dtype=np.int64), np.diff(a.states[lo:hi + 1]))
+        owner = np.repeat(per_choice, np.diff(a.choices[c0:c1 + 1]))
+        total += len(np.unique(owner * n + a.target[b0:b1]))
+    return total
 
 
 TRIM_EVERY = 32  # spans solved between two trim_heap()

@@ -50,26 +50,43 @@ def plan(low: Lowered, names: tuple[str, ...]) -> Plan:
     """The queries among `names` one backward pass answers; the others are left."""
     variants = {n: (p, opt) for p in low.model.properties for n, opt in property_variants(low, p)}
     out = Plan([], [], [], [])
-    keys: dict[str, int] = {}
     for name in names:
         found = variants.get(name)
-        target = None if found is None else _target(found[0])
-        if found is None or target is None:
+        if found is None or not _add(out, name, found[0],
+                                     "min" if found[1] == "min" else
+                                     "max" if found[1] == "max" else ""):
             out.left.append(name)
-            continue
-        prop, opt = found
-        key = repr(target)
-        if key not in keys:
-            keys[key] = len(out.targets)
-            out.targets.append(target)
-        reward = (prop.reward or "") if prop.kind == "R" else ""
-        if prop.kind == "R" and reward not in out.rewards:
-            out.rewards.append(reward)
-        kind: Literal["P", "R"] = "P" if prop.kind == "P" else "R"
-        direction: Literal["min", "max", ""] = "min" if opt == "min" else "max" if opt == "max" \
-            else ""
-        out.queries.append(acyclic.Query(name, kind, direction, keys[key], reward))
     return out
+
+
+MEAN = "\0uniform:"  # a uniform query's name in the pass, apart from the MDP's variants
+
+
+def plan_uniform(low: Lowered, names: tuple[str, ...], p: Plan) -> list[str]:
+    """Add to `p` the queries of the uniform DTMC among `names` (properties' names) that
+    the MDP's pass answers as means over each state's choices; the names it takes."""
+    props = {prop.name: prop for prop in low.model.properties}
+    return [name for name in names
+            if name in props and _add(p, MEAN + name, props[name], "mean")]
+
+
+def _add(p: Plan, name: str, prop: ir.Property,
+         opt: Literal["min", "max", "", "mean"]) -> bool:
+    """Add the query `name` of `prop` to the plan, with its target and reward model;
+    False if the pass does not answer it."""
+    target = _target(prop)
+    if target is None:
+        return False
+    key = repr(target)
+    index = next((i for i, t in enumerate(p.targets) if repr(t) == key), None)
+    if index is None:
+        index = len(p.targets)
+        p.targets.append(target)
+    reward = (prop.reward or "") if prop.kind == "R" else ""
+    if prop.kind == "R" and reward not in p.rewards:
+        p.rewards.append(reward)
+    p.queries.append(acyclic.Query(name, "P" if prop.kind == "P" else "R", opt, index, reward))
+    return True
 
 
 def _target(p: ir.Property) -> E.Expr | None:
@@ -92,6 +109,17 @@ class Answer:
     explore_time: float
     left: list[str]
     extracted: Extracted | None = None
+    uniform: Uniform | None = None  # the uniform DTMC's values, if asked
+
+
+@dataclass
+class Uniform:
+    """The uniform DTMC's values from the MDP's pass (each state the mean of its
+    floor/ceil choices) and that DTMC's size."""
+
+    values: dict[str, float]
+    seconds: dict[str, float]
+    transitions: int
 
 
 class TooMany(Exception):
@@ -103,13 +131,17 @@ class TooMany(Exception):
 
 def answer(low: Lowered, names: tuple[str, ...], what: str, notify: Notify,
            max_states: int | None = None, max_bytes: int | None = None,
-           extract: Extract | None = None) -> Answer | None:
+           extract: Extract | None = None, uniform: tuple[str, ...] = ()) -> Answer | None:
     """The queries' values by exploration and a backward pass, and what `extract` asks;
     None if the explorer gives up or the pass does not give what `extract` asks (Storm
-    then answers them all). Raises TooMany past `max_states`."""
+    then answers them all). `uniform`: properties whose values in the uniform DTMC the
+    same exploration gives (Answer.uniform), those it can. Raises TooMany past
+    `max_states`."""
     p = plan(low, names)
     if not p.queries or (extract is not None and not strategy_arrays.covers(extract, p.queries)):
         return None
+    means = plan_uniform(low, uniform, p)
+    mine = [q for q in p.queries if q.opt != "mean"]
     notify("phase", "explicit")
     started = time.perf_counter()
 
@@ -130,21 +162,39 @@ def answer(low: Lowered, names: tuple[str, ...], what: str, notify: Notify,
     notify("built", (found.states, found.transitions, built))
     notify("solver", f"the {what} explored by afsmc, acyclic but for self-loops "
            f"({len(found.arrays.layers) - 1:,} layers): each query by one exact backward pass")
-    notify("phase", "check " + ", ".join(q.name for q in p.queries))
+    notify("phase", "check " + ", ".join(q.name for q in mine))
     t0 = time.perf_counter()
     out: Extracted | None = None
     if extract is None:
-        values = acyclic.solve_many(found.arrays, p.queries)
+        values = acyclic.solve_many(found.arrays, mine)
     else:  # one query at a time, with its strategies and paths
         out = Extracted()
-        values = strategy_arrays.solve(found.arrays, p.queries, extract,
+        values = strategy_arrays.solve(found.arrays, mine, extract,
                                        view(found.arrays, low, compiled.layout, extract), out,
                                        notify)
-    secs = (time.perf_counter() - t0) / len(p.queries)
-    for q in p.queries:
+    secs = (time.perf_counter() - t0) / len(mine)
+    for q in mine:
         notify("value", (q.name, values[q.name], secs))
-    return Answer(values, {q.name: secs for q in p.queries}, found.states, found.choices,
-                  found.transitions, built, p.left, out)
+    return Answer(values, {q.name: secs for q in mine}, found.states, found.choices,
+                  found.transitions, built, p.left, out,
+                  _uniform(found.arrays, [q for q in p.queries if q.opt == "mean"], means,
+                           notify))
+
+
+def _uniform(a: acyclic.Arrays, queries: list[acyclic.Query], names: list[str],
+             notify: Notify) -> Uniform | None:
+    """The uniform DTMC's queries, answered on the MDP's arrays."""
+    if not queries:
+        return None
+    notify("solver", "the uniform DTMC's values from the same exploration: in each state "
+           "the mean of its floor/ceil choices, by one more backward pass")
+    t0 = time.perf_counter()
+    got = acyclic.solve_many(a, queries)
+    secs = (time.perf_counter() - t0) / len(queries)
+    for n in names:
+        notify("solver", f"checked {n} on the uniform DTMC in {secs:.0f} s")
+    return Uniform({n: got[MEAN + n] for n in names}, {n: secs for n in names},
+                   acyclic.mean_transitions(a))
 
 
 def view(a: acyclic.Arrays, low: Lowered, layout: explore.Layout,
@@ -180,7 +230,7 @@ def fill(job: Any, res: Any, notify: Notify, too_big: Callable[[Any, int, bool],
     has too many states: `res.failure` says so)."""
     try:
         ans = answer(job.explicit, job.names, job.what, notify, job.max_states,
-                     job.memory_budget, job.extract)
+                     job.memory_budget, job.extract, job.uniform)
     except TooMany as exc:
         res.states, res.failure = exc.states, too_big(job, exc.states, exc.partial)
         return None
@@ -193,7 +243,9 @@ def fill(job: Any, res: Any, notify: Notify, too_big: Callable[[Any, int, bool],
     res.build_time, res.check_time = ans.explore_time, sum(ans.seconds.values())
     res.values, res.seconds = dict(ans.values), dict(ans.seconds)
     res.extracted = ans.extracted
+    res.uniform = ans.uniform
     notify("engine", "explicit")
     if not ans.left:
         return None
-    return replace(job, names=tuple(ans.left), explicit=None, hybrid_extra=(), extract=None)
+    return replace(job, names=tuple(ans.left), explicit=None, hybrid_extra=(), extract=None,
+                   uniform=())

@@ -79,6 +79,9 @@ class Job:
     # the lowered model, for afsmc's own exploration and backward pass first
     # (afsmc.verify.engines.explicit); None: Storm only
     explicit: Any = None
+    # properties whose values in the uniform DTMC afsmc's exploration of this MDP gives as
+    # well (explicit.Answer.uniform), saving the uniform DTMC its own exploration
+    uniform: tuple[str, ...] = ()
     # `compose interleaving fair;`: each action's agents (afsmc.verify.plan.fairness) and
     # how many agents there are; None: every scheduler counts
     fair: tuple[tuple[str, tuple[int, ...]], ...] | None = None
@@ -142,6 +145,7 @@ class JobResult:
     elapsed: float = 0.0  # wall time of a process that failed (its answers may still count)
     failure: StormFailure | None = None
     extracted: Extracted | None = None  # what Job.extract asked for
+    uniform: Any = None  # explicit.Uniform: what Job.uniform asked, where the pass gave it
 
 
 def _quiet() -> None:
