@@ -171,3 +171,19 @@ def test_compile_applies_it_where_every_property_is_symmetric_and_says_so(
     jani = json.loads(run_cli("compile", FLEET, "-t", "jani", "-o", "-").out)
     assert "symmetry (r1, r2, r3)" in jani["metadata"]["description"]
     assert afsmc.load(FLEET).compile("prism") == prism.out
+
+
+@pytest.mark.storm
+def test_the_report_keeps_the_robots_named_where_it_shows_strategies(
+        whole: VerifyResult) -> None:
+    from afsmc.report.case import build
+
+    plays = build(FLEET, properties=["shift"], sensitivity=False, causes=False)
+    assert plays.result.symmetry is not None and plays.result.symmetry.reason is not None
+    assert plays.result.symmetry.reason.startswith("the report's strategies name the agents")
+    assert plays.result.model.states == whole.model.states
+    values = build(FLEET, properties=["shift"], sensitivity=False, causes=False,
+                   worst_case=False)
+    assert values.result.symmetry is not None and values.result.symmetry.reason is None
+    assert values.result.model.states < whole.model.states
+    _assert_same(whole, values.result)
