@@ -17,7 +17,7 @@ import afsmc
 from afsmc.api.sweep import sweep_file
 from afsmc.lower.reduce import Reductions
 from afsmc.verify.core.api import run
-from afsmc.verify.outcome.results import VerifyResult
+from afsmc.verify.outcome.results import VerifyResult, symmetry_words
 from tests.conftest import EXAMPLES, run_cli
 
 FLEET = str(EXAMPLES / "fleet.afsm")
@@ -152,6 +152,7 @@ def test_the_python_api_and_the_sweep_take_the_same_decision(whole: VerifyResult
     assert reduced < whole.model.states
     swept = sweep_file(FLEET, "K", [2], properties="shift", jobs=1).raw
     assert [p.states for p in swept.points] == [reduced]
+    assert [p.symmetry for p in swept.points] == [symmetry_words(res.raw.symmetry)]
 
 
 def test_compile_applies_it_where_every_property_is_symmetric_and_says_so(
