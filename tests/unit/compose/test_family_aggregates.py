@@ -87,3 +87,14 @@ def test_a_family_read_outside_them_or_a_bad_count_is_e253(tmp_path: Path, label
     (d,) = [d for d in err.value.diagnostics if d.code == "E253"]
     assert d.message.startswith(says), d.message
     assert d.span is not None and d.span.line == FLEET.count("\n") + 1
+
+
+def test_a_count_without_a_family_says_what_it_needs(tmp_path: Path) -> None:
+    text = FLEET.replace("agent r[1..N] : Robot;", "agents r1 = Robot(), r2 = Robot();")
+    path = _file(tmp_path, "pair.afsm", text + "label two = count(r1.mode == Finished) > 0;\n")
+    with pytest.raises(CompileError) as err:
+        load(path)
+    (d,) = [d for d in err.value.diagnostics if d.code == "E233"]
+    assert d.message == "unknown function 'count'"
+    assert d.hint is not None and d.hint.startswith(
+        "count(...) ranges over a family's members, and no family is declared")
