@@ -6,7 +6,7 @@
 
 The mission is `FLEET` below with its robots written out (`agents r1 = Robot(), ...`,
 labels and rewards over all of them), N robots, K = 2 chargers. Each N runs `verify
---json` with `--symmetry`, and without it for N up to --whole-up-to; a larger N without
+--json` with `--symmetry`, and with `--no-symmetry` for N up to --whole-up-to; a larger N without
 it runs under `--max-states` (it stops at E405, and the row says so). The rows go to the
 CSV (states, times, peak memory, every value) and are printed as a markdown table with
 the largest difference between the two runs' values of one N.
@@ -93,7 +93,7 @@ def measure(n: int, symmetry: bool, max_states: int | None, timeout: float,
     path = os.path.join(folder, f"fleet{n}.afsm")
     with open(path, "w", encoding="utf-8") as f:
         f.write(fleet(n))
-    args = ["verify", path, "--json", *(["--symmetry"] if symmetry else []),
+    args = ["verify", path, "--json", "--symmetry" if symmetry else "--no-symmetry",
             *(["--max-states", str(max_states)] if max_states is not None else [])]
     out, row = timed_row(args, timeout, {"robots": n, "symmetry": symmetry}, peak_digits=3)
     if out is not None and isinstance(out.get("model"), dict):

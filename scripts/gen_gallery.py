@@ -146,7 +146,7 @@ def instance_line(ex: Example, mission: afsmc.Mission) -> str:
 def section(ex: Example) -> tuple[list[str], bytes]:
     """An example's part of the page, and its diagram as SVG."""
     mission = afsmc.load(str(ex.path), consts=ex.consts)
-    res = mission.verify(reductions=Reductions(symmetry=True)) if ex.symmetry \
+    res = mission.verify(reductions=Reductions(symmetry="on")) if ex.symmetry \
         else mission.verify()
     svg = mission.diagram().render("svg")
     text = ex.path.read_text(encoding="utf-8")

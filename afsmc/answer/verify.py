@@ -247,6 +247,17 @@ class Baseline(Answer):
                                                       "baseline")
 
 
+class Symmetry(Answer):
+    """The symmetry reduction of a mission with alike agents (docs/language.md,
+    "Symmetry"): applied, or why not. Exact either way: the values are the same."""
+
+    groups: list[list[str]] = Field(description="the agents of each group kept in a "
+                                                "canonical order; empty when not applied")
+    reason: str | None = Field(description="why it was not applied (a property, label or "
+                                           "reward that tells the agents apart, or an "
+                                           "output that names them); null when applied")
+
+
 class Verification(Answer):
     """`afsmc verify --json` when it succeeds (exit 0, or 1 when a requirement does not
     hold)."""
@@ -269,6 +280,9 @@ class Verification(Answer):
     probability_intervals: ProbabilityIntervals | Absent = Field(
         None, description="bounds over the interval probabilities; absent without them")
     baseline: Baseline | Absent = Field(None, description="--baseline: what changed")
+    symmetry: Symmetry | Absent = Field(
+        None, description="the symmetry reduction, applied or why not; absent where no "
+                          "agents are alike (or --no-symmetry)")
 
 
 class VerifyFailure(Answer):

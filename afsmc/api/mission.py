@@ -154,13 +154,17 @@ class Mission:
               reductions: Reductions | None = None) -> dict[str, str]:
         """What `afsmc compile -t TARGET` writes: {suffix: text} (PRISM: ``.prism`` and
         ``.props``; JANI: ``.json``; DOT: ``.gv``; a controller, docs/robot.md: ``.py``
-        for "python", ``.h`` and ``.c`` for "c", made without the reductions)."""
+        for "python", ``.h`` and ``.c`` for "c", made without the reductions). By default
+        every exact reduction, the symmetry of alike agents included where the mission and
+        all its properties treat them alike (the header says which)."""
         targets = available_targets()
         if target not in targets:
             raise ValueError(f"target must be one of {', '.join(map(repr, targets))}; "
                              f"got {target!r}")
         if target in CONTROLLERS:
             reductions = Reductions.none()
+        elif reductions is None:  # as `afsmc compile`: the symmetry too where it is exact
+            reductions = Reductions(symmetry="auto")
         return targets[target](self.lowered(resolve, reductions))
 
     def compile(self, target: str = "prism", *, resolve: Resolution = "nondet",

@@ -24,7 +24,7 @@ from afsmc.lifetime import without_main
 from afsmc.text import num
 from afsmc.verify.core.uncertainty import described
 from afsmc.verify.engines.parametric import Extreme
-from afsmc.verify.outcome.results import PropertyResult, VerifyResult
+from afsmc.verify.outcome.results import PropertyResult, VerifyResult, symmetry_words
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -208,6 +208,9 @@ class Results:
                    f"{m.transitions:,} transitions, engine {html.escape(m.engine)}")
         if self.intervals is not None:
             caption += "; midpoint_*: at the interval probabilities' midpoint, never judged"
+        sym = symmetry_words(self.raw.symmetry)
+        if sym is not None:
+            caption += f"; {html.escape(sym)}"
         return (f'<table class="afsmc-results"><caption>{caption}</caption>'
                 f"<thead><tr>{head}</tr></thead><tbody>{body}</tbody></table>")
 

@@ -3,7 +3,16 @@ the composition as sync vectors (an agent's own action alone, a synchronised act
 every partner). The variables are all global, as in the single-agent model, so that a
 guard may read another agent's mode; labels and state rewards are the first automaton's
 location's transient values, the action rewards of a synchronised action are on its
-first partner's destinations (so that the joint move earns them once)."""
+first partner's destinations (so that the joint move earns them once).
+
+**One automaton per agent, not per template.** JANI allows one automaton to be named by
+several `system.elements`, each with its own copy of the automaton's local variables,
+which would write a template once. Storm 2 does not give each element its copy: its
+sparse builder builds such a network as if the elements shared their locals (a wrong
+model, silently) and its flattening refuses it ("Cannot add variable with name ...,
+because a variable with that name already exists"); tests/unit/backends/
+test_jani_template_automata.py pins this on a hand-written pair. So every instance is an
+automaton of its own, which the file's metadata says."""
 
 from __future__ import annotations
 
@@ -86,7 +95,11 @@ def emit_network(low: Lowered) -> dict[str, Any]:
         actions.append(name)
         syncs.append({"synchronise": [name if j in takers else None for j in range(n)],
                       "result": name})
-    how = ir.composition_text(net.kind, net.ties)
+    how = ir.composition_text(net.kind, net.ties) + ", one automaton per agent"
+    sym = low.symmetry
+    if sym is not None:  # as the PRISM header's list of reductions says it
+        how += "; " + (f"no symmetry: {sym.reason}" if sym.reason is not None else
+                       "; ".join(f"symmetry ({', '.join(g)})" for g in sym.groups))
     return {
         **header(low, f"mission {model.name}, {how}", actions),
         "variables": _variables(low, names),

@@ -139,7 +139,9 @@ def emit_network(low: Lowered) -> PrismOutput:
         out.append(f"// Interval constants are resolved by {how}.")
     if low.reductions:
         out.append(f"// Exact reductions: {', '.join(low.reductions)} "
-                   "(afsmc compile --no-reduce: none).")
+                   "(afsmc compile --no-reduce: none"
+                   + ("; --no-symmetry: the agents as they are" if low.symmetry is not None
+                      and low.symmetry.reason is None else "") + ").")
     out += [low.kind, ""]
     out += _constants(low)
     if model.formulas:

@@ -121,19 +121,28 @@ def add_reductions(p: argparse.ArgumentParser) -> None:
                    help="keep the declaration order of variables")
     g.add_argument("--no-saturate", action="store_true",
                    help="keep the full range of growing counters (e.g. mission time)")
-    g.add_argument("--symmetry", action="store_true",
-                   help="keep alike agents of a composed mission in a canonical order (one "
-                   "state per set of their local states), when the mission and every "
-                   "property treat them alike; the header says why not otherwise")
+    sym = g.add_mutually_exclusive_group()
+    sym.add_argument("--symmetry", action="store_const", const="on", dest="symmetry",
+                     help="keep alike agents of a composed mission in a canonical order (one "
+                     "state per set of their local states) even where an output names the "
+                     "agents (--strategy, --witness: they then name slots); a note says why "
+                     "not where the mission or a property tells them apart (default: applied "
+                     "where exact and nothing asked for names the agents; the output says "
+                     "which)")
+    sym.add_argument("--no-symmetry", action="store_const", const="off", dest="symmetry",
+                     help="check alike agents as they are, each state of each ordering")
 
 
 def reductions(args: argparse.Namespace) -> Reductions:
-    symmetry = bool(getattr(args, "symmetry", False))
+    """The reductions asked for; the symmetry's "auto" is decided by the verification
+    (afsmc.lower.symmetry.decide), and --no-reduce turns it off unless --symmetry."""
+    given = getattr(args, "symmetry", None)
     if getattr(args, "no_reduce", False):
-        return replace(Reductions.none(), symmetry=symmetry)
+        return replace(Reductions.none(), symmetry=given or "off")
     return Reductions(dead_reset=not getattr(args, "no_dead_reset", False),
                       reorder=not getattr(args, "no_reorder", False),
-                      saturate=not getattr(args, "no_saturate", False), symmetry=symmetry)
+                      saturate=not getattr(args, "no_saturate", False),
+                      symmetry=given or "auto")
 
 
 def overrides(args: argparse.Namespace) -> dict[str, str]:

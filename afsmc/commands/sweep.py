@@ -185,7 +185,9 @@ def run(args: argparse.Namespace) -> int:
     elif to_stdout or (not args.output and not args.plot):
         sys.stdout.write(res.to_csv())
     if not args.json:
-        for line in sweep_verdicts.summary(res):
+        # the symmetry reduction as verify's heading says it, once for the points alike
+        said = dict.fromkeys(p.symmetry for p in res.points if p.symmetry is not None)
+        for line in [*sweep_verdicts.summary(res), *said]:
             print(f"afsmc: {line}", file=sys.stderr)
     if progress:
         n = len(res.points)

@@ -40,7 +40,7 @@ from afsmc.verify.core.uncertainty import INTERVAL_CONSTANTS, described
 from afsmc.verify.engines.guard import MAX_STATES_LIMIT
 from afsmc.verify.engines.storm import ENGINES, VIAS
 from afsmc.verify.engines.storm_solvers import SOLVERS
-from afsmc.verify.outcome.results import ModelStats, PropertyResult
+from afsmc.verify.outcome.results import ModelStats, PropertyResult, symmetry_words
 from afsmc.verify.outcome.verdicts import failing
 from afsmc.verify.reports.junit import write_junit
 
@@ -194,6 +194,9 @@ def _model_name(res: VerifyResult, m: ModelStats) -> str:
 
 def render(res: VerifyResult) -> str:
     lines = [_header(res)]
+    sym = symmetry_words(res.symmetry)
+    if sym is not None:
+        lines.append(sym)
     u = res.uniform_model
     rows = with_verdicts(_values_table(res), res.properties)
     lines.append("")

@@ -58,6 +58,17 @@ class Command:
 
 
 @dataclass(frozen=True)
+class SymmetryNote:
+    """What the symmetry reduction (afsmc.lower.symmetry) did to a mission with alike
+    agents: the groups of agents it keeps in a canonical order, or why it did not (and the
+    property, label or reward that breaks the symmetry, if one does)."""
+
+    groups: tuple[tuple[str, ...], ...]  # the agents of each group reduced; () if not
+    reason: str | None = None  # why not, when not applied
+    where: Span | None = None
+
+
+@dataclass(frozen=True)
 class Lowered:
     model: ir.Model
     commands: tuple[Command, ...]
@@ -71,6 +82,8 @@ class Lowered:
     # A composed mission: its agents' commands apart (afsmc.lower.compose.Network), for
     # the backends that write one module per agent; `commands` are then their product.
     network: Any = None
+    # the symmetry reduction's outcome, where there was one to tell (afsmc.lower.symmetry)
+    symmetry: SymmetryNote | None = None
 
     @property
     def kind(self) -> Literal["dtmc", "mdp"]:

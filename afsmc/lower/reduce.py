@@ -22,6 +22,7 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass, replace
+from typing import Literal
 
 from afsmc.lower.lowering import Branch, Command, Lowered
 from afsmc.model import expr as E
@@ -29,15 +30,22 @@ from afsmc.model import ir
 from afsmc.model.bounds import bounds, static
 from afsmc.model.semantics import inline
 
+Symmetry = Literal["auto", "on", "off"]
+
 
 @dataclass(frozen=True)
 class Reductions:
     dead_reset: bool = True
     reorder: bool = True
     saturate: bool = True
-    # agents alike kept in a canonical order (afsmc.lower.symmetry); asked for, never a
-    # default: it changes which agent a strategy or a path names
-    symmetry: bool = False
+    # agents alike kept in a canonical order (afsmc.lower.symmetry): "on" (--symmetry)
+    # tries it whatever is asked; "auto" (the verifying front-ends' default) tries it too
+    # once afsmc.lower.symmetry.decide has found that no output asked for names the agents
+    # (it changes which agent a strategy or a path names), else turns it "off" with
+    # `symmetry_off` saying why; "off" without a reason is --no-symmetry (and the default of
+    # every other use of the lowered model: the simulator, the diagrams)
+    symmetry: Symmetry = "off"
+    symmetry_off: str | None = None
 
     @staticmethod
     def none() -> Reductions:
@@ -45,7 +53,8 @@ class Reductions:
 
     def describe(self) -> str:
         on = [n for n, v in (("dead-reset", self.dead_reset), ("saturate", self.saturate),
-                             ("reorder", self.reorder), ("symmetry", self.symmetry)) if v]
+                             ("reorder", self.reorder),
+                             ("symmetry", self.symmetry != "off")) if v]
         return ", ".join(on) if on else "none"
 
 

@@ -38,7 +38,7 @@ from afsmc.lower.reduce import (
     saturated_variables,
     saturation_points,
 )
-from afsmc.lower.symmetry import reduce_symmetric
+from afsmc.lower.symmetry import symmetric
 from afsmc.model import expr as E
 from afsmc.model import ir
 from afsmc.model.semantics import inline
@@ -57,11 +57,7 @@ def reduce_composed(low: Lowered, options: Reductions) -> Lowered:
     if options.reorder:
         low = _reorder(low)
         low = replace(low, reductions=(*low.reductions, "variable order"))
-    if options.symmetry:
-        sym = reduce_symmetric(low)
-        low = sym.lowered if sym.refused is None else replace(
-            low, reductions=(*low.reductions, f"no symmetry: {sym.refused}"))
-    return low
+    return symmetric(low, options)
 
 
 def _map_parts(net: Network, fn: Callable[[Part, Command], Command]) -> Network:

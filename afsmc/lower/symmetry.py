@@ -36,7 +36,8 @@ from dataclasses import dataclass, replace
 
 from afsmc.diagnostics import Span
 from afsmc.lower.compose import Network, Part, assemble
-from afsmc.lower.lowering import Branch, Command, Lowered
+from afsmc.lower.lowering import Branch, Command, Lowered, SymmetryNote
+from afsmc.lower.reduce import Reductions
 from afsmc.model import expr as E
 from afsmc.model import ir
 from afsmc.model.expr import Type
@@ -63,16 +64,54 @@ class Outcome:
     applied: tuple[str, ...]  # "r1, r2, r3, r4" per group reduced
     refused: str | None  # why not, naming what breaks the symmetry
     where: Span | None = None  # the property, label or reward that breaks it
+    alike: bool = True  # some agents are alike (else there is nothing to reduce)
+
+
+def decide(reductions: Reductions | None, hindrance: str | None) -> Reductions:
+    """The symmetry reduction as every verifying front-end decides it (verify, sweep,
+    report and the Python API, through afsmc.verify.check): `None` is the default, every
+    reduction on and the symmetry "auto"; "auto" stays (tried, and applied where the
+    mission and the properties checked treat the alike agents alike) unless something
+    asked for stands in its way (`hindrance`, in words: an output that names the agents,
+    which the canonical order turns into slots, or an engine that cannot build the reduced
+    model); it is then "off", with that reason for the header. "on" (--symmetry) and "off"
+    (--no-symmetry) are as asked."""
+    r = Reductions(symmetry="auto") if reductions is None else reductions
+    if r.symmetry != "auto" or hindrance is None:
+        return r
+    return replace(r, symmetry="off", symmetry_off=hindrance)
+
+
+def symmetric(low: Lowered, options: Reductions) -> Lowered:
+    """The lowered mission with the symmetry reduction as `options` decide: applied if it
+    is tried and exact, else the mission as it was; `Lowered.symmetry` and the header's
+    list of reductions say which, and why not where the mission has alike agents (or
+    --symmetry asked for it)."""
+    if options.symmetry == "off":
+        net = low.network
+        if options.symmetry_off is None or not isinstance(net, Network) \
+                or not candidates(low, net):
+            return low
+        out = Outcome(low, (), options.symmetry_off)
+    else:
+        out = reduce_symmetric(low)
+    if out.refused is None:
+        groups = tuple(tuple(n.split(", ")) for n in out.applied)
+        return replace(out.lowered, symmetry=SymmetryNote(groups))
+    if not out.alike and options.symmetry == "auto":
+        return low  # nothing to reduce, and nobody asked
+    return replace(low, reductions=(*low.reductions, f"no symmetry: {out.refused}"),
+                   symmetry=SymmetryNote((), out.refused, out.where))
 
 
 def reduce_symmetric(low: Lowered) -> Outcome:
     net = low.network
     if not isinstance(net, Network):
-        return Outcome(low, (), "the mission has one agent")
+        return Outcome(low, (), "the mission has one agent", alike=False)
     groups = candidates(low, net)
     if not groups:
         return Outcome(low, (), "no two agents are alike (the same variables, ranges, "
-                       "initial values, modes and actions)")
+                       "initial values, modes and actions)", alike=False)
     if net.ties == "fair":
         return Outcome(low, (), "fairness ('compose interleaving fair') is per agent, and "
                        "the quotient does not keep which agent is which")

@@ -26,6 +26,7 @@ from afsmc.backends.dot import diagram as dot_diagram
 from afsmc.check.sim_sources import INTERVAL, policy_of
 from afsmc.compiler import load as load_checked
 from afsmc.diagnostics import CompileError
+from afsmc.lower.symmetry import decide
 from afsmc.model import ir
 from afsmc.report.baseline import Comparison, compare
 from afsmc.report.causes import Split, split_all, splittable, why_not
@@ -254,6 +255,10 @@ def build(path: str, consts: Mapping[str, str] | None = None, *,
     # the ad-hoc formulas among the properties, named as verify names them
     full = load_with_formulas(path, consts, formulas, checked=checked)
     plays = worst_case and has_choices(model) and not opts.bisimulation
+    if plays:  # the strategies' table names the agents: the same model for the values
+        opts = dataclasses.replace(opts, reductions=decide(
+            opts.reductions, "the report's strategies name the agents, which the "
+            "reduction's canonical order would turn into slots (--symmetry forces it)"))
     # verify's schedulers come beside the values in one run, except in sound mode (a
     # requirement), where verify's values are checked without them (afsmc.verify.core
     # .conditioning): there the strategies come from a run of their own

@@ -15,7 +15,7 @@ from afsmc.report.case import Case
 from afsmc.report.causes import Split
 from afsmc.text import num
 from afsmc.verify.core.uncertainty import described
-from afsmc.verify.outcome.results import PropertyResult
+from afsmc.verify.outcome.results import PropertyResult, symmetry_words
 
 
 @dataclass(frozen=True)
@@ -96,6 +96,9 @@ def _mission(case: Case) -> Section:
     blocks.append(Table(["mode", "number", "kind"], modes))
     if case.agents:
         blocks.append(Para("Agents: " + ", ".join(case.agents) + "."))
+        sym = symmetry_words(case.result.symmetry)
+        if sym is not None:
+            blocks.append(Para(sym[0].upper() + sym[1:] + ".", "note"))
     if case.constants:
         blocks.append(Para("Instance: " + ", ".join(f"{k} = {v}" for k, v
                                                     in case.constants.items()) + "."))

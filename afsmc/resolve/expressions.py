@@ -206,8 +206,11 @@ class ExpressionsMixin(ResolverBase):
             self.rep.error(codes.E123, NOT_OPERATOR, e.func.span, hint=OPERATORS)
             return self._placeholder(s)
         if f not in E.FUNCTIONS:
+            # count/all/any are over a family (afsmc.resolve.templates): left here, none is
+            over = (f"{f}(...) ranges over a family's members, and no family is declared "
+                    "('agent r[1..N] : Robot;')" if f in ("count", "all", "any") else None)
             self.rep.error(codes.E233, f"unknown function '{f}'", e.func.span,
-                           hint=did_you_mean(f, [*E.FUNCTIONS, "w"]) or
+                           hint=over or did_you_mean(f, [*E.FUNCTIONS, "w"]) or
                            "functions: " + ", ".join(sorted(E.FUNCTIONS)) + ", w(Action)")
             return self._placeholder(s)
         args = tuple(self._num(x, ctx) for x in e.args)

@@ -42,14 +42,93 @@ def expand(module: ast.Module, rep: Reporter,
             templates[d.name.text] = d
             _check_params(d, rep)
     decls: list[ast.Decl] = []
+    families: dict[str, tuple[str, ...]] = {}  # a family's name -> its members' names
     for d in module.decls:
         if isinstance(d, ast.FamilyDecl):
+            name = d.name.text
             d = _family(d, module, templates, rep, overrides or {})
+            if d.instances:
+                families[name] = tuple(i.name.text for i in d.instances)
         if isinstance(d, ast.AgentsDecl):
             decls += [a for i in d.instances if (a := _instance(i, templates, rep)) is not None]
         elif not (isinstance(d, ast.AgentDecl) and d.params is not None):
             decls.append(d)
+    if families:
+        decls = list(rewrite(tuple(decls), _over_families(families, rep)))
     return dataclasses.replace(module, decls=tuple(decls))
+
+
+# ---- expressions over a family's members ----------------------------------------------
+
+AGGREGATES: dict[str, ast.BinOp] = {"count": "+", "all": "&&", "any": "||"}
+
+
+def _over_families(families: dict[str, tuple[str, ...]], rep: Reporter) -> Any:
+    """The rewriting of `count(e)`, `all(e)` and `any(e)` where `e` reads a family's
+    members by the family's name (`count(r.mode == Done) >= 2`, `all(r.done == ORDERS)`,
+    `any(r.mode in {Wait, Charging})`): `e` once per member, `r` replaced by the member's
+    name, joined by `+` (each as 1 or 0), `&&` or `||`. The family's name read elsewhere
+    is E253."""
+    def go(n: Any) -> Any:
+        if isinstance(n, ast.Call) and n.func.text in AGGREGATES:
+            return _aggregate(n, families, rep, go)
+        fam = _family_read(n, families)
+        if fam is not None:
+            rep.error(codes.E253, f"'{fam}' is a family of agents ({', '.join(families[fam])}): "
+                      "its members are read one at a time, or all at once in count(...), "
+                      "all(...) or any(...)", n.span,
+                      hint=f"for example 'count({fam}.mode == Done) >= 2', or "
+                      f"'{families[fam][0]}.mode'")
+            return n
+        return None
+    return go
+
+
+def _family_read(n: Any, families: dict[str, tuple[str, ...]]) -> str | None:
+    """The family `n` reads by its name (`r.mode`, `r.x`, `r.mode in {...}`), if it does."""
+    if isinstance(n, ast.FieldRef) and n.base.text in families:
+        return n.base.text
+    if isinstance(n, ast.ModeIn) and n.agent is not None and n.agent.text in families:
+        return n.agent.text
+    return None
+
+
+def _aggregate(call: ast.Call, families: dict[str, tuple[str, ...]], rep: Reporter,
+               go: Any) -> ast.Expr:
+    f = call.func.text
+    read: list[str] = []
+
+    def find(n: Any) -> Any:
+        fam = _family_read(n, families)
+        if fam is not None and fam not in read:
+            read.append(fam)
+        return None
+    if len(call.args) == 1:
+        rewrite(call.args[0], find)
+    if len(call.args) != 1 or len(read) != 1:
+        what = ("one expression" if len(call.args) != 1 else
+                "an expression that reads one family's members by the family's name")
+        rep.error(codes.E253, f"{f}(...) takes {what}" + (
+            f"; this one reads {', '.join(read)}" if len(read) > 1 else ""), call.span,
+            hint=f"for example '{f}(" + (f"{next(iter(families))}" if families else "r")
+            + ".mode == Done)'")
+        return call
+    members = families[read[0]]
+
+    def member(name: str) -> ast.Expr:
+        def put(n: Any) -> Any:
+            if _family_read(n, families) == read[0]:
+                field = "base" if isinstance(n, ast.FieldRef) else "agent"
+                return dataclasses.replace(n, **{field: ast.Ident(name, call.func.span)})
+            return None
+        e: ast.Expr = rewrite(rewrite(call.args[0], put), go)
+        if f == "count":
+            return ast.Ite(e, ast.Num(1, "1", call.span), ast.Num(0, "0", call.span), call.span)
+        return e
+    out = member(members[0])
+    for name in members[1:]:
+        out = ast.Binary(AGGREGATES[f], out, member(name), call.span)
+    return out
 
 
 def _family(d: ast.FamilyDecl, module: ast.Module, templates: dict[str, ast.AgentDecl],

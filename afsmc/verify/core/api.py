@@ -15,11 +15,11 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from afsmc.backends.prism import emit as prism_emit
-from afsmc.compiler import Checked, load, lowered, with_properties
+from afsmc.compiler import Checked, load, with_properties
 from afsmc.diagnostics import CompileError, Diagnostic, Severity, codes
 from afsmc.lower.lowering import Lowered
 from afsmc.lower.reduce import Reductions
-from afsmc.lower.symmetry import reduce_symmetric
+from afsmc.lower.symmetry import decide
 from afsmc.model import ir
 from afsmc.model.names import did_you_mean
 from afsmc.stack import deep
@@ -150,6 +150,8 @@ def check(model: ir.Model, props: Sequence[ir.Property],
     check sound at `verdicts`' DEFAULT_PRECISION unless either is given; each requirement's
     result then has its `verdict` (afsmc.verify.outcome.verdicts)."""
     o = VerifyOptions.of(options, option_values)
+    # the symmetry reduction, decided once for every front-end
+    o = dataclasses.replace(o, reductions=decide(o.reductions, symmetry_hindrance(o, witness)))
     precision, engine = sound_mode(props, o.precision, o.exact, o.engine)
     # kappa, the expected number of steps, for the rounding's bound on the values in sound
     # mode (afsmc.verify.core.conditioning)
@@ -177,7 +179,24 @@ def check(model: ir.Model, props: Sequence[ir.Property],
     if precision is not None and not o.exact:
         judged = _rounding_accounted(judged, kappa, model, props, o, checks, progress)
     return dataclasses.replace(checks, properties=judged, uncertainty=sources(model),
-                               probability=box)
+                               probability=box, symmetry=at_points.symmetry)
+
+
+def symmetry_hindrance(o: VerifyOptions, witness: WitnessRequest | None) -> str | None:
+    """What asked for stands in the way of the default symmetry reduction, in words
+    (afsmc.lower.symmetry.decide): an output that names the agents, or a symbolic engine
+    via PRISM (the reduced agents write each other's variables, which Storm's symbolic
+    PRISM builder gets wrong)."""
+    shown = [name for name, asked in (("--strategy", o.strategy),
+                                      ("--witness", witness is not None)) if asked]
+    if shown:
+        return (f"{' and '.join(shown)} name{'s' if len(shown) == 1 else ''} the agents, "
+                "which the reduction's canonical order would turn into slots "
+                "(--symmetry forces it)")
+    if o.engine in ("dd", "hybrid") and o.via == "prism":
+        return (f"the {o.engine} engine via PRISM: the reduced agents write each other's "
+                "variables, which Storm's symbolic builder gets wrong (--via jani allows it)")
+    return None
 
 
 def _rounding_accounted(judged: list[PropertyResult], kappa: float | None, model: ir.Model,
@@ -265,22 +284,21 @@ def run(path: str, options: VerifyOptions | None = None, *,
     return VerifyResult(path, model.name, consts_used, o.via, o.engine, bound, limit, checks.model,
                         checks.uniform_model, checks.properties, load_time,
                         time.perf_counter() - t0,
-                        [*loaded.warnings, *symmetry_refused(model, o.reductions)],
+                        [*loaded.warnings, *symmetry_refused(checks, o.reductions)],
                         None if model.composition is None else model.composition.text,
-                        checks.uncertainty, checks.probability)
+                        checks.uncertainty, checks.probability, checks.symmetry)
 
 
-def symmetry_refused(model: ir.Model, reductions: Reductions | None) -> list[Diagnostic]:
-    """N421 where `--symmetry` was asked and the mission or a property tells its alike
-    agents apart (afsmc.lower.symmetry): the model was checked without it."""
-    if reductions is None or not reductions.symmetry or model.composition is None:
-        return []
-    out = reduce_symmetric(lowered(model, reductions=dataclasses.replace(reductions,
-                                                                         symmetry=False)))
-    if out.refused is None:
+def symmetry_refused(checks: Checks, reductions: Reductions | None) -> list[Diagnostic]:
+    """N421 where `--symmetry` was asked and the mission or a property checked tells its
+    alike agents apart (afsmc.lower.symmetry): the model was checked without it. (Where
+    the default "auto" is not applied, the output's header says why instead.)"""
+    note = checks.symmetry
+    if reductions is None or reductions.symmetry != "on" or note is None \
+            or note.reason is None:
         return []
     return [Diagnostic(codes.N421, Severity.NOTE, "no symmetry reduction (the model was "
-                       f"checked whole): {out.refused}", out.where,
+                       f"checked whole): {note.reason}", note.where,
                        hint="docs/language.md, \"Symmetry\": every label, reward and "
                        "property must treat the alike agents alike")]
 

@@ -265,7 +265,8 @@ class CheckRun:
             raise CompileError([*errors, *notes], self.partial())
         main, *uniform_model = self.stats  # the MDP or only DTMC, then the uniform DTMC if any
         assert main is not None and None not in uniform_model  # else `errors` above
-        return Checks(main, uniform_model[0] if uniform_model else None, self.results())
+        return Checks(main, uniform_model[0] if uniform_model else None, self.results(),
+                      symmetry=self.lows[0][1].symmetry)
 
 
 class ModelLoop:

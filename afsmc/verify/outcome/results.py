@@ -14,6 +14,7 @@ from typing import TYPE_CHECKING
 
 from afsmc.backends.prism import formula_text
 from afsmc.diagnostics import Diagnostic
+from afsmc.lower.lowering import SymmetryNote
 from afsmc.model import ir
 from afsmc.model.pretty import show
 from afsmc.verify.engines.storm import JobResult, finite
@@ -156,6 +157,7 @@ class Checks:
     # probabilities' box with where the bounds were attained, if the mission has any
     uncertainty: tuple[str, ...] = ()
     probability: ProbabilityBox | None = None
+    symmetry: SymmetryNote | None = None  # the symmetry reduction's outcome, if any to tell
 
 
 @dataclass
@@ -196,6 +198,7 @@ class VerifyResult:
     composition: str | None = None  # agents: "interleaving", "timed, ties order|nondet"
     uncertainty: tuple[str, ...] = ()  # what min and max range over (Checks.uncertainty)
     probability: ProbabilityBox | None = None  # interval probabilities (Checks.probability)
+    symmetry: SymmetryNote | None = None  # alike agents reduced, or why not (Checks.symmetry)
 
     @property
     def kind(self) -> str:
@@ -230,7 +233,22 @@ class VerifyResult:
         }
         if self.probability is not None:
             out["probability_intervals"] = self.probability.to_json()
+        if self.symmetry is not None:
+            out["symmetry"] = {"groups": [list(g) for g in self.symmetry.groups],
+                               "reason": self.symmetry.reason}
         return out
+
+
+def symmetry_words(note: SymmetryNote | None) -> str | None:
+    """The front-ends' one line on the symmetry reduction (afsmc.lower.symmetry): which
+    agents it kept in a canonical order, or why the mission was checked whole."""
+    if note is None:
+        return None
+    if note.reason is not None:
+        return f"no symmetry reduction (the alike agents checked as they are): {note.reason}"
+    groups = "; ".join(", ".join(g) for g in note.groups)
+    return (f"symmetry: {groups} checked in a canonical order, one state per set of their "
+            "local states (exact: the values are those of the mission whole)")
 
 
 def shown(p: ir.Property) -> str:

@@ -36,6 +36,8 @@ class SweepPoint:
     seconds: float = 0.0  # wall time of the point (not written to the outputs)
     # A sweep over several constants: the others' values here (x is the last one's).
     at: tuple[tuple[str, Number], ...] = ()
+    # the symmetry reduction of alike agents here, in verify's words (results.symmetry_words)
+    symmetry: str | None = None
 
     def property(self, name: str) -> PropertyResult:
         return find_property(self.properties, name)

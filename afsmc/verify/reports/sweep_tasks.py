@@ -30,7 +30,7 @@ from afsmc.text import literal
 from afsmc.verify.core.api import check, load_with_formulas, select
 from afsmc.verify.core.options import VerifyOptions
 from afsmc.verify.engines.guard import Progress
-from afsmc.verify.outcome.results import Checks, Partial, PropertyResult, shown
+from afsmc.verify.outcome.results import Checks, Partial, PropertyResult, shown, symmetry_words
 from afsmc.verify.reports.sweep_result import SweepPoint
 from afsmc.verify.reports.sweep_values import Kind, Number
 
@@ -188,7 +188,8 @@ def _point(x: Number, properties: list[PropertyResult], c: Checks | Partial,
            secs: float) -> SweepPoint:
     m, u = c.model, c.uniform_model
     return SweepPoint(x, properties, m.states if m else None, m.transitions if m else None,
-                      u.states if u else None, u.transitions if u else None, secs)
+                      u.states if u else None, u.transitions if u else None, secs,
+                      symmetry=symmetry_words(c.symmetry) if isinstance(c, Checks) else None)
 
 
 def inlined(model: ir.Model, ref: E.LabelRef | E.FormulaRef) -> E.Expr | None:

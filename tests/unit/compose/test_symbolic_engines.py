@@ -67,8 +67,9 @@ def test_under_symmetry_the_agents_write_each_others_variables_so_the_same_holds
         tmp_path: Path) -> None:
     """Three robots without a shared variable: under --symmetry each robot's move writes
     the others' variables (the canonical order), which the compiled PRISM declares global;
-    a symbolic engine via PRISM is refused there (and not without --symmetry), auto builds
-    sparse, and the value is the mission's whole (0.9^6)."""
+    a symbolic engine via PRISM is refused there (and not without --symmetry: the default
+    then checks the mission whole and says why), auto builds sparse, and the value is the
+    mission's whole (0.9^6)."""
     path = tmp_path / "trio.afsm"
     path.write_text(TRIO, encoding="utf-8")
     refused = run_cli("verify", str(path), "--symmetry", "--engine", "hybrid")
@@ -76,7 +77,10 @@ def test_under_symmetry_the_agents_write_each_others_variables_so_the_same_holds
     assert "each other's variables" in refused.out + refused.err
     whole = run_cli("verify", str(path), "--engine", "hybrid", "--json")
     assert whole.code == 0, whole.err
-    for args in (["--symmetry"], ["--symmetry", "--via", "jani", "--engine", "hybrid"]):
+    assert json.loads(whole.out)["symmetry"]["reason"].startswith(
+        "the hybrid engine via PRISM: the reduced agents write each other's variables")
+    for args in ([], ["--symmetry"], ["--symmetry", "--via", "jani", "--engine", "hybrid"],
+                 ["--via", "jani", "--engine", "hybrid"]):
         r = run_cli("verify", str(path), "--json", *args)
         assert r.code == 0, r.err
         (p,) = json.loads(r.out)["properties"]

@@ -20,7 +20,8 @@ from afsmc.verify.outcome.results import VerifyResult
 
 HERE = os.path.dirname(__file__)
 FLEET4 = os.path.join(HERE, "fleet4.afsm")
-SYMMETRY = Reductions(symmetry=True)
+SYMMETRY = Reductions(symmetry="on")
+WHOLE = Reductions(symmetry="off")
 TEXT = Path(FLEET4).read_text(encoding="utf-8")
 
 
@@ -51,7 +52,7 @@ def _header(text: str, reductions: Reductions = SYMMETRY) -> str:
 
 @pytest.mark.storm
 def test_four_alike_robots_fold_into_a_twelfth_with_the_same_values() -> None:
-    full = run(FLEET4, isolate=False)
+    full = run(FLEET4, isolate=False, reductions=WHOLE)
     reduced = run(FLEET4, isolate=False, reductions=SYMMETRY)
     assert reduced.model.states * 12 <= full.model.states, (reduced.model.states,
                                                             full.model.states)
@@ -63,7 +64,7 @@ def test_the_uniform_interleaving_keeps_its_values(tmp_path: Path) -> None:
     path = tmp_path / "u.afsm"
     path.write_text(TEXT.replace("compose interleaving;", "compose interleaving uniform;"),
                     encoding="utf-8")
-    full = run(str(path), isolate=False)
+    full = run(str(path), isolate=False, reductions=WHOLE)
     reduced = run(str(path), isolate=False, reductions=SYMMETRY)
     assert full.model.type == reduced.model.type == "dtmc"
     assert reduced.model.states < full.model.states
@@ -129,7 +130,7 @@ def test_verify_notes_a_refusal_at_the_property_and_checks_the_mission_whole(
     path = tmp_path / "one.afsm"
     path.write_text(text, encoding="utf-8")
     asked = run(str(path), isolate=False, reductions=SYMMETRY, properties=["one", "shift"])
-    whole = run(str(path), isolate=False, properties=["one", "shift"])
+    whole = run(str(path), isolate=False, reductions=WHOLE, properties=["one", "shift"])
     notes = [d for d in asked.warnings if d.code == "N421"]
     assert len(notes) == 1 and "the property one tells r1 and r2 apart" in notes[0].message
     assert notes[0].span is not None and notes[0].span.line == text.count("\n")
