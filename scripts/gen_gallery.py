@@ -130,7 +130,9 @@ def model_line(ex: Example, res: Results) -> str:
             if ex.consts or ex.symmetry else "")
     what = ("an MDP: min and max range over the interval constants' floor/ceil choices"
             if res.kind == "mdp" else "a DTMC: one value per property")
-    sym = " (its alike agents in a canonical order, `--symmetry`)" if ex.symmetry else ""
+    note = res.raw.symmetry
+    sym = (" (its alike agents in a canonical order: the symmetry reduction, on by default "
+           "where every property is symmetric)" if note is not None and note.groups else "")
     return (f"`afsmc verify examples/{ex.path.name}{args}` builds {m.states:,} states and "
             f"{m.transitions:,} transitions{sym}, {what}.")
 
