@@ -7,7 +7,8 @@ version of a document cancels the work on the older one; each document has its o
 At most MAX_SHOWN diagnostics of a document are published (errors first), with one more,
 N901, that says how many are left out: a 2 MB file of unused constants has 90,000
 warnings, which no editor lists usefully and whose conversion and sending held up the
-server. They are converted to LSP's lines and characters off the event loop, through the
+server. They are picked where the checks ran (in the job), so the server never holds the
+others (letting 90,000 diagnostics go held up the event loop for a tenth of a second). They are converted to LSP's lines and characters off the event loop, through the
 document's one line index (positions.indexed)."""
 
 from __future__ import annotations
@@ -74,10 +75,11 @@ def shown(diags: list[Diagnostic]) -> list[Diagnostic]:
 
 def _params(ls: AfsmServer, uri: str, version: int | None, text: str, diags: list[Diagnostic],
             index: I.Index | None) -> tuple[T.PublishDiagnosticsParams, Doc]:
-    """What is published for `text` (off the event loop), and the line index it used."""
+    """What is published for `text` (off the event loop), and the line index it used;
+    `diags` are those `shown`."""
     doc = indexed(ls, uri, text, keep=False)
     return T.PublishDiagnosticsParams(
-        uri=uri, diagnostics=[_to_lsp(d, doc, uri, index) for d in shown(diags)],
+        uri=uri, diagnostics=[_to_lsp(d, doc, uri, index) for d in diags],
         version=version), doc
 
 
@@ -101,13 +103,13 @@ def _internal_diag(what: str) -> Diagnostic:
 def _fast_stage(text: str, path: str) -> tuple[list[Diagnostic], ir.Model | None, I.Index | None]:
     fast = analyse_fast(text, path)
     index = I.build(fast.module, text) if fast.module is not None else None
-    return fast.diagnostics, fast.model, index
+    return shown(fast.diagnostics), fast.model, index
 
 
 def _full_stage(text: str, path: str) -> tuple[list[Diagnostic], float]:
     started = time.perf_counter()
     diags = analyse_full(text, path)
-    return diags, time.perf_counter() - started
+    return shown(diags), time.perf_counter() - started
 
 
 def _work(text: str, path: str, stages: tuple[str, ...]) -> Work:
