@@ -74,25 +74,25 @@ def shown(diags: list[Diagnostic]) -> list[Diagnostic]:
 
 
 def _params(ls: AfsmServer, uri: str, version: int | None, text: str, diags: list[Diagnostic],
-            index: I.Index | None) -> tuple[T.PublishDiagnosticsParams, Doc]:
-    """What is published for `text` (off the event loop), and the line index it used;
-    `diags` are those `shown`."""
+            index: I.Index | None) -> tuple[str, Doc]:
+    """The notification published for `text`, encoded (off the event loop), and the line
+    index it used; `diags` are those `shown`."""
     doc = indexed(ls, uri, text, keep=False)
-    return T.PublishDiagnosticsParams(
-        uri=uri, diagnostics=[_to_lsp(d, doc, uri, index) for d in diags],
-        version=version), doc
+    params = T.PublishDiagnosticsParams(
+        uri=uri, diagnostics=[_to_lsp(d, doc, uri, index) for d in diags], version=version)
+    return ls.protocol.encode_notification(T.TEXT_DOCUMENT_PUBLISH_DIAGNOSTICS, params), doc
 
 
 async def _publish(ls: AfsmServer, uri: str, version: int | None, text: str,
                    diags: list[Diagnostic]) -> None:
     st = ls.docs.get(uri)
     index = st.index if st is not None and st.index is not None and st.index.text == text else None
-    params, doc = await asyncio.get_running_loop().run_in_executor(
+    encoded, doc = await asyncio.get_running_loop().run_in_executor(
         off_loop(), _params, ls, uri, version, text, diags, index)
     keep_index(ls, uri, doc)
     if st is not None:
         st.published = text
-    ls.text_document_publish_diagnostics(params)
+    ls.protocol.send_encoded(encoded)
 
 
 def _internal_diag(what: str) -> Diagnostic:
