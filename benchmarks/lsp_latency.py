@@ -18,7 +18,9 @@ while a 2 MB document is being analysed.
 
 With `--big RUNS`, only the hovers on a small document while a document of 90,000 unused
 constants (2 MB, 90,000 warnings) is checked, in RUNS fresh servers, median and max of
-each run (`--outline`: then while that document's outline is made and sent too).
+each run (`--outline`: then while that document's outline is made and sent too); then,
+for comparison, the same hovers with no big document, alone and beside two processes
+that spin (what the machine itself adds).
 
     .venv/bin/python benchmarks/lsp_latency.py --big 3 --outline
 """
@@ -28,6 +30,7 @@ from __future__ import annotations
 import argparse
 import asyncio
 import statistics
+import subprocess
 import sys
 import time
 from collections.abc import Callable
@@ -188,6 +191,40 @@ async def while_big_document(text: str, outline: bool = False) -> dict[str, floa
     return out
 
 
+async def baseline(seconds: float, busy: int) -> dict[str, float]:
+    """The hovers on a small document alone, for `seconds`, while `busy` processes of
+    this machine spin (what a 2 MB document's child process and the decoding thread take
+    of the CPU): what the machine itself adds to the round trips."""
+    spinners = [subprocess.Popen([sys.executable, "-c", "while True: pass"])
+                for _ in range(busy)]
+    try:
+        client = LanguageClient("afsmc-bench", "0")
+        published: set[str] = set()
+
+        @client.feature(T.TEXT_DOCUMENT_PUBLISH_DIAGNOSTICS)
+        def _diags(params: T.PublishDiagnosticsParams) -> None:
+            published.add(params.uri)
+
+        await client.start_io(sys.executable, "-m", "afsmc.cli", "lsp")
+        await client.initialize_async(T.InitializeParams(capabilities=T.ClientCapabilities()))
+        client.initialized(T.InitializedParams())
+        small = "file:///tmp/bench_small.afsm"
+        client.text_document_did_open(T.DidOpenTextDocumentParams(text_document=T.TextDocumentItem(
+            uri=small, language_id="afsm", version=1, text=SMALL)))
+        while small not in published:
+            await asyncio.sleep(0.01)
+        end = time.perf_counter() + seconds
+        times = await _hovers_until(client, small, lambda: time.perf_counter() > end)
+        await client.shutdown_async(None)
+        client.exit(None)
+        await client.stop()
+    finally:
+        for p in spinners:
+            p.kill()
+            p.wait()
+    return _summary(times)
+
+
 def big_runs(runs: int, n: int, outline: bool) -> None:
     """`while_big_document` `runs` times on a document of `n` unused constants: each run's
     figures, and the worst of the hovers' maxima."""
@@ -202,6 +239,10 @@ def big_runs(runs: int, n: int, outline: bool) -> None:
             if k.endswith("max ms"):
                 worst[k] = max(worst.get(k, 0.0), v)
     print("worst over the runs: " + ", ".join(f"{k} {v:,.1f}" for k, v in worst.items()))
+    for busy in (0, 2):
+        got = asyncio.run(baseline(15, busy))
+        print(f"no big document, {busy} busy processes, 15 s: "
+              + ", ".join(f"{k} {v:,.1f}" for k, v in got.items()))
 
 
 def main() -> None:
