@@ -18,7 +18,8 @@ while a 2 MB document is being analysed.
 
 With `--big RUNS`, only the hovers on a small document while a document of 90,000 unused
 constants (2 MB, 90,000 warnings) is checked, in RUNS fresh servers, median and max of
-each run (`--outline`: then while that document's outline is made and sent too); then,
+each run (`--outline`: then while that document's outline is made and sent too;
+`--edit`: then while it is changed and checked again); then,
 for comparison, the same hovers with no big document, alone and beside two processes
 that spin (what the machine itself adds).
 
@@ -152,17 +153,22 @@ def _summary(times: list[tuple[float, float]], what: str = "hover") -> dict[str,
             f"{what} max ms": worst[1] * 1000, f"{what} max sent at s": worst[0]}
 
 
-async def while_big_document(text: str, outline: bool = False) -> dict[str, float]:
+async def while_big_document(text: str, outline: bool = False, edit: bool = False
+                             ) -> dict[str, float]:
     """Open `text` in a fresh server and hover on a small document until the big one's
     diagnostics arrive: the seconds to them, and the hover round trips meanwhile (ms).
     With `outline`, then ask for the big document's outline and hover until it comes: its
-    seconds and symbols, and the hovers meanwhile."""
+    seconds and symbols, and the hovers meanwhile. With `edit`, then change the big
+    document (a constant added) and hover until its new diagnostics come (its older
+    analysis is let go meanwhile)."""
     client = LanguageClient("afsmc-bench", "0")
     published: dict[str, float] = {}
+    versions: dict[str, int | None] = {}
 
     @client.feature(T.TEXT_DOCUMENT_PUBLISH_DIAGNOSTICS)
     def _diags(params: T.PublishDiagnosticsParams) -> None:
         published.setdefault(params.uri, time.perf_counter())
+        versions[params.uri] = params.version
 
     await client.start_io(sys.executable, "-m", "afsmc.cli", "lsp")
     await client.initialize_async(T.InitializeParams(capabilities=T.ClientCapabilities()))
@@ -185,6 +191,15 @@ async def while_big_document(text: str, outline: bool = False) -> dict[str, floa
         out["outline s"] = time.perf_counter() - t
         out["outline symbols"] = float(len(request.result() or []))
         out.update(_summary(times, "hover during outline"))
+    if edit:
+        t = time.perf_counter()
+        client.text_document_did_change(T.DidChangeTextDocumentParams(
+            text_document=T.VersionedTextDocumentIdentifier(uri=big, version=2),
+            content_changes=[T.TextDocumentContentChangeWholeDocument(
+                text=text + "const int Z = 1;\n")]))
+        times = await _hovers_until(client, small, lambda: versions.get(big) == 2)
+        out["edit to diagnostics s"] = time.perf_counter() - t
+        out.update(_summary(times, "hover after edit"))
     await client.shutdown_async(None)
     client.exit(None)
     await client.stop()
@@ -225,7 +240,7 @@ async def baseline(seconds: float, busy: int) -> dict[str, float]:
     return _summary(times)
 
 
-def big_runs(runs: int, n: int, outline: bool) -> None:
+def big_runs(runs: int, n: int, outline: bool, edit: bool) -> None:
     """`while_big_document` `runs` times on a document of `n` unused constants: each run's
     figures, and the worst of the hovers' maxima."""
     text = "machine big;\nmode A = 0 initial final;\n" + "".join(
@@ -233,7 +248,7 @@ def big_runs(runs: int, n: int, outline: bool) -> None:
     worst: dict[str, float] = {}
     print(f"a document of {n:,} unused constants, {len(text):,} characters:")
     for i in range(runs):
-        got = asyncio.run(while_big_document(text, outline))
+        got = asyncio.run(while_big_document(text, outline, edit))
         print(f"run {i + 1}: " + ", ".join(f"{k} {v:,.1f}" for k, v in got.items()), flush=True)
         for k, v in got.items():
             if k.endswith("max ms"):
@@ -252,9 +267,10 @@ def main() -> None:
                     help="only hover while a 2 MB document is checked, RUNS times")
     ap.add_argument("--constants", type=int, default=90_000, help="the big document's size")
     ap.add_argument("--outline", action="store_true", help="with --big: then ask its outline")
+    ap.add_argument("--edit", action="store_true", help="with --big: then change it")
     args = ap.parse_args()
     if args.big:
-        big_runs(args.big, args.constants, args.outline)
+        big_runs(args.big, args.constants, args.outline, args.edit)
         return
     text = UAV.read_text()
     stages(text, args.repeat)

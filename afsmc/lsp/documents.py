@@ -27,6 +27,7 @@ from afsmc.lsp.actions import fixes
 from afsmc.lsp.analysis import analyse_fast, analyse_full
 from afsmc.lsp.positions import Doc, indexed, keep_index, to_range
 from afsmc.lsp.state import AfsmServer, DocState, guarded
+from afsmc.lsp.transfer import let_go
 from afsmc.lsp.worker import Failed, Job, Send, Work, off_loop, release_memory
 from afsmc.model import ir
 
@@ -166,8 +167,10 @@ async def _analyse(ls: AfsmServer, uri: str, st: DocState, version: int | None,
             await _publish(ls, uri, version, text, [_internal_diag("parse")])
             return
         diags, model, index = msg[1]
+        old: list[object] = [st.model]
         if index is not None:
             index.text = text  # the same text (the child's copy of it is let go)
+            old.append(st.index)
             st.index = index
             st.recovered = None
             _refresh_tokens(ls)
@@ -175,6 +178,7 @@ async def _analyse(ls: AfsmServer, uri: str, st: DocState, version: int | None,
         # The facts hover shows (values, ranges) hold for the text that resolved: another
         # text keeps none rather than show a constant's old value beside its new declaration.
         st.model = model
+        off_loop().submit(let_go, old)  # the older analysis, freed off the loop
         if diags or st.shows_fast:  # new parse or name errors, or old ones now fixed
             await _publish(ls, uri, version, text, diags)
         st.shows_fast = bool(diags)
@@ -223,6 +227,10 @@ async def did_close(ls: AfsmServer, params: T.DidCloseTextDocumentParams) -> Non
     if st is not None and st.task is not None:
         st.task.cancel()
     ls.text_document_publish_diagnostics(T.PublishDiagnosticsParams(uri=params.text_document.uri, diagnostics=[]))
+    if st is not None:  # its analysis freed off the loop, then the memory given back
+        old = [st.index, st.model]
+        st.index = st.model = st.recovered = None
+        off_loop().submit(let_go, old)
     del st
-    release_memory()
+    off_loop().submit(release_memory)
 

@@ -106,3 +106,20 @@ def test_a_part_that_does_not_decode_fails_its_message_only() -> None:
     for data in parts[:-1]:
         decoder.part(data)
     assert decoder.last(parts[-1]) == ("ok", list(range(3 * PART_ITEMS)))
+
+
+def test_let_go_frees_a_replaced_analysis_whole() -> None:
+    import gc
+    import weakref
+
+    sent = (FAST, _fast_stage(unused_constants(3 * PART_ITEMS), "/tmp/old.afsm"))
+    got = _decode(Parts().encode(sent))
+    _, (_, model, index) = got  # type: ignore[misc]
+    refs = [weakref.ref(x) for x in (model, index, index.module, index.module.decls[-1],
+                                     index.defs[("value", "C7")], model.constants[-1])]
+    held = [index, model]
+    del got, model, index
+    gc.collect()
+    assert all(r() is not None for r in refs)  # held only by `held`
+    transfer.let_go(held)
+    assert held == [] and [r() for r in refs] == [None] * len(refs)
