@@ -128,3 +128,12 @@ async def test_hover_is_answered_while_90000_warnings_come_back(client: Language
     assert last.name == f"{count + 1 - MAX_SYMBOLS:,} more declarations are not shown"
     # it stands at the first declaration left out, the constant C999
     assert last.selection_range.start.line == 2 + MAX_SYMBOLS - 1
+
+    # workspace symbols: every name holds "C", the first MAX_SYMBOLS are given
+    found = asyncio.ensure_future(client.workspace_symbol_async(T.WorkspaceSymbolParams(query="c")))
+    await asyncio.sleep(0)
+    waited = await _hover(client, small)
+    symbols = await found
+    assert waited < 1.5, waited
+    assert symbols is not None and len(symbols) == MAX_SYMBOLS
+    assert all("C" in s.name for s in symbols)
