@@ -8,8 +8,9 @@ At most MAX_SHOWN diagnostics of a document are published (errors first), with o
 N901, that says how many are left out: a 2 MB file of unused constants has 90,000
 warnings, which no editor lists usefully and whose conversion and sending held up the
 server. They are picked where the checks ran (in the job), so the server never holds the
-others (letting 90,000 diagnostics go held up the event loop for a tenth of a second). They are converted to LSP's lines and characters off the event loop, through the
-document's one line index (positions.indexed)."""
+others (letting them all go at once held up the event loop). They are converted to LSP's
+lines and characters, and encoded, off the event loop, through the document's one line
+index (positions.indexed)."""
 
 from __future__ import annotations
 

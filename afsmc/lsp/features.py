@@ -66,7 +66,7 @@ async def workspace_symbols(ls: AfsmServer, params: T.WorkspaceSymbolParams
                             ) -> list[T.WorkspaceSymbol]:
     """The declarations whose names hold the query, in the open documents, found off the
     event loop: at most MAX_SYMBOLS (an editor asks again as the query grows; an empty
-    query in a 2 MB document would be 90,000 of them, a reply of megabytes)."""
+    query in a big document would be every name, a reply of megabytes)."""
     return list(await in_thread(_workspace_symbols, ls, params))
 
 

@@ -79,8 +79,9 @@ _SYMBOL_KINDS = {
 
 
 # Declarations in the outline of one document; one more entry says how many are left out.
-# The outline of a 2 MB document (90,000 declarations) was a reply of 21 MB, which took the
-# client seconds to read, and every reply behind it (a hover on another document) waited.
+# The outline of a document of tens of thousands of declarations is a reply of megabytes:
+# the client takes seconds to read it, and every reply behind it (a hover on another
+# document) waits; no one reads such an outline through.
 MAX_SYMBOLS = 1000
 
 

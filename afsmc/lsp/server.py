@@ -74,8 +74,8 @@ def serve() -> int:
     own exit code is lost in its event loop)."""
     # The threads that decode and encode run Python code for seconds on a big document;
     # the event loop's thread, wanting the interpreter back to answer a request, waits for
-    # them at most this long each time (the default, 5 ms, added up to tens of
-    # milliseconds over the steps of one request).
+    # them at most this long each time (the default, 5 ms, adds up over the steps of one
+    # request).
     sys.setswitchinterval(SWITCH_INTERVAL)
     server.start_io()
     return 0 if server.shut_down else 1

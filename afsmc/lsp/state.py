@@ -58,10 +58,11 @@ _ENCODER: ThreadPoolExecutor | None = None
 class _Protocol(LanguageServerProtocol):
     """pygls only logs a request whose params do not fit its method (a negative position,
     no params at all), and a client waiting for the answer would hang: answer it with the
-    error. A reply of more than BIG_REPLY items (the outline of a 2 MB document: 90,000
-    symbols, 21 MB of JSON) is encoded in a thread of its own, not on the event loop, where
-    it held every other request for seconds; replies may come in any order (JSON-RPC
-    matches them by id), notifications keep theirs (they are never encoded there)."""
+    error. A reply of more than BIG_REPLY items (the folds or the references of a big
+    document) is encoded in a thread of its own, not on the event loop, where it would hold
+    every other request; replies may come in any order (JSON-RPC matches them by id).
+    Notifications keep theirs: a big one (a document's diagnostics) is encoded off the loop
+    by its sender (`encode_notification`) and sent by the loop (`send_encoded`)."""
 
     def _send_data(self, data: Any) -> None:
         result = getattr(data, "result", None)
@@ -92,8 +93,8 @@ class _Protocol(LanguageServerProtocol):
 
     def encode_notification(self, method: str, params: Any) -> str:
         """The JSON of a notification, made where this is called: off the event loop (a
-        document's 1,001 diagnostics took the loop a tenth of a second to encode); the
-        loop then sends it with `send_encoded`, in the order it sends the others."""
+        document's diagnostics, up to a thousand, are slow to encode); the loop then sends
+        it with `send_encoded`, in the order it sends the others."""
         kind = self.get_message_type(method) or JsonRPCNotification
         return json.dumps(kind(method=method, params=params, jsonrpc=JsonRPCProtocol.VERSION),
                           default=self._serialize_message)
@@ -128,10 +129,9 @@ class _Protocol(LanguageServerProtocol):
 
 class _PipeReader:
     """Standard input read by the event loop itself, where it is a pipe (as editors start
-    the server). pygls reads it in a thread, a line at a time, and each line went from that
-    thread to the event loop: four hand-overs a request, each waiting for the interpreter
-    while the decoding thread ran, which added up to a tenth of a second on a busy
-    machine."""
+    the server). pygls reads it in a thread, a line at a time, and hands each line from
+    that thread to the event loop: several hand-overs a request, each waiting for the
+    interpreter while the decoding thread runs."""
 
     def __init__(self, stdin: BinaryIO) -> None:
         self._stdin = stdin

@@ -3,9 +3,10 @@ of its own that is decoded in the server's decoding thread without holding the i
 lock for long (worker.py).
 
 Why parts: an unpickler keeps every object it made in its memo, and lets the memo go in one
-step when it is freed: for the parse of a 2 MB document (some 2.4 million objects) that one
-step held the interpreter's lock, and with it the event loop's thread, for 0.1-0.3 s. Cut
-into parts, each unpickler's memo holds the objects of one part only.
+step when it is freed: for the parse of a big document (millions of objects) that one step
+held the interpreter's lock, and with it the event loop's thread, long enough to delay a
+request on another document. Cut into parts, each unpickler's memo holds the objects of one
+part only, however big the document.
 
 How: every list, tuple or dict of more than PART_ITEMS items (in the message itself, or a
 field of an object in it) is sent as parts of PART_ITEMS items each, before the rest of the
@@ -182,8 +183,7 @@ class Frames:
     """A pickle's bytes read through Python methods: the unpickler calls `read` once per
     frame (64 KB), and a Python call is where the interpreter lets another thread run.
     Unpickling from the bytes at once makes the objects of frozen dataclasses in C
-    throughout, holding the interpreter's lock: the event loop's thread waited 1.5 s in
-    one stretch for the analysis of a 2 MB document."""
+    throughout, holding the interpreter's lock, and the event loop's thread waits."""
 
     def __init__(self, data: bytes) -> None:
         self._data = io.BytesIO(data)
@@ -212,10 +212,10 @@ class Decoder:
     The collector is paused while a part is decoded: unpickling makes millions of objects
     and frees none, and the collections that would trigger (each scanning the growing heap,
     holding the interpreter's lock) made decoding five times slower. What the message made
-    is then put out of the collector's reach (`gc.freeze`): the analysis of a 2 MB document
+    is then put out of the collector's reach (`gc.freeze`): the analysis of a big document
     is millions of objects without cycles (freed by their reference counts when the
-    document changes or closes), and each full collection that scanned them held up the
-    event loop for seconds."""
+    document changes or closes), and each full collection that scanned them would hold up
+    the event loop."""
 
     def __init__(self) -> None:
         self.table: list[Any] = []
@@ -266,9 +266,9 @@ class Decoder:
 
 def let_go(held: list[Any]) -> None:
     """Free what `held` holds (a document's index and model that a newer analysis
-    replaced), a part at a time: freed at once, the 2.4 million objects of a 2 MB
-    document's parse went in one step of a sixth of a second, holding the interpreter's
-    lock. Run it in the decoding thread, and let `held` be the only holder. The items of
+    replaced), a part at a time: freed at once, the millions of objects of a big
+    document's parse go in one step that holds the interpreter's lock. Run it in the
+    decoding thread, and let `held` be the only holder. The items of
     every big container in them (found as `Parts` finds them) are kept aside first, so
     that dropping the containers frees none of them; then they are dropped PART_ITEMS
     at a time."""

@@ -61,8 +61,8 @@ async def in_thread(fn: Callable[..., Any], *args: Any) -> Any:
 
 def _reap(pid: int) -> None:
     """Wait for a child that ended or was killed, in a thread of its own: the system takes
-    a tenth of a second or more to take down a child that analysed a 2 MB document (its
-    memory), and the event loop, waiting for it, answered nothing meanwhile."""
+    a while to take down a child that analysed a big document (its memory), and the event
+    loop, waiting for it, would answer nothing meanwhile."""
     with contextlib.suppress(ChildProcessError):
         os.waitpid(pid, 0)
 
