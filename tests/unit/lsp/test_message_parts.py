@@ -1,8 +1,8 @@
 """A job's message crosses from the child process in parts (afsmc/lsp/transfer.py): what the
 server decodes equals what the child sent, objects shared in it stay shared, and no part's
 unpickler holds more than a bounded number of objects, whatever the document's size (one
-unpickler for the parse of a 2 MB document held 2.4 million, and let them go in one step
-that stopped the event loop for 0.1-0.3 s)."""
+unpickler for the parse of a big document holds millions, and lets them go in one step
+that holds the interpreter's lock); a replaced analysis is let go whole."""
 
 from __future__ import annotations
 
