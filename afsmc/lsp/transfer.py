@@ -61,36 +61,14 @@ def joined(kind: str, ranges: tuple[tuple[int, int], ...]) -> Any:
 
 
 class _Pickler(pickle.Pickler):
-    """A pickler of one part: what the message's earlier parts hold is referred to by its
-    place in the receiver's table, a big container becomes parts of its own."""
+    """A pickler of one part. Objects of the types in `parts.reductions` (those that may be
+    an item of an earlier part, hold a big container, or be the text) go through
+    `parts.reduce`; every other object is pickled as pickle does, without a call into
+    Python (a call per object made a big document's parse twice as slow to send)."""
 
-    def __init__(self, file: io.BytesIO, parts: Parts, alone: object = None) -> None:
+    def __init__(self, file: io.BytesIO, parts: Parts) -> None:
+        self.dispatch_table = parts.reductions  # (read by pickle's __init__)
         super().__init__(file, protocol=pickle.HIGHEST_PROTOCOL)
-        self._parts = parts
-        self._alone = alone  # the Source this part is made for
-
-    def reducer_override(self, obj: Any) -> Any:
-        # (called for every object of the message that is not a str, number, list, tuple
-        # or dict: the common cases first)
-        k = self._parts.slot.get(id(obj))
-        if k is not None:
-            return shared, (k,)
-        watch = _watched(type(obj))
-        if watch is None:
-            return NotImplemented
-        if watch is _Later:
-            return self._parts.cut(obj.value)
-        if watch is Source:
-            if obj is self._alone:
-                return NotImplemented
-            self._parts.alone(obj)
-            return shared, (self._parts.slot[id(obj)],)
-        state = obj.__dict__
-        if not any(_big(state.get(name)) for name in watch):
-            return NotImplemented
-        # reduced as pickle would, with the big container marked to be cut into parts
-        return (_NEWOBJ, (type(obj),),
-                {name: _Later(v) if _big(v) else v for name, v in state.items()})
 
 
 _WATCH: dict[type, Any] = {_Later: _Later, Source: Source}
@@ -100,7 +78,7 @@ _CONTAINER_TYPE = re.compile(r"\b(?:tuple|list|dict|Tuple|List|Dict|Any|object)\
 
 
 def _watched(cls: type) -> Any:
-    """What `reducer_override` looks at in an object of `cls`: _Later or Source for those;
+    """What `Parts.reduce` looks at in an object of `cls`: _Later or Source for those;
     for a dataclass, the names of its fields that may hold a container (typed `tuple[...]`,
     `list[...]`, `dict[...]`, `Any` or `object`); None for every other class (pickled as
     pickle does), for a dataclass without such a field, and for one that reduces itself."""
@@ -124,20 +102,68 @@ class Parts:
         self.slot: dict[int, int] = {}  # id of an object of an earlier part -> its place
         self._keep: list[Any] = []  # those objects, kept alive so that their ids stay theirs
         self._size = 0  # places in the receiver's table so far
+        self._alone: object = None  # the Source whose own part is being made
+        # the types whose objects go through `reduce` (a pickler's dispatch table)
+        self.reductions: dict[type, Callable[[Any], Any]] = {
+            _Later: self.reduce, Source: self.reduce}
 
     def encode(self, msg: Any) -> list[bytes]:
         """Every part of `msg`: the last one is the message itself."""
+        self._owners(msg)
         last = self._dump(self._top(msg))
         return [*self.out, last]
+
+    def _owners(self, msg: Any) -> None:
+        """Put in `reductions` the types of the objects of `msg`'s frame that hold a big
+        container: the objects reached from it through tuples and fields that are not
+        containers. (An item of a big container that holds one is found when its container
+        is cut.)"""
+        todo, seen = [msg], set()
+        while todo:
+            obj = todo.pop()
+            if id(obj) in seen:
+                continue
+            seen.add(id(obj))
+            if type(obj) is tuple and not _big(obj):
+                todo += obj
+                continue
+            watch = _watched(type(obj))
+            if type(watch) is not tuple and not hasattr(obj, "__dataclass_fields__"):
+                continue
+            state = getattr(obj, "__dict__", {})
+            if type(watch) is tuple and any(_big(state.get(name)) for name in watch):
+                self.reductions[type(obj)] = self.reduce
+            todo += [v for v in state.values() if hasattr(v, "__dataclass_fields__")]
+
+    def reduce(self, obj: Any) -> Any:
+        """How an object of a type in `reductions` is pickled: by its place if an earlier
+        part holds it; a big container cut into parts; the text in a part of its own the
+        first time; an object with a big container with that container marked to be cut
+        (`_Later`); any other as pickle would."""
+        k = self.slot.get(id(obj))
+        if k is not None:
+            return shared, (k,)
+        cls = type(obj)
+        if cls is _Later:
+            return self.cut(obj.value)
+        if cls is Source and obj is not self._alone:
+            self.alone(obj)
+            return shared, (self.slot[id(obj)],)
+        watch = _watched(cls)
+        names: tuple[str, ...] = watch if type(watch) is tuple else ()
+        state = obj.__dict__ if names else {}
+        if not any(_big(state.get(name)) for name in names):
+            return obj.__reduce_ex__(pickle.HIGHEST_PROTOCOL)
+        return (_NEWOBJ, (cls,), {name: _Later(v) if _big(v) else v for name, v in state.items()})
 
     def _top(self, value: Any) -> Any:
         if type(value) is tuple and not _big(value):
             return tuple(self._top(v) for v in value)
         return _Later(value) if _big(value) else value
 
-    def _dump(self, obj: Any, alone: object = None) -> bytes:
+    def _dump(self, obj: Any) -> bytes:
         f = io.BytesIO()
-        _Pickler(f, self, alone).dump(obj)
+        _Pickler(f, self).dump(obj)
         return f.getvalue()
 
     def _add(self, items: list[Any], data: bytes) -> tuple[int, int]:
@@ -145,6 +171,8 @@ class Parts:
         start = self._size
         for j, item in enumerate(items):
             self.slot[id(item)] = start + j
+            if type(item) not in self.reductions and hasattr(type(item), "__dataclass_fields__"):
+                self.reductions[type(item)] = self.reduce  # (it may be referred to later)
         self._keep.append(items)
         self._size += len(items)
         self.out.append(data)
@@ -152,7 +180,12 @@ class Parts:
 
     def alone(self, obj: Any) -> None:
         """`obj` in a part of its own."""
-        self._add([obj], self._dump([obj], alone=obj))
+        outer, self._alone = self._alone, obj
+        try:
+            data = self._dump([obj])
+        finally:
+            self._alone = outer
+        self._add([obj], data)
 
     def cut(self, value: list[Any] | tuple[Any, ...] | dict[Any, Any]
             ) -> tuple[Callable[..., Any], tuple[str, tuple[tuple[int, int], ...]]]:
