@@ -7,8 +7,10 @@ version of a document cancels the work on the older one; each document has its o
 At most MAX_SHOWN diagnostics of a document are published (errors first), with one more,
 N901, that says how many are left out: a 2 MB file of unused constants has 90,000
 warnings, which no editor lists usefully and whose conversion and sending held up the
-server. They are converted to LSP's lines and characters off the event loop, through the
-document's one line index (positions.indexed)."""
+server. They are picked where the checks ran (in the job), so the server never holds the
+others (letting them all go at once held up the event loop). They are converted to LSP's
+lines and characters, and encoded, off the event loop, through the document's one line
+index (positions.indexed)."""
 
 from __future__ import annotations
 
@@ -26,6 +28,7 @@ from afsmc.lsp.actions import fixes
 from afsmc.lsp.analysis import analyse_fast, analyse_full
 from afsmc.lsp.positions import Doc, indexed, keep_index, to_range
 from afsmc.lsp.state import AfsmServer, DocState, guarded
+from afsmc.lsp.transfer import let_go
 from afsmc.lsp.worker import Failed, Job, Send, Work, off_loop, release_memory
 from afsmc.model import ir
 
@@ -73,24 +76,25 @@ def shown(diags: list[Diagnostic]) -> list[Diagnostic]:
 
 
 def _params(ls: AfsmServer, uri: str, version: int | None, text: str, diags: list[Diagnostic],
-            index: I.Index | None) -> tuple[T.PublishDiagnosticsParams, Doc]:
-    """What is published for `text` (off the event loop), and the line index it used."""
+            index: I.Index | None) -> tuple[str, Doc]:
+    """The notification published for `text`, encoded (off the event loop), and the line
+    index it used; `diags` are those `shown`."""
     doc = indexed(ls, uri, text, keep=False)
-    return T.PublishDiagnosticsParams(
-        uri=uri, diagnostics=[_to_lsp(d, doc, uri, index) for d in shown(diags)],
-        version=version), doc
+    params = T.PublishDiagnosticsParams(
+        uri=uri, diagnostics=[_to_lsp(d, doc, uri, index) for d in diags], version=version)
+    return ls.protocol.encode_notification(T.TEXT_DOCUMENT_PUBLISH_DIAGNOSTICS, params), doc
 
 
 async def _publish(ls: AfsmServer, uri: str, version: int | None, text: str,
                    diags: list[Diagnostic]) -> None:
     st = ls.docs.get(uri)
     index = st.index if st is not None and st.index is not None and st.index.text == text else None
-    params, doc = await asyncio.get_running_loop().run_in_executor(
+    encoded, doc = await asyncio.get_running_loop().run_in_executor(
         off_loop(), _params, ls, uri, version, text, diags, index)
     keep_index(ls, uri, doc)
     if st is not None:
         st.published = text
-    ls.text_document_publish_diagnostics(params)
+    ls.protocol.send_encoded(encoded)
 
 
 def _internal_diag(what: str) -> Diagnostic:
@@ -101,13 +105,13 @@ def _internal_diag(what: str) -> Diagnostic:
 def _fast_stage(text: str, path: str) -> tuple[list[Diagnostic], ir.Model | None, I.Index | None]:
     fast = analyse_fast(text, path)
     index = I.build(fast.module, text) if fast.module is not None else None
-    return fast.diagnostics, fast.model, index
+    return shown(fast.diagnostics), fast.model, index
 
 
 def _full_stage(text: str, path: str) -> tuple[list[Diagnostic], float]:
     started = time.perf_counter()
     diags = analyse_full(text, path)
-    return diags, time.perf_counter() - started
+    return shown(diags), time.perf_counter() - started
 
 
 def _work(text: str, path: str, stages: tuple[str, ...]) -> Work:
@@ -164,8 +168,10 @@ async def _analyse(ls: AfsmServer, uri: str, st: DocState, version: int | None,
             await _publish(ls, uri, version, text, [_internal_diag("parse")])
             return
         diags, model, index = msg[1]
+        old: list[object] = [st.model]
         if index is not None:
             index.text = text  # the same text (the child's copy of it is let go)
+            old.append(st.index)
             st.index = index
             st.recovered = None
             _refresh_tokens(ls)
@@ -173,6 +179,7 @@ async def _analyse(ls: AfsmServer, uri: str, st: DocState, version: int | None,
         # The facts hover shows (values, ranges) hold for the text that resolved: another
         # text keeps none rather than show a constant's old value beside its new declaration.
         st.model = model
+        off_loop().submit(let_go, old)  # the older analysis, freed off the loop
         if diags or st.shows_fast:  # new parse or name errors, or old ones now fixed
             await _publish(ls, uri, version, text, diags)
         st.shows_fast = bool(diags)
@@ -221,6 +228,10 @@ async def did_close(ls: AfsmServer, params: T.DidCloseTextDocumentParams) -> Non
     if st is not None and st.task is not None:
         st.task.cancel()
     ls.text_document_publish_diagnostics(T.PublishDiagnosticsParams(uri=params.text_document.uri, diagnostics=[]))
+    if st is not None:  # its analysis freed off the loop, then the memory given back
+        old = [st.index, st.model]
+        st.index = st.model = st.recovered = None
+        off_loop().submit(let_go, old)
     del st
-    release_memory()
+    off_loop().submit(release_memory)
 

@@ -1,5 +1,5 @@
 """The smaller features: folding ranges (declarations and comment runs), workspace symbols
-across the open documents, inlay hints (a constant's value or interval after each use, a
+across the open documents (at most MAX_SYMBOLS), inlay hints (a constant's value or interval after each use, a
 weight's expression after `w(A)`), signature help for the built-in functions, and range
 formatting (the lines of `afsmc fmt`'s changes that meet the range; a big document is
 formatted in a child process)."""
@@ -15,7 +15,7 @@ from pygls.uris import to_fs_path
 from afsmc.diagnostics import CompileError
 from afsmc.lsp import index as I
 from afsmc.lsp.documents import SMALL
-from afsmc.lsp.navigation import _SYMBOL_KINDS
+from afsmc.lsp.navigation import _SYMBOL_KINDS, MAX_SYMBOLS
 from afsmc.lsp.positions import current, new_range, shift_of, to_range
 from afsmc.lsp.state import AfsmServer, guarded
 from afsmc.lsp.worker import call, in_thread
@@ -62,10 +62,18 @@ def _folding_ranges(ls: AfsmServer, params: T.FoldingRangeParams) -> list[T.Fold
 
 
 @guarded
-def workspace_symbols(ls: AfsmServer, params: T.WorkspaceSymbolParams
-                      ) -> list[T.WorkspaceSymbol]:
+async def workspace_symbols(ls: AfsmServer, params: T.WorkspaceSymbolParams
+                            ) -> list[T.WorkspaceSymbol]:
+    """The declarations whose names hold the query, in the open documents, found off the
+    event loop: at most MAX_SYMBOLS (an editor asks again as the query grows; an empty
+    query in a big document would be every name, a reply of megabytes)."""
+    return list(await in_thread(_workspace_symbols, ls, params))
+
+
+def _workspace_symbols(ls: AfsmServer, params: T.WorkspaceSymbolParams
+                       ) -> list[T.WorkspaceSymbol]:
     query = params.query.lower()
-    out = []
+    out: list[T.WorkspaceSymbol] = []
     for uri, st in sorted(ls.docs.items()):
         if st.index is None:
             continue
@@ -73,6 +81,8 @@ def workspace_symbols(ls: AfsmServer, params: T.WorkspaceSymbolParams
         for d in st.index.defs.values():
             if query and query not in d.name.lower():
                 continue
+            if len(out) == MAX_SYMBOLS:
+                return out
             r = new_range(shift, doc, d.ident.start, d.ident.end)
             if r is not None:
                 out.append(T.WorkspaceSymbol(

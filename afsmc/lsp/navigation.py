@@ -3,6 +3,8 @@ the last text that parsed, mapped to the editor's text through the lines both sh
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+
 from lsprotocol import types as T
 
 from afsmc.lsp import index as I
@@ -76,10 +78,18 @@ _SYMBOL_KINDS = {
 }
 
 
+# Declarations in the outline of one document; one more entry says how many are left out.
+# The outline of a document of tens of thousands of declarations is a reply of megabytes:
+# the client takes seconds to read it, and every reply behind it (a hover on another
+# document) waits; no one reads such an outline through.
+MAX_SYMBOLS = 1000
+
+
 @guarded
 async def document_symbols(ls: AfsmServer, params: T.DocumentSymbolParams
                            ) -> list[T.DocumentSymbol]:
-    """The outline, made off the event loop (90,000 symbols: seconds)."""
+    """The outline, made off the event loop: the first MAX_SYMBOLS declarations, and an
+    entry that says how many more there are (at the first of them)."""
     return list(await in_thread(_document_symbols, ls, params))
 
 
@@ -92,13 +102,16 @@ def _document_symbols(ls: AfsmServer, params: T.DocumentSymbolParams) -> list[T.
     shift, doc = shift_of(ls, uri, idx)
     by_decl: dict[int, I.Definition] = {
         id(d.decl): d for d in idx.defs.values() if d.kind != "field"}
-    out = []
-    for decl in idx.module.decls:
+    out: list[T.DocumentSymbol] = []
+    for i, decl in enumerate(idx.module.decls):
         d = by_decl.get(id(decl))
         whole = new_range(shift, doc, decl.span.start, decl.span.end)
         name = new_range(shift, doc, d.ident.start, d.ident.end) if d else None
         if d is None or whole is None or name is None:
             continue  # not declared, or edited since the last good parse
+        if len(out) == MAX_SYMBOLS:
+            out.append(_left_out(idx.module.decls[i:], by_decl, whole, name))
+            break
         children = [
             T.DocumentSymbol(name=f.name.text, kind=T.SymbolKind.Field, range=r, selection_range=n)
             for f in (decl.type.fields if isinstance(decl, ast.VarDecl)
@@ -113,3 +126,15 @@ def _document_symbols(ls: AfsmServer, params: T.DocumentSymbolParams) -> list[T.
             name=d.name, kind=_SYMBOL_KINDS[d.kind], range=whole, selection_range=name,
             detail=detail, children=children or None))
     return out
+
+
+def _left_out(rest: Sequence[ast.Decl], by_decl: dict[int, I.Definition], whole: T.Range,
+              name: T.Range) -> T.DocumentSymbol:
+    """The outline's last entry, for the declarations from `rest[0]` on (at `whole`, its
+    name at `name`) that it leaves out."""
+    n = sum(1 for decl in rest if id(decl) in by_decl)
+    return T.DocumentSymbol(
+        name=f"{n:,} more declarations are not shown", kind=T.SymbolKind.Namespace,
+        range=whole, selection_range=name,
+        detail=f"the outline lists the first {MAX_SYMBOLS:,} declarations; workspace symbols "
+        "(search by name) find the others")

@@ -25,6 +25,7 @@ This module wires the features to the server:
 
 from __future__ import annotations
 
+import sys
 from collections.abc import Callable
 from typing import Any
 
@@ -34,6 +35,7 @@ from afsmc.lsp import actions, completion, documents, editing, features, navigat
 from afsmc.lsp.state import AfsmServer
 
 server = AfsmServer()
+SWITCH_INTERVAL = 0.001  # seconds
 
 _FEATURES: list[tuple[str, Any, Callable[..., Any]]] = [
     (T.TEXT_DOCUMENT_DID_OPEN, None, documents.did_open),
@@ -70,5 +72,10 @@ def _on_shutdown(ls: AfsmServer, params: Any) -> None:
 def serve() -> int:
     """Serve until `exit`: 0 after a `shutdown` request, 1 without one (as LSP asks; pygls's
     own exit code is lost in its event loop)."""
+    # The threads that decode and encode run Python code for seconds on a big document;
+    # the event loop's thread, wanting the interpreter back to answer a request, waits for
+    # them at most this long each time (the default, 5 ms, adds up over the steps of one
+    # request).
+    sys.setswitchinterval(SWITCH_INTERVAL)
     server.start_io()
     return 0 if server.shut_down else 1

@@ -3,10 +3,11 @@ it goes, in a forked child process (where fork exists) or else in a thread.
 
 A child can be killed, so a newer version of a document stops the work on the older one at
 once, and whatever the work allocated goes back to the system with the child: the server's
-own memory stays at its baseline however big the documents were. Messages come back pickled
-through a pipe that the event loop watches (`add_reader`), so the loop never waits for them;
-the loop only gathers their bytes, and one decoding thread unpickles them (the analysis of a
-2 MB document is some 30 MB of pickle: seconds of decoding that would hold up every request).
+own memory stays at its baseline however big the documents were. Messages come back pickled,
+in parts (transfer.py), through a pipe that the event loop watches (`add_reader`), so the
+loop never waits for them; the loop only gathers their bytes, and one decoding thread
+unpickles them (the analysis of a 2 MB document is some 30 MB of pickle: seconds of
+decoding that would hold up every request).
 A thread cannot be killed: its messages are dropped once the job is cancelled.
 """
 
@@ -15,9 +16,7 @@ from __future__ import annotations
 import asyncio
 import contextlib
 import gc
-import io
 import os
-import pickle
 import signal
 import struct
 import threading
@@ -27,13 +26,16 @@ from concurrent.futures import ThreadPoolExecutor
 from typing import Any
 
 from afsmc.diagnostics import CompileError
-from afsmc.heap import collector_paused
 from afsmc.lifetime import die_with_parent
+from afsmc.lsp.transfer import Decoder, Failed, Parts
+
+__all__ = ["Failed", "Job", "Send", "Work", "call", "in_thread", "off_loop", "release_memory"]
 
 Send = Callable[[Any], None]
 Work = Callable[[Send], None]
 
-_HEADER = struct.Struct("<Q")
+# a part's length, and whether it is the last part of its message
+_HEADER = struct.Struct("<QB")
 FORK = hasattr(os, "fork")
 
 
@@ -57,48 +59,12 @@ async def in_thread(fn: Callable[..., Any], *args: Any) -> Any:
     return await asyncio.get_running_loop().run_in_executor(off_loop(), fn, *args)
 
 
-class Failed:
-    """The message a job sends when its work raised: the traceback, for the server's log."""
-
-    def __init__(self, trace: str) -> None:
-        self.trace = trace
-
-
-class _Frames:
-    """A pickle's bytes read through Python methods: the unpickler calls `read` once per
-    frame (64 KB), and a Python call is where the interpreter lets another thread run.
-    Unpickling from the bytes at once makes the objects of frozen dataclasses in C
-    throughout, holding the interpreter's lock: the event loop's thread waited 1.5 s in
-    one stretch for the analysis of a 2 MB document."""
-
-    def __init__(self, data: bytes) -> None:
-        self._data = io.BytesIO(data)
-
-    def read(self, n: int = -1) -> bytes:
-        return self._data.read(n)
-
-    def readinto(self, buf: Any) -> int:
-        return self._data.readinto(buf)
-
-    def readline(self) -> bytes:
-        return self._data.readline()
-
-
-def _decode(data: bytes) -> Any:
-    """A message's objects from its pickle, in the decoding thread. The collector is paused
-    meanwhile: unpickling makes millions of objects and frees none, and the collections
-    that would trigger (each scanning the growing heap, holding the interpreter's lock) made
-    decoding five times slower. What it made is then put out of the collector's reach
-    (`gc.freeze`): the analysis of a 2 MB document is millions of objects without cycles
-    (freed by their reference counts when the document changes or closes), and each full
-    collection that scanned them held up the event loop for seconds."""
-    try:
-        with collector_paused():
-            msg = pickle.Unpickler(_Frames(data)).load()
-        gc.freeze()
-        return msg
-    except Exception:
-        return Failed(traceback.format_exc())
+def _reap(pid: int) -> None:
+    """Wait for a child that ended or was killed, in a thread of its own: the system takes
+    a while to take down a child that analysed a big document (its memory), and the event
+    loop, waiting for it, would answer nothing meanwhile."""
+    with contextlib.suppress(ChildProcessError):
+        os.waitpid(pid, 0)
 
 
 class Job:
@@ -112,6 +78,7 @@ class Job:
         self.pid = 0
         self._fd = -1
         self._buf = bytearray()
+        self._decoder = Decoder()
         if process and FORK:
             self._fork(work)
         else:
@@ -144,10 +111,11 @@ class Job:
                 die_with_parent(parent)
 
                 def send(msg: Any) -> None:
-                    data = pickle.dumps(msg, protocol=pickle.HIGHEST_PROTOCOL)
-                    view = memoryview(_HEADER.pack(len(data)) + data)
-                    while view:
-                        view = view[os.write(w, view):]
+                    parts = Parts().encode(msg)
+                    for i, data in enumerate(parts):
+                        view = memoryview(_HEADER.pack(len(data), i == len(parts) - 1) + data)
+                        while view:
+                            view = view[os.write(w, view):]
 
                 try:
                     work(send)
@@ -171,13 +139,19 @@ class Job:
         if chunk:
             self._buf += chunk
             while len(self._buf) >= _HEADER.size:
-                (n,) = _HEADER.unpack_from(self._buf)
+                n, last = _HEADER.unpack_from(self._buf)
                 if len(self._buf) < _HEADER.size + n:
                     break
                 data = bytes(self._buf[_HEADER.size:_HEADER.size + n])
                 del self._buf[:_HEADER.size + n]
-                if not self.cancelled:  # decoded off the loop, queued in order
-                    self._queue.put_nowait(self._loop.run_in_executor(off_loop(), _decode, data))
+                if self.cancelled:
+                    continue
+                # decoded off the loop, in order: a message once its last part is
+                if last:
+                    self._queue.put_nowait(self._loop.run_in_executor(
+                        off_loop(), self._decoder.last, data))
+                else:
+                    self._loop.run_in_executor(off_loop(), self._decoder.part, data)
             return
         self._close()
         self._queue.put_nowait(None)
@@ -188,8 +162,8 @@ class Job:
             os.close(self._fd)
             self._fd = -1
         if self.pid:
-            with contextlib.suppress(ChildProcessError):
-                os.waitpid(self.pid, 0)
+            threading.Thread(target=_reap, args=(self.pid,), name="afsmc-lsp-reap",
+                             daemon=True).start()
             self.pid = 0
 
     # ---- for the server ----------------------------------------------------------------

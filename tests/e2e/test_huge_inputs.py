@@ -112,7 +112,7 @@ def test_a_megabyte_chain_is_e113_at_once(tmp_path: Path) -> None:
 def test_a_chain_past_the_size_limit_is_e004_unread(tmp_path: Path) -> None:
     path = _write(tmp_path, "machine m;\nconst int N = " + "1+" * (MAX_SOURCE_CHARS // 2) + "1;\n")
     r, seconds = _timed("check", path)
-    assert r.code == 1 and "error[E004]" in r.err and "2,097,152" in r.err, r.err[:300]
+    assert r.code == 1 and "error[E004]" in r.err and "4,194,304" in r.err, r.err[:300]
     assert seconds < 5.0, seconds
     assert run_cli("fmt", path).code == 1
 

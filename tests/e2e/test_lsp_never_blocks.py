@@ -5,8 +5,11 @@ constant unused, W304), the case where no request on any document was answered f
 rebuilt the list of lines). The test asserts the order of events, not times: hovers on a
 small document are answered after the big one's parse has come back to the server (it asks
 the client to refresh the semantic tokens then) and before its diagnostics are published,
-and those are capped, with N901 counting the rest. The latency is measured by
-benchmarks/lsp_latency.py and recorded in docs/benchmarks.md ("Input size scaling").
+and those are capped, with N901 counting the rest. Then its outline and the workspace
+symbols are asked, each with a hover sent behind it on the same pipe, which is answered
+promptly: both are capped (a reply of all its names is megabytes, and the client reads it
+before the hover's reply). The latency is measured by benchmarks/lsp_latency.py and
+recorded in docs/benchmarks.md ("Input size scaling").
 """
 
 from __future__ import annotations
@@ -22,6 +25,7 @@ from lsprotocol import types as T
 from pytest_lsp import ClientServerConfig, LanguageClient
 
 from afsmc.lsp.documents import MAX_SHOWN
+from afsmc.lsp.navigation import MAX_SYMBOLS
 
 pytestmark = pytest.mark.slow  # a real server with a 2 MB document: about 20 s
 
@@ -71,11 +75,14 @@ def _open(client: LanguageClient, uri: str, text: str) -> None:
         text_document=T.TextDocumentItem(uri=uri, language_id="afsm", version=1, text=text)))
 
 
-async def _hover(client: LanguageClient, uri: str) -> None:
+async def _hover(client: LanguageClient, uri: str) -> float:
+    """A hover's round trip (s)."""
+    t = time.monotonic()
     hover = await client.text_document_hover_async(T.HoverParams(
         text_document=T.TextDocumentIdentifier(uri=uri), position=T.Position(line=2, character=12)))
     assert hover is not None and "N" in str(hover.contents)
     EVENTS.append(("hover", time.monotonic()))
+    return time.monotonic() - t
 
 
 @pytest.mark.asyncio
@@ -107,3 +114,27 @@ async def test_hover_is_answered_while_90000_warnings_come_back(client: Language
     assert note.code == "N901" and note.severity == T.DiagnosticSeverity.Information
     count = unused_constants().count("const int")
     assert f"{count - MAX_SHOWN:,} more diagnostics are not shown" in note.message
+
+    # the outline, and a hover sent behind it on the same pipe
+    outline = asyncio.ensure_future(client.text_document_document_symbol_async(
+        T.DocumentSymbolParams(text_document=T.TextDocumentIdentifier(uri=big))))
+    await asyncio.sleep(0)  # sent first
+    waited = await _hover(client, small)
+    symbols = await outline
+    assert waited < 1.5, waited  # an uncapped outline ahead of it held it for seconds
+    assert symbols is not None and len(symbols) == MAX_SYMBOLS + 1
+    assert [s.name for s in symbols[:3]] == ["A", "C0", "C1"]
+    last = symbols[-1]
+    assert isinstance(last, T.DocumentSymbol)
+    assert last.name == f"{count + 1 - MAX_SYMBOLS:,} more declarations are not shown"
+    # it stands at the first declaration left out, the constant C999
+    assert last.selection_range.start.line == 2 + MAX_SYMBOLS - 1
+
+    # workspace symbols: every name holds "C", the first MAX_SYMBOLS are given
+    found = asyncio.ensure_future(client.workspace_symbol_async(T.WorkspaceSymbolParams(query="c")))
+    await asyncio.sleep(0)
+    waited = await _hover(client, small)
+    symbols = await found
+    assert waited < 1.5, waited
+    assert symbols is not None and len(symbols) == MAX_SYMBOLS
+    assert all("C" in s.name for s in symbols)
