@@ -128,7 +128,8 @@ def extremes(lifted: Lifted, qs: Sequence[Query], precision: float
         outer_lo, outer_hi = lo.outer, hi.outer
         if q.kind == "P":
             outer_lo, outer_hi = max(0.0, outer_lo), min(1.0, outer_hi)
-        out.append(Extreme(q.prop, outer_lo, outer_hi, lo.attained, hi.attained, lo.at, hi.at))
+        out.append(Extreme(q.prop, outer_lo, outer_hi, lo.attained, hi.attained, lo.at, hi.at,
+                           "lifting"))
         gaps[q.prop] = max(lo.gap, hi.gap)
     return out, gaps
 

@@ -55,13 +55,14 @@ def lifted_bounds(lifted: Lifted, qs: Sequence[Query], probs: F64
     return sweep(lifted, qs, probs, lift=True)
 
 
-def sweep(lifted: Lifted, qs: Sequence[Query], probs: F64, *, lift: bool
+def sweep(lifted: Lifted, qs: Sequence[Query], probs: F64, *, lift: bool, every: bool = False
           ) -> tuple[F64, I64, npt.NDArray[np.bool_]]:
     """The pass: the initial state's value of each query and, lifted over one box, the
     corner the choices' votes pick for each and the parameters they disagree on.
     Lifted, the columns of `probs` are the corners of one box or of several, box after
     box (then the values are boxes x queries); else column j gives query j's
-    probabilities."""
+    probabilities. With `every`, the values of every state (states x boxes x queries)
+    instead of the initial state's."""
     a = lifted.arrays
     n, q = len(a.states) - 1, len(qs)
     k = 1 << len(lifted.names) if lift else 1
@@ -138,6 +139,8 @@ def sweep(lifted: Lifted, qs: Sequence[Query], probs: F64, *, lift: bool
     bits = (votes[1] > votes[0]).astype(np.int64)
     picks = (bits * (1 << np.arange(len(lifted.names) - 1, -1, -1))[:, None]).sum(axis=0)
     mixed: npt.NDArray[np.bool_] = np.all(votes > 0, axis=0)
+    if every:
+        return value, picks, mixed
     return value[a.initial] if boxes > 1 else value[a.initial, 0], picks, mixed
 
 

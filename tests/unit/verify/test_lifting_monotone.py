@@ -1,0 +1,192 @@
+"""Monotonicity proven from an interval bound on the slopes carried along the backward
+pass (afsmc.verify.lifting.monotone), and the regions it decides by exact corner values
+(afsmc.verify.lifting.regions), held to independent oracles: closed forms and their
+derivatives on a grid, Storm's numeric models at grid points and corners, and a value
+that is not monotone (never claimed monotone)."""
+
+from __future__ import annotations
+
+import itertools
+import json
+from collections.abc import Callable
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from afsmc.compiler import load, lowered
+from afsmc.model import ir
+from afsmc.verify.engines.parametric import interval_box
+from afsmc.verify.lifting import monotone
+from afsmc.verify.lifting.model import Lifted, Query, build, queries
+from afsmc.verify.lifting.regions import Decider
+from afsmc.verify.reports import regions as R
+from tests.conftest import run_cli
+from tests.unit.verify.points import value
+from tests.unit.verify.test_lifting import SMALL, TWO_STEPS, UAV_BOX
+
+# PA / (1 - (1 - PA) QB): retried while QB holds, a self-loop whose probability reads both
+RETRY = """machine retry;
+
+const prob PA = [0.2, 0.8];
+const prob QB = [0.1, 0.6];
+
+mode A    = 0 initial;
+mode Done = 1 final;
+mode Fail = 2 final;
+
+action Try in A {
+    PA:                   goto Done;
+    (1 - PA) * QB:        goto A;
+    (1 - PA) * (1 - QB):  goto Fail;
+}
+
+property done = P=? [ F mode == Done ];
+"""
+
+
+def _lifted(text: str, tmp: Path, prop: str) -> tuple[Lifted, Query, ir.Model]:
+    path = tmp / "m.afsm"
+    path.write_text(text, encoding="utf-8")
+    model = load(str(path)).model
+    low = lowered(model, "nondet")
+    p = next(x for x in model.properties if x.name == prop)
+    lifted = build(low, interval_box(model), [p.path.target], [])  # type: ignore[list-item]
+    return lifted, queries(low, [p])[0][0], model
+
+
+def _grid_quotients(f: Callable[[float, float], float], box: dict[str, tuple[float, float]],
+                    steps: int = 6) -> tuple[list[float], list[float]]:
+    """Every difference quotient of f(PA, QB) along PA and along QB between neighbours of
+    a grid over `box` (a brute-force oracle of the slopes)."""
+    pa = np.linspace(*box["PA"], steps)
+    qb = np.linspace(*box["QB"], steps)
+    along_pa = [(f(pa[i + 1], q) - f(pa[i], q)) / (pa[i + 1] - pa[i])
+                for i in range(steps - 1) for q in qb]
+    along_qb = [(f(p, qb[j + 1]) - f(p, qb[j])) / (qb[j + 1] - qb[j])
+                for j in range(steps - 1) for p in pa]
+    return along_pa, along_qb
+
+
+def _done(pa: float, qb: float) -> float:
+    return pa * (1 - pa) * (1 - qb)
+
+
+def _retry(pa: float, qb: float) -> float:
+    return pa / (1 - (1 - pa) * qb)
+
+
+@pytest.mark.parametrize(("text", "f", "boxes"), [
+    (TWO_STEPS, _done, [{"PA": (0.2, 0.8), "QB": (0.1, 0.3)}, {"PA": (0.2, 0.4), "QB": (0.1, 0.3)},
+                        {"PA": (0.6, 0.8), "QB": (0.2, 0.3)}, {"PA": (0.45, 0.55), "QB": (0.1, 0.3)}]),
+    (RETRY, _retry, [{"PA": (0.2, 0.8), "QB": (0.1, 0.6)}, {"PA": (0.5, 0.6), "QB": (0.3, 0.4)}]),
+])
+def test_slopes_contain_every_difference_quotient_of_the_closed_form(
+        tmp_path: Path, text: str, f: Callable[[float, float], float],
+        boxes: list[dict[str, tuple[float, float]]]) -> None:
+    lifted, q, _ = _lifted(text, tmp_path, "done")
+    assert lifted.names == ("PA", "QB")
+    for box in boxes:
+        s = monotone.slopes(lifted, q, box)
+        values = [f(pa, qb) for pa, qb in itertools.product(np.linspace(*box["PA"], 6),
+                                                             np.linspace(*box["QB"], 6))]
+        assert s.low <= min(values) + 1e-12 and max(values) <= s.high + 1e-12
+        for quotients, (lo, hi) in zip(_grid_quotients(f, box), s.slopes, strict=True):
+            assert lo <= min(quotients) + 1e-12 and max(quotients) <= hi + 1e-12, (box, lo, hi)
+
+
+def test_a_value_not_monotone_is_not_claimed_monotone(tmp_path: Path) -> None:
+    # PA(1 - PA)(1 - QB) rises in PA below 0.5 and falls above it
+    lifted, q, _ = _lifted(TWO_STEPS, tmp_path, "done")
+    for box in ({"PA": (0.2, 0.8), "QB": (0.1, 0.3)}, {"PA": (0.45, 0.55), "QB": (0.1, 0.3)},
+                {"PA": (0.49, 0.51), "QB": (0.1, 0.11)}):
+        s = monotone.slopes(lifted, q, box)
+        assert s.signs() is None
+        lo, hi = s.slopes[0]
+        assert lo < 0.0 < hi  # both signs occur along PA: the grid shows it
+        along_pa, _ = _grid_quotients(_done, box)
+        assert min(along_pa) < 0.0 < max(along_pa)
+    # on either side of 0.5 it is monotone, and the signs say which way
+    assert monotone.slopes(lifted, q, {"PA": (0.2, 0.4), "QB": (0.1, 0.3)}).signs() == (1, -1)
+    assert monotone.slopes(lifted, q, {"PA": (0.6, 0.8), "QB": (0.1, 0.3)}).signs() == (-1, -1)
+
+
+def test_a_parameter_no_probability_reads_has_slope_exactly_zero(tmp_path: Path) -> None:
+    lifted, q, _ = _lifted(TWO_STEPS, tmp_path, "reach_b")  # PA alone reaches B
+    s = monotone.slopes(lifted, q, {"PA": (0.2, 0.8), "QB": (0.1, 0.3)})
+    assert s.slopes[1] == (0.0, 0.0) and s.signs() == (1, 0)
+    assert s.slopes[0][0] <= 1.0 <= s.slopes[0][1]
+    assert s.slopes[0][1] - s.slopes[0][0] < 1e-9
+
+
+@pytest.mark.storm
+def test_monotone_uav_corners_are_point_verifications(tmp_path: Path) -> None:
+    # examples/uav.afsm on a 2x2 arena, the MDP's Pmin of success over P_INIT_FAIL and
+    # P_DROP (P_DROP_LIFT fixed): proven monotone over the whole box; on a 3 x 3 grid
+    # of point-valued Storm models the values fall along both, and the two extreme
+    # corners' exact values are the point verifications there
+    from tests.conftest import EXAMPLES
+
+    text = (EXAMPLES / "uav.afsm").read_text(encoding="utf-8")
+    box = {"P_INIT_FAIL": UAV_BOX["P_INIT_FAIL"], "P_DROP": (0.005, 0.2)}
+    for name, (lo, hi) in box.items():
+        old = next(line for line in text.splitlines() if line.startswith(f"const prob {name} "))
+        text = text.replace(old, f"const prob {name} = [{lo}, {hi}];")
+    path = tmp_path / "uav.afsm"
+    path.write_text(text, encoding="utf-8")
+    model = load(str(path), SMALL).model
+    low = lowered(model, "nondet")
+    prop = next(p for p in model.properties if p.name == "success")
+    lifted = build(low, box, [prop.path.target], [])  # type: ignore[list-item]
+    req = R.parse_requirement('P>=0.17 [ F "success" ]')
+    q = R.lifted_query(req, queries(low, [prop])[0][0], mdp=True)
+    s = monotone.slopes(lifted, q, box)
+    signs = s.signs()
+    assert signs == (-1, -1)  # lifted.names: P_DROP, P_INIT_FAIL
+    formula = 'Pmin=? [ F "success" ]'
+    grid = {n: np.linspace(lo, hi, 3).tolist() for n, (lo, hi) in box.items()}
+    at = {pt: value(model, dict(zip(lifted.names, pt, strict=True)), formula)
+          for pt in itertools.product(grid["P_DROP"], grid["P_INIT_FAIL"])}
+    for (d, f), v in at.items():
+        for (d2, f2), v2 in at.items():
+            if d <= d2 and f <= f2:
+                assert v2 <= v + 1e-9  # non-increasing in both
+    for end in ("min", "max"):
+        corner = monotone.extreme_corner(lifted.names, box, signs, end)
+        exact = monotone.exact_values(lifted, q, [corner], 1 << 20)[0]
+        assert exact == pytest.approx(value(model, corner, formula), abs=1e-9)
+        assert exact == pytest.approx((min if end == "min" else max)(at.values()), abs=1e-9)
+        assert s.low - 1e-12 <= exact <= s.high + 1e-12
+    # the regions: every box inside the proven one, decided by its corners
+    decider = Decider(lifted, q, req.cmp, req.bound, R.margin(req))
+    regions, _ = R.refine_lifted(lifted, q, req, box, coverage=0.9, max_rounds=8)
+    assert decider.decide([box]) == ["unknown"] and decider.slope_passes == 1
+    decided = [r for r in regions if r.verdict != "unknown"]
+    assert {r.verdict for r in decided} == {"holds", "fails"}
+    assert decider.decide([dict(r.bounds) for r in decided]) == [r.verdict for r in decided]
+    assert decider.slope_passes == 1  # every region lies inside the box proven monotone
+    for r in decided:
+        names = sorted(r.bounds)
+        for c in itertools.product(*(r.bounds[n] for n in names)):
+            v = decider.values.get(tuple(dict(zip(names, c, strict=True))[n]
+                                         for n in lifted.names))
+            if v is not None:
+                assert (v >= req.bound) == (r.verdict == "holds")
+
+
+def test_regions_json_names_lifting_and_each_decided_corner_agrees(tmp_path: Path) -> None:
+    # RETRY's value PA / (1 - (1 - PA) QB) rises in both: every region decided by its
+    # corners (one slope pass for the whole box); the closed form at each corner of each
+    # decided region agrees with its verdict
+    path = tmp_path / "retry.afsm"
+    path.write_text(RETRY, encoding="utf-8")
+    r = run_cli("regions", str(path), "--require", 'P>=0.6 [ F mode == Done ]', "--json",
+                "--coverage", "0.9")
+    assert r.code == 0, r.err
+    out = json.loads(r.out)
+    assert out["engine"] == "lifting" and out["coverage"] >= 0.9
+    decided = [g for g in out["regions"] if g["verdict"] != "unknown"]
+    assert {g["verdict"] for g in decided} == {"holds", "fails"}
+    for g in decided:
+        for pa, qb in itertools.product(g["bounds"]["PA"], g["bounds"]["QB"]):
+            assert (_retry(pa, qb) >= 0.6) == (g["verdict"] == "holds"), (g, pa, qb)
