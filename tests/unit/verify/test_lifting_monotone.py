@@ -190,3 +190,76 @@ def test_regions_json_names_lifting_and_each_decided_corner_agrees(tmp_path: Pat
     for g in decided:
         for pa, qb in itertools.product(g["bounds"]["PA"], g["bounds"]["QB"]):
             assert (_retry(pa, qb) >= 0.6) == (g["verdict"] == "holds"), (g, pa, qb)
+
+
+@pytest.mark.storm
+def test_diagram_reach_with_interval_probabilities_by_lifting(tmp_path: Path) -> None:
+    # the diagram's --reach over TWO_STEPS' box: Done's bounds are PA(1 - PA)(1 - QB)'s
+    # extremes (0.2 * 0.8 * 0.7 at a corner, 0.25 * 0.9 at PA = 0.5), by parameter lifting
+    from afsmc.api.diagram import mode_reachability
+
+    path = tmp_path / "twostep.afsm"
+    path.write_text(TWO_STEPS, encoding="utf-8")
+    model = load(str(path)).model
+    said: list[str] = []
+    got, mdp = mode_reachability(model, "nondet", progress=said.append)
+    assert mdp
+    assert any("bounds over the interval probabilities (afsmc's explorer, parameter lifting)"
+               in s for s in said), said
+    done = next(m.number for m in model.modes if m.name == "Done")
+    b = next(m.number for m in model.modes if m.name == "B")
+    assert got[b] == pytest.approx((0.2, 0.8), abs=1e-12)
+    assert got[done][0] == pytest.approx(0.2 * 0.8 * 0.7, abs=1e-12)
+    assert got[done][1] == pytest.approx(0.25 * 0.9, abs=1e-4)
+
+
+# 0.9 PA + (1 - PA)(0.6 - 0.5 PA) = 0.6 - 0.2 PA + 0.5 PA^2, rising on [0.3, 0.8] (its
+# derivative PA - 0.2 > 0) while C's own value falls in PA: the lifted states disagree
+DISAGREE = """machine disagree;
+
+const prob PA = [0.3, 0.8];
+
+mode A    = 0 initial;
+mode B    = 1;
+mode C    = 2;
+mode Done = 3 final;
+mode Fail = 4 final;
+
+action First in A {
+    PA:     goto B;
+    1 - PA: goto C;
+}
+action FromB in B {
+    0.9: goto Done;
+    0.1: goto Fail;
+}
+action FromC in C {
+    0.6 - 0.5 * PA: goto Done;
+    0.4 + 0.5 * PA: goto Fail;
+}
+
+property done = P=? [ F mode == Done ];
+"""
+
+
+def test_a_monotone_value_whose_states_disagree_is_exact_at_its_corners(tmp_path: Path) -> None:
+    from afsmc.verify.lifting import bounds, passes
+    from afsmc.verify.plan.precision import PARAMETER_PRECISION
+
+    lifted, q, _ = _lifted(DISAGREE, tmp_path, "done")
+    # the lifted bound alone is far from the minimum (C at PA = 0.8, A at PA = 0.3)
+    corners = lifted.values_at([{"PA": 0.3}, {"PA": 0.8}])
+    outer = float(passes.lifted_bounds(lifted, [q], corners)[0][0])
+    assert outer == pytest.approx(0.3 * 0.9 + 0.7 * 0.2, abs=1e-12)
+    assert monotone.slopes(lifted, q, lifted.box).signs() == (1,)
+    # the bounds: exact at the corners the signs name, no refinement (gap 0); by splitting
+    # the outer bound would only come within the precision of them
+    path = tmp_path / "m.afsm"
+    model = load(str(path)).model
+    (e,), gaps = bounds.extremes(lifted, queries(lowered(model, "nondet"), model.properties)[0],
+                                 PARAMETER_PRECISION)
+    lo, hi = (0.6 - 0.2 * pa + 0.5 * pa * pa for pa in (0.3, 0.8))
+    assert (e.min, e.min_attained, e.max, e.max_attained) == pytest.approx((lo, lo, hi, hi),
+                                                                           abs=1e-12)
+    assert (e.min_at, e.max_at, e.engine) == ({"PA": 0.3}, {"PA": 0.8}, "lifting")
+    assert gaps["done"] == 0.0
