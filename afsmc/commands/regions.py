@@ -247,8 +247,8 @@ def solve_lifted(args: argparse.Namespace, low: Lowered, req: R.Requirement,
                 "parametric engine checks the regions")
         return None
     if say is not None:
-        say(f"afsmc's explorer: {lifted.states:,} states; each box decided by parameter "
-            "lifting")
+        say(f"afsmc's explorer: {lifted.states:,} states; each box decided by exact corner "
+            "values where the value is proven monotone over it, else by parameter lifting")
     regions, rounds = R.refine_lifted(lifted, R.lifted_query(req, qs[0], low.kind == "mdp"),
                                       req, box, coverage=args.coverage,
                                       max_rounds=args.max_rounds, progress=say)

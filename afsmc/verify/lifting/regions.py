@@ -40,8 +40,12 @@ class Decider:
         self.point_passes = 0
 
     def summary(self) -> str:
-        return (f"{self.slope_passes} slope passes, {len(self.values)} corner values, "
-                f"{len(self.proven)} boxes proven monotone")
+        """The work so far, for the progress lines."""
+        def count(n: int, one: str, many: str) -> str:
+            return f"{n} {one if n == 1 else many}"
+        return (f"{count(self.slope_passes, 'slope pass', 'slope passes')}, "
+                f"{count(len(self.values), 'corner value', 'corner values')}, "
+                f"{count(len(self.proven), 'box', 'boxes')} proven monotone")
 
     def verdict(self, worst: float, best: float | None) -> str:
         """The verdict from the value on the side the requirement reads (`worst`) and on

@@ -342,7 +342,7 @@ def refine_lifted(lifted: Lifted, q: Query, req: Requirement, box: Bounds, *,
         done += [Region(b, v) for b, v in zip(todo, verdicts, strict=True) if v != "unknown"]
         decided = sum(r.volume(box) for r in done)
         if progress is not None:
-            progress(f"round {rounds}: {len(todo)} boxes checked "
+            progress(f"round {rounds}: {len(todo)} box{'es' if len(todo) > 1 else ''} checked "
                      f"({decider.summary()}), {decided:.1%} of the volume decided")
         if decided >= coverage or not unknown:
             return done + [Region(b, "unknown") for b in unknown], rounds
