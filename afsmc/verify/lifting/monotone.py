@@ -50,7 +50,7 @@ import numpy.typing as npt
 from afsmc.verify.engines import acyclic, umb
 from afsmc.verify.engines.acyclic import F64
 from afsmc.verify.lifting import passes
-from afsmc.verify.lifting.model import Box, Lifted, Query, corners_of
+from afsmc.verify.lifting.model import Box, Lifted, Query, center, corners_of
 
 UNIT = 2.0 ** -53  # the unit roundoff of a double
 
@@ -242,12 +242,23 @@ def _divided(numer: F64, den: tuple[F64, F64], gamma: float) -> F64:
 
 
 def exact_values(lifted: Lifted, q: Query, points: Sequence[Mapping[str, float]],
-                 value_bytes: int) -> list[float]:
+                 value_bytes: int, base: F64 | None = None) -> list[float]:
     """`q`'s value (under its scheduler) at each point, by point passes of as many points
-    as `value_bytes` allows (a pass keeps a value per state and point)."""
+    as `value_bytes` allows (a pass keeps a value per state and point). `base`: every
+    state's value at one point, on a model renumbered by afsmc.verify.lifting.order (then
+    only the states that depend on the parameters are computed)."""
     per = max(1, value_bytes // (8 * max(lifted.states, 1)))
     out: list[float] = []
     for i in range(0, len(points), per):
         part = list(points[i:i + per])
-        out += passes.attained(lifted, [q] * len(part), lifted.values_at(part)).tolist()
+        out += passes.attained(lifted, [q] * len(part), lifted.values_at(part),
+                               base).tolist()
+    return out
+
+
+def base_values(lifted: Lifted, q: Query) -> F64:
+    """Every state's value of `q` at the box's centre: for a state whose value does not
+    depend on the parameters, its value at every point (afsmc.verify.lifting.order)."""
+    at = lifted.values_at([center(lifted.box)])
+    out: F64 = passes.sweep(lifted, [q], at, lift=False, every=True)[0][:, 0, 0]
     return out

@@ -17,7 +17,8 @@ from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
 
-from afsmc.verify.lifting import monotone
+from afsmc.verify.engines.acyclic import F64
+from afsmc.verify.lifting import monotone, order
 from afsmc.verify.lifting.bounds import VALUE_BYTES
 from afsmc.verify.lifting.model import Box, Lifted, Query
 
@@ -31,7 +32,10 @@ class Decider:
 
     def __init__(self, lifted: Lifted, q: Query, op: str, threshold: float, margin: float
                  ) -> None:
-        self.lifted, self.q = lifted, q
+        # each layer's states that depend on the parameters first: a corner's point
+        # pass computes only those (afsmc.verify.lifting.order)
+        self.lifted, self.q = order.dependent_first(lifted), q
+        self.base: F64 | None = None
         self.lower = op in (">=", ">")
         self.threshold, self.margin = threshold, margin
         self.proven: list[tuple[Box, Signs]] = []
@@ -100,7 +104,9 @@ class Decider:
         new = sorted({c for c in corners if c not in self.values})
         if new:
             points = [dict(zip(self.lifted.names, c, strict=True)) for c in new]
-            found = monotone.exact_values(self.lifted, self.q, points, VALUE_BYTES)
+            if self.base is None:
+                self.base = monotone.base_values(self.lifted, self.q)
+            found = monotone.exact_values(self.lifted, self.q, points, VALUE_BYTES, self.base)
             self.point_passes += 1
             self.values.update(zip(new, found, strict=True))
         return [self.values[c] for c in corners]

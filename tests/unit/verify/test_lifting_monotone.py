@@ -263,3 +263,36 @@ def test_a_monotone_value_whose_states_disagree_is_exact_at_its_corners(tmp_path
                                                                            abs=1e-12)
     assert (e.min_at, e.max_at, e.engine) == ({"PA": 0.3}, {"PA": 0.8}, "lifting")
     assert gaps["done"] == 0.0
+
+
+def test_states_renumbered_dependent_first_give_the_same_values(tmp_path: Path) -> None:
+    # the small UAV over P_INIT_FAIL x P_DROP: the states that do not depend on them have
+    # one value at every corner (a full pass at each, compared state by state); a point
+    # pass over the dependent states only, the others taken from one pass at the centre,
+    # gives the values of a pass over every state
+    from afsmc.verify.lifting import order, passes
+    from tests.conftest import EXAMPLES
+
+    model = load(str(EXAMPLES / "uav.afsm"), SMALL).model
+    low = lowered(model, "nondet")
+    box = {"P_INIT_FAIL": UAV_BOX["P_INIT_FAIL"], "P_DROP": (0.005, 0.2)}
+    prop = next(p for p in model.properties if p.name == "success")
+    lifted = build(low, box, [prop.path.target], [])  # type: ignore[list-item]
+    q = R.lifted_query(R.parse_requirement('P>=0.5 [ F "success" ]'),
+                       queries(low, [prop])[0][0], mdp=True)
+    dep = order.dependent(lifted)
+    assert 0 < dep.sum() < len(dep)
+    corners = [dict(zip(lifted.names, c, strict=True))
+               for c in itertools.product(*(box[n] for n in lifted.names))]
+    every = passes.sweep(lifted, [q] * 4, lifted.values_at(corners), lift=False,
+                         every=True)[0][:, 0, :]
+    assert (every[~dep] == every[~dep][:, :1]).all()
+    assert (every[dep] != every[dep][:, :1]).any(axis=1).sum() > 0
+    renumbered = order.dependent_first(lifted)
+    assert renumbered.leading is not None and renumbered.leading.sum() == dep.sum()
+    base = monotone.base_values(renumbered, q)
+    points = [{"P_INIT_FAIL": 0.021, "P_DROP": 0.05}, {"P_INIT_FAIL": 0.025, "P_DROP": 0.17},
+              *corners]
+    want = passes.attained(lifted, [q] * len(points), lifted.values_at(points))
+    got = monotone.exact_values(renumbered, q, points, 1 << 20, base)
+    assert got == pytest.approx(want.tolist(), abs=1e-12)
