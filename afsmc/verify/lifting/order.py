@@ -18,7 +18,7 @@ import dataclasses
 import numpy as np
 
 from afsmc.verify.engines import acyclic
-from afsmc.verify.engines.acyclic import I64, Idx
+from afsmc.verify.engines.acyclic import I64
 from afsmc.verify.lifting import passes
 from afsmc.verify.lifting.model import Lifted
 
@@ -37,35 +37,72 @@ def dependent(lifted: Lifted) -> np.ndarray:
     return out
 
 
+CHUNK_STATES = 1 << 20  # states renumbered at a time (whole layers), to bound the temporaries
+
+
 def dependent_first(lifted: Lifted) -> Lifted:
     """`lifted` with each layer's dependent states first (the same layers, choices and
-    branches, renumbered), and per layer how many of its states depend (`leading`)."""
+    branches, renumbered), and per layer how many of its states depend (`leading`).
+    A layer's choices and branches keep their place as a whole, so the arrays are
+    rewritten a group of layers at a time."""
     a = lifted.arrays
+    assert isinstance(a.prob, acyclic.Coded)
     dep = dependent(lifted)
     n = len(dep)
     layer_of = np.repeat(np.arange(len(a.layers) - 1), np.diff(a.layers))
     # the new order: by layer, dependent before independent, stable
-    order = np.lexsort((np.arange(n), ~dep, layer_of))
-    counts: I64 = np.add.reduceat(dep.astype(np.int64), a.layers[:-1]) if n else np.zeros(0,
-                                                                                     np.int64)
-    new_of = np.empty(n, dtype=np.int64)
-    new_of[order] = np.arange(n)
-    per_state = np.diff(a.states)[order]
-    states: I64 = np.concatenate(([0], np.cumsum(per_state))).astype(np.int64)
-    choice_order = acyclic._ranges(a.states[:-1][order], a.states[1:][order])
-    per_choice = np.diff(a.choices)[choice_order]
-    choices: I64 = np.concatenate(([0], np.cumsum(per_choice))).astype(np.int64)
-    branch_order = acyclic._ranges(a.choices[:-1][choice_order], a.choices[1:][choice_order])
-    target: Idx = new_of[np.asarray(a.target)[branch_order]].astype(a.target.dtype)
-    assert isinstance(a.prob, acyclic.Coded)
-    codes = a.prob.codes[branch_order]
+    order = np.lexsort((~dep, layer_of)).astype(np.int32)
+    del layer_of
+    new_of = np.empty(n, dtype=np.int32)
+    new_of[order] = np.arange(n, dtype=np.int32)
+    states, choices = np.empty_like(a.states), np.empty_like(a.choices)
+    states[0], choices[0] = 0, 0
+    target, codes = np.empty_like(a.target), np.empty_like(a.prob.codes)
+    loop = np.empty_like(lifted.loop)
+    stay = None if a.stay is None else np.asarray(a.stay[0:len(a.stay)])
+    new_stay = None if stay is None else np.empty_like(stay)
+    rewards = {k: np.asarray(v[0:len(v)], np.float64) for k, v in a.rewards.items()}
+    new_rewards = {k: np.empty_like(v) for k, v in rewards.items()}
+    for lo, hi in _chunks(a.layers):
+        old = order[lo:hi]
+        c0, b0 = int(a.states[lo]), int(a.choices[a.states[lo]])
+        states[lo + 1:hi + 1] = c0 + np.cumsum(a.states[old + 1] - a.states[old])
+        c_order = acyclic._ranges(a.states[old], a.states[old + 1])
+        c1 = c0 + len(c_order)
+        choices[c0 + 1:c1 + 1] = b0 + np.cumsum(a.choices[c_order + 1] - a.choices[c_order])
+        b_order = acyclic._ranges(a.choices[c_order], a.choices[c_order + 1])
+        b1 = b0 + len(b_order)
+        target[b0:b1] = new_of[a.target[b_order]]
+        codes[b0:b1] = a.prob.codes[b_order]
+        loop[b0:b1] = lifted.loop[b_order]
+        if stay is not None and new_stay is not None:
+            new_stay[c0:c1] = stay[c_order]
+        for k, v in rewards.items():
+            new_rewards[k][c0:c1] = v[c_order]
+    leading: I64 = np.add.reduceat(dep.astype(np.int64), a.layers[:-1])
     arrays = dataclasses.replace(
         a, states=states, choices=choices, target=target,
-        prob=acyclic.Coded(a.prob.table, codes),
-        stay=None if a.stay is None else np.asarray(a.stay[0:len(a.stay)])[choice_order],
+        prob=acyclic.Coded(a.prob.table, codes), stay=new_stay,
         initial=int(new_of[a.initial]),
         labels={k: np.asarray(v)[order] for k, v in a.labels.items()},
-        rewards={k: np.asarray(v[0:len(v)], np.float64)[choice_order]
-                 for k, v in a.rewards.items()})
-    return dataclasses.replace(lifted, arrays=arrays, codes=codes,
-                               loop=lifted.loop[branch_order], leading=counts)
+        rewards={k: _vec(v) for k, v in new_rewards.items()})
+    return dataclasses.replace(lifted, arrays=arrays, codes=codes, loop=loop, leading=leading)
+
+
+def _vec(v: np.ndarray) -> acyclic.Vec:
+    out: acyclic.Vec = v
+    return out
+
+
+def _chunks(layers: I64) -> list[tuple[int, int]]:
+    """Ranges of states of whole layers, each of about CHUNK_STATES states or one layer."""
+    out: list[tuple[int, int]] = []
+    start = 0
+    bounds = layers.tolist()
+    for end in bounds[1:]:
+        if end - start >= CHUNK_STATES:
+            out.append((start, end))
+            start = end
+    if start < bounds[-1]:
+        out.append((start, bounds[-1]))
+    return out

@@ -33,8 +33,10 @@ class Decider:
     def __init__(self, lifted: Lifted, q: Query, op: str, threshold: float, margin: float
                  ) -> None:
         # each layer's states that depend on the parameters first: a corner's point
-        # pass computes only those (afsmc.verify.lifting.order)
-        self.lifted, self.q = order.dependent_first(lifted), q
+        # pass computes only those (afsmc.verify.lifting.order); the caller may have
+        # renumbered them already, and then keeps no second copy
+        self.lifted = lifted if lifted.leading is not None else order.dependent_first(lifted)
+        self.q = q
         self.base: F64 | None = None
         self.lower = op in (">=", ">")
         self.threshold, self.margin = threshold, margin

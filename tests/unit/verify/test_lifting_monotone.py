@@ -265,7 +265,8 @@ def test_a_monotone_value_whose_states_disagree_is_exact_at_its_corners(tmp_path
     assert gaps["done"] == 0.0
 
 
-def test_states_renumbered_dependent_first_give_the_same_values(tmp_path: Path) -> None:
+def test_states_renumbered_dependent_first_give_the_same_values(
+        monkeypatch: pytest.MonkeyPatch) -> None:
     # the small UAV over P_INIT_FAIL x P_DROP: the states that do not depend on them have
     # one value at every corner (a full pass at each, compared state by state); a point
     # pass over the dependent states only, the others taken from one pass at the centre,
@@ -288,6 +289,9 @@ def test_states_renumbered_dependent_first_give_the_same_values(tmp_path: Path) 
                          every=True)[0][:, 0, :]
     assert (every[~dep] == every[~dep][:, :1]).all()
     assert (every[dep] != every[dep][:, :1]).any(axis=1).sum() > 0
+    # a few layers at a time, as on a model of millions of states
+    monkeypatch.setattr(order, "CHUNK_STATES", 50)
+    assert len(order._chunks(lifted.arrays.layers)) > 3
     renumbered = order.dependent_first(lifted)
     assert renumbered.leading is not None and renumbered.leading.sum() == dep.sum()
     base = monotone.base_values(renumbered, q)
