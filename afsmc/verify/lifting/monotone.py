@@ -34,8 +34,9 @@ every sub-box the same holds with the same corners' rule.
 
 Rounding: each state's numerator is widened by a bound of its floating-point error
 (`_rounding`), where any of its terms is not exactly zero; a state none of whose terms
-can be non-zero (every branch's D_j exactly 0, as its probability does not read p_i, and
-every successor's slope exactly [0, 0]) has slope exactly [0, 0].
+can be non-zero (every branch's D_j exactly 0, as its probability does not read p_i, or
+its successor's bounds exactly [0, 0]; and every successor's slope exactly [0, 0]) has
+slope exactly [0, 0].
 """
 
 from __future__ import annotations
@@ -219,7 +220,9 @@ def _numerators(lifted: Lifted, b0: int, b1: int, c0: int, c1: int, value: F64, 
         s_u = stay[u][:, None] + np.add.reduceat(np.where(loop[vb][:, None], pv, 0.0),
                                                  first, axis=0)
         den_lo[u], den_hi[u] = 1.0 - s_u.max(axis=1), 1.0 - s_u.min(axis=1)
-        nonzero[u] |= np.add.reduceat((dv != 0.0).any(axis=1), first, axis=0) > 0
+        # D_j * V_j(y) is an exact 0 where D_j is 0 or V_j is 0 at every point
+        moves = (dv != 0.0).any(axis=1) & (v != 0.0).any(axis=1)[:, None]
+        nonzero[u] |= np.add.reduceat(moves, first, axis=0) > 0
     numer[:, :, 0] = np.where(np.isnan(numer[:, :, 0]), -np.inf, numer[:, :, 0])
     numer[:, :, 1] = np.where(np.isnan(numer[:, :, 1]), np.inf, numer[:, :, 1])
     return numer, (den_lo, den_hi), nonzero

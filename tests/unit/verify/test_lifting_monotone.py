@@ -41,7 +41,12 @@ action Try in A {
     (1 - PA) * (1 - QB):  goto Fail;
 }
 
-property done = P=? [ F mode == Done ];
+rewards tries {
+    [Try] true : 1;
+}
+
+property done  = P=? [ F mode == Done ];
+property tries = R{"tries"}=? [ F mode != A ];
 """
 
 
@@ -51,8 +56,8 @@ def _lifted(text: str, tmp: Path, prop: str) -> tuple[Lifted, Query, ir.Model]:
     model = load(str(path)).model
     low = lowered(model, "nondet")
     p = next(x for x in model.properties if x.name == prop)
-    lifted = build(low, interval_box(model), [p.path.target], [])  # type: ignore[list-item]
-    return lifted, queries(low, [p])[0][0], model
+    qs, targets, rewards, _ = queries(low, [p])
+    return build(low, interval_box(model), targets, rewards), qs[0], model
 
 
 def _grid_quotients(f: Callable[[float, float], float], box: dict[str, tuple[float, float]],
@@ -76,15 +81,22 @@ def _retry(pa: float, qb: float) -> float:
     return pa / (1 - (1 - pa) * qb)
 
 
-@pytest.mark.parametrize(("text", "f", "boxes"), [
-    (TWO_STEPS, _done, [{"PA": (0.2, 0.8), "QB": (0.1, 0.3)}, {"PA": (0.2, 0.4), "QB": (0.1, 0.3)},
+def _tries(pa: float, qb: float) -> float:
+    return 1 / (1 - (1 - pa) * qb)  # the expected number of tries
+
+
+@pytest.mark.parametrize(("text", "prop", "f", "boxes"), [
+    (TWO_STEPS, "done", _done, [{"PA": (0.2, 0.8), "QB": (0.1, 0.3)}, {"PA": (0.2, 0.4), "QB": (0.1, 0.3)},
                         {"PA": (0.6, 0.8), "QB": (0.2, 0.3)}, {"PA": (0.45, 0.55), "QB": (0.1, 0.3)}]),
-    (RETRY, _retry, [{"PA": (0.2, 0.8), "QB": (0.1, 0.6)}, {"PA": (0.5, 0.6), "QB": (0.3, 0.4)}]),
+    (RETRY, "done", _retry, [{"PA": (0.2, 0.8), "QB": (0.1, 0.6)},
+                             {"PA": (0.5, 0.6), "QB": (0.3, 0.4)}]),
+    (RETRY, "tries", _tries, [{"PA": (0.2, 0.8), "QB": (0.1, 0.6)},
+                              {"PA": (0.5, 0.6), "QB": (0.3, 0.4)}]),
 ])
 def test_slopes_contain_every_difference_quotient_of_the_closed_form(
-        tmp_path: Path, text: str, f: Callable[[float, float], float],
+        tmp_path: Path, text: str, prop: str, f: Callable[[float, float], float],
         boxes: list[dict[str, tuple[float, float]]]) -> None:
-    lifted, q, _ = _lifted(text, tmp_path, "done")
+    lifted, q, _ = _lifted(text, tmp_path, prop)
     assert lifted.names == ("PA", "QB")
     for box in boxes:
         s = monotone.slopes(lifted, q, box)
@@ -300,3 +312,40 @@ def test_states_renumbered_dependent_first_give_the_same_values(
     want = passes.attained(lifted, [q] * len(points), lifted.values_at(points))
     got = monotone.exact_values(renumbered, q, points, 1 << 20, base)
     assert got == pytest.approx(want.tolist(), abs=1e-12)
+
+
+def test_expected_rewards_get_slopes_too(tmp_path: Path) -> None:
+    # 1 / (1 - (1 - PA) QB) tries: fewer as PA rises, more as QB does
+    lifted, q, _ = _lifted(RETRY, tmp_path, "tries")
+    assert monotone.slopes(lifted, q, lifted.box).signs() == (-1, 1)
+    # one First whatever PA and QB: a count that does not depend on them, slopes exactly 0
+    lifted, q, _ = _lifted(TWO_STEPS, tmp_path, "firsts")
+    s = monotone.slopes(lifted, q, lifted.box)
+    assert (s.low, s.high, s.slopes) == (1.0, 1.0, ((0.0, 0.0), (0.0, 0.0)))
+
+
+def test_regions_of_a_value_not_monotone_split_until_the_halves_are(tmp_path: Path) -> None:
+    # PA(1 - PA)(1 - QB) >= 0.2: not monotone over the whole box (no corner rule there),
+    # monotone on boxes on either side of PA = 0.5, which are then decided by corners;
+    # every decided region agrees with the closed form at its corners and at its point
+    # nearest PA = 0.5 (where the value is greatest along PA)
+    lifted, q, _ = _lifted(TWO_STEPS, tmp_path, "done")
+    req = R.parse_requirement('P>=0.2 [ F "done" ]')
+    q = R.lifted_query(req, q, mdp=False)
+    decider = Decider(lifted, q, req.cmp, req.bound, R.margin(req))
+    box = dict(lifted.box)
+    assert decider.decide([box]) == ["unknown"] and not decider.proven
+    decider.decide([{"PA": (0.2, 0.4), "QB": box["QB"]}])
+    assert [signs for _, signs in decider.proven] == [(1, -1)]
+    regions, _ = R.refine_lifted(lifted, q, req, box, coverage=0.8, max_rounds=10)
+    decided = [r for r in regions if r.verdict != "unknown"]
+    assert {r.verdict for r in decided} == {"holds", "fails"}
+    assert sum(r.volume(box) for r in decided) >= 0.8
+    for r in decided:
+        (pa_lo, pa_hi), (qb_lo, qb_hi) = r.bounds["PA"], r.bounds["QB"]
+        top = min(max(0.5, pa_lo), pa_hi)
+        values = [_done(pa, qb) for pa in (pa_lo, pa_hi, top) for qb in (qb_lo, qb_hi)]
+        if r.verdict == "holds":
+            assert min(values) >= 0.2
+        else:
+            assert max(values) <= 0.2
