@@ -12,7 +12,8 @@ from afsmc.answer.common import Absent, Answer, Diagnostic
 
 
 class Region(Answer):
-    """A sub-box and what Storm's parameter lifting proved for all of it."""
+    """A sub-box and what parameter lifting (or exact corner values of a value proven
+    monotone) proved for all of it."""
 
     bounds: dict[str, tuple[float, float]] = Field(
         description="each parameter's interval [lo, hi] in this region")
@@ -47,11 +48,17 @@ class Regions(Answer):
                     "some floor/ceil choice misses it); null where it is")
     min: float | None = Field(
         description="the requirement's value's min over the whole box, as `afsmc verify` "
-                    "bounds it (Storm's parametric engine); null if not computed")
+                    "bounds it (by `engine`); null if not computed")
     max: float | None = Field(description="its max over the whole box, likewise")
     error: float | None = Field(description="each bound's error: the true extreme lies "
                                             "within it")
     decided_by: c.DecidedBy | None = Field(description=c.DECIDED_BY)
+    engine: Literal["lifting", "parametric"] = Field(
+        description="what decided the regions and bounded the whole box: afsmc's explorer "
+                    "(\"lifting\": lifted bounds, and exact corner values where the value "
+                    "is proven monotone; docs/uncertainty.md) or Storm's parametric engine "
+                    "and region checker (\"parametric\", for missions the explorer does not "
+                    "take)")
     regions: list[Region] = Field(description="the regions, decided ones first")
     feasible: dict[str, float] | None = Field(
         None, description="--feasible: one valuation of the parameters that meets the "

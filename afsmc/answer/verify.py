@@ -199,6 +199,10 @@ class IntervalBound(Answer):
                                                    "infinite)")
     min_at: dict[str, float] = Field(description="where: each interval probability's value")
     max_at: dict[str, float] = Field(description="where: each interval probability's value")
+    engine: Literal["lifting", "parametric"] = Field(
+        description="what computed the bounds: parameter lifting on afsmc's explorer "
+                    "(\"lifting\", docs/uncertainty.md) or Storm's parametric engine "
+                    "(\"parametric\", the fallback for missions the explorer does not take)")
     infinite: list[Literal["outer_min", "outer_max", "min_attained",
                            "max_attained"]] | Absent = Field(
         None, description="which of the four are an infinite expected reward (JSON has no "

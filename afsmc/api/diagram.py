@@ -172,9 +172,9 @@ def _reachability(model: ir.Model, resolution: Resolution, max_states: int | Non
     say(f"reach: building the {low.kind.upper()} with Storm and checking {len(targets)} "
         f"modes ...")
     t0 = time.monotonic()
-    # With interval probabilities the values come from the parametric engine below; the
-    # build at the midpoint stays, with one query, as the guard (state limit, memory) that
-    # the parametric engine does not have.
+    # With interval probabilities the values come from the bounds below (parameter lifting
+    # on afsmc's explorer, else Storm's parametric engine); the build at the midpoint
+    # stays, with one query, as the guard (state limit, memory) that they do not have.
     asked = dict(list(queries.items())[:1]) if model.prob_intervals else queries
     got = ask(low, asked, bound=upper_bound(model), what=f"{low.kind.upper()} (--reach)",
               max_states=max_states, progress=relay)
@@ -192,10 +192,10 @@ def _reachability(model: ir.Model, resolution: Resolution, max_states: int | Non
     else:
         # the bounds over every fixed value of the interval probabilities, as verify's
         # min and max (docs/verification.md, "What a result means"), not the midpoint's
-        say("reach: the bounds over the interval probabilities (Storm's parametric engine)")
-        over = reach_bounds(model, [(query(i, ""), E.Binary(
+        over, engine = reach_bounds(model, [(query(i, ""), E.Binary(
             "==", E.VarRef(var, E.Type.INT), E.lit(n), E.Type.BOOL))
             for i, (_, var, n) in enumerate(targets)])
+        say(f"reach: the bounds over the interval probabilities ({engine})")
         for i, (agent, _, n) in enumerate(targets):
             out.setdefault(agent, {})[n] = over[query(i, "")]
         mdp = True

@@ -36,6 +36,9 @@ def test_json_lists_regions_with_bounds_verdicts_and_coverage(patrol: str) -> No
     # no --param: the one dimension is the file's interval probability, and says so
     assert out["from_file"] == ["P_SLIP"]
     assert out["verdict"] in ("holds", "fails", "depends", "undecided") and out["reason"]
+    # the patrol has cycles of more than one state, which afsmc's explorer does not take:
+    # Storm's parametric engine decides the regions, and the JSON says so
+    assert out["engine"] == "parametric"
 
 
 def test_the_table_the_plot_and_the_feasible_flags(patrol: str, tmp_path: Path) -> None:

@@ -127,15 +127,7 @@ def over_probabilities(checks: Checks, model: ir.Model, props: Sequence[ir.Prope
     asked = [*props, *beside]
     kept = dataclasses.replace(model, properties=tuple(asked) + tuple(preserve))
     low = lowered(kept, "nondet", reductions)
-    found, gaps, engine = _lifted(low, asked, box, progress)
-    left = [p for p in asked if p.name not in {e.name for e in found}]
-    if left:
-        if progress is not None:
-            progress(f"bounding {len(left)} propert{'y' if len(left) == 1 else 'ies'} over "
-                     + ", ".join(f"{n} in [{lo:g}, {hi:g}]" for n, (lo, hi) in box.items())
-                     + " with Storm's parametric engine")
-        found += parametric.extremes(low, left, via=via, precision=PARAMETER_PRECISION)
-        engine = PARAMETRIC if not gaps else f"{LIFTING} and {PARAMETRIC}"
+    found, gaps, engine = _bounded(low, asked, box, via, progress)
     seconds = time.perf_counter() - t0
     by_name = {e.name: e for e in found}
     error = bound_error(precision)
@@ -149,6 +141,24 @@ def over_probabilities(checks: Checks, model: ir.Model, props: Sequence[ir.Prope
 
 LIFTING = "afsmc's explorer, parameter lifting"
 PARAMETRIC = "Storm's parametric engine"
+
+
+def _bounded(low: Lowered, props: Sequence[ir.Property], box: dict[str, tuple[float, float]],
+             via: str, progress: Callable[[str], None] | None
+             ) -> tuple[list[parametric.Extreme], dict[str, float], str]:
+    """Each property's bounds over `box`: by parameter lifting on afsmc's explorer where it
+    takes them (`_lifted`), the others by Storm's parametric engine; the lifted ones' gaps,
+    and the engine in words."""
+    found, gaps, engine = _lifted(low, props, box, progress)
+    left = [p for p in props if p.name not in {e.name for e in found}]
+    if left:
+        if progress is not None:
+            progress(f"bounding {len(left)} propert{'y' if len(left) == 1 else 'ies'} over "
+                     + ", ".join(f"{n} in [{lo:g}, {hi:g}]" for n, (lo, hi) in box.items())
+                     + " with Storm's parametric engine")
+        found += parametric.extremes(low, left, via=via, precision=PARAMETER_PRECISION)
+        engine = PARAMETRIC if not gaps else f"{LIFTING} and {PARAMETRIC}"
+    return found, gaps, engine
 
 
 def _lifted(low: Lowered, props: Sequence[ir.Property], box: dict[str, tuple[float, float]],
@@ -172,18 +182,19 @@ def _lifted(low: Lowered, props: Sequence[ir.Property], box: dict[str, tuple[flo
 
 
 def reach_bounds(model: ir.Model, targets: Sequence[tuple[str, E.Expr]], *,
-                 via: str = "prism") -> dict[str, tuple[float, float]]:
+                 via: str = "prism") -> tuple[dict[str, tuple[float, float]], str]:
     """The min and max probability of ever reaching each target (name, state predicate)
     over everything uncertain, interval probabilities included (the diagram's --reach on
     a mission with interval probabilities): the same bounds as `verify -f 'P=? [ F ... ]'`
-    gives."""
+    gives, by the same engines (parameter lifting on afsmc's explorer where it takes the
+    mission, else Storm's parametric engine), and which in words."""
     span = Span.at_offset(model.source, 0, 0)
     props = [ir.Property(name, "P", "", ir.Path("F", target), None, span)
              for name, target in targets]
     kept = dataclasses.replace(model, properties=tuple(props))
-    found = parametric.extremes(lowered(kept, "nondet"), props, via=via,
-                                precision=PARAMETER_PRECISION)
-    return {e.name: (e.min_attained, e.max_attained) for e in found}
+    found, _, engine = _bounded(lowered(kept, "nondet"), props, parametric.interval_box(model),
+                                via, None)
+    return {e.name: (e.min_attained, e.max_attained) for e in found}, engine
 
 
 def _midpoint(r: PropertyResult) -> Reference:

@@ -30,7 +30,7 @@ import tempfile
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from fractions import Fraction
-from typing import Any
+from typing import Any, Literal
 
 from afsmc.backends import jani as jani_backend
 from afsmc.backends.prism import PrismPrinter, emit, formula_text, property_variants
@@ -267,7 +267,9 @@ def _message(exc: BaseException) -> str:
 @dataclass(frozen=True)
 class Extreme:
     """A property's bounds over the interval probabilities: `min`/`max` are the outer
-    (sound) ends; `attained` the value Storm found at `min_at`/`max_at`."""
+    (sound) ends; `attained` the value found at `min_at`/`max_at`; `engine` what found
+    them: "parametric" (Storm's parametric engine) or "lifting" (parameter lifting on
+    afsmc's explorer, afsmc.verify.lifting)."""
 
     name: str
     min: float
@@ -276,6 +278,7 @@ class Extreme:
     max_attained: float
     min_at: dict[str, float]
     max_at: dict[str, float]
+    engine: Literal["lifting", "parametric"] = "parametric"
 
     def to_json(self) -> dict[str, object]:
         """JSON has no infinity: an infinite bound (an expected reward) is null, named in
@@ -284,7 +287,7 @@ class Extreme:
                   "min_attained": self.min_attained, "max_attained": self.max_attained}
         out: dict[str, object] = {"name": self.name}
         out |= {k: v if math.isfinite(v) else None for k, v in values.items()}
-        out |= {"min_at": self.min_at, "max_at": self.max_at}
+        out |= {"min_at": self.min_at, "max_at": self.max_at, "engine": self.engine}
         infinite = [k for k, v in values.items() if not math.isfinite(v)]
         if infinite:
             out["infinite"] = infinite

@@ -17,7 +17,11 @@ For a minimum (a maximum is the mirror):
   is reported as the error).
 
 When the outer bound equals an attained value, the bound is exact: the usual case for a
-value monotone in each parameter, where every state picks the same corner.
+value monotone in each parameter, where every state picks the same corner. Where they are
+apart by more than the precision, the value may still be monotone with states that prefer
+different corners: before splitting, a slope pass (afsmc.verify.lifting.monotone) tries
+to prove it monotone in every parameter over the whole box, and if it does, the bound is
+the exact value at the corner its signs name.
 """
 
 from __future__ import annotations
@@ -29,6 +33,7 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 
 from afsmc.verify.engines.parametric import Extreme
+from afsmc.verify.lifting import monotone
 from afsmc.verify.lifting.model import Box, Lifted, Query, corners_of
 from afsmc.verify.lifting.passes import attained, lifted_bounds
 
@@ -81,6 +86,10 @@ def refine(lifted: Lifted, q: Query, precision: float, outer: tuple[float, list[
     best, at = start
     if math.isinf(outer[0]) or math.isinf(best):
         return Bound(outer[0], best, at, 1)
+    if sign * best - sign * outer[0] > precision:
+        exact = _monotone(lifted, q)
+        if exact is not None:
+            return exact
     heap = [(sign * outer[0], 0, dict(whole), outer[1])]
     settled = math.inf  # the least signed lifted bound of the sub-boxes settled
     count = 1
@@ -98,6 +107,17 @@ def refine(lifted: Lifted, q: Query, precision: float, outer: tuple[float, list[
                 settled = min(settled, sign * bound)
     lowest = min([settled, sign * best] + [h[0] for h in heap])
     return Bound(sign * lowest, best, at, count)
+
+
+def _monotone(lifted: Lifted, q: Query) -> Bound | None:
+    """`q`'s exact bound where its value is proven monotone in every parameter over the
+    whole box (afsmc.verify.lifting.monotone): the value at the corner its signs name."""
+    signs = monotone.slopes(lifted, q, lifted.box).signs()
+    if signs is None:
+        return None
+    at = monotone.extreme_corner(lifted.names, lifted.box, signs, q.end)
+    value = float(attained(lifted, [q], lifted.values_at([at]))[0])
+    return Bound(value, value, at, 1)
 
 
 def extremes(lifted: Lifted, qs: Sequence[Query], precision: float
@@ -128,7 +148,8 @@ def extremes(lifted: Lifted, qs: Sequence[Query], precision: float
         outer_lo, outer_hi = lo.outer, hi.outer
         if q.kind == "P":
             outer_lo, outer_hi = max(0.0, outer_lo), min(1.0, outer_hi)
-        out.append(Extreme(q.prop, outer_lo, outer_hi, lo.attained, hi.attained, lo.at, hi.at))
+        out.append(Extreme(q.prop, outer_lo, outer_hi, lo.attained, hi.attained, lo.at, hi.at,
+                           "lifting"))
         gaps[q.prop] = max(lo.gap, hi.gap)
     return out, gaps
 

@@ -69,6 +69,9 @@ class Lifted:
     choices: int
     transitions: int
     loop: np.ndarray  # branch -> whether it leads back to its own state
+    # per layer, how many of its first states depend on the parameters, where the states
+    # are renumbered so (afsmc.verify.lifting.order); None where they are not
+    leading: np.ndarray | None = None
 
     def weights(self, points: Sequence[Mapping[str, float]]) -> F64:
         """(2^k corners) x (points): the multilinear interpolation's weights."""

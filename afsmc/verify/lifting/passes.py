@@ -39,10 +39,12 @@ SPAN_ELEMENTS = 1 << 21
 TRIM_STATES = 1 << 20  # a model of more states gives its heap back now and then in a pass
 
 
-def attained(lifted: Lifted, qs: Sequence[Query], probs: F64) -> F64:
+def attained(lifted: Lifted, qs: Sequence[Query], probs: F64, base: F64 | None = None
+             ) -> F64:
     """Each query's value at the initial state with the branch probabilities of its own
-    column of `probs` (distinct probabilities x queries): values at valuations, attained."""
-    values, _, _ = sweep(lifted, qs, probs, lift=False)
+    column of `probs` (distinct probabilities x queries): values at valuations, attained.
+    `base`: see `sweep`."""
+    values, _, _ = sweep(lifted, qs, probs, lift=False, base=base)
     return values
 
 
@@ -55,18 +57,23 @@ def lifted_bounds(lifted: Lifted, qs: Sequence[Query], probs: F64
     return sweep(lifted, qs, probs, lift=True)
 
 
-def sweep(lifted: Lifted, qs: Sequence[Query], probs: F64, *, lift: bool
-          ) -> tuple[F64, I64, npt.NDArray[np.bool_]]:
+def sweep(lifted: Lifted, qs: Sequence[Query], probs: F64, *, lift: bool, every: bool = False,
+          base: F64 | None = None) -> tuple[F64, I64, npt.NDArray[np.bool_]]:
     """The pass: the initial state's value of each query and, lifted over one box, the
     corner the choices' votes pick for each and the parameters they disagree on.
     Lifted, the columns of `probs` are the corners of one box or of several, box after
     box (then the values are boxes x queries); else column j gives query j's
-    probabilities."""
+    probabilities. With `every`, the values of every state (states x boxes x queries)
+    instead of the initial state's. With `base` (every state's value for these queries at
+    any one point, on a model renumbered by afsmc.verify.lifting.order), only the states
+    that depend on the parameters are computed, the others' values taken from it."""
     a = lifted.arrays
     n, q = len(a.states) - 1, len(qs)
     k = 1 << len(lifted.names) if lift else 1
     boxes = probs.shape[1] // k if lift else 1
     value = np.zeros((n, boxes, q))
+    if base is not None:
+        value[:] = base[:, None, None]
     kind = qs[0].kind
     if any(x.kind != kind for x in qs):
         raise ValueError("one pass answers queries of one kind")
@@ -83,7 +90,8 @@ def sweep(lifted: Lifted, qs: Sequence[Query], probs: F64, *, lift: bool
     varies = (probs != probs[:, :1]).any(axis=1)
     fixed = np.where(varies, 0.0, probs[:, 0])
     per_span = max(64, SPAN_ELEMENTS // (boxes * q * 4))
-    for i, (lo, hi) in enumerate(_spans(a.layers, per_span)):
+    spans = _spans(a.layers, per_span, None if base is None else lifted.leading)
+    for i, (lo, hi) in enumerate(spans):
         if trim and i % acyclic.TRIM_EVERY == acyclic.TRIM_EVERY - 1:
             acyclic.trim_heap()
         c0, c1 = int(a.states[lo]), int(a.states[hi])
@@ -138,6 +146,8 @@ def sweep(lifted: Lifted, qs: Sequence[Query], probs: F64, *, lift: bool
     bits = (votes[1] > votes[0]).astype(np.int64)
     picks = (bits * (1 << np.arange(len(lifted.names) - 1, -1, -1))[:, None]).sum(axis=0)
     mixed: npt.NDArray[np.bool_] = np.all(votes > 0, axis=0)
+    if every:
+        return value, picks, mixed
     return value[a.initial] if boxes > 1 else value[a.initial, 0], picks, mixed
 
 
@@ -174,10 +184,12 @@ def _dense(v: acyclic.Vec) -> F64:
     return out
 
 
-def _spans(layers: I64, span: int) -> list[tuple[int, int]]:
+def _spans(layers: I64, span: int, leading: npt.NDArray[np.int64] | None = None
+           ) -> list[tuple[int, int]]:
     """The layers as ranges of states, those of more than `span` cut (their states are
-    independent)."""
+    independent); with `leading`, only each layer's first `leading[i]` states."""
     out = []
-    for lo, hi in itertools.pairwise(layers.tolist()):
-        out += [(x, min(x + span, hi)) for x in range(lo, hi, span)]
+    for i, (lo, hi) in enumerate(itertools.pairwise(layers.tolist())):
+        end = hi if leading is None else lo + int(leading[i])
+        out += [(x, min(x + span, end)) for x in range(lo, end, span)]
     return out

@@ -47,9 +47,10 @@ from typing import Any, Literal
 from afsmc.diagnostics import CompileError, Diagnostic, Severity, codes
 from afsmc.lifetime import die_with_parent
 from afsmc.lower.lowering import Lowered
+from afsmc.verify.core.uncertainty import LIFTING, PARAMETRIC
 from afsmc.verify.engines.parametric import Parametric, Source, check_box, source, with_parameters
-from afsmc.verify.lifting.bounds import decide
 from afsmc.verify.lifting.model import Lifted, Query
+from afsmc.verify.lifting.regions import Decider
 from afsmc.verify.outcome.verdicts import Verdict
 from afsmc.verify.plan.precision import PARAMETER_SOLVER_ERROR
 
@@ -142,8 +143,8 @@ class RegionResult:
     # what a region's verdict means where it is not verify's word for its values (an MDP
     # with a bare requirement: the regions decide the worst choice only); "" where it is
     meaning: str = ""
-    # what decided the regions and bounded the whole box
-    engine: str = "Storm's parametric engine"
+    # what decided the regions and bounded the whole box, in words (LIFTING or PARAMETRIC)
+    engine: str = PARAMETRIC
 
     def fraction(self, verdict: str) -> float:
         return sum(r.volume(self.box) for r in self.regions if r.verdict == verdict)
@@ -176,6 +177,7 @@ class RegionResult:
             "max": None if self.bounds is None else self.bounds[1],
             "error": None if self.bounds is None else self.bounds[2],
             "decided_by": None if self.judged is None else self.judged.decided_by,
+            "engine": "lifting" if self.engine == LIFTING else "parametric",
             "regions": [r.to_json() for r in self.regions]}
         if self.feasible is not None:
             out["feasible"] = self.feasible or None
@@ -325,21 +327,23 @@ def lifted_query(req: Requirement, q: Query, mdp: bool) -> Query:
 def refine_lifted(lifted: Lifted, q: Query, req: Requirement, box: Bounds, *,
                   coverage: float = 0.95, max_rounds: int = 12, progress: Any = None
                   ) -> tuple[list[Region], int]:
-    """The regions of `box` as `refine` makes them, each sub-box decided by parameter
-    lifting on afsmc's explored model (afsmc.verify.lifting.bounds.decide: one lifted
-    pass a round for all its boxes, both sides, with the same margin)."""
+    """The regions of `box` as `refine` makes them, each sub-box decided on afsmc's
+    explored model (afsmc.verify.lifting.regions.Decider: exact values at two corners
+    where the value is proven monotone over the box or one containing it, else the
+    box's lifted bounds, with the same margin)."""
+    decider = Decider(lifted, q, req.cmp, req.bound, margin(req))
     done: list[Region] = []
     todo: list[Bounds] = [dict(box)]
     rounds = 0
     while todo and rounds < max_rounds:
         rounds += 1
-        verdicts = decide(lifted, q, todo, req.cmp, req.bound, margin(req))
+        verdicts = decider.decide(todo)
         unknown = [b for b, v in zip(todo, verdicts, strict=True) if v == "unknown"]
         done += [Region(b, v) for b, v in zip(todo, verdicts, strict=True) if v != "unknown"]
         decided = sum(r.volume(box) for r in done)
         if progress is not None:
-            progress(f"round {rounds}: {len(todo)} boxes lifted, {decided:.1%} of the volume "
-                     "decided")
+            progress(f"round {rounds}: {len(todo)} box{'es' if len(todo) > 1 else ''} checked "
+                     f"({decider.summary()}), {decided:.1%} of the volume decided")
         if decided >= coverage or not unknown:
             return done + [Region(b, "unknown") for b in unknown], rounds
         todo = [h for b in unknown for h in split(b, box)]

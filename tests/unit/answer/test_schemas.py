@@ -117,7 +117,7 @@ def test_an_absent_key_is_left_out_and_never_null() -> None:
                                holds=1, fails=0, unknown=0, rounds=1, states=1, seconds=0,
                                verdict="holds", reason="r", from_file=[], region_meaning=None,
                                min=None, max=None,
-                               error=None, decided_by=None, regions=[])
+                               error=None, decided_by=None, engine="lifting", regions=[])
     assert "feasible" not in regions.Regions(**box).model_dump(mode="json")
     none = regions.Regions(**box, feasible=None, feasible_method=None)
     assert none.model_dump(mode="json")["feasible"] is None

@@ -119,6 +119,8 @@ def test_verify_reports_the_lifted_bounds_and_judges_them_once(two_steps: Path) 
     res = run(str(two_steps), properties=["done"],
               formulas=['P>=0.1 [ F "done" ]', 'P>=0.2 [ F "done" ]'])
     assert res.probability is not None and res.probability.engine == LIFTING
+    intervals: Any = res.to_json()["probability_intervals"]
+    assert {e["engine"] for e in intervals["properties"]} == {"lifting"}
     by = {p.name: p for p in res.properties}
     assert by["done"].min == pytest.approx(0.112, abs=1e-12)
     assert by["done"].reference is not None  # the midpoint kept as a reference
@@ -153,6 +155,8 @@ def test_a_probability_not_multilinear_goes_to_storm(tmp_path: Path) -> None:
                        PARAMETER_PRECISION)
     res = run(str(path), properties=["reach_b"])
     assert res.probability is not None and res.probability.engine == PARAMETRIC
+    intervals: Any = res.to_json()["probability_intervals"]
+    assert [e["engine"] for e in intervals["properties"]] == ["parametric"]
     assert res.properties[0].min == pytest.approx(0.04, abs=2 * PARAMETER_PRECISION)
 
 
