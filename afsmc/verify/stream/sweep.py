@@ -1,0 +1,197 @@
+"""The backward pass over the streamed layers (afsmc.verify.stream.layers): the files read
+back in reverse (the sinks, the late states, then the buckets from the last explored to
+the first), every query of the run in one sweep, each layer by the same step as the
+in-memory pass (:func:`afsmc.verify.engines.acyclic.settle`).
+
+Values kept: those of the sinks and late states ("other"), and of a window of regular
+buckets, contiguous in the global numbering: bucket b's values, followed by those of the
+later buckets some bucket not yet solved reaches.
+"""
+
+from __future__ import annotations
+
+import itertools
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+import numpy.typing as npt
+
+from afsmc.verify.engines import acyclic
+from afsmc.verify.engines.acyclic import F64, I64, Query, Sense
+from afsmc.verify.stream.layers import Streamed
+
+LATE = np.iinfo(np.int64).min  # a branch into a late state, before it is numbered
+
+
+@dataclass
+class Part:
+    """One file's states as the pass reads them: offsets, each branch's successor as a
+    column of the regular window (`reg`, -1 if none) or of the other values (`oth`, -1
+    if none), probabilities, self-loops, rewards per choice and labels per state."""
+
+    states: I64
+    choices: I64
+    reg: I64
+    oth: I64
+    prob: F64
+    stay: acyclic.Vec | None
+    layers: I64
+    rewards: list[F64]
+    labels: list[acyclic.Bools]
+
+
+def _offsets(counts: npt.NDArray[np.int32]) -> I64:
+    out = np.zeros(len(counts) + 1, np.int64)
+    np.cumsum(counts, out=out[1:])
+    return out
+
+
+def load(st: Streamed, name: str, first: int, own_other: int | None, late_sorted: I64,
+         late_order: I64, rewards: int, labels: int) -> Part:
+    """The file `name`; its regular successors as columns from `first` (its own first
+    number), or, for the sinks and the late states (`own_other`: its first other number),
+    its own states as columns of the other values from there."""
+    s = st.scratch
+    states = _offsets(s.load(name, "nchoice"))
+    choices = _offsets(s.load(name, "nbranch"))
+    target = s.load(name, "target")
+    if (s.root / f"{name}.late_at.npy").exists():
+        at, keys = s.load(name, "late_at"), s.load(name, "late_key")
+        target[at] = -1 - (st.sinks + late_order[np.searchsorted(late_sorted, keys)])
+    assert not (target == LATE).any()
+    prob = st.table[s.load(name, "prob")]
+    regular = target >= 0
+    reg = np.where(regular, target - first, -1)
+    oth = np.where(regular, -1, -1 - target)
+    own = reg if own_other is None else np.where(regular, -1, oth - own_other)
+    stay = acyclic.self_loops(states, choices, own.astype(np.int64), prob)
+    per_choice = []
+    for i in range(rewards):
+        r = np.zeros(len(choices) - 1)
+        r[s.load(name, f"reward{i}_at")] = s.load(name, f"reward{i}_v")
+        per_choice.append(r)
+    layers = np.zeros(1, np.int64)
+    sizes = s.load(name, "layers")
+    layers = np.concatenate([[0], np.cumsum(sizes)]).astype(np.int64)
+    return Part(states, choices, reg, oth, prob, stay, layers, per_choice,
+                [s.load(name, f"label{i}") for i in range(labels)])
+
+
+def _product(part: Part, lo: int, hi: int, reg: F64 | None, other: F64) -> F64:
+    """Each choice of the span's states: its branches' probabilities times their
+    successors' values (regular window and others)."""
+    from scipy.sparse import csr_matrix
+
+    c0, c1 = int(part.states[lo]), int(part.states[hi])
+    b0, b1 = int(part.choices[c0]), int(part.choices[c1])
+    owner = np.repeat(np.arange(c1 - c0), np.diff(part.choices[c0:c1 + 1]))
+    out = np.zeros((c1 - c0, other.shape[1]))
+    for cols, values in ((part.reg[b0:b1], reg), (part.oth[b0:b1], other)):
+        m = cols >= 0
+        if values is None or not m.any():
+            continue
+        rows = np.zeros(c1 - c0 + 1, np.int64)
+        np.cumsum(np.bincount(owner[m], minlength=c1 - c0), out=rows[1:])
+        step = csr_matrix((part.prob[b0:b1][m], cols[m], rows),
+                          shape=(c1 - c0, len(values)))
+        out += np.asarray(step @ values)
+    return out
+
+
+@dataclass
+class Group:
+    """The queries of one kind solved side by side, and where their reward models and
+    targets are among the files' (`reward`: index per query, or None for P)."""
+
+    queries: list[Query]
+    sense: Sense
+    reward: list[int] | None
+    target: list[int]
+
+
+def solve_part(part: Part, groups: list[Group], reg: list[F64] | None, other: list[F64],
+               out: list[F64], at: int) -> int:
+    """Solve the part's layers into `out[g][at + state]` for each group; the distinct
+    (state, successor) pairs of its states (the uniform DTMC's transitions)."""
+    pairs = 0
+    spans = [(k, min(k + acyclic.SPAN, hi)) for lo, hi in
+             itertools.pairwise(part.layers.tolist()) for k in range(lo, hi, acyclic.SPAN)]
+    for i, (lo, hi) in enumerate(spans):
+        if i % acyclic.TRIM_EVERY == acyclic.TRIM_EVERY - 1:
+            acyclic.trim_heap()
+        c0, c1 = int(part.states[lo]), int(part.states[hi])
+        offsets = part.states[lo:hi + 1] - c0
+        for g, grp in enumerate(groups):
+            per_choice = _product(part, lo, hi, None if reg is None else reg[g], other[g])
+            if grp.reward is not None:
+                per_choice += np.stack([part.rewards[r][c0:c1] for r in grp.reward], axis=1)
+            on = np.stack([part.labels[t][lo:hi] for t in grp.target], axis=1)
+            stay = None if part.stay is None else part.stay[c0:c1]
+            out[g][at + lo:at + hi] = acyclic.settle(per_choice, stay, offsets, on, grp.sense)
+        if any(grp.sense.mean for grp in groups):
+            pairs += _pairs(part, lo, hi)
+    return pairs
+
+
+def _pairs(part: Part, lo: int, hi: int) -> int:
+    """The distinct (state, successor) pairs of the span's states."""
+    c0, c1 = int(part.states[lo]), int(part.states[hi])
+    b0, b1 = int(part.choices[c0]), int(part.choices[c1])
+    per_choice = np.repeat(np.arange(hi - lo, dtype=np.int64), np.diff(part.states[lo:hi + 1]))
+    owner = np.repeat(per_choice, np.diff(part.choices[c0:c1 + 1]))
+    reg, oth = part.reg[b0:b1], part.oth[b0:b1]
+    succ = np.where(reg >= 0, 2 * reg, 2 * oth + 1)  # the two spaces apart
+    return len(np.unique(succ * acyclic.SPAN + owner))
+
+
+def groups_of(queries: list[Query], reward_names: list[str]) -> list[Group]:
+    """The queries by kind (and means apart), as acyclic.solve_many groups them."""
+    by: dict[tuple[str, bool], list[Query]] = {}
+    for q in queries:
+        by.setdefault((q.kind, q.opt == "mean"), []).append(q)
+    return [Group(qs, Sense.of(qs),
+                  [reward_names.index(q.reward) for q in qs] if qs[0].kind == "R" else None,
+                  [q.target for q in qs]) for qs in by.values()]
+
+
+Progress = Callable[[int, int], None]  # buckets solved, of how many
+
+
+def run(st: Streamed, queries: list[Query], reward_names: list[str], targets: int,
+        progress: Progress | None = None) -> tuple[dict[str, float], int]:
+    """Each query's value in the initial state, and the uniform DTMC's transitions (0
+    unless a query is a mean)."""
+    groups = groups_of(queries, reward_names)
+    nr = len(reward_names)
+    other = [np.zeros((st.sinks + st.late, len(g.queries))) for g in groups]
+    order = np.argsort(st.late_keys)
+    late = (st.late_keys[order], order)
+    pairs = 0
+    for i, first in enumerate(st.sink_start):
+        part = load(st, f"s{i}", 0, first, *late, nr, targets)
+        pairs += solve_part(part, groups, None, other, other, first)
+    if st.late:
+        part = load(st, "late", 0, st.sinks, *late, nr, targets)
+        pairs += solve_part(part, groups, None, other, other, st.sinks)
+    ends = [s + n for s, n in zip(st.start, st.size, strict=True)]
+    keep = list(itertools.accumulate((ends[r] for r in st.reach), max))
+    window = [np.zeros((0, len(g.queries))) for g in groups]
+    count = len(st.start)
+    for i in reversed(range(count)):
+        first, size = st.start[i], st.size[i]
+        values = [np.zeros((keep[i] - first, len(g.queries))) for g in groups]
+        for v, w in zip(values, window, strict=True):
+            v[size:] = w
+        part = load(st, f"b{i}", first, None, *late, nr, targets)
+        pairs += solve_part(part, groups, values, other, values, 0)
+        del part
+        upto = keep[i - 1] - first if i else size
+        window = [v[:upto] for v in values]
+        if progress is not None:
+            progress(count - i, count)
+    out: dict[str, float] = {}
+    for g, grp in enumerate(groups):
+        row = window[g][st.initial] if st.initial >= 0 else other[g][-1 - st.initial]
+        out |= {q.name: float(x) for q, x in zip(grp.queries, row, strict=True)}
+    return {q.name: out[q.name] for q in queries}, pairs
