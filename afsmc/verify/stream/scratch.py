@@ -90,3 +90,12 @@ class Scratch:
         """Remove files no longer needed (their bytes stay counted in `written`)."""
         for key in keys:
             (self.root / f"{name}.{key}.npy").unlink(missing_ok=True)
+
+
+def clear(root: Path) -> None:
+    """Remove every file under `root`, keeping the directory (its owner removes it)."""
+    for p in root.iterdir():
+        if p.is_dir():
+            shutil.rmtree(p, ignore_errors=True)
+        else:
+            p.unlink(missing_ok=True)
