@@ -54,8 +54,10 @@ def made(directory: str) -> Iterator[Path]:
         shutil.rmtree(path, ignore_errors=True)
 
 
-# A fault injection for the tests: called with each file's path before it is written.
+# A fault injection for the tests (a full disk, an interrupt): called with each file's
+# path before it is written; FAULT for every Scratch that is given none.
 BeforeWrite = Callable[[Path], None]
+FAULT: BeforeWrite | None = None
 
 
 class Scratch:
@@ -71,8 +73,9 @@ class Scratch:
         for key, a in arrays.items():
             path = self.root / f"{name}.{key}.npy"
             try:
-                if self.before_write is not None:
-                    self.before_write(path)
+                hook = self.before_write or FAULT
+                if hook is not None:
+                    hook(path)
                 with open(path, "wb") as f:
                     np.save(f, np.ascontiguousarray(a), allow_pickle=False)
             except OSError as exc:
