@@ -5,7 +5,9 @@ in-memory pass (:func:`afsmc.verify.engines.acyclic.settle`).
 
 Values kept: those of the sinks and late states ("other"), and of a window of regular
 buckets, contiguous in the global numbering: bucket b's values, followed by those of the
-later buckets some bucket not yet solved reaches.
+later buckets some bucket not yet solved reaches. The window lives in a ring of as many
+rows as the largest window, state g at row g mod its size: nothing is copied as it
+slides.
 """
 
 from __future__ import annotations
@@ -48,10 +50,11 @@ def _offsets(counts: npt.NDArray[np.int32]) -> I64:
 
 
 def load(st: Streamed, name: str, first: int, own_other: int | None, late_sorted: I64,
-         late_order: I64, rewards: int, labels: int) -> Part:
-    """The file `name`; its regular successors as columns from `first` (its own first
-    number), or, for the sinks and the late states (`own_other`: its first other number),
-    its own states as columns of the other values from there."""
+         late_order: I64, rewards: int, labels: int, ring: int = 1) -> Part:
+    """The file `name`; its regular successors as rows of the ring of `ring` rows (its
+    own states from `first`, its own first number), or, for the sinks and the late states
+    (`own_other`: their first other number), its own states as rows of the other values
+    from there."""
     s = st.scratch
     states = _offsets(s.load(name, "nchoice"))
     choices = _offsets(s.load(name, "nbranch"))
@@ -62,9 +65,10 @@ def load(st: Streamed, name: str, first: int, own_other: int | None, late_sorted
     assert not (target == LATE).any()
     prob = st.table[s.load(name, "prob")]
     regular = target >= 0
-    reg = np.where(regular, target - first, -1)
+    reg = np.where(regular, target % ring, -1)
     oth = np.where(regular, -1, -1 - target)
-    own = reg if own_other is None else np.where(regular, -1, oth - own_other)
+    own = np.where(regular, target - first, -1) if own_other is None else \
+        np.where(regular, -1, oth - own_other)
     stay = acyclic.self_loops(states, choices, own.astype(np.int64), prob)
     per_choice = []
     for i in range(rewards):
@@ -110,10 +114,23 @@ class Group:
     target: list[int]
 
 
+def put(out: F64, at: int, values: F64) -> None:
+    """`values` into the rows from `at` of `out`, as a ring (past its end, from row 0)."""
+    size = len(out)
+    lo = at % size
+    hi = lo + len(values)
+    if hi <= size:
+        out[lo:hi] = values
+    else:
+        out[lo:] = values[:size - lo]
+        out[:hi - size] = values[size - lo:]
+
+
 def solve_part(part: Part, groups: list[Group], reg: list[F64] | None, other: list[F64],
                out: list[F64], at: int) -> int:
-    """Solve the part's layers into `out[g][at + state]` for each group; the distinct
-    (state, successor) pairs of its states (the uniform DTMC's transitions)."""
+    """Solve the part's layers into `out[g]`, its state s at row `at + s` (as a ring);
+    the distinct (state, successor) pairs of its states (the uniform DTMC's
+    transitions)."""
     pairs = 0
     spans = [(k, min(k + acyclic.SPAN, hi)) for lo, hi in
              itertools.pairwise(part.layers.tolist()) for k in range(lo, hi, acyclic.SPAN)]
@@ -128,7 +145,7 @@ def solve_part(part: Part, groups: list[Group], reg: list[F64] | None, other: li
                 per_choice += np.stack([part.rewards[r][c0:c1] for r in grp.reward], axis=1)
             on = np.stack([part.labels[t][lo:hi] for t in grp.target], axis=1)
             stay = None if part.stay is None else part.stay[c0:c1]
-            out[g][at + lo:at + hi] = acyclic.settle(per_choice, stay, offsets, on, grp.sense)
+            put(out[g], at + lo, acyclic.settle(per_choice, stay, offsets, on, grp.sense))
         if any(grp.sense.mean for grp in groups):
             pairs += _pairs(part, lo, hi)
     return pairs
@@ -175,23 +192,23 @@ def run(st: Streamed, queries: list[Query], reward_names: list[str], targets: in
         part = load(st, "late", 0, st.sinks, *late, nr, targets)
         pairs += solve_part(part, groups, None, other, other, st.sinks)
     ends = [s + n for s, n in zip(st.start, st.size, strict=True)]
+    # bucket i's branches reach the states from its own first to keep[i]
     keep = list(itertools.accumulate((ends[r] for r in st.reach), max))
-    window = [np.zeros((0, len(g.queries))) for g in groups]
+    rows = max((k - s for k, s in zip(keep, st.start, strict=True)), default=1)
+    ring = [np.zeros((max(rows, 1), len(g.queries))) for g in groups]
     count = len(st.start)
     for i in reversed(range(count)):
         first, size = st.start[i], st.size[i]
-        values = [np.zeros((keep[i] - first, len(g.queries))) for g in groups]
-        for v, w in zip(values, window, strict=True):
-            v[size:] = w
-        part = load(st, f"b{i}", first, None, *late, nr, targets)
-        pairs += solve_part(part, groups, values, other, values, 0)
+        for r in ring:  # its rows start at 0, as the in-memory pass's values do
+            put(r, first, np.zeros((size, r.shape[1])))
+        part = load(st, f"b{i}", first, None, *late, nr, targets, len(ring[0]))
+        pairs += solve_part(part, groups, ring, other, ring, first)
         del part
-        upto = keep[i - 1] - first if i else size
-        window = [v[:upto] for v in values]
         if progress is not None:
             progress(count - i, count)
     out: dict[str, float] = {}
     for g, grp in enumerate(groups):
-        row = window[g][st.initial] if st.initial >= 0 else other[g][-1 - st.initial]
+        row = ring[g][st.initial % len(ring[g])] if st.initial >= 0 else \
+            other[g][-1 - st.initial]
         out |= {q.name: float(x) for q, x in zip(grp.queries, row, strict=True)}
     return {q.name: out[q.name] for q in queries}, pairs
