@@ -5,7 +5,9 @@ The clock only grows: a transition from bucket b lands in a bucket from b to the
 bucket b's states reach (its "reach", recorded while exploring), in the absorbing states
 split off every bucket (the sinks), or in the late states (the clock set back). So a
 bucket's successors are resolved into state numbers once every bucket up to its reach is
-explored; only those buckets' blocks and sorted keys stay in memory. Numbers: the regular
+explored: each bucket is written at once with its successors' keys, which are read back
+and replaced by numbers then, so that only the sorted keys of the buckets not yet
+resolved (and of those they reach) stay in memory. Numbers: the regular
 states in exploration order, a bucket's states in its layered order (global, from 0); the
 sinks and then the late states in a space of their own ("other", stored as -1 - o). A
 branch into a late state keeps its key (the late states are numbered at the end) and is
@@ -93,11 +95,11 @@ def _save_block(s: Scratch, name: str, blk: Block, target: I64, extra: dict[str,
 
 @dataclass
 class _Waiting:
-    """An explored bucket whose successors are not all explored yet."""
+    """An explored bucket, written with its successors' keys, some of whose successor
+    buckets are not explored yet."""
 
     index: int
     bucket: int
-    block: Block
     reach: int  # the largest bucket its branches reach
 
 
@@ -141,10 +143,12 @@ def explore(c: Compiled, s: Scratch, notify: Notify | None = None,
         if index == 0:
             out.initial = _resolve(window[b], sinks, initial)[0][0]
         reach = int(c.layout.bucket_of(block.target).max()) if len(block.target) else b
-        unresolved.append(_Waiting(index, b, block, max(reach, b)))
+        unresolved.append(_Waiting(index, b, max(reach, b)))
         out.choices += len(block.nbranch) + len(sink.nbranch)
         out.transitions += len(block.target) + len(sink.target)
+        _save_block(s, f"b{index}", block, block.target, {})
         count += len(known)
+        del block, sink, known, order, numbers, sink_numbers
         if max_states is not None and count > max_states:
             raise TooManyStates(count)
         explore_graph.narrow(count, rounds)
@@ -160,6 +164,7 @@ def explore(c: Compiled, s: Scratch, notify: Notify | None = None,
             shown = time.monotonic()
             notify("explored", (b, count, s.written))
     assert not unresolved
+    acyclic.trim_heap()
     _late(c, s, out, table, waiting, sinks, buckets, count, max_states)
     out.table = table.table()
     s.save("table", prob=out.table)
@@ -186,21 +191,21 @@ def _resolve(window: tuple[I64, I64], sinks: _Index, keys: I64) -> tuple[I64, ac
 
 def _finish(s: Scratch, out: Streamed, w: _Waiting, window: dict[int, tuple[I64, I64]],
             sinks: _Index, buckets: list[int], c: Compiled) -> None:
-    """Resolve the successors of a bucket whose every successor bucket is explored,
-    write it and let it go."""
+    """Resolve the successors of a bucket whose every successor bucket is explored: its
+    successors' keys read back, written over by their numbers."""
     span = [window[t] for t in sorted(window) if w.bucket <= t <= w.reach]
     # a bucket's keys are those whose high bits are the bucket: the window's runs, end
     # to end in bucket order, are sorted
     joined = (np.concatenate([k for k, _ in span]), np.concatenate([n for _, n in span]))
-    target, late = _resolve(joined, sinks, w.block.target)
+    keys = s.load(f"b{w.index}", "target")
+    target, late = _resolve(joined, sinks, keys)
     at = np.flatnonzero(late)
-    if at.size and (c.layout.bucket_of(w.block.target[at]) >= w.bucket).any():
+    if at.size and (c.layout.bucket_of(keys[at]) >= w.bucket).any():
         raise GiveUp("a successor that was not explored")
     target[at] = np.iinfo(np.int64).min
     out.reach.append(int(np.searchsorted(buckets, w.reach, side="right")) - 1)
-    _save_block(s, f"b{w.index}", w.block, target,
-                {"late_at": at, "late_key": w.block.target[at]} if at.size else {})
-    w.block.target = np.zeros(0, np.int64)
+    s.save(f"b{w.index}", target=target,
+           **({"late_at": at, "late_key": keys[at]} if at.size else {}))
 
 
 def _late(c: Compiled, s: Scratch, out: Streamed, table: ProbTable, waiting: Frontiers,

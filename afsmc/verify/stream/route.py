@@ -38,16 +38,17 @@ def answer(c: Compiled, p: explicit.Plan, means: list[str], where: str, what: st
         notify("built", (st.states, st.transitions, built))
         notify("solver", f"the {what} explored by afsmc into the scratch directory "
                f"({mb(s.written)} of layers, {len(st.start):,} buckets), acyclic but for "
-               "self-loops: every query by one backward pass reading the layers back")
+               "self-loops: every query by a backward pass reading the layers back")
         mine = [q for q in p.queries if q.opt != "mean"]
         notify("phase", "check " + ", ".join(q.name for q in mine))
         t0 = time.perf_counter()
         shown = [t0]
 
-        def solved(done: int, of: int) -> None:
+        def solved(done: int, of: int, left: int) -> None:
             if time.perf_counter() - shown[0] > 2.0:
                 shown[0] = time.perf_counter()
-                notify("solver", f"solved {done:,} of {of:,} buckets of the {what}")
+                notify("solver", f"solved {done:,} of {of:,} buckets of the {what}"
+                       + (f" ({left} sweeps to go, this one included)" if left > 1 else ""))
 
         values, pairs = sweep.run(st, p.queries, c.reward_names, len(p.targets), solved)
     finally:

@@ -61,7 +61,8 @@ FAULT: BeforeWrite | None = None
 
 
 class Scratch:
-    """Arrays saved under `root` by name; `written`: the bytes on disk."""
+    """Arrays saved under `root` by name; `written`: the bytes on disk (a file written
+    over counts once)."""
 
     def __init__(self, root: Path, before_write: BeforeWrite | None = None) -> None:
         self.root = root
@@ -72,6 +73,8 @@ class Scratch:
         """Each array as `name`.`key`.npy; a full disk raises ScratchFull."""
         for key, a in arrays.items():
             path = self.root / f"{name}.{key}.npy"
+            if path.exists():
+                self.written -= path.stat().st_size
             try:
                 hook = self.before_write or FAULT
                 if hook is not None:
@@ -89,10 +92,6 @@ class Scratch:
         out: npt.NDArray[Any] = np.load(self.root / f"{name}.{key}.npy", allow_pickle=False)
         return out
 
-    def drop(self, name: str, *keys: str) -> None:
-        """Remove files no longer needed (their bytes stay counted in `written`)."""
-        for key in keys:
-            (self.root / f"{name}.{key}.npy").unlink(missing_ok=True)
 
 
 def clear(root: Path) -> None:

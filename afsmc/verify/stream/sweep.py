@@ -172,15 +172,59 @@ def groups_of(queries: list[Query], reward_names: list[str]) -> list[Group]:
                   [q.target for q in qs]) for qs in by.values()]
 
 
-Progress = Callable[[int, int], None]  # buckets solved, of how many
+Progress = Callable[[int, int, int], None]  # buckets solved, of how many; sweeps to go
+
+
+def window_rows(st: Streamed) -> int:
+    """The most regular states whose values the pass keeps at once: for each bucket,
+    from its first state to the last one that it or an earlier bucket reaches."""
+    ends = [s + n for s, n in zip(st.start, st.size, strict=True)]
+    keep = itertools.accumulate((ends[r] for r in st.reach), max)
+    return max(1, max((k - s for k, s in zip(keep, st.start, strict=True)), default=1))
+
+
+# The most bytes the window's values of one sweep take: above it, the queries' groups (P,
+# R, the uniform DTMC's means) are solved in sweeps of their own, each reading the files
+# again, rather than side by side.
+SWEEP_BYTES = 1 << 28
+
+
+def sweeps(groups: list[Group], rows: int) -> list[list[Group]]:
+    """The groups packed into sweeps whose window of values fits SWEEP_BYTES (a group
+    alone where it does not)."""
+    out: list[list[Group]] = []
+    cols = 0
+    for g in groups:
+        k = len(g.queries)
+        if out and (cols + k) * rows * 8 <= SWEEP_BYTES:
+            out[-1].append(g)
+            cols += k
+        else:
+            out.append([g])
+            cols = k
+    return out
 
 
 def run(st: Streamed, queries: list[Query], reward_names: list[str], targets: int,
         progress: Progress | None = None) -> tuple[dict[str, float], int]:
     """Each query's value in the initial state, and the uniform DTMC's transitions (0
-    unless a query is a mean)."""
-    groups = groups_of(queries, reward_names)
-    nr = len(reward_names)
+    unless a query is a mean): as few sweeps over the files as SWEEP_BYTES allows."""
+    rows = window_rows(st)
+    plan = sweeps(groups_of(queries, reward_names), rows)
+    out: dict[str, float] = {}
+    pairs = 0
+    for k, part in enumerate(plan):
+        values, got = _sweep(st, part, len(reward_names), targets, rows, progress,
+                             len(plan) - k)
+        out |= values
+        pairs = max(pairs, got)
+    return {q.name: out[q.name] for q in queries}, pairs
+
+
+def _sweep(st: Streamed, groups: list[Group], nr: int, targets: int, rows: int,
+           progress: Progress | None, left: int) -> tuple[dict[str, float], int]:
+    """One sweep over the files for `groups`: their values in the initial state, and
+    the uniform DTMC's transitions if a group is of means."""
     other = [np.zeros((st.sinks + st.late, len(g.queries))) for g in groups]
     order = np.argsort(st.late_keys)
     late = (st.late_keys[order], order)
@@ -191,24 +235,19 @@ def run(st: Streamed, queries: list[Query], reward_names: list[str], targets: in
     if st.late:
         part = load(st, "late", 0, st.sinks, *late, nr, targets)
         pairs += solve_part(part, groups, None, other, other, st.sinks)
-    ends = [s + n for s, n in zip(st.start, st.size, strict=True)]
-    # bucket i's branches reach the states from its own first to keep[i]
-    keep = list(itertools.accumulate((ends[r] for r in st.reach), max))
-    rows = max((k - s for k, s in zip(keep, st.start, strict=True)), default=1)
-    ring = [np.zeros((max(rows, 1), len(g.queries))) for g in groups]
+    ring = [np.zeros((rows, len(g.queries))) for g in groups]
     count = len(st.start)
     for i in reversed(range(count)):
         first, size = st.start[i], st.size[i]
         for r in ring:  # its rows start at 0, as the in-memory pass's values do
             put(r, first, np.zeros((size, r.shape[1])))
-        part = load(st, f"b{i}", first, None, *late, nr, targets, len(ring[0]))
+        part = load(st, f"b{i}", first, None, *late, nr, targets, rows)
         pairs += solve_part(part, groups, ring, other, ring, first)
         del part
         if progress is not None:
-            progress(count - i, count)
+            progress(count - i, count, left)
     out: dict[str, float] = {}
     for g, grp in enumerate(groups):
-        row = ring[g][st.initial % len(ring[g])] if st.initial >= 0 else \
-            other[g][-1 - st.initial]
+        row = ring[g][st.initial % rows] if st.initial >= 0 else other[g][-1 - st.initial]
         out |= {q.name: float(x) for q, x in zip(grp.queries, row, strict=True)}
-    return {q.name: out[q.name] for q in queries}, pairs
+    return out, pairs
