@@ -162,14 +162,19 @@ def _pairs(part: Part, lo: int, hi: int) -> int:
     return len(np.unique(succ * acyclic.SPAN + owner))
 
 
-def groups_of(queries: list[Query], reward_names: list[str]) -> list[Group]:
-    """The queries by kind (and means apart), as acyclic.solve_many groups them."""
+def groups_of(queries: list[Query], reward_names: list[str], most: int | None = None
+              ) -> list[Group]:
+    """The queries by kind (and means apart), as acyclic.solve_many groups them, at
+    most `most` in a group."""
     by: dict[tuple[str, bool], list[Query]] = {}
     for q in queries:
         by.setdefault((q.kind, q.opt == "mean"), []).append(q)
+    step = most or max(1, len(queries))
     return [Group(qs, Sense.of(qs),
                   [reward_names.index(q.reward) for q in qs] if qs[0].kind == "R" else None,
-                  [q.target for q in qs]) for qs in by.values()]
+                  [q.target for q in qs])
+            for every in by.values() for qs in (every[i:i + step]
+                                                for i in range(0, len(every), step))]
 
 
 Progress = Callable[[int, int, int], None]  # buckets solved, of how many; sweeps to go
@@ -183,15 +188,16 @@ def window_rows(st: Streamed) -> int:
     return max(1, max((k - s for k, s in zip(keep, st.start, strict=True)), default=1))
 
 
-# The most bytes the window's values of one sweep take: above it, the queries' groups (P,
-# R, the uniform DTMC's means) are solved in sweeps of their own, each reading the files
-# again, rather than side by side.
+# The most bytes the window's values of one sweep take: above it, the queries (P, R, the
+# uniform DTMC's means) are solved in several sweeps, each reading the files again,
+# rather than all side by side.
 SWEEP_BYTES = 1 << 28
 
 
-def sweeps(groups: list[Group], rows: int) -> list[list[Group]]:
-    """The groups packed into sweeps whose window of values fits SWEEP_BYTES (a group
-    alone where it does not)."""
+def sweeps(queries: list[Query], reward_names: list[str], rows: int) -> list[list[Group]]:
+    """The queries' groups, cut to fit, packed into sweeps whose window of values fits
+    SWEEP_BYTES (one query at a time where one does not)."""
+    groups = groups_of(queries, reward_names, max(1, SWEEP_BYTES // (8 * rows)))
     out: list[list[Group]] = []
     cols = 0
     for g in groups:
@@ -210,7 +216,7 @@ def run(st: Streamed, queries: list[Query], reward_names: list[str], targets: in
     """Each query's value in the initial state, and the uniform DTMC's transitions (0
     unless a query is a mean): as few sweeps over the files as SWEEP_BYTES allows."""
     rows = window_rows(st)
-    plan = sweeps(groups_of(queries, reward_names), rows)
+    plan = sweeps(queries, reward_names, rows)
     out: dict[str, float] = {}
     pairs = 0
     for k, part in enumerate(plan):

@@ -80,10 +80,10 @@ def test_queries_in_sweeps_of_their_own_have_the_same_values(
     with scratch.made(str(tmp_path)) as where:
         st = layers.explore(c, scratch.Scratch(where))
         together, pairs = sweep.run(st, p.queries, c.reward_names, len(p.targets))
-        groups = sweep.groups_of(p.queries, c.reward_names)
-        assert len(sweep.sweeps(groups, sweep.window_rows(st))) == 1
-        monkeypatch.setattr(sweep, "SWEEP_BYTES", 1)  # a sweep for each group
-        assert len(sweep.sweeps(groups, sweep.window_rows(st))) == len(groups) == 4
+        rows = sweep.window_rows(st)
+        assert len(sweep.sweeps(p.queries, c.reward_names, rows)) == 1
+        monkeypatch.setattr(sweep, "SWEEP_BYTES", 1)  # a sweep for each query
+        assert len(sweep.sweeps(p.queries, c.reward_names, rows)) == len(p.queries)
         apart, pairs_apart = sweep.run(st, p.queries, c.reward_names, len(p.targets))
     assert apart == together and pairs_apart == pairs > 0
 
