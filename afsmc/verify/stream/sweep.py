@@ -15,11 +15,12 @@ from __future__ import annotations
 import itertools
 from collections.abc import Callable
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 import numpy.typing as npt
 
-from afsmc.verify.engines import acyclic
+from afsmc.verify.engines import acyclic, explore_graph
 from afsmc.verify.engines.acyclic import F64, I64, Query, Sense
 from afsmc.verify.stream.layers import Streamed
 
@@ -82,24 +83,36 @@ def load(st: Streamed, name: str, first: int, own_other: int | None, late_sorted
                 [s.load(name, f"label{i}") for i in range(labels)])
 
 
-def _product(part: Part, lo: int, hi: int, reg: F64 | None, other: F64) -> F64:
-    """Each choice of the span's states: its branches' probabilities times their
-    successors' values (regular window and others)."""
+def _steps(part: Part, lo: int, hi: int, reg: int, other: int) -> list[tuple[bool, Any]]:
+    """The span's choices as sparse rows over the regular window (of `reg` rows; True)
+    and over the other values (`other` rows; False), those that have branches there."""
     from scipy.sparse import csr_matrix
 
     c0, c1 = int(part.states[lo]), int(part.states[hi])
     b0, b1 = int(part.choices[c0]), int(part.choices[c1])
-    owner = np.repeat(np.arange(c1 - c0), np.diff(part.choices[c0:c1 + 1]))
-    out = np.zeros((c1 - c0, other.shape[1]))
-    for cols, values in ((part.reg[b0:b1], reg), (part.oth[b0:b1], other)):
+    sizes = np.diff(part.choices[c0:c1 + 1])
+    out = []
+    for regular, cols, width in ((True, part.reg[b0:b1], reg), (False, part.oth[b0:b1], other)):
         m = cols >= 0
-        if values is None or not m.any():
+        if not m.any():
             continue
-        rows = np.zeros(c1 - c0 + 1, np.int64)
-        np.cumsum(np.bincount(owner[m], minlength=c1 - c0), out=rows[1:])
-        step = csr_matrix((part.prob[b0:b1][m], cols[m], rows),
-                          shape=(c1 - c0, len(values)))
-        out += np.asarray(step @ values)
+        if m.all():
+            rows = part.choices[c0:c1 + 1] - b0
+        else:
+            rows = np.zeros(c1 - c0 + 1, np.int64)
+            owner = np.repeat(np.arange(c1 - c0), sizes)
+            np.cumsum(np.bincount(owner[m], minlength=c1 - c0), out=rows[1:])
+        out.append((regular, csr_matrix((part.prob[b0:b1][m], cols[m], rows),
+                                        shape=(c1 - c0, width))))
+    return out
+
+
+def _product(steps: list[tuple[bool, Any]], choices: int, reg: F64 | None, other: F64) -> F64:
+    """Each choice of a span: its branches' probabilities times their successors'
+    values (regular window and others)."""
+    out = np.zeros((choices, other.shape[1]))
+    for regular, step in steps:
+        out += np.asarray(step @ (reg if regular else other))
     return out
 
 
@@ -127,10 +140,10 @@ def put(out: F64, at: int, values: F64) -> None:
 
 
 def solve_part(part: Part, groups: list[Group], reg: list[F64] | None, other: list[F64],
-               out: list[F64], at: int) -> int:
+               out: list[F64], at: int, count: bool = False) -> int:
     """Solve the part's layers into `out[g]`, its state s at row `at + s` (as a ring);
-    the distinct (state, successor) pairs of its states (the uniform DTMC's
-    transitions)."""
+    with `count`, the distinct (state, successor) pairs of its states (the uniform
+    DTMC's transitions), else 0."""
     pairs = 0
     spans = [(k, min(k + acyclic.SPAN, hi)) for lo, hi in
              itertools.pairwise(part.layers.tolist()) for k in range(lo, hi, acyclic.SPAN)]
@@ -139,14 +152,15 @@ def solve_part(part: Part, groups: list[Group], reg: list[F64] | None, other: li
             acyclic.trim_heap()
         c0, c1 = int(part.states[lo]), int(part.states[hi])
         offsets = part.states[lo:hi + 1] - c0
+        steps = _steps(part, lo, hi, 0 if reg is None else len(reg[0]), len(other[0]))
         for g, grp in enumerate(groups):
-            per_choice = _product(part, lo, hi, None if reg is None else reg[g], other[g])
+            per_choice = _product(steps, c1 - c0, None if reg is None else reg[g], other[g])
             if grp.reward is not None:
                 per_choice += np.stack([part.rewards[r][c0:c1] for r in grp.reward], axis=1)
             on = np.stack([part.labels[t][lo:hi] for t in grp.target], axis=1)
             stay = None if part.stay is None else part.stay[c0:c1]
             put(out[g], at + lo, acyclic.settle(per_choice, stay, offsets, on, grp.sense))
-        if any(grp.sense.mean for grp in groups):
+        if count:
             pairs += _pairs(part, lo, hi)
     return pairs
 
@@ -159,7 +173,8 @@ def _pairs(part: Part, lo: int, hi: int) -> int:
     owner = np.repeat(per_choice, np.diff(part.choices[c0:c1 + 1]))
     reg, oth = part.reg[b0:b1], part.oth[b0:b1]
     succ = np.where(reg >= 0, 2 * reg, 2 * oth + 1)  # the two spaces apart
-    return len(np.unique(succ * acyclic.SPAN + owner))
+    # distinct by a sort (np.unique hashes int64 keys far slower)
+    return len(explore_graph._unique(succ * acyclic.SPAN + owner))
 
 
 def groups_of(queries: list[Query], reward_names: list[str], most: int | None = None
@@ -219,39 +234,42 @@ def run(st: Streamed, queries: list[Query], reward_names: list[str], targets: in
     plan = sweeps(queries, reward_names, rows)
     out: dict[str, float] = {}
     pairs = 0
+    # the uniform DTMC's transitions counted in the first sweep of means
+    counted = next((k for k, part in enumerate(plan) if any(g.sense.mean for g in part)), -1)
     for k, part in enumerate(plan):
         values, got = _sweep(st, part, len(reward_names), targets, rows, progress,
-                             len(plan) - k)
+                             len(plan) - k, k == counted)
         out |= values
-        pairs = max(pairs, got)
+        pairs += got
     return {q.name: out[q.name] for q in queries}, pairs
 
 
 def _sweep(st: Streamed, groups: list[Group], nr: int, targets: int, rows: int,
-           progress: Progress | None, left: int) -> tuple[dict[str, float], int]:
+           progress: Progress | None, left: int, count: bool
+           ) -> tuple[dict[str, float], int]:
     """One sweep over the files for `groups`: their values in the initial state, and
-    the uniform DTMC's transitions if a group is of means."""
+    with `count` the uniform DTMC's transitions."""
     other = [np.zeros((st.sinks + st.late, len(g.queries))) for g in groups]
     order = np.argsort(st.late_keys)
     late = (st.late_keys[order], order)
     pairs = 0
     for i, first in enumerate(st.sink_start):
         part = load(st, f"s{i}", 0, first, *late, nr, targets)
-        pairs += solve_part(part, groups, None, other, other, first)
+        pairs += solve_part(part, groups, None, other, other, first, count)
     if st.late:
         part = load(st, "late", 0, st.sinks, *late, nr, targets)
-        pairs += solve_part(part, groups, None, other, other, st.sinks)
+        pairs += solve_part(part, groups, None, other, other, st.sinks, count)
     ring = [np.zeros((rows, len(g.queries))) for g in groups]
-    count = len(st.start)
-    for i in reversed(range(count)):
+    buckets = len(st.start)
+    for i in reversed(range(buckets)):
         first, size = st.start[i], st.size[i]
         for r in ring:  # its rows start at 0, as the in-memory pass's values do
             put(r, first, np.zeros((size, r.shape[1])))
         part = load(st, f"b{i}", first, None, *late, nr, targets, rows)
-        pairs += solve_part(part, groups, ring, other, ring, first)
+        pairs += solve_part(part, groups, ring, other, ring, first, count)
         del part
         if progress is not None:
-            progress(count - i, count, left)
+            progress(buckets - i, buckets, left)
     out: dict[str, float] = {}
     for g, grp in enumerate(groups):
         row = ring[g][st.initial % rows] if st.initial >= 0 else other[g][-1 - st.initial]
