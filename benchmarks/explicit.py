@@ -30,6 +30,7 @@ import os
 import re
 import subprocess
 import sys
+import tempfile
 import time
 from collections.abc import Callable
 
@@ -39,10 +40,13 @@ sys.path.insert(0, ROOT)
 from benchmarks.acyclic import WORKLOADS, values_of  # noqa: E402
 from benchmarks.run import INSTANCES, UAV  # noqa: E402
 
-PATHS: dict[str, list[str]] = {"explicit": [], "storm": ["--solver", "topological"]}
+# "stream": afsmc's exploration through a scratch directory in the system's temp directory
+# (verify --scratch), the layers on disk; its scratch_mb is the bytes it wrote there
+PATHS: dict[str, list[str]] = {"explicit": [], "storm": ["--solver", "topological"],
+                               "stream": ["--scratch", tempfile.gettempdir()]}
 FIELDS = ["measured", "load", "instance", "workload", "path", "status", "wall_s", "cpu_s",
           "peak_gb", "states", "transitions", "build_s", "check_s", "uniform_build_s",
-          "uniform_check_s", "engine_used", "solver_used", "values"]
+          "uniform_check_s", "engine_used", "solver_used", "values", "scratch_mb"]
 
 
 def _seconds(text: str) -> float:
@@ -104,8 +108,14 @@ def run_one(instance: str, workload: str, path: str, extra: list[str],
                 "uniform_build_s": tm.get("uniform_build"),
                 "uniform_check_s": tm.get("uniform_check"),
                 "engine_used": m.get("engine", ""), "solver_used": m.get("solver", ""),
-                "values": json.dumps(values_of(out))}
+                "values": json.dumps(values_of(out)), "scratch_mb": _scratch_mb(m)}
     return row
+
+
+def _scratch_mb(model: dict[str, object]) -> float | str:
+    """The MB written to the scratch directory, as the engine's reason says ("" if none)."""
+    m = re.search(r"through ([\d,.]+) MB of scratch disk", str(model.get("engine_reason", "")))
+    return float(m.group(1).replace(",", "")) if m else ""
 
 
 def table(rows: list[dict[str, object]]) -> str:
@@ -113,8 +123,8 @@ def table(rows: list[dict[str, object]]) -> str:
     and workload."""
     first: dict[tuple[object, object], dict[str, float]] = {}
     lines = ["| instance | workload | path | engine, solver | wall s | CPU s | peak GB | "
-             "states | build + check s | uniform build + check s | max diff | load |",
-             "|---|---|---|---|---|---|---|---|---|---|---|---|"]
+             "states | build + check s | uniform build + check s | scratch MB | max diff | "
+             "load |", "|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
     for r in rows:
         vals = json.loads(str(r.get("values") or "{}"))
         base = first.setdefault((r["instance"], r["workload"]), vals)
@@ -129,7 +139,8 @@ def table(rows: list[dict[str, object]]) -> str:
             f"{r.get('solver_used', '')} | {num('wall_s'):.1f} | {num('cpu_s'):.1f} | "
             f"{num('peak_gb'):.2f} | {int(num('states')):,} | "
             f"{num('build_s') + num('check_s'):.1f} | "
-            f"{num('uniform_build_s') + num('uniform_check_s'):.1f} | {diff:.1e} | "
+            f"{num('uniform_build_s') + num('uniform_check_s'):.1f} | "
+            f"{r.get('scratch_mb') or '-'} | {diff:.1e} | "
             f"{r['load']} |")
     return "\n".join(lines)
 
@@ -182,6 +193,14 @@ def append_rows(out: str, fields: list[str],
     reported on stderr."""
     rows = []
     new = not os.path.exists(out)
+    if not new:
+        with open(out, encoding="utf-8") as f:
+            old = list(csv.DictReader(f))
+        if old and list(old[0]) != fields:  # a column added since: the file rewritten with it
+            with open(out, "w", newline="", encoding="utf-8") as f:
+                w = csv.DictWriter(f, fieldnames=fields)
+                w.writeheader()
+                w.writerows(old)
     with open(out, "a", newline="", encoding="utf-8") as f:
         w = csv.DictWriter(f, fieldnames=fields)
         if new:

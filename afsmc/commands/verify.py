@@ -86,6 +86,12 @@ def add_storm_options(p: argparse.ArgumentParser) -> None:
                         "the sparse engine only: what 70%% of the free memory holds as sparse "
                         "matrices, at most 50 M; the symbolic engines are stopped by the "
                         "memory guard instead)")
+    p.add_argument("--scratch", metavar="DIR",
+                   help="afsmc's own exploration writes the model layer by layer to a "
+                        "directory of its own in DIR (an existing, writable directory) and "
+                        "reads it back for one backward pass: the memory is that of a window "
+                        "of layers, not of the whole model; the directory is removed at the end "
+                        "(docs/verification.md#streaming-layers---scratch)")
     p.add_argument("--no-uniform", dest="uniform", action="store_false",
                    help="for an MDP, skip the uniform resolution of the interval constants")
     p.add_argument("--progress", action="store_true",
@@ -97,7 +103,7 @@ def storm_options(args: argparse.Namespace) -> VerifyOptions:
     return VerifyOptions(via=args.via, engine=args.engine, solver=args.solver,
                          max_states=args.max_states, uniform=args.uniform,
                          reductions=reductions(args), bisimulation=args.bisim,
-                         split=args.split)
+                         split=args.split, scratch=args.scratch)
 
 
 def progress_printer(args: argparse.Namespace) -> Callable[[str], None] | None:

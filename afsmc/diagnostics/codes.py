@@ -202,6 +202,7 @@ E415 = Code("E415", Severity.ERROR, "no strategy or failure path for this reques
 E416 = Code("E416", Severity.ERROR, "a strategy needs the sparse engine, and the model does not fit")
 E417 = Code("E417", Severity.ERROR, "a property cannot be split by cause")
 E418 = Code("E418", Severity.ERROR, "the --baseline file cannot be used")
+E419 = Code("E419", Severity.ERROR, "the --scratch directory cannot be used, or its disk is full")
 E420 = Code("E420", Severity.ERROR, "a variable's range is too large for a build without a state limit")
 N421 = Code("N421", Severity.NOTE, "--symmetry was not applied: something tells alike agents apart")
 

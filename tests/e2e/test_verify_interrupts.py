@@ -204,3 +204,35 @@ def test_sigterm_after_a_failed_query_reports_it_as_an_error_in_json(tmp_path: P
     exact = run(str(path), via="jani", engine="sparse", isolate=False, properties=["reach"])
     assert values == {"nxt": None, "reach": exact.property("reach").value, "slow": None}, values
     _group_ends(proc.pid)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("how", ["ctrl-c", "sigterm"])
+def test_ctrl_c_and_sigterm_remove_the_scratch_directory(tmp_path: Path, how: str) -> None:
+    # `verify --scratch DIR` while its watched child writes the layers there: stopped, it
+    # leaves DIR as it was (its own subdirectory removed after the child is gone).
+    import os
+    import signal
+    import sys
+
+    scratch = tmp_path / "scratch"
+    scratch.mkdir()
+    argv = [sys.executable, "-m", "afsmc", "verify", UAV, "--json", "--progress",
+            "--scratch", str(scratch), "--const", "WIDTH=4,HEIGHT=4,OBJECTS=2,T_LIMIT=300"]
+    proc = subprocess.Popen(argv, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                            start_new_session=True, cwd=str(tmp_path),
+                            preexec_fn=_sigint_as_a_terminal_has_it)
+    assert proc.stderr is not None
+    for line in proc.stderr:  # the layers are being written once it says so
+        if "on the scratch disk" in line:
+            break
+    assert any(scratch.iterdir()), "no scratch directory while exploring"
+    if how == "ctrl-c":
+        os.killpg(proc.pid, signal.SIGINT)
+    else:
+        os.kill(proc.pid, signal.SIGTERM)
+    out, err = proc.communicate(timeout=60)
+    assert proc.returncode == (130 if how == "ctrl-c" else 143), err
+    assert json.loads(out)["interrupted"] is True and "Traceback" not in err
+    _group_ends(proc.pid)
+    assert list(scratch.iterdir()) == []

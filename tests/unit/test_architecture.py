@@ -50,7 +50,8 @@ STAGES: tuple[tuple[str, tuple[str, ...]], ...] = (
     ("pipeline", ("afsmc.compiler",)),
     # lowered IR -> PRISM/JANI/DOT text, simulated runs, Storm's and afsmc's numbers
     ("engines", ("afsmc.backends", "afsmc.controllers", "afsmc.sim", "afsmc.conform",
-                 "afsmc.verify.plan", "afsmc.verify.engines", "afsmc.verify.lifting")),
+                 "afsmc.verify.plan", "afsmc.verify.engines", "afsmc.verify.lifting",
+                 "afsmc.verify.stream")),
     # numbers -> one typed answer per property (verify.core drives the engines)
     ("answer", ("afsmc.verify.outcome", "afsmc.verify.core")),
     # many answers (sweeps, regions) and the reports rendered from answers; afsmc.verify,

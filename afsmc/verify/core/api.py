@@ -37,6 +37,7 @@ from afsmc.verify.outcome.results import Checks, PropertyResult, VerifyResult
 from afsmc.verify.outcome.strategy import extras, witness_request
 from afsmc.verify.outcome.verdicts import judge_all
 from afsmc.verify.plan.precision import DEFAULT_PRECISION, check_options
+from afsmc.verify.stream.scratch import unusable
 
 
 def _fresh_name(text: str, base: str, taken: set[str]) -> str:
@@ -150,6 +151,10 @@ def check(model: ir.Model, props: Sequence[ir.Property],
     check sound at `verdicts`' DEFAULT_PRECISION unless either is given; each requirement's
     result then has its `verdict` (afsmc.verify.outcome.verdicts)."""
     o = VerifyOptions.of(options, option_values)
+    if o.scratch is not None and (why := unusable(o.scratch)) is not None:
+        raise CompileError([Diagnostic(codes.E419, Severity.ERROR, f"--scratch: {why}", None,
+                                       hint="give an existing directory you can write to, "
+                                            "or leave --scratch out (in memory)")])
     # the symmetry reduction, decided once for every front-end
     o = dataclasses.replace(o, reductions=decide(o.reductions, symmetry_hindrance(o, witness)))
     precision, engine = sound_mode(props, o.precision, o.exact, o.engine)

@@ -36,7 +36,9 @@ class VerifyOptions:
     Storm's own stopping rule); `exact`: rational arithmetic; `strategy`: the min and max
     strategies in mission terms; `witness`: the K most probable paths of one query
     (query name or None for the only property, K); `witness_dir`, `witness_target`: whose
-    strategy the paths follow ("min"/"max"), and into which target.
+    strategy the paths follow ("min"/"max"), and into which target; `scratch`: a directory
+    whose disk holds afsmc's own exploration, layer by layer, so that its memory is that of
+    a window of layers (afsmc.verify.stream; None: in memory).
 
     A misspelt `via`, `engine` or `solver` is a ValueError when the options are made."""
 
@@ -56,6 +58,7 @@ class VerifyOptions:
     witness: tuple[str | None, int] | None = None
     witness_dir: str | None = None
     witness_target: str | None = None
+    scratch: str | None = None
 
     def __post_init__(self) -> None:
         check_choice("via", self.via, Via)

@@ -442,7 +442,8 @@ class ModelLoop:
                                   precision=run.precision, exact=o.exact)
         if applies(self.low, self.job_engine, o.solver,
                    o.bisimulation or o.exact or run.precision is not None):
-            job = dataclasses.replace(job, explicit=self.low, uniform=self.uniform_beside())
+            job = dataclasses.replace(job, explicit=self.low, uniform=self.uniform_beside(),
+                                      scratch=o.scratch)
         # no scheduler for a step-bounded query, nor for the rounding's kappa (conditioning)
         ex = request(self.low, o.strategy, run.witness, mine, self.run.asked_as,
                      skip={n for p, n in unit if stepped(p) or p.name == conditioning.STEPS})

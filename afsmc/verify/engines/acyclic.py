@@ -398,13 +398,8 @@ def _pass(a: Arrays, qs: list[Query], best: npt.NDArray[np.integer[Any]] | None 
         value = np.zeros((n, k))
     on_target = [a.labels[LABEL + str(q.target)] for q in qs]
     reward = [a.rewards[q.reward] for q in qs] if qs[0].kind == "R" else None
-    stuck = 0.0 if qs[0].kind == "P" else np.inf  # a choice that only loops
-    reached = 1.0 if qs[0].kind == "P" else 0.0  # on the target
-    mean = qs[0].opt == "mean"  # (a pass's queries are all means or none)
-    assert all((q.opt == "mean") == mean for q in qs) and not (mean and (best is not None
-                                                                       or policy is not None))
-    low = np.array([q.opt == "min" for q in qs])
-    sign = np.where(low, 1.0, -1.0)  # a max as the min of the negated values
+    assert not (qs[0].opt == "mean" and (best is not None or policy is not None))
+    sense = Sense.of(qs)
     for i, (lo, hi) in enumerate(_spans(a.layers)):
         if i % TRIM_EVERY == TRIM_EVERY - 1:
             trim_heap()
@@ -415,41 +410,77 @@ def _pass(a: Arrays, qs: list[Query], best: npt.NDArray[np.integer[Any]] | None 
         per_choice = np.asarray(step @ value)
         if reward is not None:
             per_choice += np.stack([r[c0:c1] for r in reward], axis=1)
-        if mean:
-            per_state = _mean(per_choice, None if a.stay is None else
-                              np.asarray(a.stay[c0:c1], np.float64), a.states[lo:hi + 1] - c0,
-                              stuck)
-            value[lo:hi] = np.where(np.stack([t[lo:hi] for t in on_target], axis=1), reached,
-                                    per_state)
-            continue
-        if a.stay is not None:
-            s = a.stay[c0:c1][:, None]
-            if s.any():
-                with np.errstate(divide="ignore", invalid="ignore"):
-                    per_choice = np.where(s >= 1.0, stuck, per_choice / (1.0 - s))
-        if policy is not None:
-            picked = (a.states[lo:hi] - c0)[:, None] + policy.offsets[lo:hi][:, policy.columns]
-            per_state = per_choice[picked, np.arange(k)]
-        elif c1 - c0 == hi - lo:
-            per_state = per_choice
-        else:
-            # the optimum of each state's j-th choice (its last, past its count) over j:
-            # elementwise, where numpy's reduceat or a min down a middle axis is slower
-            first = a.states[lo:hi] - c0
-            last = a.states[lo + 1:hi + 1] - c0 - 1
-            signed = per_choice if low.all() else per_choice * sign
-            per_state = signed[first]
-            for j in range(1, int((last - first).max()) + 1):
-                np.minimum(per_state, signed[np.minimum(first + j, last)], out=per_state)
-            if not low.all():
-                per_state *= sign
-        if best is not None:
-            offsets = a.states[lo:hi + 1] - c0
-            for j in range(k):
-                best[lo:hi, j] = _first_best(per_choice[:, j], per_state[:, j], offsets)
-        value[lo:hi] = np.where(np.stack([t[lo:hi] for t in on_target], axis=1), reached,
-                                per_state)
+        picked = None if policy is None else policy.offsets[lo:hi][:, policy.columns]
+        value[lo:hi] = settle(per_choice, None if a.stay is None else a.stay[c0:c1],
+                              a.states[lo:hi + 1] - c0,
+                              np.stack([t[lo:hi] for t in on_target], axis=1), sense,
+                              None if best is None else best[lo:hi], picked)
     return [float(v) for v in value[a.initial]]
+
+
+@dataclass(frozen=True)
+class Sense:
+    """What the queries of one pass share: their kind's value on the target and of a
+    choice that only loops, whether they are means, and which are minima."""
+
+    stuck: float  # a choice that only loops
+    reached: float  # on the target
+    mean: bool  # the uniform DTMC's (a pass's queries are all means or none)
+    low: Bools  # per query: a min (else a max)
+
+    @classmethod
+    def of(cls, qs: list[Query]) -> Sense:
+        mean = qs[0].opt == "mean"
+        assert all(q.kind == qs[0].kind and (q.opt == "mean") == mean for q in qs)
+        p = qs[0].kind == "P"
+        return cls(0.0 if p else np.inf, 1.0 if p else 0.0, mean,
+                   np.array([q.opt == "min" for q in qs]))
+
+
+def settle(per_choice: F64, stay: Vec | None, offsets: I64, on: Bools, sense: Sense,
+           best: npt.NDArray[np.integer[Any]] | None = None,
+           picked: npt.NDArray[np.integer[Any]] | None = None) -> F64:
+    """The values of a span of one layer's states, from their choices' (`per_choice`,
+    choices x queries: each one's reward plus its branches' probabilities times their
+    successors' values; `stay`: each choice's self-loop probability, None if none loops;
+    `offsets`: the states' first choices and the end, from 0; `on`: states x queries, on
+    the query's target). A self-loop of probability s < 1 divides the rest by 1 - s, one
+    of 1 is `sense.stuck`; then each state's min or max over its choices (with `best`:
+    each state's first optimal choice, written there), or its policy's choice
+    (`picked`: states x queries, the choice's number within its state), or the mean."""
+    k = per_choice.shape[1]
+    if sense.mean:
+        per_state = _mean(per_choice, None if stay is None else np.asarray(stay, np.float64),
+                          offsets, sense.stuck)
+        out: F64 = np.where(on, sense.reached, per_state)
+        return out
+    if stay is not None:
+        s = np.asarray(stay, np.float64)[:, None]
+        if s.any():
+            with np.errstate(divide="ignore", invalid="ignore"):
+                per_choice = np.where(s >= 1.0, sense.stuck, per_choice / (1.0 - s))
+    n = len(offsets) - 1
+    low = sense.low
+    if picked is not None:
+        per_state = per_choice[offsets[:-1][:, None] + picked, np.arange(k)]
+    elif len(per_choice) == n:
+        per_state = per_choice
+    else:
+        # the optimum of each state's j-th choice (its last, past its count) over j:
+        # elementwise, where numpy's reduceat or a min down a middle axis is slower
+        first = offsets[:-1]
+        last = offsets[1:] - 1
+        signed = per_choice if low.all() else per_choice * np.where(low, 1.0, -1.0)
+        per_state = signed[first]
+        for j in range(1, int((last - first).max()) + 1):
+            np.minimum(per_state, signed[np.minimum(first + j, last)], out=per_state)
+        if not low.all():
+            per_state *= np.where(low, 1.0, -1.0)
+    if best is not None:
+        for j in range(k):
+            best[:, j] = _first_best(per_choice[:, j], per_state[:, j], offsets)
+    out = np.where(on, sense.reached, per_state)
+    return out
 
 
 def _mean(per_choice: F64, stay: F64 | None, offsets: I64, stuck: float) -> F64:

@@ -110,6 +110,7 @@ class Answer:
     left: list[str]
     extracted: Extracted | None = None
     uniform: Uniform | None = None  # the uniform DTMC's values, if asked
+    scratch: int | None = None  # bytes written to the scratch directory (afsmc.verify.stream)
 
 
 @dataclass
@@ -131,12 +132,15 @@ class TooMany(Exception):
 
 def answer(low: Lowered, names: tuple[str, ...], what: str, notify: Notify,
            max_states: int | None = None, max_bytes: int | None = None,
-           extract: Extract | None = None, uniform: tuple[str, ...] = ()) -> Answer | None:
+           extract: Extract | None = None, uniform: tuple[str, ...] = (),
+           scratch: str | None = None) -> Answer | None:
     """The queries' values by exploration and a backward pass, and what `extract` asks;
     None if the explorer gives up or the pass does not give what `extract` asks (Storm
     then answers them all). `uniform`: properties whose values in the uniform DTMC the
-    same exploration gives (Answer.uniform), those it can. Raises TooMany past
-    `max_states`."""
+    same exploration gives (Answer.uniform), those it can. `scratch`: a directory of the
+    job's own, to explore through layer by layer (afsmc.verify.stream; not for a
+    strategy yet, which is explored in memory). Raises TooMany past `max_states`, and
+    ScratchFull when the scratch disk fills."""
     p = plan(low, names)
     if not p.queries or (extract is not None and not strategy_arrays.covers(extract, p.queries)):
         return None
@@ -149,8 +153,16 @@ def answer(low: Lowered, names: tuple[str, ...], what: str, notify: Notify,
         notify("solver", f"explored {data[1]:,} states of the {what} so far (clock at "
                f"{data[0]}; {time.perf_counter() - started:.0f} s)")
 
+    if scratch is not None and extract is not None:
+        notify("solver", "strategies and witnesses are not streamed yet: the "
+               f"{what} is explored in memory, not through --scratch")
+        scratch = None
     try:
         compiled = explore.compile_model(low, p.targets, p.rewards, extract is not None)
+        if scratch is not None:
+            from afsmc.verify.stream import route
+
+            return route.answer(compiled, p, means, scratch, what, notify, max_states)
         found = explore_graph.explore(compiled, explored, max_states, max_bytes)
     except (explore.GiveUp, SimError) as exc:
         notify("solver", f"afsmc's own exploration does not apply to the {what} ({exc}): "
@@ -228,18 +240,27 @@ def fill(job: Any, res: Any, notify: Notify, too_big: Callable[[Any, int, bool],
     """Answer what the exploration can of a Storm job (afsmc.verify.engines.storm.Job) into its
     result `res`; the job of what is left for Storm, or None if nothing is (or the model
     has too many states: `res.failure` says so)."""
+    from afsmc.verify.engines.storm import StormFailure  # (storm imports this module)
+    from afsmc.verify.stream.scratch import ScratchFull
+
     try:
         ans = answer(job.explicit, job.names, job.what, notify, job.max_states,
-                     job.memory_budget, job.extract, job.uniform)
+                     job.memory_budget, job.extract, job.uniform, job.scratch)
     except TooMany as exc:
         res.states, res.failure = exc.states, too_big(job, exc.states, exc.partial)
+        return None
+    except ScratchFull as exc:
+        res.failure = StormFailure("scratch", str(exc))
         return None
     if ans is None:
         return replace(job, explicit=None)
     res.states, res.choices, res.transitions = ans.states, ans.choices, ans.transitions
     res.kind, res.engine, res.solver = job.explicit.kind, "explicit", "acyclic"
     res.engine_reason = ("afsmc's own exploration: the model's clock only grows, so one "
-                         "exact backward pass answers its reachability queries")
+                         "exact backward pass answers its reachability queries"
+                         + ("" if ans.scratch is None else
+                            f"; explored layer by layer through {ans.scratch / 1e6:,.1f} MB "
+                            "of scratch disk"))
     res.build_time, res.check_time = ans.explore_time, sum(ans.seconds.values())
     res.values, res.seconds = dict(ans.values), dict(ans.seconds)
     res.extracted = ans.extracted

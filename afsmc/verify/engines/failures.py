@@ -102,6 +102,9 @@ def failure_diagnostic(f: StormFailure, model: ir.Model, low: Lowered,
                         " (the sparse engine needs about 250 bytes per state)"
                         if job.engine in ("sparse", "auto") else "")
                     + ", or check a smaller instance with --const")
+    if f.stage == "scratch":
+        return diag(codes.E419, first, None, "free some space on that disk, give --scratch a "
+                    "directory on a larger one, or leave --scratch out (in memory)")
     if f.stage == "memory":
         if job.engine in ("hybrid", "dd"):
             return diag(codes.E406, first, None, "this one check needs more memory than the "

@@ -439,7 +439,20 @@ def _checking(phase: str) -> str | None:
 
 
 def run_job(job: Job, bound: int, *, isolate: bool | None, progress: Progress | None) -> JobResult:
-    """Run in this process when the model is surely small, else in a watched child."""
+    """Run in this process when the model is surely small, else in a watched child; with
+    a scratch directory, in a subdirectory of it made here and removed here (after the
+    child is gone: on exit, on error and on interrupt)."""
+    if job.scratch is None or job.explicit is None:
+        return _run_job(job, bound, isolate=isolate, progress=progress)
+    from afsmc.verify.stream.scratch import made
+
+    with made(job.scratch) as where:
+        return _run_job(replace(job, scratch=str(where)), bound, isolate=isolate,
+                        progress=progress)
+
+
+def _run_job(job: Job, bound: int, *, isolate: bool | None, progress: Progress | None
+             ) -> JobResult:
     if isolate is None:
         isolate = bound > IN_PROCESS_STATES
     if not isolate:

@@ -33,7 +33,7 @@ VIAS: tuple[Via, ...] = ("prism", "jani")
 # Storm stages a failure can come from; the caller picks the diagnostic code from it.
 # "stopped": the guard interrupted an explicit build that proved within --max-states
 Stage = Literal["parse", "property", "build", "check", "too-big", "memory", "tables",
-                "internal", "stopped"]
+                "internal", "stopped", "scratch"]
 
 Notify = Callable[[str, Any], None]
 
@@ -76,6 +76,9 @@ class Job:
     exact: bool = False  # build over rationals and solve exactly (sparse engine only)
     # schedulers and most probable paths to extract (sparse engine only; strategy_storm)
     extract: Extract | None = None
+    # a directory of its own for afsmc's own exploration layer by layer (guard.run_job makes
+    # it under the user's --scratch DIR and removes it); None: in memory
+    scratch: str | None = None
     # the lowered model, for afsmc's own exploration and backward pass first
     # (afsmc.verify.engines.explicit); None: Storm only
     explicit: Any = None

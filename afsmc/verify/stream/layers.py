@@ -1,0 +1,242 @@
+"""afsmc's exploration (afsmc.verify.engines.explore_graph) with each bucket's layers
+written to the scratch directory as soon as its successors are known.
+
+The clock only grows: a transition from bucket b lands in a bucket from b to the largest
+bucket b's states reach (its "reach", recorded while exploring), in the absorbing states
+split off every bucket (the sinks), or in the late states (the clock set back). So a
+bucket's successors are resolved into state numbers once every bucket up to its reach is
+explored: each bucket is written at once with its successors' keys, which are read back
+and replaced by numbers then, so that only the sorted keys of the buckets not yet
+resolved (and of those they reach) stay in memory. Numbers: the regular
+states in exploration order, a bucket's states in its layered order (global, from 0); the
+sinks and then the late states in a space of their own ("other", stored as -1 - o). A
+branch into a late state keeps its key (the late states are numbered at the end) and is
+resolved when its bucket is read back.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from afsmc.verify.engines import acyclic, explore_graph
+from afsmc.verify.engines.acyclic import I64
+from afsmc.verify.engines.explore import Compiled, GiveUp, Notify, TooManyStates
+from afsmc.verify.engines.explore_graph import Block, Frontiers, ProbTable, _found, _unique
+from afsmc.verify.stream.scratch import Scratch
+
+
+@dataclass
+class Streamed:
+    """What the backward pass needs besides the files: per explored bucket (in order) its
+    first global number, its size and the index of the last bucket it reaches; the sinks'
+    files and counts; the late states' count; the initial state (>= 0 regular, else
+    -1 - o); the probabilities' table."""
+
+    scratch: Scratch
+    start: list[int] = field(default_factory=list)
+    size: list[int] = field(default_factory=list)
+    reach: list[int] = field(default_factory=list)
+    sink_start: list[int] = field(default_factory=list)  # per bucket: its first sink
+    sinks: int = 0
+    late: int = 0
+    initial: int = 0
+    table: Any = None
+    choices: int = 0
+    transitions: int = 0
+    late_keys: I64 = field(default_factory=lambda: np.zeros(0, np.int64))
+
+    @property
+    def states(self) -> int:
+        return sum(self.size) + self.sinks + self.late
+
+
+class _Index:
+    """Sorted keys with a number each, as a few sorted runs merged like a binary
+    counter (see explore_graph._Keys)."""
+
+    def __init__(self) -> None:
+        self.runs: list[tuple[I64, I64]] = []
+
+    def add(self, keys: I64, numbers: I64) -> None:
+        order = np.argsort(keys, kind="stable")
+        self.runs.append((keys[order], numbers[order]))
+        while len(self.runs) > 1 and len(self.runs[-2][0]) <= 2 * len(self.runs[-1][0]):
+            k1, n1 = self.runs.pop()
+            k0, n0 = self.runs[-1]
+            keys_, nums = np.concatenate([k0, k1]), np.concatenate([n0, n1])
+            o = np.argsort(keys_, kind="stable")
+            self.runs[-1] = (keys_[o], nums[o])
+
+    def find(self, keys: I64, out: I64, todo: acyclic.Bools) -> None:
+        """Write the number of each key of `keys[todo]` found into `out`, clearing `todo`."""
+        for sk, nums in self.runs:
+            idx = np.flatnonzero(todo)
+            if not idx.size or not len(sk):
+                continue
+            hit = _found(sk, keys[idx])
+            out[idx[hit]] = nums[np.searchsorted(sk, keys[idx[hit]])]
+            todo[idx[hit]] = False
+
+
+def _save_block(s: Scratch, name: str, blk: Block, target: I64, extra: dict[str, Any]) -> None:
+    arrays: dict[str, Any] = {
+        "keys": blk.keys, "nchoice": blk.nchoice, "nbranch": blk.nbranch, "target": target,
+        "prob": blk.prob, "layers": np.asarray(blk.layers, np.int64), **extra}
+    for i, (at, values) in enumerate(blk.reward):
+        arrays[f"reward{i}_at"], arrays[f"reward{i}_v"] = at, values
+    for i, lab in enumerate(blk.labels):
+        arrays[f"label{i}"] = lab
+    s.save(name, **arrays)
+
+
+@dataclass
+class _Waiting:
+    """An explored bucket, written with its successors' keys, some of whose successor
+    buckets are not explored yet."""
+
+    index: int
+    bucket: int
+    reach: int  # the largest bucket its branches reach
+
+
+def explore(c: Compiled, s: Scratch, notify: Notify | None = None,
+            max_states: int | None = None) -> Streamed:
+    """Every state reachable from the initial one, bucket by bucket, written to `s`;
+    raises GiveUp as explore_graph.explore does, TooManyStates past `max_states`."""
+    waiting, table = Frontiers(), ProbTable()
+    waiting.pending[int(c.layout.bucket_of(np.array([c.initial]))[0])] = [
+        np.array([c.initial], np.int64)]
+    out = Streamed(s)
+    sinks = _Index()
+    unresolved: list[_Waiting] = []
+    window: dict[int, tuple[I64, I64]] = {}  # bucket -> its sorted keys and their numbers
+    buckets: list[int] = []
+    count = rounds = 0
+    shown = time.monotonic()
+    initial = np.array([c.initial], np.int64)
+    while waiting.pending:
+        b = min(waiting.pending)
+        begin = _unique(np.concatenate(waiting.pending.pop(b)))
+        block, known, took = explore_graph.explore_bucket(
+            c, table, begin, b, waiting, counted=count, max_states=max_states, rounds=rounds)
+        rounds += took
+        sink, block = explore_graph.split_sinks(block)
+        index = len(buckets)
+        buckets.append(b)
+        first = sum(out.size)
+        out.start.append(first)
+        out.size.append(len(block.keys))
+        out.sink_start.append(out.sinks)
+        sink_numbers = np.arange(out.sinks, out.sinks + len(sink.keys), dtype=np.int64)
+        sinks.add(sink.keys, sink_numbers)
+        out.sinks += len(sink.keys)
+        _save_block(s, f"s{index}", sink, -1 - sink_numbers[
+            acyclic._state_of_branches(explore_graph._offsets(sink.nchoice),
+                                       explore_graph._offsets(sink.nbranch))], {})
+        numbers = np.arange(first, first + len(block.keys), dtype=np.int64)
+        order = np.argsort(block.keys)
+        window[b] = (block.keys[order], numbers[order])
+        if index == 0:
+            out.initial = _resolve(window[b], sinks, initial)[0][0]
+        reach = int(c.layout.bucket_of(block.target).max()) if len(block.target) else b
+        unresolved.append(_Waiting(index, b, max(reach, b)))
+        out.choices += len(block.nbranch) + len(sink.nbranch)
+        out.transitions += len(block.target) + len(sink.target)
+        _save_block(s, f"b{index}", block, block.target, {})
+        count += len(known)
+        del block, sink, known, order, numbers, sink_numbers
+        if max_states is not None and count > max_states:
+            raise TooManyStates(count)
+        explore_graph.narrow(count, rounds)
+        nxt = min(waiting.pending) if waiting.pending else None
+        while unresolved and (nxt is None or unresolved[0].reach < nxt):
+            _finish(s, out, unresolved.pop(0), window, sinks, buckets, c)
+            low = unresolved[0].bucket if unresolved else nxt
+            for t in [t for t in window if low is None or t < low]:
+                del window[t]
+        if index % explore_graph.TRIM_BUCKETS == explore_graph.TRIM_BUCKETS - 1:
+            acyclic.trim_heap()
+        if notify is not None and time.monotonic() - shown > explore_graph.PROGRESS_EVERY:
+            shown = time.monotonic()
+            notify("explored", (b, count, s.written))
+    assert not unresolved
+    acyclic.trim_heap()
+    _late(c, s, out, table, waiting, sinks, buckets, count, max_states)
+    out.table = table.table()
+    s.save("table", prob=out.table)
+    return out
+
+
+def _resolve(window: tuple[I64, I64], sinks: _Index, keys: I64) -> tuple[I64, acyclic.Bools]:
+    """The numbers of `keys` among the window's regular states (>= 0) or the sinks
+    (-1 - o); and which keys are neither (left as they are)."""
+    sk, nums = window
+    out = keys.copy()
+    todo = np.ones(len(keys), bool)
+    if len(sk):
+        hit = _found(sk, keys)
+        out[hit] = nums[np.searchsorted(sk, keys[hit])]
+        todo[hit] = False
+    other = np.zeros(len(keys), np.int64)
+    left = todo.copy()
+    sinks.find(keys, other, left)  # clears `left` where a sink's
+    is_sink = todo & ~left
+    out[is_sink] = -1 - other[is_sink]
+    return out, left
+
+
+def _finish(s: Scratch, out: Streamed, w: _Waiting, window: dict[int, tuple[I64, I64]],
+            sinks: _Index, buckets: list[int], c: Compiled) -> None:
+    """Resolve the successors of a bucket whose every successor bucket is explored: its
+    successors' keys read back, written over by their numbers."""
+    span = [window[t] for t in sorted(window) if w.bucket <= t <= w.reach]
+    # a bucket's keys are those whose high bits are the bucket: the window's runs, end
+    # to end in bucket order, are sorted
+    joined = (np.concatenate([k for k, _ in span]), np.concatenate([n for _, n in span]))
+    keys = s.load(f"b{w.index}", "target")
+    target, late = _resolve(joined, sinks, keys)
+    at = np.flatnonzero(late)
+    if at.size and (c.layout.bucket_of(keys[at]) >= w.bucket).any():
+        raise GiveUp("a successor that was not explored")
+    target[at] = np.iinfo(np.int64).min
+    out.reach.append(int(np.searchsorted(buckets, w.reach, side="right")) - 1)
+    s.save(f"b{w.index}", target=target,
+           **({"late_at": at, "late_key": keys[at]} if at.size else {}))
+
+
+def _late(c: Compiled, s: Scratch, out: Streamed, table: ProbTable, waiting: Frontiers,
+          sinks: _Index, buckets: list[int], count: int, max_states: int | None) -> None:
+    """The late states (their successors are late or sinks), as one block in a file."""
+    if not waiting.late:
+        return
+    absorbing = np.sort(np.concatenate([k for k, _ in sinks.runs])) if sinks.runs else \
+        np.zeros(0, np.int64)
+    block, known, _ = explore_graph.explore_bucket(c, table, np.concatenate(waiting.late), None,
+                                                   Frontiers(), absorbing, counted=count,
+                                                   max_states=max_states)
+    _check_late(c, s, known, buckets)
+    out.late = len(block.keys)
+    numbers = -1 - (out.sinks + np.arange(len(block.keys), dtype=np.int64))
+    order = np.argsort(block.keys)
+    target, missing = _resolve((block.keys[order], numbers[order]), sinks, block.target)
+    if missing.any():
+        raise GiveUp("a successor that was not explored")
+    out.late_keys = block.keys
+    out.choices += len(block.nbranch)
+    out.transitions += len(block.target)
+    _save_block(s, "late", block, target, {})
+
+
+def _check_late(c: Compiled, s: Scratch, late: I64, buckets: list[int]) -> None:
+    """GiveUp if a late state is also a regular one (reached both before and after its
+    clock went back): each bucket's keys read back from its file."""
+    tb = c.layout.bucket_of(late)
+    for b in np.unique(tb).tolist():
+        i = int(np.searchsorted(buckets, b))
+        if i < len(buckets) and buckets[i] == b and \
+                _found(np.sort(s.load(f"b{i}", "keys")), late[tb == b]).any():
+            raise GiveUp("a state reached both before and after its clock went back")

@@ -1,0 +1,277 @@
+"""The backward pass over the streamed layers (afsmc.verify.stream.layers): the files read
+back in reverse (the sinks, the late states, then the buckets from the last explored to
+the first), every query of the run in one sweep, each layer by the same step as the
+in-memory pass (:func:`afsmc.verify.engines.acyclic.settle`).
+
+Values kept: those of the sinks and late states ("other"), and of a window of regular
+buckets, contiguous in the global numbering: bucket b's values, followed by those of the
+later buckets some bucket not yet solved reaches. The window lives in a ring of as many
+rows as the largest window, state g at row g mod its size: nothing is copied as it
+slides.
+"""
+
+from __future__ import annotations
+
+import itertools
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+import numpy.typing as npt
+
+from afsmc.verify.engines import acyclic, explore_graph
+from afsmc.verify.engines.acyclic import F64, I64, Query, Sense
+from afsmc.verify.stream.layers import Streamed
+
+LATE = np.iinfo(np.int64).min  # a branch into a late state, before it is numbered
+
+
+@dataclass
+class Part:
+    """One file's states as the pass reads them: offsets, each branch's successor as a
+    column of the regular window (`reg`, -1 if none) or of the other values (`oth`, -1
+    if none), probabilities, self-loops, rewards per choice and labels per state."""
+
+    states: I64
+    choices: I64
+    reg: I64
+    oth: I64
+    prob: F64
+    stay: acyclic.Vec | None
+    layers: I64
+    rewards: list[F64]
+    labels: list[acyclic.Bools]
+
+
+def _offsets(counts: npt.NDArray[np.int32]) -> I64:
+    out = np.zeros(len(counts) + 1, np.int64)
+    np.cumsum(counts, out=out[1:])
+    return out
+
+
+def load(st: Streamed, name: str, first: int, own_other: int | None, late_sorted: I64,
+         late_order: I64, rewards: int, labels: int, ring: int = 1) -> Part:
+    """The file `name`; its regular successors as rows of the ring of `ring` rows (its
+    own states from `first`, its own first number), or, for the sinks and the late states
+    (`own_other`: their first other number), its own states as rows of the other values
+    from there."""
+    s = st.scratch
+    states = _offsets(s.load(name, "nchoice"))
+    choices = _offsets(s.load(name, "nbranch"))
+    target = s.load(name, "target")
+    if (s.root / f"{name}.late_at.npy").exists():
+        at, keys = s.load(name, "late_at"), s.load(name, "late_key")
+        target[at] = -1 - (st.sinks + late_order[np.searchsorted(late_sorted, keys)])
+    assert not (target == LATE).any()
+    prob = st.table[s.load(name, "prob")]
+    regular = target >= 0
+    reg = np.where(regular, target % ring, -1)
+    oth = np.where(regular, -1, -1 - target)
+    own = np.where(regular, target - first, -1) if own_other is None else \
+        np.where(regular, -1, oth - own_other)
+    stay = acyclic.self_loops(states, choices, own.astype(np.int64), prob)
+    per_choice = []
+    for i in range(rewards):
+        r = np.zeros(len(choices) - 1)
+        r[s.load(name, f"reward{i}_at")] = s.load(name, f"reward{i}_v")
+        per_choice.append(r)
+    layers = np.zeros(1, np.int64)
+    sizes = s.load(name, "layers")
+    layers = np.concatenate([[0], np.cumsum(sizes)]).astype(np.int64)
+    return Part(states, choices, reg, oth, prob, stay, layers, per_choice,
+                [s.load(name, f"label{i}") for i in range(labels)])
+
+
+def _steps(part: Part, lo: int, hi: int, reg: int, other: int) -> list[tuple[bool, Any]]:
+    """The span's choices as sparse rows over the regular window (of `reg` rows; True)
+    and over the other values (`other` rows; False), those that have branches there."""
+    from scipy.sparse import csr_matrix
+
+    c0, c1 = int(part.states[lo]), int(part.states[hi])
+    b0, b1 = int(part.choices[c0]), int(part.choices[c1])
+    sizes = np.diff(part.choices[c0:c1 + 1])
+    out = []
+    for regular, cols, width in ((True, part.reg[b0:b1], reg), (False, part.oth[b0:b1], other)):
+        m = cols >= 0
+        if not m.any():
+            continue
+        if m.all():
+            rows = part.choices[c0:c1 + 1] - b0
+        else:
+            rows = np.zeros(c1 - c0 + 1, np.int64)
+            owner = np.repeat(np.arange(c1 - c0), sizes)
+            np.cumsum(np.bincount(owner[m], minlength=c1 - c0), out=rows[1:])
+        out.append((regular, csr_matrix((part.prob[b0:b1][m], cols[m], rows),
+                                        shape=(c1 - c0, width))))
+    return out
+
+
+def _product(steps: list[tuple[bool, Any]], choices: int, reg: F64 | None, other: F64) -> F64:
+    """Each choice of a span: its branches' probabilities times their successors'
+    values (regular window and others)."""
+    out = np.zeros((choices, other.shape[1]))
+    for regular, step in steps:
+        out += np.asarray(step @ (reg if regular else other))
+    return out
+
+
+@dataclass
+class Group:
+    """The queries of one kind solved side by side, and where their reward models and
+    targets are among the files' (`reward`: index per query, or None for P)."""
+
+    queries: list[Query]
+    sense: Sense
+    reward: list[int] | None
+    target: list[int]
+
+
+def put(out: F64, at: int, values: F64) -> None:
+    """`values` into the rows from `at` of `out`, as a ring (past its end, from row 0)."""
+    size = len(out)
+    lo = at % size
+    hi = lo + len(values)
+    if hi <= size:
+        out[lo:hi] = values
+    else:
+        out[lo:] = values[:size - lo]
+        out[:hi - size] = values[size - lo:]
+
+
+def solve_part(part: Part, groups: list[Group], reg: list[F64] | None, other: list[F64],
+               out: list[F64], at: int, count: bool = False) -> int:
+    """Solve the part's layers into `out[g]`, its state s at row `at + s` (as a ring);
+    with `count`, the distinct (state, successor) pairs of its states (the uniform
+    DTMC's transitions), else 0."""
+    pairs = 0
+    spans = [(k, min(k + acyclic.SPAN, hi)) for lo, hi in
+             itertools.pairwise(part.layers.tolist()) for k in range(lo, hi, acyclic.SPAN)]
+    for i, (lo, hi) in enumerate(spans):
+        if i % acyclic.TRIM_EVERY == acyclic.TRIM_EVERY - 1:
+            acyclic.trim_heap()
+        c0, c1 = int(part.states[lo]), int(part.states[hi])
+        offsets = part.states[lo:hi + 1] - c0
+        steps = _steps(part, lo, hi, 0 if reg is None else len(reg[0]), len(other[0]))
+        for g, grp in enumerate(groups):
+            per_choice = _product(steps, c1 - c0, None if reg is None else reg[g], other[g])
+            if grp.reward is not None:
+                per_choice += np.stack([part.rewards[r][c0:c1] for r in grp.reward], axis=1)
+            on = np.stack([part.labels[t][lo:hi] for t in grp.target], axis=1)
+            stay = None if part.stay is None else part.stay[c0:c1]
+            put(out[g], at + lo, acyclic.settle(per_choice, stay, offsets, on, grp.sense))
+        if count:
+            pairs += _pairs(part, lo, hi)
+    return pairs
+
+
+def _pairs(part: Part, lo: int, hi: int) -> int:
+    """The distinct (state, successor) pairs of the span's states."""
+    c0, c1 = int(part.states[lo]), int(part.states[hi])
+    b0, b1 = int(part.choices[c0]), int(part.choices[c1])
+    per_choice = np.repeat(np.arange(hi - lo, dtype=np.int64), np.diff(part.states[lo:hi + 1]))
+    owner = np.repeat(per_choice, np.diff(part.choices[c0:c1 + 1]))
+    reg, oth = part.reg[b0:b1], part.oth[b0:b1]
+    succ = np.where(reg >= 0, 2 * reg, 2 * oth + 1)  # the two spaces apart
+    # distinct by a sort (np.unique hashes int64 keys far slower)
+    return len(explore_graph._unique(succ * acyclic.SPAN + owner))
+
+
+def groups_of(queries: list[Query], reward_names: list[str], most: int | None = None
+              ) -> list[Group]:
+    """The queries by kind (and means apart), as acyclic.solve_many groups them, at
+    most `most` in a group."""
+    by: dict[tuple[str, bool], list[Query]] = {}
+    for q in queries:
+        by.setdefault((q.kind, q.opt == "mean"), []).append(q)
+    step = most or max(1, len(queries))
+    return [Group(qs, Sense.of(qs),
+                  [reward_names.index(q.reward) for q in qs] if qs[0].kind == "R" else None,
+                  [q.target for q in qs])
+            for every in by.values() for qs in (every[i:i + step]
+                                                for i in range(0, len(every), step))]
+
+
+Progress = Callable[[int, int, int], None]  # buckets solved, of how many; sweeps to go
+
+
+def window_rows(st: Streamed) -> int:
+    """The most regular states whose values the pass keeps at once: for each bucket,
+    from its first state to the last one that it or an earlier bucket reaches."""
+    ends = [s + n for s, n in zip(st.start, st.size, strict=True)]
+    keep = itertools.accumulate((ends[r] for r in st.reach), max)
+    return max(1, max((k - s for k, s in zip(keep, st.start, strict=True)), default=1))
+
+
+# The most bytes the window's values of one sweep take: above it, the queries (P, R, the
+# uniform DTMC's means) are solved in several sweeps, each reading the files again,
+# rather than all side by side.
+SWEEP_BYTES = 1 << 28
+
+
+def sweeps(queries: list[Query], reward_names: list[str], rows: int) -> list[list[Group]]:
+    """The queries' groups, cut to fit, packed into sweeps whose window of values fits
+    SWEEP_BYTES (one query at a time where one does not)."""
+    groups = groups_of(queries, reward_names, max(1, SWEEP_BYTES // (8 * rows)))
+    out: list[list[Group]] = []
+    cols = 0
+    for g in groups:
+        k = len(g.queries)
+        if out and (cols + k) * rows * 8 <= SWEEP_BYTES:
+            out[-1].append(g)
+            cols += k
+        else:
+            out.append([g])
+            cols = k
+    return out
+
+
+def run(st: Streamed, queries: list[Query], reward_names: list[str], targets: int,
+        progress: Progress | None = None) -> tuple[dict[str, float], int]:
+    """Each query's value in the initial state, and the uniform DTMC's transitions (0
+    unless a query is a mean): as few sweeps over the files as SWEEP_BYTES allows."""
+    rows = window_rows(st)
+    plan = sweeps(queries, reward_names, rows)
+    out: dict[str, float] = {}
+    pairs = 0
+    # the uniform DTMC's transitions counted in the first sweep of means
+    counted = next((k for k, part in enumerate(plan) if any(g.sense.mean for g in part)), -1)
+    for k, part in enumerate(plan):
+        values, got = _sweep(st, part, len(reward_names), targets, rows, progress,
+                             len(plan) - k, k == counted)
+        out |= values
+        pairs += got
+    return {q.name: out[q.name] for q in queries}, pairs
+
+
+def _sweep(st: Streamed, groups: list[Group], nr: int, targets: int, rows: int,
+           progress: Progress | None, left: int, count: bool
+           ) -> tuple[dict[str, float], int]:
+    """One sweep over the files for `groups`: their values in the initial state, and
+    with `count` the uniform DTMC's transitions."""
+    other = [np.zeros((st.sinks + st.late, len(g.queries))) for g in groups]
+    order = np.argsort(st.late_keys)
+    late = (st.late_keys[order], order)
+    pairs = 0
+    for i, first in enumerate(st.sink_start):
+        part = load(st, f"s{i}", 0, first, *late, nr, targets)
+        pairs += solve_part(part, groups, None, other, other, first, count)
+    if st.late:
+        part = load(st, "late", 0, st.sinks, *late, nr, targets)
+        pairs += solve_part(part, groups, None, other, other, st.sinks, count)
+    ring = [np.zeros((rows, len(g.queries))) for g in groups]
+    buckets = len(st.start)
+    for i in reversed(range(buckets)):
+        first, size = st.start[i], st.size[i]
+        for r in ring:  # its rows start at 0, as the in-memory pass's values do
+            put(r, first, np.zeros((size, r.shape[1])))
+        part = load(st, f"b{i}", first, None, *late, nr, targets, rows)
+        pairs += solve_part(part, groups, ring, other, ring, first, count)
+        del part
+        if progress is not None:
+            progress(buckets - i, buckets, left)
+    out: dict[str, float] = {}
+    for g, grp in enumerate(groups):
+        row = ring[g][st.initial % rows] if st.initial >= 0 else other[g][-1 - st.initial]
+        out |= {q.name: float(x) for q, x in zip(grp.queries, row, strict=True)}
+    return out, pairs

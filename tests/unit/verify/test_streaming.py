@@ -1,0 +1,176 @@
+"""`verify --scratch DIR`: afsmc's own exploration written layer by layer to a scratch
+directory and read back by one backward pass (afsmc.verify.stream). Oracle: the in-memory
+exploration and pass (afsmc.verify.engines.explore_graph, acyclic), the reference route,
+equal to 1e-12 on every query, the uniform DTMC's means included; and the scratch
+directory left empty after a success, an error, a full disk and an interrupt."""
+
+from __future__ import annotations
+
+import errno
+from pathlib import Path
+from typing import Any
+
+import pytest
+
+from afsmc.backends.prism import property_variants
+from afsmc.compiler import load, lowered
+from afsmc.diagnostics import CompileError
+from afsmc.verify import run
+from afsmc.verify.engines import acyclic, explicit, explore, explore_graph
+from afsmc.verify.stream import layers, scratch, sweep
+from tests.conftest import EXAMPLES, run_cli
+from tests.unit.backends.test_prism import SMALL
+from tests.unit.verify.test_uniform_beside import LOOPS
+
+pytestmark = pytest.mark.storm
+
+UAV = str(EXAMPLES / "uav.afsm")
+
+
+def _loops(tmp: Path) -> str:
+    path = tmp / "loops.afsm"
+    path.write_text(LOOPS, encoding="utf-8")
+    return str(path)
+
+
+def _plan(path: str, consts: dict[str, str]) -> tuple[explicit.Plan, explore.Compiled]:
+    low = lowered(load(path, consts).model, "nondet")
+    names = tuple(n for p in low.model.properties for n, _ in property_variants(low, p))
+    p = explicit.plan(low, names)
+    explicit.plan_uniform(low, tuple(pr.name for pr in low.model.properties), p)
+    return p, explore.compile_model(low, p.targets, p.rewards)
+
+
+CASES = {
+    "uav": (UAV, SMALL["uav"]),  # many buckets, sinks, a window of several buckets
+    "rover": (str(EXAMPLES / "rover.afsm"), {}),  # late states (a clock set back) and sinks
+    "overtake": (str(EXAMPLES / "overtake.afsm"), {}),
+}
+
+
+@pytest.mark.parametrize("case", [*CASES, "loops"])
+def test_streamed_values_equal_the_in_memory_pass(case: str, tmp_path: Path) -> None:
+    path, consts = CASES[case] if case != "loops" else (_loops(tmp_path), {})
+    p, c = _plan(path, consts)
+    a = explore_graph.explore(c).arrays
+    want = acyclic.solve_many(a, p.queries)
+    with scratch.made(str(tmp_path)) as where:
+        st = layers.explore(c, scratch.Scratch(where))
+        got, pairs = sweep.run(st, p.queries, c.reward_names, len(p.targets))
+        assert st.scratch.written > 0 and any(where.iterdir())
+    assert st.states == len(a.states) - 1 and st.transitions == len(a.target)
+    assert pairs == acyclic.mean_transitions(a)
+    assert any(q.opt == "mean" for q in p.queries)
+    for q in p.queries:
+        assert got[q.name] == pytest.approx(want[q.name], rel=1e-12, abs=1e-12), q.name
+    # uav: a window of several buckets, smaller than the whole (the ring wraps round)
+    shape = {"uav": lambda: len(st.start) > 10 and st.sinks > 0 and max(
+                 r - i for i, r in enumerate(st.reach)) >= 1
+                 and sweep.window_rows(st) < sum(st.size) / 2,
+             "rover": lambda: st.late > 0,
+             "loops": lambda: a.stay is not None,
+             "overtake": lambda: st.sinks > 0}
+    assert shape[case](), case  # the case covers what it is here for
+    assert not list(tmp_path.glob(scratch.PREFIX + "*"))
+
+
+def test_queries_in_sweeps_of_their_own_have_the_same_values(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    p, c = _plan(*CASES["uav"])
+    with scratch.made(str(tmp_path)) as where:
+        st = layers.explore(c, scratch.Scratch(where))
+        together, pairs = sweep.run(st, p.queries, c.reward_names, len(p.targets))
+        rows = sweep.window_rows(st)
+        assert len(sweep.sweeps(p.queries, c.reward_names, rows)) == 1
+        monkeypatch.setattr(sweep, "SWEEP_BYTES", 1)  # a sweep for each query
+        assert len(sweep.sweeps(p.queries, c.reward_names, rows)) == len(p.queries)
+        apart, pairs_apart = sweep.run(st, p.queries, c.reward_names, len(p.targets))
+    assert apart == together and pairs_apart == pairs > 0
+
+
+def test_a_model_the_explorer_gives_up_on_is_given_up_with_the_scratch_too(
+        tmp_path: Path) -> None:
+    path = str(EXAMPLES / "auv.afsm")
+    _, c = _plan(path, {})
+    with pytest.raises(explore.GiveUp, match="clock went back"):
+        explore_graph.explore(c)
+    with scratch.made(str(tmp_path)) as where, pytest.raises(explore.GiveUp,
+                                                             match="clock went back"):
+        layers.explore(c, scratch.Scratch(where))
+    low = lowered(load(path, {}).model, "nondet")
+    names = tuple(n for q in low.model.properties for n, _ in property_variants(low, q))
+    work = tmp_path / "job"
+    work.mkdir()
+    assert explicit.answer(low, names, "MDP", lambda _e, _d: None, scratch=str(work)) is None
+    assert list(work.iterdir()) == []
+
+
+def test_verify_with_a_scratch_gives_the_same_answer_and_leaves_nothing(tmp_path: Path) -> None:
+    plain = run(UAV, consts=SMALL["uav"], isolate=False)
+    streamed = run(UAV, consts=SMALL["uav"], isolate=False, scratch=str(tmp_path))
+    assert streamed.model.engine == "explicit" and "MB of scratch disk" in str(
+        streamed.model.engine_reason)
+    for a, b in zip(plain.properties, streamed.properties, strict=True):
+        for x, y in ((a.min, b.min), (a.max, b.max), (a.uniform, b.uniform)):
+            assert x is not None and y == pytest.approx(x, rel=1e-12, abs=1e-12), a.name
+    assert (plain.model.states, plain.model.transitions, plain.model.choices) == (
+        streamed.model.states, streamed.model.transitions, streamed.model.choices)
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_the_scratch_of_a_watched_child_is_removed_too(tmp_path: Path) -> None:
+    said: list[str] = []
+    res = run(UAV, consts=SMALL["uav"], isolate=True, scratch=str(tmp_path),
+              properties=["success"], progress=said.append)
+    assert res.model.processes == 1 and "scratch disk" in str(res.model.engine_reason)
+    assert any("into the scratch directory" in s for s in said), said
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_a_scratch_that_is_no_writable_directory_is_refused_up_front(tmp_path: Path) -> None:
+    afile = tmp_path / "file"
+    afile.write_text("x", encoding="utf-8")
+    for bad, words in ((tmp_path / "missing", "does not exist"), (afile, "not a directory")):
+        with pytest.raises(CompileError) as exc:
+            run(UAV, consts=SMALL["uav"], scratch=str(bad))
+        d = exc.value.diagnostics[0]
+        assert d.code == "E419" and words in d.message and d.hint
+    r = run_cli("verify", UAV, "--scratch", str(tmp_path / "missing"))
+    assert r.code == 1 and "E419" in r.err and "Traceback" not in r.err, r.err
+
+
+def _fail_after(k: int, exc: BaseException) -> Any:
+    seen: list[Path] = []
+
+    def hook(path: Path) -> None:
+        seen.append(path)
+        if len(seen) > k:
+            raise exc
+
+    return hook
+
+
+def test_a_full_disk_is_a_clear_error_and_leaves_nothing(tmp_path: Path,
+                                                         monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setattr(scratch, "FAULT", _fail_after(40, OSError(errno.ENOSPC, "No space")))
+    with pytest.raises(CompileError) as exc:
+        run(UAV, consts=SMALL["uav"], isolate=False, scratch=str(tmp_path))
+    d = exc.value.diagnostics[0]
+    assert d.code == "E419" and "scratch disk is full" in d.message and d.hint, d
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_an_interrupt_leaves_nothing(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setattr(scratch, "FAULT", _fail_after(40, KeyboardInterrupt()))
+    with pytest.raises(KeyboardInterrupt):
+        run(UAV, consts=SMALL["uav"], isolate=False, scratch=str(tmp_path))
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_a_strategy_with_a_scratch_is_explored_in_memory_and_says_so(tmp_path: Path) -> None:
+    said: list[str] = []
+    res = run(_loops(tmp_path), isolate=True, scratch=str(tmp_path), strategy=True,
+              progress=said.append)
+    assert any("not streamed yet" in s for s in said), said
+    assert res.properties[0].strategy is not None
+    assert [p.name for p in tmp_path.iterdir()] == ["loops.afsm"]
