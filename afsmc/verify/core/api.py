@@ -27,8 +27,9 @@ from afsmc.syntax import ast
 from afsmc.syntax.parser import parse_property
 from afsmc.text import count, literal
 from afsmc.verify.core import conditioning
+from afsmc.verify.core.model_loop import ModelLoop
 from afsmc.verify.core.options import VerifyOptions
-from afsmc.verify.core.runner import CheckRun, ModelLoop, Options
+from afsmc.verify.core.runner import CheckRun, Options
 from afsmc.verify.core.uncertainty import kept_at_midpoint, over_probabilities, sources
 from afsmc.verify.engines.guard import Progress, default_max_states, run_job, upper_bound
 from afsmc.verify.engines.storm import Engine, Job, StormFailure

@@ -501,20 +501,6 @@ def _mean(per_choice: F64, stay: F64 | None, offsets: I64, stuck: float) -> F64:
     return out
 
 
-def mean_transitions(a: Arrays) -> int:
-    """The transitions of the DTMC that picks each state's choices uniformly (queries
-    "mean"): each state's distinct successors over all its choices, a span at a time."""
-    total = 0
-    n = len(a.states) - 1
-    for lo, hi in _spans(a.layers):
-        c0, c1 = int(a.states[lo]), int(a.states[hi])
-        b0, b1 = int(a.choices[c0]), int(a.choices[c1])
-        per_choice = np.repeat(np.arange(hi - lo, dtype=np.int64), np.diff(a.states[lo:hi + 1]))
-        owner = np.repeat(per_choice, np.diff(a.choices[c0:c1 + 1]))
-        total += len(np.unique(owner * n + a.target[b0:b1]))
-    return total
-
-
 TRIM_EVERY = 32  # spans solved between two trim_heap()
 
 

@@ -206,7 +206,7 @@ def _uniform(a: acyclic.Arrays, queries: list[acyclic.Query], names: list[str],
     for n in names:
         notify("solver", f"checked {n} on the uniform DTMC in {secs:.0f} s")
     return Uniform({n: got[MEAN + n] for n in names}, {n: secs for n in names},
-                   acyclic.mean_transitions(a))
+                   _mean_transitions(a))
 
 
 def view(a: acyclic.Arrays, low: Lowered, layout: explore.Layout,
@@ -270,3 +270,17 @@ def fill(job: Any, res: Any, notify: Notify, too_big: Callable[[Any, int, bool],
         return None
     return replace(job, names=tuple(ans.left), explicit=None, hybrid_extra=(), extract=None,
                    uniform=())
+
+
+def _mean_transitions(a: acyclic.Arrays) -> int:
+    """The transitions of the DTMC that picks each state's choices uniformly (queries
+    "mean"): each state's distinct successors over all its choices, a span at a time."""
+    total = 0
+    n = len(a.states) - 1
+    for lo, hi in acyclic._spans(a.layers):
+        c0, c1 = int(a.states[lo]), int(a.states[hi])
+        b0, b1 = int(a.choices[c0]), int(a.choices[c1])
+        per_choice = np.repeat(np.arange(hi - lo, dtype=np.int64), np.diff(a.states[lo:hi + 1]))
+        owner = np.repeat(per_choice, np.diff(a.choices[c0:c1 + 1]))
+        total += len(np.unique(owner * n + a.target[b0:b1]))
+    return total

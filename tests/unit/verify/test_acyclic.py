@@ -27,7 +27,7 @@ pytestmark = pytest.mark.storm
 def _storm_builds(monkeypatch: pytest.MonkeyPatch) -> None:
     """These tests are of the pass over Storm's own build: afsmc's exploration, which a
     job tries first (test_explicit.py), is not tried here."""
-    monkeypatch.setattr("afsmc.verify.core.runner.applies", lambda *_a: False)
+    monkeypatch.setattr("afsmc.verify.core.model_loop.applies", lambda *_a: False)
 
 EXAMPLE_FILES = sorted(EXAMPLES.glob("*.afsm"))
 CYCLIC = {"fleet", "patrol", "warehouse"}  # examples with a cycle of more than one state

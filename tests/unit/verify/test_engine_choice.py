@@ -306,7 +306,7 @@ def test_too_small_decision_diagram_tables_are_retried_with_storm_s_default() ->
 def test_complementary_queries_keep_the_larger_tables_once_one_needed_them(
         monkeypatch: pytest.MonkeyPatch) -> None:
     # Every first attempt gets 1 MB tables, too small for any query of the small UAV.
-    from afsmc.verify.core import runner
+    from afsmc.verify.core import model_loop as runner
     from afsmc.verify.engines.storm import DD_MEMORY_RETRY
 
     make_job = runner.make_job
@@ -347,7 +347,7 @@ def test_full_tables_in_a_grouped_process_replan_the_queries_it_had_not_answered
         monkeypatch: pytest.MonkeyPatch, answered: int) -> None:
     # The guard's verdict when Sylvan ends a process of several queries while checking
     # (seen on scenario 1 after one answer): stand in for it with Storm's real answers.
-    from afsmc.verify.core import runner
+    from afsmc.verify.core import model_loop as runner
     from afsmc.verify.engines.storm import JobResult, StormFailure
 
     names = ["success", "drops"]

@@ -67,7 +67,7 @@ def test_a_memory_stop_names_the_query_and_the_others_go_on(
     """The guard names the query it stopped (its "check" phase); the run goes on with the
     process's other queries in a fresh one, and the error says which query it was."""
     from afsmc.diagnostics import CompileError
-    from afsmc.verify.core import runner
+    from afsmc.verify.core import model_loop as runner
     from afsmc.verify.engines.guard import _checking
     from afsmc.verify.engines.guard import run_job as real
     from afsmc.verify.engines.storm import JobResult, StormFailure

@@ -329,7 +329,7 @@ def test_the_explored_model_gives_storm_s_strategies_and_paths(monkeypatch: Any)
 def test_storm_s_model_gives_storm_s_strategies_and_paths(monkeypatch: Any) -> None:
     """Where afsmc's exploration does not apply, the backward pass over Storm's exported
     model gives them (strategy_arrays on Storm's arrays), equal to Storm's own to the bit."""
-    from afsmc.verify.core import runner
+    from afsmc.verify.core import model_loop as runner
 
     monkeypatch.setattr(runner, "applies", lambda *_a: False)
     consts = {"T_LIMIT": 90, "DEADLINE": 90}

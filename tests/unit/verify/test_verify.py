@@ -322,12 +322,14 @@ def test_default_max_states_binds_the_sparse_engine_only(monkeypatch: pytest.Mon
     every variable's range: a counter beyond it is refused before a symbolic build (E420,
     tests/e2e/test_deep_guard.py)."""
     import afsmc.verify.core.api as api
+    import afsmc.verify.core.model_loop as model_loop
     import afsmc.verify.core.runner as runner
     from afsmc.compiler import CompileError
     from afsmc.verify import run
 
     monkeypatch.setattr(api, "default_max_states", lambda: 30)
     monkeypatch.setattr(runner, "default_max_states", lambda: 30)
+    monkeypatch.setattr(model_loop, "default_max_states", lambda: 30)
     hybrid = run(PATROL, engine="hybrid", isolate=False)
     assert hybrid.model.states > 30
     with pytest.raises(CompileError) as sparse:

@@ -26,7 +26,7 @@ def test_auto_hybrid_process_stopped_keeps_its_answers(
     # rest (termination, the complement) run one per process.
     import pathlib
 
-    from afsmc.verify.core import runner
+    from afsmc.verify.core import model_loop as runner
     from afsmc.verify.engines.guard import run_job as real
     from afsmc.verify.engines.storm import JobResult, StormFailure
 
@@ -98,7 +98,7 @@ def _stop_after_first_answer(monkeypatch: pytest.MonkeyPatch, stop: Callable[
         [dict[str, float]], BaseException | None]) -> None:
     """Run the first Storm job for real, then fail it (or raise) with its first answer only:
     what a memory stop or a Ctrl-C leaves, with Storm's real value."""
-    from afsmc.verify.core import runner
+    from afsmc.verify.core import model_loop as runner
     from afsmc.verify.engines.guard import run_job as real
     from afsmc.verify.engines.storm import JobResult, StormFailure
 
@@ -294,7 +294,7 @@ def test_a_failed_complement_does_not_matter_where_not_every_path_ends(
     1 - Pmin of its complement. A complement that failed (here, faked to run out of memory)
     is then no error: every value is answered, equal to the sparse engine's, and no error
     is raised."""
-    from afsmc.verify.core import runner
+    from afsmc.verify.core import model_loop as runner
     from afsmc.verify.engines.guard import run_job as real
     from afsmc.verify.engines.storm import JobResult, StormFailure
 
