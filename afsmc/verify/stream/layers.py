@@ -12,6 +12,12 @@ states in exploration order, a bucket's states in its layered order (global, fro
 sinks and then the late states in a space of their own ("other", stored as -1 - o). A
 branch into a late state keeps its key (the late states are numbered at the end) and is
 resolved when its bucket is read back.
+
+While resolving, each bucket also records the regular states whose lowest predecessor
+bucket it is (its "dies", as offsets from its first number): once the backward pass has
+solved that bucket, no bucket still to be solved needs their values
+(afsmc.verify.stream.sweep keeps a value only that long). The initial state is never in
+one; a state no other bucket points at is in its own bucket's.
 """
 
 from __future__ import annotations
@@ -32,14 +38,15 @@ from afsmc.verify.stream.scratch import Scratch
 @dataclass
 class Streamed:
     """What the backward pass needs besides the files: per explored bucket (in order) its
-    first global number, its size and the index of the last bucket it reaches; the sinks'
-    files and counts; the late states' count; the initial state (>= 0 regular, else
+    first global number, its size, the index of the last bucket it reaches and how many
+    states it is the lowest predecessor bucket of (`dies`); the sinks' files and counts; the late states' count; the initial state (>= 0 regular, else
     -1 - o); the probabilities' table."""
 
     scratch: Scratch
     start: list[int] = field(default_factory=list)
     size: list[int] = field(default_factory=list)
     reach: list[int] = field(default_factory=list)
+    dies: list[int] = field(default_factory=list)
     sink_start: list[int] = field(default_factory=list)  # per bucket: its first sink
     sinks: int = 0
     late: int = 0
@@ -114,6 +121,8 @@ def explore(c: Compiled, s: Scratch, notify: Notify | None = None,
     sinks = _Index()
     unresolved: list[_Waiting] = []
     window: dict[int, tuple[I64, I64]] = {}  # bucket -> its sorted keys and their numbers
+    # bucket -> its first number, and which of its states some resolved bucket points at
+    seen: dict[int, tuple[int, acyclic.Bools]] = {}
     buckets: list[int] = []
     count = rounds = 0
     shown = time.monotonic()
@@ -140,8 +149,11 @@ def explore(c: Compiled, s: Scratch, notify: Notify | None = None,
         numbers = np.arange(first, first + len(block.keys), dtype=np.int64)
         order = np.argsort(block.keys)
         window[b] = (block.keys[order], numbers[order])
+        seen[b] = (first, np.zeros(len(block.keys), bool))
         if index == 0:
             out.initial = _resolve(window[b], sinks, initial)[0][0]
+            if out.initial >= 0:  # its value is read once the pass is over: never dropped
+                seen[b][1][out.initial - first] = True
         reach = int(c.layout.bucket_of(block.target).max()) if len(block.target) else b
         unresolved.append(_Waiting(index, b, max(reach, b)))
         out.choices += len(block.nbranch) + len(sink.nbranch)
@@ -154,10 +166,10 @@ def explore(c: Compiled, s: Scratch, notify: Notify | None = None,
         explore_graph.narrow(count, rounds)
         nxt = min(waiting.pending) if waiting.pending else None
         while unresolved and (nxt is None or unresolved[0].reach < nxt):
-            _finish(s, out, unresolved.pop(0), window, sinks, buckets, c)
+            _finish(s, out, unresolved.pop(0), window, seen, sinks, buckets, c)
             low = unresolved[0].bucket if unresolved else nxt
             for t in [t for t in window if low is None or t < low]:
-                del window[t]
+                del window[t], seen[t]
         if index % explore_graph.TRIM_BUCKETS == explore_graph.TRIM_BUCKETS - 1:
             acyclic.trim_heap()
         if notify is not None and time.monotonic() - shown > explore_graph.PROGRESS_EVERY:
@@ -190,9 +202,11 @@ def _resolve(window: tuple[I64, I64], sinks: _Index, keys: I64) -> tuple[I64, ac
 
 
 def _finish(s: Scratch, out: Streamed, w: _Waiting, window: dict[int, tuple[I64, I64]],
-            sinks: _Index, buckets: list[int], c: Compiled) -> None:
+            seen: dict[int, tuple[int, acyclic.Bools]], sinks: _Index, buckets: list[int],
+            c: Compiled) -> None:
     """Resolve the successors of a bucket whose every successor bucket is explored: its
-    successors' keys read back, written over by their numbers."""
+    successors' keys read back, written over by their numbers; and its dies. Buckets
+    are resolved in order, so the first to point at a state is its lowest predecessor."""
     span = [window[t] for t in sorted(window) if w.bucket <= t <= w.reach]
     # a bucket's keys are those whose high bits are the bucket: the window's runs, end
     # to end in bucket order, are sorted
@@ -204,8 +218,33 @@ def _finish(s: Scratch, out: Streamed, w: _Waiting, window: dict[int, tuple[I64,
         raise GiveUp("a successor that was not explored")
     target[at] = np.iinfo(np.int64).min
     out.reach.append(int(np.searchsorted(buckets, w.reach, side="right")) - 1)
-    s.save(f"b{w.index}", target=target,
+    dies = _dies(target, w, seen)
+    out.dies.append(len(dies))
+    first = out.start[w.index]
+    # offsets from the bucket's first number: int32 while its reach spans fewer states
+    wide = bool(len(dies)) and int(dies[-1]) - first >= 2 ** 31
+    s.save(f"b{w.index}", target=target, dies=(dies - first).astype(
+        np.int64 if wide else np.int32),
            **({"late_at": at, "late_key": keys[at]} if at.size else {}))
+
+
+def _dies(target: I64, w: _Waiting, seen: dict[int, tuple[int, acyclic.Bools]]) -> I64:
+    """The regular states (sorted numbers) that bucket `w` points at and no earlier bucket
+    did, and those of its own that nothing points at but the initial state; marked seen."""
+    points = _unique(target[target >= 0])
+    out = []
+    for t in sorted(seen):
+        if not w.bucket <= t <= w.reach:
+            continue
+        first, mark = seen[t]
+        lo, hi = np.searchsorted(points, [first, first + len(mark)])
+        at = points[lo:hi] - first
+        if t == w.bucket:  # no later bucket points at its states: all of them go now
+            at = np.arange(len(mark), dtype=np.int64)
+        new = at[~mark[at]]
+        mark[new] = True
+        out.append(new + first)
+    return np.concatenate(out) if out else np.zeros(0, np.int64)
 
 
 def _late(c: Compiled, s: Scratch, out: Streamed, table: ProbTable, waiting: Frontiers,

@@ -3,11 +3,14 @@ back in reverse (the sinks, the late states, then the buckets from the last expl
 the first), every query of the run in one sweep, each layer by the same step as the
 in-memory pass (:func:`afsmc.verify.engines.acyclic.settle`).
 
-Values kept: those of the sinks and late states ("other"), and of a window of regular
-buckets, contiguous in the global numbering: bucket b's values, followed by those of the
-later buckets some bucket not yet solved reaches. The window lives in a ring of as many
-rows as the largest window, state g at row g mod its size: nothing is copied as it
-slides.
+Values kept: those of the sinks and late states ("other"), and of the regular states that
+are live: solved, and pointed at by a bucket not yet solved (each bucket's "dies", recorded
+while exploring, are the states it is the lowest predecessor bucket of; they are dropped
+once it is solved). Their values live in rows handed out and taken back through a stack
+of free rows, as many rows as the most states live at once (live_rows), not a whole
+window of buckets. Which row holds regular state g is kept for a window of buckets (from
+the bucket being solved to the last one a bucket not yet solved reaches; window_rows), one
+integer per state, in a ring: state g at entry g mod its size.
 """
 
 from __future__ import annotations
@@ -25,6 +28,7 @@ from afsmc.verify.engines.acyclic import F64, I64, Query, Sense
 from afsmc.verify.stream.layers import Streamed
 
 LATE = np.iinfo(np.int64).min  # a branch into a late state, before it is numbered
+Rows = npt.NDArray[np.signedinteger[Any]]  # rows of the live values (int32 or int64)
 
 
 @dataclass
@@ -51,11 +55,11 @@ def _offsets(counts: npt.NDArray[np.int32]) -> I64:
 
 
 def load(st: Streamed, name: str, first: int, own_other: int | None, late_sorted: I64,
-         late_order: I64, rewards: int, labels: int, ring: int = 1) -> Part:
-    """The file `name`; its regular successors as rows of the ring of `ring` rows (its
-    own states from `first`, its own first number), or, for the sinks and the late states
-    (`own_other`: their first other number), its own states as rows of the other values
-    from there."""
+         late_order: I64, rewards: int, labels: int, slot: Rows | None = None) -> Part:
+    """The file `name`; its regular successors as the rows `slot[g mod len(slot)]` of
+    the live values (its own states from `first`, its own first number), or, for the
+    sinks and the late states (`own_other`: their first other number), its own states as
+    rows of the other values from there."""
     s = st.scratch
     states = _offsets(s.load(name, "nchoice"))
     choices = _offsets(s.load(name, "nbranch"))
@@ -66,7 +70,9 @@ def load(st: Streamed, name: str, first: int, own_other: int | None, late_sorted
     assert not (target == LATE).any()
     prob = st.table[s.load(name, "prob")]
     regular = target >= 0
-    reg = np.where(regular, target % ring, -1)
+    # the sinks' and late states' successors are all "other"
+    reg = np.full(len(target), -1, np.int64) if slot is None else \
+        np.where(regular, slot[target % len(slot)], -1)
     oth = np.where(regular, -1, -1 - target)
     own = np.where(regular, target - first, -1) if own_other is None else \
         np.where(regular, -1, oth - own_other)
@@ -127,7 +133,7 @@ class Group:
     target: list[int]
 
 
-def put(out: F64, at: int, values: F64) -> None:
+def put(out: npt.NDArray[Any], at: int, values: npt.NDArray[Any]) -> None:
     """`values` into the rows from `at` of `out`, as a ring (past its end, from row 0)."""
     size = len(out)
     lo = at % size
@@ -140,8 +146,9 @@ def put(out: F64, at: int, values: F64) -> None:
 
 
 def solve_part(part: Part, groups: list[Group], reg: list[F64] | None, other: list[F64],
-               out: list[F64], at: int, count: bool = False) -> int:
-    """Solve the part's layers into `out[g]`, its state s at row `at + s` (as a ring);
+               out: list[F64], at: int | Rows, count: bool = False) -> int:
+    """Solve the part's layers into `out[g]`, its state s at row `at + s` (as a ring),
+    or at row `at[s]` where `at` is an array of rows;
     with `count`, the distinct (state, successor) pairs of its states (the uniform
     DTMC's transitions), else 0."""
     pairs = 0
@@ -159,7 +166,11 @@ def solve_part(part: Part, groups: list[Group], reg: list[F64] | None, other: li
                 per_choice += np.stack([part.rewards[r][c0:c1] for r in grp.reward], axis=1)
             on = np.stack([part.labels[t][lo:hi] for t in grp.target], axis=1)
             stay = None if part.stay is None else part.stay[c0:c1]
-            put(out[g], at + lo, acyclic.settle(per_choice, stay, offsets, on, grp.sense))
+            values = acyclic.settle(per_choice, stay, offsets, on, grp.sense)
+            if isinstance(at, int):
+                put(out[g], at + lo, values)
+            else:
+                out[g][at[lo:hi]] = values
         if count:
             pairs += _pairs(part, lo, hi)
     return pairs
@@ -203,7 +214,19 @@ def window_rows(st: Streamed) -> int:
     return max(1, max((k - s for k, s in zip(keep, st.start, strict=True)), default=1))
 
 
-# The most bytes the window's values of one sweep take: above it, the queries (P, R, the
+def live_rows(st: Streamed) -> int:
+    """The most regular states live at once in the pass: solving bucket i, its own and
+    those of later buckets that bucket i or an earlier one points at (less the dies of
+    the buckets solved before it)."""
+    alive = most = 0
+    for size, dies in zip(reversed(st.size), reversed(st.dies), strict=True):
+        alive += size
+        most = max(most, alive)
+        alive -= dies
+    return max(1, most)
+
+
+# The most bytes the live values of one sweep take: above it, the queries (P, R, the
 # uniform DTMC's means) are solved in several sweeps, each reading the files again,
 # rather than all side by side.
 SWEEP_BYTES = 1 << 28
@@ -230,7 +253,7 @@ def run(st: Streamed, queries: list[Query], reward_names: list[str], targets: in
         progress: Progress | None = None) -> tuple[dict[str, float], int]:
     """Each query's value in the initial state, and the uniform DTMC's transitions (0
     unless a query is a mean): as few sweeps over the files as SWEEP_BYTES allows."""
-    rows = window_rows(st)
+    rows = live_rows(st)
     plan = sweeps(queries, reward_names, rows)
     out: dict[str, float] = {}
     pairs = 0
@@ -259,19 +282,30 @@ def _sweep(st: Streamed, groups: list[Group], nr: int, targets: int, rows: int,
     if st.late:
         part = load(st, "late", 0, st.sinks, *late, nr, targets)
         pairs += solve_part(part, groups, None, other, other, st.sinks, count)
-    ring = [np.zeros((rows, len(g.queries))) for g in groups]
+    live = [np.zeros((rows, len(g.queries))) for g in groups]
+    wide = rows >= 2 ** 31
+    slot: Rows = np.zeros(window_rows(st), np.int64 if wide else np.int32)
+    free = np.arange(rows, dtype=slot.dtype)  # a stack of the free rows, top at the end
+    top = rows
     buckets = len(st.start)
     for i in reversed(range(buckets)):
         first, size = st.start[i], st.size[i]
-        for r in ring:  # its rows start at 0, as the in-memory pass's values do
-            put(r, first, np.zeros((size, r.shape[1])))
-        part = load(st, f"b{i}", first, None, *late, nr, targets, rows)
-        pairs += solve_part(part, groups, ring, other, ring, first, count)
+        mine = free[top - size:top].copy()
+        top -= size
+        put(slot, first, mine)
+        for r in live:  # its rows start at 0, as the in-memory pass's values do
+            r[mine] = 0.0
+        part = load(st, f"b{i}", first, None, *late, nr, targets, slot)
+        pairs += solve_part(part, groups, live, other, live, mine, count)
         del part
+        dead = slot[(st.scratch.load(f"b{i}", "dies").astype(np.int64) + first) % len(slot)]
+        free[top:top + len(dead)] = dead
+        top += len(dead)
         if progress is not None:
             progress(buckets - i, buckets, left)
     out: dict[str, float] = {}
     for g, grp in enumerate(groups):
-        row = ring[g][st.initial % rows] if st.initial >= 0 else other[g][-1 - st.initial]
+        row = live[g][slot[st.initial % len(slot)]] if st.initial >= 0 else \
+            other[g][-1 - st.initial]
         out |= {q.name: float(x) for q, x in zip(grp.queries, row, strict=True)}
     return out, pairs
