@@ -27,6 +27,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
+import numpy.typing as npt
 
 from afsmc.verify.engines import acyclic, explore_graph
 from afsmc.verify.engines.acyclic import I64
@@ -223,9 +224,32 @@ def _finish(s: Scratch, out: Streamed, w: _Waiting, window: dict[int, tuple[I64,
     first = out.start[w.index]
     # offsets from the bucket's first number: int32 while its reach spans fewer states
     wide = bool(len(dies)) and int(dies[-1]) - first >= 2 ** 31
-    s.save(f"b{w.index}", target=target, dies=(dies - first).astype(
+    s.save(f"b{w.index}", target=narrow(target, first), dies=(dies - first).astype(
         np.int64 if wide else np.int32),
            **({"late_at": at, "late_key": keys[at]} if at.size else {}))
+
+
+def narrow(target: I64, first: int) -> npt.NDArray[np.signedinteger[Any]]:
+    """A bucket's resolved successors as stored: a regular one as its offset from the
+    bucket's `first` number (successors lie in the bucket or a few later), the others
+    as they are; int32 where every one fits, a branch into a late state as the type's
+    least value (see widen)."""
+    late = target == np.iinfo(np.int64).min
+    out = np.where(target >= 0, target - first, target)
+    kept = out[~late]
+    small = not kept.size or (int(kept.min()) > -2 ** 31 and int(kept.max()) < 2 ** 31)
+    out = out.astype(np.int32 if small else np.int64)
+    out[late] = np.iinfo(out.dtype).min
+    return out
+
+
+def widen(stored: npt.NDArray[np.signedinteger[Any]], first: int) -> I64:
+    """The successors `narrow` stored, as numbers again (a late one as int64's least)."""
+    out = stored.astype(np.int64)
+    out[stored == np.iinfo(stored.dtype).min] = np.iinfo(np.int64).min
+    regular = out >= 0
+    out[regular] += first
+    return out
 
 
 def _dies(target: I64, w: _Waiting, seen: dict[int, tuple[int, acyclic.Bools]]) -> I64:

@@ -25,7 +25,7 @@ import numpy.typing as npt
 
 from afsmc.verify.engines import acyclic, explore_graph
 from afsmc.verify.engines.acyclic import F64, I64, Query, Sense
-from afsmc.verify.stream.layers import Streamed
+from afsmc.verify.stream.layers import Streamed, widen
 
 LATE = np.iinfo(np.int64).min  # a branch into a late state, before it is numbered
 Rows = npt.NDArray[np.signedinteger[Any]]  # rows of the live values (int32 or int64)
@@ -63,7 +63,7 @@ def load(st: Streamed, name: str, first: int, own_other: int | None, late_sorted
     s = st.scratch
     states = _offsets(s.load(name, "nchoice"))
     choices = _offsets(s.load(name, "nbranch"))
-    target = s.load(name, "target")
+    target = widen(s.load(name, "target"), first)
     if (s.root / f"{name}.late_at.npy").exists():
         at, keys = s.load(name, "late_at"), s.load(name, "late_key")
         target[at] = -1 - (st.sinks + late_order[np.searchsorted(late_sorted, keys)])

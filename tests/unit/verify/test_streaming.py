@@ -10,6 +10,7 @@ import errno
 from pathlib import Path
 from typing import Any
 
+import numpy as np
 import pytest
 
 from afsmc.backends.prism import property_variants
@@ -96,7 +97,8 @@ def test_the_pass_keeps_only_the_live_states_a_brute_force_count_says(tmp_path: 
         st = layers.explore(c, scratch.Scratch(where))
         lowest: dict[int, int] = {}  # regular state -> its lowest predecessor bucket
         for i in range(len(st.start)):
-            for g in st.scratch.load(f"b{i}", "target").tolist():
+            stored = st.scratch.load(f"b{i}", "target")
+            for g in layers.widen(stored, st.start[i]).tolist():
                 if g >= 0:
                     lowest[g] = min(lowest.get(g, i), i)
         got, _ = sweep.run(st, p.queries, c.reward_names, len(p.targets))
@@ -110,6 +112,17 @@ def test_the_pass_keeps_only_the_live_states_a_brute_force_count_says(tmp_path: 
     want = acyclic.solve_many(explore_graph.explore(c).arrays, p.queries)
     for q in p.queries:
         assert got[q.name] == pytest.approx(want[q.name], rel=1e-12, abs=1e-12), q.name
+
+
+def test_successors_are_stored_as_int32_offsets_where_they_fit() -> None:
+    late = np.iinfo(np.int64).min  # a branch into a late state, numbered later
+    small = np.array([5, 7, -1, -3, late, 6], np.int64)
+    stored = layers.narrow(small, 5)
+    assert stored.dtype == np.int32 and stored.tolist()[:4] == [0, 2, -1, -3]
+    assert layers.widen(stored, 5).tolist() == small.tolist()
+    big = np.array([5, 5 + 2 ** 31, -1, late], np.int64)  # too far for int32: int64 kept
+    assert layers.narrow(big, 5).dtype == np.int64
+    assert layers.widen(layers.narrow(big, 5), 5).tolist() == big.tolist()
 
 
 def test_a_model_the_explorer_gives_up_on_is_given_up_with_the_scratch_too(
