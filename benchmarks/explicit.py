@@ -100,7 +100,7 @@ def run_one(instance: str, workload: str, path: str, extra: list[str],
             *PATHS[path], *extra]
     out, row = timed_row(args, timeout, {"instance": instance, "workload": workload,
                                          "path": path})
-    if out is not None:
+    if out is not None and "model" in out:  # (an interrupted run's JSON has no model)
         m, tm = out["model"], out["timings"]
         assert isinstance(m, dict) and isinstance(tm, dict)
         row |= {"states": m.get("states"), "transitions": m.get("transitions"),

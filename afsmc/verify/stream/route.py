@@ -38,7 +38,8 @@ def answer(c: Compiled, p: explicit.Plan, means: list[str], where: str, what: st
         notify("built", (st.states, st.transitions, built))
         notify("solver", f"the {what} explored by afsmc into the scratch directory "
                f"({mb(s.written)} of layers, {len(st.start):,} buckets), acyclic but for "
-               "self-loops: every query by a backward pass reading the layers back")
+               "self-loops: every query by a backward pass reading the layers back, "
+               f"keeping the values of at most {sweep.live_rows(st):,} states at once")
         mine = [q for q in p.queries if q.opt != "mean"]
         notify("phase", "check " + ", ".join(q.name for q in mine))
         t0 = time.perf_counter()
