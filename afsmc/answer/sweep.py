@@ -61,6 +61,10 @@ class _Sizes(Answer):
     transitions: int | None = Field(description=TRANSITIONS)
     uniform_states: int | None = Field(description=UNIFORM_STATES)
     uniform_transitions: int | None = Field(description=UNIFORM_TRANSITIONS)
+    symmetry: str | Absent = Field(
+        None, description="the symmetry reduction of alike agents at this point, in "
+                          "verify's words: applied, or why not; absent where the mission "
+                          "has no alike agents")
 
 
 class _PointHead(Answer):

@@ -41,6 +41,8 @@ def to_json(res: SweepResult) -> dict[str, object]:
             row.update(states=pt.states, transitions=pt.transitions,
                        uniform_states=pt.uniform_states,
                        uniform_transitions=pt.uniform_transitions)
+            if pt.symmetry is not None:
+                row["symmetry"] = pt.symmetry
             rows.append(row)
     out: dict[str, object] = {
         "file": res.path, "variables": list(res.grid), "kind": res.kind, "type": res.type,

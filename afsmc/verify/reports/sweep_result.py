@@ -145,6 +145,7 @@ class SweepResult:
                 "transitions": pt.transitions,
                 "uniform_states": pt.uniform_states,
                 "uniform_transitions": pt.uniform_transitions,
+                **({} if pt.symmetry is None else {"symmetry": pt.symmetry}),
                 # no check times: a sweep's output is the same however it was split
                 # a property that is not a requirement: no threshold/verdict/error keys
                 "properties": [{k: v for k, v in r.to_json().items()

@@ -153,6 +153,13 @@ def test_the_python_api_and_the_sweep_take_the_same_decision(whole: VerifyResult
     swept = sweep_file(FLEET, "K", [2], properties="shift", jobs=1).raw
     assert [p.states for p in swept.points] == [reduced]
     assert [p.symmetry for p in swept.points] == [symmetry_words(res.raw.symmetry)]
+    # the sweep's --json carries it at each point, as its schema publishes
+    from tests.e2e.test_json_schemas import validate
+
+    cli = run_cli("sweep", FLEET, "--const", "K=2:2", "-p", "shift", "--json")
+    assert cli.code == 0, cli.err
+    points = validate("sweep", cli.out)["points"]
+    assert [p["symmetry"] for p in points] == [symmetry_words(res.raw.symmetry)]
 
 
 def test_compile_applies_it_where_every_property_is_symmetric_and_says_so(
