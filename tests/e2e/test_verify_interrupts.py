@@ -56,6 +56,22 @@ def test_ctrl_c_with_json_still_prints_one_json_object(monkeypatch: pytest.Monke
         ("success", sparse.property("success").min, None), prop
 
 
+def _interrupt(proc: subprocess.Popen[str], how: str) -> tuple[str, str]:
+    """Ctrl-C (SIGINT to the whole process group, as a terminal sends it) or `kill PID`
+    (SIGTERM to afsmc alone); its output, once it exited as a shell reports it (130 or
+    128 + 15)."""
+    import os
+    import signal
+
+    if how == "ctrl-c":
+        os.killpg(proc.pid, signal.SIGINT)
+    else:
+        os.kill(proc.pid, signal.SIGTERM)
+    out, err = proc.communicate(timeout=60)
+    assert proc.returncode == (130 if how == "ctrl-c" else 143), err
+    return out, err
+
+
 def _group_ends(pgid: int, seconds: float = 10.0) -> None:
     """Wait for every process of the group to end; fail with their list if they do not."""
     import os
@@ -106,16 +122,9 @@ def test_ctrl_c_and_sigterm_stop_the_watched_storm_process(tmp_path: Path, how: 
     # `kill PID` (a CI timeout, a batch system): SIGTERM to afsmc alone, exit 128 + 15 as a
     # shell reports it. Either while the guard's child builds: one JSON object, no
     # traceback and no Storm process left behind.
-    import os
-    import signal
 
     proc = _verify_building(tmp_path)
-    if how == "ctrl-c":
-        os.killpg(proc.pid, signal.SIGINT)
-    else:
-        os.kill(proc.pid, signal.SIGTERM)
-    out, err = proc.communicate(timeout=60)
-    assert proc.returncode == (130 if how == "ctrl-c" else 143), err
+    out, err = _interrupt(proc, how)
     assert json.loads(out)["interrupted"] is True
     said = "afsmc: interrupted" if how == "ctrl-c" else "afsmc: terminated"
     assert "Traceback" not in err and said in err
@@ -211,8 +220,6 @@ def test_sigterm_after_a_failed_query_reports_it_as_an_error_in_json(tmp_path: P
 def test_ctrl_c_and_sigterm_remove_the_scratch_directory(tmp_path: Path, how: str) -> None:
     # `verify --scratch DIR` while its watched child writes the layers there: stopped, it
     # leaves DIR as it was (its own subdirectory removed after the child is gone).
-    import os
-    import signal
     import sys
 
     scratch = tmp_path / "scratch"
@@ -227,12 +234,7 @@ def test_ctrl_c_and_sigterm_remove_the_scratch_directory(tmp_path: Path, how: st
         if "on the scratch disk" in line:
             break
     assert any(scratch.iterdir()), "no scratch directory while exploring"
-    if how == "ctrl-c":
-        os.killpg(proc.pid, signal.SIGINT)
-    else:
-        os.kill(proc.pid, signal.SIGTERM)
-    out, err = proc.communicate(timeout=60)
-    assert proc.returncode == (130 if how == "ctrl-c" else 143), err
+    out, err = _interrupt(proc, how)
     assert json.loads(out)["interrupted"] is True and "Traceback" not in err
     _group_ends(proc.pid)
     assert list(scratch.iterdir()) == []

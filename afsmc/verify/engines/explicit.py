@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import time
 from collections.abc import Callable
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 from typing import Any, Literal
 
 import numpy as np
@@ -44,6 +44,8 @@ class Plan:
     targets: list[E.Expr]
     rewards: list[str]
     left: list[str]  # the job's queries it does not answer
+    # a target's text -> its index in `targets` (queries of the same target share it)
+    keys: dict[str, int] = field(default_factory=dict)
 
 
 def plan(low: Lowered, names: tuple[str, ...]) -> Plan:
@@ -78,9 +80,8 @@ def _add(p: Plan, name: str, prop: ir.Property,
     if target is None:
         return False
     key = repr(target)
-    index = next((i for i, t in enumerate(p.targets) if repr(t) == key), None)
-    if index is None:
-        index = len(p.targets)
+    index = p.keys.setdefault(key, len(p.targets))
+    if index == len(p.targets):
         p.targets.append(target)
     reward = (prop.reward or "") if prop.kind == "R" else ""
     if prop.kind == "R" and reward not in p.rewards:

@@ -39,7 +39,7 @@ import math
 import multiprocessing
 import os
 import re
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass, field
 from typing import Any, Literal
@@ -261,9 +261,6 @@ def refine(low: Lowered, src: Source, formulas: tuple[str, str], built: Parametr
            max_rounds: int = 12, progress: Any = None) -> tuple[list[Region], int]:
     """The regions of `box`, refined round by round (see the module docstring)."""
     check_box(low, built, box)
-    done: list[Region] = []
-    todo: list[Bounds] = [dict(box)]
-    rounds = 0
     pool = None
     client = None
     if dask is not None:
@@ -275,26 +272,42 @@ def refine(low: Lowered, src: Source, formulas: tuple[str, str], built: Parametr
         ctx = multiprocessing.get_context("spawn")  # safe even if the caller has threads
         pool = ProcessPoolExecutor(jobs, mp_context=ctx, initializer=_init,
                                    initargs=(src, formulas, os.getpid()))
+    say = None if progress is None else (
+        lambda rounds, todo, decided: progress(f"round {rounds}: {len(todo)} boxes checked, "
+                                               f"{decided:.1%} of the volume decided"))
     try:
-        while todo and rounds < max_rounds:
-            rounds += 1
-            verdicts = _round(todo, src, formulas, built, pool, client, jobs)
-            unknown = [b for b, v in zip(todo, verdicts, strict=True) if v == "unknown"]
-            done += [Region(b, v) for b, v in zip(todo, verdicts, strict=True)
-                     if v != "unknown"]
-            decided = sum(r.volume(box) for r in done)
-            if progress is not None:
-                progress(f"round {rounds}: {len(todo)} boxes checked, "
-                         f"{decided:.1%} of the volume decided")
-            if decided >= coverage or not unknown:
-                return done + [Region(b, "unknown") for b in unknown], rounds
-            todo = [h for b in unknown for h in split(b, box)]
-        return done + [Region(b, "unknown") for b in todo], rounds
+        return _rounds(box, lambda todo: _round(todo, src, formulas, built, pool, client, jobs),
+                       coverage, max_rounds, say)
     finally:
         if pool is not None:
             pool.shutdown(cancel_futures=True)
         if client is not None and client is not dask:
             client.close()
+
+
+Said = Callable[[int, list[Bounds], float], None]  # a round's progress line
+
+
+def _rounds(box: Bounds, decide: Callable[[list[Bounds]], list[str]], coverage: float,
+            max_rounds: int, say: Said | None) -> tuple[list[Region], int]:
+    """The rounds of both routes: each decides the boxes left, the decided ones are kept,
+    and the undecided ones are split in two for the next round, until `coverage` of the
+    volume is decided, nothing is left, or `max_rounds`; the regions and the rounds."""
+    done: list[Region] = []
+    todo: list[Bounds] = [dict(box)]
+    rounds = 0
+    while todo and rounds < max_rounds:
+        rounds += 1
+        verdicts = decide(todo)
+        unknown = [b for b, v in zip(todo, verdicts, strict=True) if v == "unknown"]
+        done += [Region(b, v) for b, v in zip(todo, verdicts, strict=True) if v != "unknown"]
+        decided = sum(r.volume(box) for r in done)
+        if say is not None:
+            say(rounds, todo, decided)
+        if decided >= coverage or not unknown:
+            return done + [Region(b, "unknown") for b in unknown], rounds
+        todo = [h for b in unknown for h in split(b, box)]
+    return done + [Region(b, "unknown") for b in todo], rounds
 
 
 def _round(todo: list[Bounds], src: Source, formulas: tuple[str, str], built: Parametric,
@@ -332,22 +345,11 @@ def refine_lifted(lifted: Lifted, q: Query, req: Requirement, box: Bounds, *,
     where the value is proven monotone over the box or one containing it, else the
     box's lifted bounds, with the same margin)."""
     decider = Decider(lifted, q, req.cmp, req.bound, margin(req))
-    done: list[Region] = []
-    todo: list[Bounds] = [dict(box)]
-    rounds = 0
-    while todo and rounds < max_rounds:
-        rounds += 1
-        verdicts = decider.decide(todo)
-        unknown = [b for b, v in zip(todo, verdicts, strict=True) if v == "unknown"]
-        done += [Region(b, v) for b, v in zip(todo, verdicts, strict=True) if v != "unknown"]
-        decided = sum(r.volume(box) for r in done)
-        if progress is not None:
-            progress(f"round {rounds}: {len(todo)} box{'es' if len(todo) > 1 else ''} checked "
-                     f"({decider.summary()}), {decided:.1%} of the volume decided")
-        if decided >= coverage or not unknown:
-            return done + [Region(b, "unknown") for b in unknown], rounds
-        todo = [h for b in unknown for h in split(b, box)]
-    return done + [Region(b, "unknown") for b in todo], rounds
+    say = None if progress is None else (
+        lambda rounds, todo, decided: progress(
+            f"round {rounds}: {len(todo)} box{'es' if len(todo) > 1 else ''} checked "
+            f"({decider.summary()}), {decided:.1%} of the volume decided"))
+    return _rounds(box, decider.decide, coverage, max_rounds, say)
 
 
 def point_bounds(values: Mapping[str, float]) -> Bounds:
