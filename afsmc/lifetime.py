@@ -30,8 +30,14 @@ def die_with_parent(parent: int) -> None:
     """Call first thing in a child: the kernel sends it SIGKILL when the process `parent`
     (its parent's pid, passed in) dies, however it dies. Linux only (prctl); elsewhere
     nothing changes. The parent must wait for the child in the thread that started it: the
-    signal follows the death of that thread."""
+    signal follows the death of that thread.
+
+    It also dies at a SIGTERM again. A forked child inherits the CLI's Python handler,
+    which turns SIGTERM into an exception; a pool worker catches that as the failure of
+    its batch and goes on with the next, so the parent's `terminate()` would not stop it."""
     import ctypes
+
+    signal.signal(signal.SIGTERM, signal.SIG_DFL)
 
     try:
         libc = ctypes.CDLL(None, use_errno=True)
