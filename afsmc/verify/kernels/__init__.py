@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import os
 from collections.abc import Callable
-from typing import Any, TypeVar
+from typing import Any, TypeVar, cast
 
 F = TypeVar("F", bound=Callable[..., Any])
 
@@ -38,5 +38,4 @@ def jit(fn: F) -> F:
     import them only once `enabled` said yes."""
     import numba
 
-    out: F = numba.njit(cache=True, nogil=True)(fn)
-    return out
+    return cast(F, numba.njit(cache=True, nogil=True)(fn))
