@@ -79,20 +79,24 @@ class SweepResult:
 
     def columns(self) -> list[str]:
         """The CSV's columns (and `Sweep.to_pandas()`'s): the swept constants, the property,
-        its values, the model's size, `verdict` if a swept property is a requirement, and
-        the values at the interval probabilities' midpoint if a property has them
+        its values, the model's size, `verdict` if a swept property is a requirement, the
+        values at the interval probabilities' midpoint if a property has them
         (`midpoint_min`, ...: the core's reference point, as `Results.to_pandas()` names
-        it)."""
+        it), and `symmetry` for a mission with alike agents: verify's line on the symmetry
+        reduction at that point, applied (its `states` are then the reduced model's) or
+        why not."""
         verdicts, references = self._extras()
         return [*self.swept, "property", *VALUES, "states", "transitions", "uniform_states",
                 "uniform_transitions"] + (["verdict"] if verdicts else []) \
-            + ([f"midpoint_{k}" for k in VALUES] if references else [])
+            + ([f"midpoint_{k}" for k in VALUES] if references else []) \
+            + (["symmetry"] if self._reduced() else [])
 
     def rows(self) -> list[list[Number | str | None]]:
         """The CSV's rows as values, one per point and property: a missing value is None,
         a verdict its kind as the core judged it (`PropertyResult.verdict`), None for a
         requirement without one and for a property that is no requirement."""
         verdicts, references = self._extras()
+        reduced = self._reduced()
         out: list[list[Number | str | None]] = []
         for pt in self.points:
             for r in pt.properties:
@@ -104,8 +108,15 @@ class SweepResult:
                 if references:
                     ref = reference(r) or {}
                     row += [ref.get(k) for k in VALUES]
+                if reduced:
+                    row.append(pt.symmetry)
                 out.append(row)
         return out
+
+    def _reduced(self) -> bool:
+        """Whether a point has a line on the symmetry of alike agents (the CSV then has
+        it as a column)."""
+        return any(pt.symmetry is not None for pt in self.points)
 
     def _extras(self) -> tuple[bool, bool]:
         """Whether the CSV has a verdict column, and reference columns."""

@@ -160,6 +160,18 @@ def test_the_python_api_and_the_sweep_take_the_same_decision(whole: VerifyResult
     assert cli.code == 0, cli.err
     points = validate("sweep", cli.out)["points"]
     assert [p["symmetry"] for p in points] == [symmetry_words(res.raw.symmetry)]
+    # and its CSV, in a column of its own: the states it counts are the reduced model's
+    import csv
+    import io
+
+    table = run_cli("sweep", FLEET, "--const", "K=2:2", "-p", "shift")
+    assert table.code == 0, table.err
+    rows = list(csv.DictReader(io.StringIO(table.out)))
+    assert [(r["states"], r["symmetry"]) for r in rows] == [
+        (str(reduced), symmetry_words(res.raw.symmetry))]
+    whole_csv = run_cli("sweep", FLEET, "--const", "K=2:2", "-p", "shift", "--no-symmetry")
+    assert whole_csv.code == 0, whole_csv.err
+    assert "symmetry" not in whole_csv.out.splitlines()[0].split(",")
 
 
 def test_compile_applies_it_where_every_property_is_symmetric_and_says_so(
