@@ -13,6 +13,7 @@ from afsmc.lsp.documents import SMALL
 from afsmc.lsp.positions import current
 from afsmc.lsp.state import AfsmServer, guarded
 from afsmc.model.expr import FUNCTIONS
+from afsmc.resolve.templates import AGGREGATES
 
 _ITEM_KINDS = {
     "constant": T.CompletionItemKind.Constant, "variable": T.CompletionItemKind.Variable,
@@ -45,6 +46,9 @@ def completions(idx: I.Index | None, before: str) -> list[T.CompletionItem]:
     return (_items(idx.names(I.VALUE))
             + [T.CompletionItem(f, kind=T.CompletionItemKind.Function, detail="function")
                for f in (*sorted(FUNCTIONS), "w")]
+            + [T.CompletionItem(f, kind=T.CompletionItemKind.Function,
+                                detail="over an agent family (agent r[1..N] : T)")
+               for f in sorted(AGGREGATES)]
             + [T.CompletionItem(k, kind=T.CompletionItemKind.Keyword) for k in I.KEYWORDS
                if k not in FUNCTIONS])  # `min`, `max`: once, as the functions they are
 

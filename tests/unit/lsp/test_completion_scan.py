@@ -24,3 +24,19 @@ def test_never_parsed_completion_falls_back_to_a_lexical_scan() -> None:
     idx = I.recover(garbage, len(garbage), "g.afsm")
     assert [d.name for d in idx.names(I.VALUE, ("mode",))] == ["A", "B"]
     assert [d.name for d in idx.names(I.FIELD)] == ["t.x", "t.y"]
+
+
+def test_completion_offers_the_aggregates_over_agent_families() -> None:
+    """`count`, `all` and `any` (expanded over a family's members when names are resolved)
+    are offered where an expression is typed, as functions, like `min` and `max`."""
+    from lsprotocol import types as T
+
+    from afsmc.lsp import index as I
+    from afsmc.lsp.completion import completions
+    from afsmc.syntax.parser import parse
+
+    fleet = (EXAMPLES / "fleet.afsm").read_text()
+    items = completions(I.build(parse(fleet, "fleet.afsm"), fleet), "label done = ")
+    kinds = {i.label: i.kind for i in items}
+    assert {kinds[f] for f in ("count", "all", "any", "min")} == {T.CompletionItemKind.Function}
+    assert [i.label for i in items].count("count") == 1
