@@ -23,6 +23,7 @@ from __future__ import annotations
 
 import argparse
 import os
+import re
 import sys
 import tempfile
 
@@ -40,10 +41,20 @@ def _uav(objects: int, t_limit: int) -> list[str]:
             f"DEADLINE={t_limit}"]
 
 
-# name -> (objects, time limit); scenario2 and scenario1 are the paper's
-SIZES: dict[str, tuple[int, int]] = {
-    "t150": (2, 150), "t300": (2, 300), "t400": (2, 400), "scenario2": (2, 500),
-    "o3-t450": (3, 450), "o3-t600": (3, 600), "o3-t750": (3, 750), "scenario1": (3, 900)}
+# the paper's two scenarios: (objects, time limit)
+SCENARIOS: dict[str, tuple[int, int]] = {"scenario2": (2, 500), "scenario1": (3, 900)}
+
+
+def size_of(name: str) -> tuple[int, int]:
+    """A size's objects and time limit: `scenario1`, `scenario2`, `tT` (2 objects, time
+    limit T) or `oN-tT` (N objects)."""
+    if name in SCENARIOS:
+        return SCENARIOS[name]
+    m = re.fullmatch(r"(?:o(\d+)-)?t(\d+)", name)
+    if m is None:
+        raise SystemExit(f"stream_growth: unknown size {name!r} (scenario1, scenario2, tT "
+                         "or oN-tT)")
+    return int(m.group(1) or 2), int(m.group(2))
 FIELDS = ["measured", "load", "size", "objects", "t_limit", "status", "wall_s", "cpu_s",
           "peak_gb", "states", "transitions", "scratch_mb"]
 # column, name, its unit, and the factor and unit of its slope per transition
@@ -53,7 +64,7 @@ MEASURES = [("wall_s", "wall", "s", 1e6, "µs"), ("cpu_s", "CPU", "s", 1e6, "µs
 
 
 def run_one(size: str, scratch: str, timeout: float) -> dict[str, object]:
-    objects, t_limit = SIZES[size]
+    objects, t_limit = size_of(size)
     args = ["verify", UAV, *_uav(objects, t_limit), "--json", "--scratch", scratch]
     out, row = timed_row(args, timeout, {"size": size, "objects": objects,
                                          "t_limit": t_limit})
@@ -79,8 +90,9 @@ def fit(xs: list[float], ys: list[float]) -> tuple[float, float, float]:
 
 
 def table(rows: list[dict[str, object]]) -> str:
-    """The runs as markdown, then each measure's line against the transitions (over the
-    runs that finished)."""
+    """The runs as markdown, by transitions (those that did not finish last), then each
+    measure's line against the transitions (over the runs that finished)."""
+    rows = sorted(rows, key=lambda r: float(str(r.get("transitions") or "inf")))
     lines = ["| size | objects | T_LIMIT | states | transitions | wall s | CPU s | peak GB | "
              "scratch MB | load |", "|---|---|---|---|---|---|---|---|---|---|"]
     done = [r for r in rows if r.get("status") == "ok" and r.get("transitions")]
@@ -103,7 +115,8 @@ def table(rows: list[dict[str, object]]) -> str:
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--sizes", default="t300,t400,scenario2,o3-t600",
-                    help=f"comma-separated, of {', '.join(SIZES)} (smallest first)")
+                    help="comma-separated, smallest first: scenario1, scenario2, tT (2 "
+                         "objects, time limit T) or oN-tT (N objects)")
     ap.add_argument("--scratch", default=tempfile.gettempdir(),
                     help="the --scratch directory (default: the system temp directory)")
     csv_options(ap, "stream_growth.csv")
