@@ -92,10 +92,11 @@ class _Index:
 
 
 def _save_block(s: Scratch, name: str, blk: Block, target: I64 | None) -> None:
-    """The block as one file; its successors (`target`) too unless None (a bucket's are
-    appended once they are numbered)."""
+    """The block as one file, what the backward pass reads: its successors (`target`) too
+    unless None (a bucket's are appended once they are numbered); not its keys (a
+    bucket's are a file of their own, read only to check the late states)."""
     arrays: dict[str, Any] = {
-        "keys": blk.keys, "nchoice": blk.nchoice, "nbranch": blk.nbranch,
+        "nchoice": blk.nchoice, "nbranch": blk.nbranch,
         "prob": blk.prob, "layers": np.asarray(blk.layers, np.int64),
         **({} if target is None else {"target": target})}
     for i, (at, values) in enumerate(blk.reward):
@@ -154,6 +155,7 @@ def explore(c: Compiled, s: Scratch, notify: Notify | None = None,
         numbers = np.arange(first, first + len(block.keys), dtype=np.int64)
         order = np.argsort(block.keys)
         window[b] = (block.keys[order], numbers[order])
+        s.save(f"keys{index}", keys=window[b][0])  # sorted, for _check_late
         seen[b] = (first, np.zeros(len(block.keys), bool))
         if index == 0:
             out.initial = _resolve(window[b], sinks, initial)[0][0]
@@ -302,10 +304,10 @@ def _late(c: Compiled, s: Scratch, out: Streamed, table: ProbTable, waiting: Fro
 
 def _check_late(c: Compiled, s: Scratch, late: I64, buckets: list[int]) -> None:
     """GiveUp if a late state is also a regular one (reached both before and after its
-    clock went back): each bucket's keys read back from its file."""
+    clock went back): each bucket's sorted keys read back from their file."""
     tb = c.layout.bucket_of(late)
     for b in np.unique(tb).tolist():
         i = int(np.searchsorted(buckets, b))
         if i < len(buckets) and buckets[i] == b and \
-                _found(np.sort(s.load(f"b{i}")["keys"]), late[tb == b]).any():
+                _found(s.load(f"keys{i}")["keys"], late[tb == b]).any():
             raise GiveUp("a state reached both before and after its clock went back")
