@@ -91,7 +91,12 @@ def add_storm_options(p: argparse.ArgumentParser) -> None:
                         "directory of its own in DIR (an existing, writable directory) and "
                         "reads it back for one backward pass: the memory is that of a window "
                         "of layers, not of the whole model; the directory is removed at the end "
-                        "(docs/verification.md#streaming-layers---scratch)")
+                        "(default: in the system temp directory, once the exploration in "
+                        "memory would take more than half the memory available; "
+                        "docs/verification.md#streaming-layers---scratch)")
+    p.add_argument("--no-scratch", action="store_true",
+                   help="keep afsmc's own exploration in memory, never streamed through "
+                        "the disk (not with --scratch)")
     p.add_argument("--no-uniform", dest="uniform", action="store_false",
                    help="for an MDP, skip the uniform resolution of the interval constants")
     p.add_argument("--progress", action="store_true",
@@ -103,7 +108,8 @@ def storm_options(args: argparse.Namespace) -> VerifyOptions:
     return VerifyOptions(via=args.via, engine=args.engine, solver=args.solver,
                          max_states=args.max_states, uniform=args.uniform,
                          reductions=reductions(args), bisimulation=args.bisim,
-                         split=args.split, scratch=args.scratch)
+                         split=args.split, scratch=args.scratch,
+                         no_scratch=args.no_scratch)
 
 
 def progress_printer(args: argparse.Namespace) -> Callable[[str], None] | None:

@@ -152,10 +152,16 @@ def check(model: ir.Model, props: Sequence[ir.Property],
     check sound at `verdicts`' DEFAULT_PRECISION unless either is given; each requirement's
     result then has its `verdict` (afsmc.verify.outcome.verdicts)."""
     o = VerifyOptions.of(options, option_values)
+    if o.scratch is not None and o.no_scratch:
+        raise CompileError([Diagnostic(codes.E419, Severity.ERROR,
+                                       "--scratch and --no-scratch together", None,
+                                       hint="give --scratch DIR to stream through DIR, or "
+                                            "--no-scratch to keep the model in memory")])
     if o.scratch is not None and (why := unusable(o.scratch)) is not None:
         raise CompileError([Diagnostic(codes.E419, Severity.ERROR, f"--scratch: {why}", None,
                                        hint="give an existing directory you can write to, "
-                                            "or leave --scratch out (in memory)")])
+                                            "or leave --scratch out (in memory, or the "
+                                            "system temp directory if the model needs it)")])
     # the symmetry reduction, decided once for every front-end
     o = dataclasses.replace(o, reductions=decide(o.reductions, symmetry_hindrance(o, witness)))
     precision, engine = sound_mode(props, o.precision, o.exact, o.engine)

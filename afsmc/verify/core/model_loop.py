@@ -29,6 +29,7 @@ from afsmc.verify.engines.failures import (
 from afsmc.verify.engines.guard import (
     Interrupted,
     default_max_states,
+    mem_available,
     run_job,
 )
 from afsmc.verify.engines.jobs import make_job, unfair
@@ -54,6 +55,7 @@ from afsmc.verify.plan.queries import (
     unanswered,
     unit_text,
 )
+from afsmc.verify.stream.route import where
 
 
 class ModelLoop:
@@ -229,8 +231,9 @@ class ModelLoop:
                                   precision=run.precision, exact=o.exact)
         if applies(self.low, self.job_engine, o.solver,
                    o.bisimulation or o.exact or run.precision is not None):
+            put = where(o.scratch, o.no_scratch, self.run.bound, mem_available())
             job = dataclasses.replace(job, explicit=self.low, uniform=self.uniform_beside(),
-                                      scratch=o.scratch)
+                                      scratch=put.directory, scratch_auto=put.auto)
         # no scheduler for a step-bounded query, nor for the rounding's kappa (conditioning)
         ex = request(self.low, o.strategy, run.witness, mine, self.run.asked_as,
                      skip={n for p, n in unit if stepped(p) or p.name == conditioning.STEPS})

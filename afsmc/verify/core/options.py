@@ -38,7 +38,9 @@ class VerifyOptions:
     (query name or None for the only property, K); `witness_dir`, `witness_target`: whose
     strategy the paths follow ("min"/"max"), and into which target; `scratch`: a directory
     whose disk holds afsmc's own exploration, layer by layer, so that its memory is that of
-    a window of layers (afsmc.verify.stream; None: in memory).
+    a window of layers (afsmc.verify.stream; None: the system temp directory, taken only
+    once the in-memory exploration would not fit comfortably); `no_scratch`: in memory
+    always (not with `scratch`, E419).
 
     A misspelt `via`, `engine` or `solver` is a ValueError when the options are made."""
 
@@ -59,6 +61,7 @@ class VerifyOptions:
     witness_dir: str | None = None
     witness_target: str | None = None
     scratch: str | None = None
+    no_scratch: bool = False
 
     def __post_init__(self) -> None:
         check_choice("via", self.via, Via)

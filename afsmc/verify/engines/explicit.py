@@ -13,6 +13,7 @@ from __future__ import annotations
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field, replace
+from pathlib import Path
 from typing import Any, Literal
 
 import numpy as np
@@ -112,6 +113,7 @@ class Answer:
     extracted: Extracted | None = None
     uniform: Uniform | None = None  # the uniform DTMC's values, if asked
     scratch: int | None = None  # bytes written to the scratch directory (afsmc.verify.stream)
+    scratch_why: str = ""  # why it was streamed: "--scratch", or the memory it would need
 
 
 @dataclass
@@ -134,14 +136,15 @@ class TooMany(Exception):
 def answer(low: Lowered, names: tuple[str, ...], what: str, notify: Notify,
            max_states: int | None = None, max_bytes: int | None = None,
            extract: Extract | None = None, uniform: tuple[str, ...] = (),
-           scratch: str | None = None) -> Answer | None:
+           scratch: str | None = None, scratch_auto: bool = False) -> Answer | None:
     """The queries' values by exploration and a backward pass, and what `extract` asks;
     None if the explorer gives up or the pass does not give what `extract` asks (Storm
     then answers them all). `uniform`: properties whose values in the uniform DTMC the
     same exploration gives (Answer.uniform), those it can. `scratch`: a directory of the
     job's own, to explore through layer by layer (afsmc.verify.stream; not for a
-    strategy yet, which is explored in memory). Raises TooMany past `max_states`, and
-    ScratchFull when the scratch disk fills."""
+    strategy yet, which is explored in memory); with `scratch_auto`, only once the
+    in-memory exploration would not fit comfortably (afsmc.verify.stream.route.Watch).
+    Raises TooMany past `max_states`, and ScratchFull when the scratch disk fills."""
     p = plan(low, names)
     if not p.queries or (extract is not None and not strategy_arrays.covers(extract, p.queries)):
         return None
@@ -155,16 +158,16 @@ def answer(low: Lowered, names: tuple[str, ...], what: str, notify: Notify,
                f"{data[0]}; {time.perf_counter() - started:.0f} s)")
 
     if scratch is not None and extract is not None:
-        notify("solver", "strategies and witnesses are not streamed yet: the "
-               f"{what} is explored in memory, not through --scratch")
+        if not scratch_auto:
+            notify("solver", "strategies and witnesses are not streamed yet: the "
+                   f"{what} is explored in memory, not through --scratch")
         scratch = None
     try:
         compiled = explore.compile_model(low, p.targets, p.rewards, extract is not None)
-        if scratch is not None:
-            from afsmc.verify.stream import route
-
-            return route.answer(compiled, p, means, scratch, what, notify, max_states)
-        found = explore_graph.explore(compiled, explored, max_states, max_bytes)
+        found = _explored(compiled, p, means, what, notify, explored, max_states, max_bytes,
+                          scratch, scratch_auto)
+        if isinstance(found, Answer):
+            return found
     except (explore.GiveUp, SimError) as exc:
         notify("solver", f"afsmc's own exploration does not apply to the {what} ({exc}): "
                "Storm builds it")
@@ -192,6 +195,34 @@ def answer(low: Lowered, names: tuple[str, ...], what: str, notify: Notify,
                   found.transitions, built, p.left, out,
                   _uniform(found.arrays, [q for q in p.queries if q.opt == "mean"], means,
                            notify))
+
+
+def _explored(compiled: explore.Compiled, p: Plan, means: list[str], what: str,
+              notify: Notify, explored: Notify, max_states: int | None,
+              max_bytes: int | None, scratch: str | None, scratch_auto: bool
+              ) -> explore_graph.Explored | Answer:
+    """The model explored in memory, or the queries' answer through `scratch`: at once,
+    or (`scratch_auto`) once the in-memory exploration would not fit comfortably, the
+    exploration then begun again layer by layer."""
+    if scratch is None:
+        return explore_graph.explore(compiled, explored, max_states, max_bytes)
+    from afsmc.verify.engines.guard import mem_available
+    from afsmc.verify.stream import route
+
+    if not scratch_auto:
+        return route.answer(compiled, p, means, scratch, what, notify, max_states)
+    why = ""
+    try:
+        return explore_graph.explore(compiled, route.Watch(mem_available(), explored),
+                                     max_states, max_bytes)
+    except route.TooBig as exc:
+        why = exc.why  # (the partial exploration is freed with the exception)
+    acyclic.trim_heap()
+    notify("solver", f"the {what}'s exploration {why}: explored again layer by layer "
+           f"through the scratch directory in {Path(scratch).parent} (--no-scratch keeps "
+           "it in memory; --scratch DIR picks the directory)")
+    return route.answer(compiled, p, means, scratch, what, notify, max_states,
+                        f"by default: {why}")
 
 
 def _uniform(a: acyclic.Arrays, queries: list[acyclic.Query], names: list[str],
@@ -246,7 +277,7 @@ def fill(job: Any, res: Any, notify: Notify, too_big: Callable[[Any, int, bool],
 
     try:
         ans = answer(job.explicit, job.names, job.what, notify, job.max_states,
-                     job.memory_budget, job.extract, job.uniform, job.scratch)
+                     job.memory_budget, job.extract, job.uniform, job.scratch, job.scratch_auto)
     except TooMany as exc:
         res.states, res.failure = exc.states, too_big(job, exc.states, exc.partial)
         return None
@@ -261,7 +292,7 @@ def fill(job: Any, res: Any, notify: Notify, too_big: Callable[[Any, int, bool],
                          "exact backward pass answers its reachability queries"
                          + ("" if ans.scratch is None else
                             f"; explored layer by layer through {ans.scratch / 1e6:,.1f} MB "
-                            "of scratch disk"))
+                            f"of scratch disk ({ans.scratch_why})"))
     res.build_time, res.check_time = ans.explore_time, sum(ans.seconds.values())
     res.values, res.seconds = dict(ans.values), dict(ans.seconds)
     res.extracted = ans.extracted

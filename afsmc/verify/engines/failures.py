@@ -104,7 +104,7 @@ def failure_diagnostic(f: StormFailure, model: ir.Model, low: Lowered,
                     + ", or check a smaller instance with --const")
     if f.stage == "scratch":
         return diag(codes.E419, first, None, "free some space on that disk, give --scratch a "
-                    "directory on a larger one, or leave --scratch out (in memory)")
+                    "directory on a larger one, or give --no-scratch (in memory)")
     if f.stage == "memory":
         if job.engine in ("hybrid", "dd"):
             return diag(codes.E406, first, None, "this one check needs more memory than the "

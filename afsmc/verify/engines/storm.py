@@ -77,8 +77,11 @@ class Job:
     # schedulers and most probable paths to extract (sparse engine only; strategy_storm)
     extract: Extract | None = None
     # a directory of its own for afsmc's own exploration layer by layer (guard.run_job makes
-    # it under the user's --scratch DIR and removes it); None: in memory
+    # it under the user's --scratch DIR, or the system temp directory, and removes it);
+    # None: in memory. `scratch_auto`: taken only once the in-memory exploration would not
+    # fit comfortably (afsmc.verify.stream.route.where)
     scratch: str | None = None
+    scratch_auto: bool = False
     # the lowered model, for afsmc's own exploration and backward pass first
     # (afsmc.verify.engines.explicit); None: Storm only
     explicit: Any = None

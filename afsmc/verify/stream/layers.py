@@ -5,8 +5,9 @@ The clock only grows: a transition from bucket b lands in a bucket from b to the
 bucket b's states reach (its "reach", recorded while exploring), in the absorbing states
 split off every bucket (the sinks), or in the late states (the clock set back). So a
 bucket's successors are resolved into state numbers once every bucket up to its reach is
-explored: each bucket is written at once with its successors' keys, which are read back
-and replaced by numbers then, so that only the sorted keys of the buckets not yet
+explored: each bucket is written at once with its successors' keys in a file of their own,
+which is read back then, its numbers appended to the bucket's file and the keys' file
+removed, so that only the sorted keys of the buckets not yet
 resolved (and of those they reach) stay in memory. Numbers: the regular
 states in exploration order, a bucket's states in its layered order (global, from 0); the
 sinks and then the late states in a space of their own ("other", stored as -1 - o). A
@@ -90,10 +91,14 @@ class _Index:
             todo[idx[hit]] = False
 
 
-def _save_block(s: Scratch, name: str, blk: Block, target: I64, extra: dict[str, Any]) -> None:
+def _save_block(s: Scratch, name: str, blk: Block, target: I64 | None) -> None:
+    """The block as one file, what the backward pass reads: its successors (`target`) too
+    unless None (a bucket's are appended once they are numbered); not its keys (a
+    bucket's are a file of their own, read only to check the late states)."""
     arrays: dict[str, Any] = {
-        "keys": blk.keys, "nchoice": blk.nchoice, "nbranch": blk.nbranch, "target": target,
-        "prob": blk.prob, "layers": np.asarray(blk.layers, np.int64), **extra}
+        "nchoice": blk.nchoice, "nbranch": blk.nbranch,
+        "prob": blk.prob, "layers": np.asarray(blk.layers, np.int64),
+        **({} if target is None else {"target": target})}
     for i, (at, values) in enumerate(blk.reward):
         arrays[f"reward{i}_at"], arrays[f"reward{i}_v"] = at, values
     for i, lab in enumerate(blk.labels):
@@ -146,10 +151,11 @@ def explore(c: Compiled, s: Scratch, notify: Notify | None = None,
         out.sinks += len(sink.keys)
         _save_block(s, f"s{index}", sink, -1 - sink_numbers[
             acyclic._state_of_branches(explore_graph._offsets(sink.nchoice),
-                                       explore_graph._offsets(sink.nbranch))], {})
+                                       explore_graph._offsets(sink.nbranch))])
         numbers = np.arange(first, first + len(block.keys), dtype=np.int64)
         order = np.argsort(block.keys)
         window[b] = (block.keys[order], numbers[order])
+        s.save(f"keys{index}", keys=window[b][0])  # sorted, for _check_late
         seen[b] = (first, np.zeros(len(block.keys), bool))
         if index == 0:
             out.initial = _resolve(window[b], sinks, initial)[0][0]
@@ -159,7 +165,8 @@ def explore(c: Compiled, s: Scratch, notify: Notify | None = None,
         unresolved.append(_Waiting(index, b, max(reach, b)))
         out.choices += len(block.nbranch) + len(sink.nbranch)
         out.transitions += len(block.target) + len(sink.target)
-        _save_block(s, f"b{index}", block, block.target, {})
+        _save_block(s, f"b{index}", block, None)
+        s.save(f"k{index}", target=block.target)  # its successors' keys, until numbered
         count += len(known)
         del block, sink, known, order, numbers, sink_numbers
         if max_states is not None and count > max_states:
@@ -212,7 +219,7 @@ def _finish(s: Scratch, out: Streamed, w: _Waiting, window: dict[int, tuple[I64,
     # a bucket's keys are those whose high bits are the bucket: the window's runs, end
     # to end in bucket order, are sorted
     joined = (np.concatenate([k for k, _ in span]), np.concatenate([n for _, n in span]))
-    keys = s.load(f"b{w.index}", "target")
+    keys = s.load(f"k{w.index}")["target"]
     target, late = _resolve(joined, sinks, keys)
     at = np.flatnonzero(late)
     if at.size and (c.layout.bucket_of(keys[at]) >= w.bucket).any():
@@ -224,9 +231,10 @@ def _finish(s: Scratch, out: Streamed, w: _Waiting, window: dict[int, tuple[I64,
     first = out.start[w.index]
     # offsets from the bucket's first number: int32 while its reach spans fewer states
     wide = bool(len(dies)) and int(dies[-1]) - first >= 2 ** 31
-    s.save(f"b{w.index}", target=narrow(target, first), dies=(dies - first).astype(
-        np.int64 if wide else np.int32),
+    s.save(f"b{w.index}", append=True, target=narrow(target, first), dies=(
+        dies - first).astype(np.int64 if wide else np.int32),
            **({"late_at": at, "late_key": keys[at]} if at.size else {}))
+    s.remove(f"k{w.index}")
 
 
 def narrow(target: I64, first: int) -> npt.NDArray[np.signedinteger[Any]]:
@@ -291,15 +299,15 @@ def _late(c: Compiled, s: Scratch, out: Streamed, table: ProbTable, waiting: Fro
     out.late_keys = block.keys
     out.choices += len(block.nbranch)
     out.transitions += len(block.target)
-    _save_block(s, "late", block, target, {})
+    _save_block(s, "late", block, target)
 
 
 def _check_late(c: Compiled, s: Scratch, late: I64, buckets: list[int]) -> None:
     """GiveUp if a late state is also a regular one (reached both before and after its
-    clock went back): each bucket's keys read back from its file."""
+    clock went back): each bucket's sorted keys read back from their file."""
     tb = c.layout.bucket_of(late)
     for b in np.unique(tb).tolist():
         i = int(np.searchsorted(buckets, b))
         if i < len(buckets) and buckets[i] == b and \
-                _found(np.sort(s.load(f"b{i}", "keys")), late[tb == b]).any():
+                _found(s.load(f"keys{i}")["keys"], late[tb == b]).any():
             raise GiveUp("a state reached both before and after its clock went back")

@@ -1,31 +1,115 @@
-"""The queries of afsmc's own exploration answered through the scratch directory
-(``verify --scratch``): :func:`afsmc.verify.engines.explicit.answer` calls :func:`answer`
-when a job has a scratch directory and asks for no strategy."""
+"""The queries of afsmc's own exploration answered through the scratch directory:
+:func:`afsmc.verify.engines.explicit.answer` calls :func:`answer` when a job has a
+scratch directory and asks for no strategy, at once with ``verify --scratch DIR``, and by
+default (:func:`where`) once the in-memory exploration would not fit comfortably
+(:class:`Watch`, :func:`too_big`); ``--no-scratch`` keeps it in memory."""
 
 from __future__ import annotations
 
+import os
+import tempfile
 import time
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from afsmc.verify.engines import explicit
+from afsmc.verify.engines import explicit, explore_graph
 from afsmc.verify.engines.explore import Compiled
 from afsmc.verify.stream import layers, sweep
-from afsmc.verify.stream.scratch import Scratch, clear
+from afsmc.verify.stream.scratch import Scratch, clear, unusable
+
+# The share of the memory available when the exploration starts that the in-memory route
+# may take (its peak estimated as the memory grown so far times explore_graph.PEAK_FACTOR,
+# as the route estimates its own): above it, by default, the model is streamed.
+COMFORT = 0.5
+# Bytes per state of the in-memory route's explored blocks (0.72 GB for scenario 2's 8.4 M
+# states, 86 per state; rounded up): with the upper bound, a model surely small.
+BLOCK_BYTES_PER_STATE = 100
+
+
+@dataclass(frozen=True)
+class Scratching:
+    """Where a job may explore through a scratch directory: `directory` (None: in
+    memory), and whether only once the in-memory exploration would not fit (`auto`)."""
+
+    directory: str | None
+    auto: bool = False
+
+
+def where(given: str | None, forbidden: bool, bound: int, available: int | None
+          ) -> Scratching:
+    """`--scratch DIR` (`given`) streams into DIR; `--no-scratch` (`forbidden`) never
+    streams; else the system temp directory, taken once the in-memory exploration would
+    not fit comfortably, unless the model's upper bound `bound` surely fits or the temp
+    directory cannot be written."""
+    if given is not None:
+        return Scratching(given)
+    if forbidden or surely_fits(bound, available):
+        return Scratching(None)
+    tmp = tempfile.gettempdir()
+    return Scratching(None) if unusable(tmp) is not None else Scratching(tmp, auto=True)
+
+
+def surely_fits(bound: int, available: int | None) -> bool:
+    """Whether `bound` states explored in memory fit comfortably in `available` bytes."""
+    return available is None or \
+        bound * BLOCK_BYTES_PER_STATE * explore_graph.PEAK_FACTOR <= COMFORT * available
+
+
+def too_big(grown: int, available: int | None) -> bool:
+    """Whether an in-memory exploration whose process has grown by `grown` bytes would
+    peak past the comfortable share of `available` bytes."""
+    return available is not None and grown * explore_graph.PEAK_FACTOR > COMFORT * available
+
+
+class TooBig(Exception):
+    """The in-memory exploration would not fit comfortably: stream it instead."""
+
+    def __init__(self, states: int, grown: int, available: int) -> None:
+        self.why = (f"in memory it would peak at about "
+                    f"{grown * explore_graph.PEAK_FACTOR / 1e9:.1f} GB after {states:,} "
+                    f"states, more than {COMFORT:.0%} of the {available / 1e9:.1f} GB "
+                    "available")
+        super().__init__(self.why)
+
+
+def resident() -> int:
+    """This process's resident memory in bytes (0 where /proc is not there)."""
+    try:
+        with open("/proc/self/statm", encoding="ascii") as f:
+            return int(f.read().split()[1]) * os.sysconf("SC_PAGE_SIZE")
+    except OSError:
+        return 0
+
+
+class Watch:
+    """The in-memory exploration's progress callback with a watch on its memory: raises
+    TooBig once too_big says so (as often as explore_graph notifies progress)."""
+
+    def __init__(self, available: int | None, then: explicit.Notify) -> None:
+        self.available = available
+        self.then = then
+        self.base = resident()
+
+    def __call__(self, event: str, data: Any) -> None:
+        grown = resident() - self.base
+        if self.available is not None and too_big(grown, self.available):
+            raise TooBig(int(data[1]), grown, self.available)
+        self.then(event, data)
 
 
 def mb(n: int) -> str:
     return f"{n / 1e6:,.1f} MB"
 
 
-def answer(c: Compiled, p: explicit.Plan, means: list[str], where: str, what: str,
-           notify: explicit.Notify, max_states: int | None,
+def answer(c: Compiled, p: explicit.Plan, means: list[str], into: str, what: str,
+           notify: explicit.Notify, max_states: int | None, why: str = "--scratch",
            before_write: Any = None) -> explicit.Answer:
-    """Explore into `where` (a directory of this job's own), answer every query of `p`
-    by one sweep over the files, and remove them (also on error). Raises what
-    layers.explore raises, and ScratchFull."""
+    """Explore into `into` (a directory of this job's own), answer every query of `p`
+    by one sweep over the files, and remove them (also on error); `why` it is streamed
+    goes into the answer. Raises what layers.explore raises, and ScratchFull."""
     started = time.perf_counter()
-    s = Scratch(Path(where), before_write)
+    s = Scratch(Path(into), before_write)
 
     def explored(_event: str, data: Any) -> None:
         notify("solver", f"explored {data[1]:,} states of the {what} so far (clock at "
@@ -65,4 +149,4 @@ def answer(c: Compiled, p: explicit.Plan, means: list[str], where: str, what: st
                                    dict.fromkeys(means, secs), pairs)
     return explicit.Answer({q.name: values[q.name] for q in mine},
                            {q.name: secs for q in mine}, st.states, st.choices,
-                           st.transitions, built, p.left, None, uniform, s.written)
+                           st.transitions, built, p.left, None, uniform, s.written, why)

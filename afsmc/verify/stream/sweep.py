@@ -46,6 +46,7 @@ class Part:
     layers: I64
     rewards: list[F64]
     labels: list[acyclic.Bools]
+    dies: npt.NDArray[np.signedinteger[Any]] | None  # a bucket's, as offsets; else None
 
 
 def _offsets(counts: npt.NDArray[np.int32]) -> I64:
@@ -60,15 +61,15 @@ def load(st: Streamed, name: str, first: int, own_other: int | None, late_sorted
     the live values (its own states from `first`, its own first number), or, for the
     sinks and the late states (`own_other`: their first other number), its own states as
     rows of the other values from there."""
-    s = st.scratch
-    states = _offsets(s.load(name, "nchoice"))
-    choices = _offsets(s.load(name, "nbranch"))
-    target = widen(s.load(name, "target"), first)
-    if (s.root / f"{name}.late_at.npy").exists():
-        at, keys = s.load(name, "late_at"), s.load(name, "late_key")
-        target[at] = -1 - (st.sinks + late_order[np.searchsorted(late_sorted, keys)])
+    a = st.scratch.load(name)
+    states = _offsets(a["nchoice"])
+    choices = _offsets(a["nbranch"])
+    target = widen(a["target"], first)
+    if "late_at" in a:
+        target[a["late_at"]] = -1 - (st.sinks + late_order[np.searchsorted(late_sorted,
+                                                                             a["late_key"])])
     assert not (target == LATE).any()
-    prob = st.table[s.load(name, "prob")]
+    prob = st.table[a["prob"]]
     regular = target >= 0
     # the sinks' and late states' successors are all "other"
     reg = np.full(len(target), -1, np.int64) if slot is None else \
@@ -80,13 +81,11 @@ def load(st: Streamed, name: str, first: int, own_other: int | None, late_sorted
     per_choice = []
     for i in range(rewards):
         r = np.zeros(len(choices) - 1)
-        r[s.load(name, f"reward{i}_at")] = s.load(name, f"reward{i}_v")
+        r[a[f"reward{i}_at"]] = a[f"reward{i}_v"]
         per_choice.append(r)
-    layers = np.zeros(1, np.int64)
-    sizes = s.load(name, "layers")
-    layers = np.concatenate([[0], np.cumsum(sizes)]).astype(np.int64)
+    layers = np.concatenate([[0], np.cumsum(a["layers"])]).astype(np.int64)
     return Part(states, choices, reg, oth, prob, stay, layers, per_choice,
-                [s.load(name, f"label{i}") for i in range(labels)])
+                [a[f"label{i}"] for i in range(labels)], a.get("dies"))
 
 
 def _steps(part: Part, lo: int, hi: int, reg: int, other: int) -> list[tuple[bool, Any]]:
@@ -297,8 +296,9 @@ def _sweep(st: Streamed, groups: list[Group], nr: int, targets: int, rows: int,
             r[mine] = 0.0
         part = load(st, f"b{i}", first, None, *late, nr, targets, slot)
         pairs += solve_part(part, groups, live, other, live, mine, count)
+        assert part.dies is not None
+        dead = slot[(part.dies.astype(np.int64) + first) % len(slot)]
         del part
-        dead = slot[(st.scratch.load(f"b{i}", "dies").astype(np.int64) + first) % len(slot)]
         free[top:top + len(dead)] = dead
         top += len(dead)
         if progress is not None:

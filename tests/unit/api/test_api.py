@@ -121,7 +121,8 @@ def test_verify_defaults_are_the_cli_defaults() -> None:
     # the options of `afsmc verify` and the run() arguments they become
     for option, arg in [("via", "via"), ("engine", "engine"), ("solver", "solver"),
                         ("uniform", "uniform"), ("max_states", "max_states"),
-                        ("bisim", "bisimulation"), ("split", "split"), ("scratch", "scratch")]:
+                        ("bisim", "bisimulation"), ("split", "split"), ("scratch", "scratch"),
+                        ("no_scratch", "no_scratch")]:
         assert api[arg] == cli[option], option
 
 

@@ -7,6 +7,7 @@ directory left empty after a success, an error, a full disk and an interrupt."""
 from __future__ import annotations
 
 import errno
+import json
 from pathlib import Path
 from typing import Any
 
@@ -17,6 +18,7 @@ from afsmc.backends.prism import property_variants
 from afsmc.compiler import load, lowered
 from afsmc.diagnostics import CompileError
 from afsmc.verify import run
+from afsmc.verify import sweep as sweep_points
 from afsmc.verify.engines import acyclic, explicit, explore, explore_graph
 from afsmc.verify.stream import layers, scratch, sweep
 from tests.conftest import EXAMPLES, run_cli
@@ -97,7 +99,7 @@ def test_the_pass_keeps_only_the_live_states_a_brute_force_count_says(tmp_path: 
         st = layers.explore(c, scratch.Scratch(where))
         lowest: dict[int, int] = {}  # regular state -> its lowest predecessor bucket
         for i in range(len(st.start)):
-            stored = st.scratch.load(f"b{i}", "target")
+            stored = st.scratch.load(f"b{i}")["target"]
             for g in layers.widen(stored, st.start[i]).tolist():
                 if g >= 0:
                     lowest[g] = min(lowest.get(g, i), i)
@@ -211,3 +213,60 @@ def test_a_strategy_with_a_scratch_is_explored_in_memory_and_says_so(tmp_path: P
     assert any("not streamed yet" in s for s in said), said
     assert res.properties[0].strategy is not None
     assert [p.name for p in tmp_path.iterdir()] == ["loops.afsm"]
+
+
+def test_a_bucket_is_one_file_read_back_with_its_appended_records(tmp_path: Path) -> None:
+    # every dtype and shape the layers use, empty ones too, in one file; an appended
+    # record's array replaces the earlier one of its name; written counts the bytes on disk
+    s = scratch.Scratch(tmp_path)
+    first = {"keys": np.array([3, 1, 2], np.int64), "nchoice": np.array([1, 2], np.int32),
+             "label0": np.array([True, False, True]), "none": np.zeros(0, np.int64),
+             "layers": np.array(7, np.int64), "prob": np.arange(6, dtype=np.uint16)}
+    s.save("b0", **first)
+    s.save("b0", append=True, target=np.array([-5, 2 ** 31 - 1], np.int32),
+           prob=np.array([1.5, 2.5]))
+    got = s.load("b0")
+    assert [p.name for p in tmp_path.iterdir()] == ["b0"]
+    assert set(got) == {*first, "target"}
+    for k, a in first.items():
+        if k != "prob":
+            assert got[k].dtype == a.dtype and got[k].shape == a.shape
+            assert got[k].tolist() == a.tolist(), k
+    assert got["prob"].tolist() == [1.5, 2.5] and got["target"].tolist() == [-5, 2 ** 31 - 1]
+    got["keys"][0] = 9  # writable, as np.load's arrays are
+    assert s.written == (tmp_path / "b0").stat().st_size
+    s.save("b0", keys=np.zeros(2, np.int64))  # replaced, not appended
+    assert list(s.load("b0")) == ["keys"] and s.written == (tmp_path / "b0").stat().st_size
+    s.remove("b0")
+    assert s.written == 0 and not list(tmp_path.iterdir())
+
+
+def test_a_sweep_with_a_scratch_gives_the_in_memory_sweeps_values_and_leaves_nothing(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    # two points of the SMALL UAV (T_LIMIT 100 and 120): each streamed through a directory
+    # of its own (the files written there, seen by the fault hook), the values those of
+    # the sweep in memory; the same through `afsmc sweep --scratch`
+    consts = {"WIDTH": "2", "HEIGHT": "2"}
+    names = ["success", "timeout"]
+    plain = sweep_points(UAV, "T_LIMIT", [100, 120], consts=consts, properties=names,
+                  isolate=False, no_scratch=True, jobs=1)
+    written: list[Path] = []
+    monkeypatch.setattr(scratch, "FAULT", written.append)
+    streamed = sweep_points(UAV, "T_LIMIT", [100, 120], consts=consts, properties=names,
+                     isolate=False, scratch=str(tmp_path), jobs=1)
+    # a directory per point (and per model of a point: the MDP's uniform DTMC comes from it)
+    assert len({p.parent for p in written}) == 2 and all(
+        p.parent.parent == tmp_path for p in written)
+    args = ["sweep", UAV, "--const", "WIDTH=2", "--const", "HEIGHT=2", "--const",
+            "T_LIMIT=100,120", "-p", "success", "-p", "timeout", "--json"]
+    cli = run_cli(*args, "--scratch", str(tmp_path))
+    assert cli.code == 0, cli.err
+    want = [[(q.min, q.max, q.uniform) for q in p.properties] for p in plain.points]
+    for got in ([[(q.min, q.max, q.uniform) for q in p.properties] for p in streamed.points],
+                [[(q["min"], q["max"], q["uniform"]) for q in p["properties"]]
+                 for p in json.loads(cli.out)["points"]]):
+        assert np.allclose(np.array(got, float), np.array(want, float), rtol=1e-12,
+                           atol=1e-12), (got, want)
+    assert [(p.states, p.transitions) for p in streamed.points] == [
+        (p.states, p.transitions) for p in plain.points]
+    assert list(tmp_path.iterdir()) == []
