@@ -100,6 +100,8 @@ class Block:
     labels: list[Bools]  # per target: per state
     layers: list[int]  # the layers' sizes
     command: Commands  # per choice: its lowered command (empty unless Compiled.keep)
+    # the absorbing states (see split_sinks) are the first `sinks` ones; -1: not known
+    sinks: int = -1
 
 
 def _unique(a: I64) -> I64:
@@ -310,7 +312,7 @@ def explore_bucket(c: Compiled, table: ProbTable, start: I64, b: int | None,
             raise TooManyStates(counted + found.size, partial=True)
         if rounds is not None:
             narrow(counted + found.size, rounds + len(parts))
-    return _block(c, table, found, parts, fast), found.sorted(), len(parts)
+    return _block(c, table, found, parts, fast, fast and b is not None), found.sorted(), len(parts)
 
 
 def _offsets(counts: Counts) -> I64:
@@ -355,6 +357,8 @@ def split_sinks(blk: Block) -> tuple[Block, Block]:
     """(the block's absorbing states, whose every branch loops, and the others). The
     absorbing ones are in its first layer: they may come first of all, before the
     states that reach them by a transition that sets the clock back."""
+    if blk.sinks >= 0:
+        return _cut(blk, blk.sinks)
     n = len(blk.keys)
     owner = acyclic._state_of_branches(_offsets(blk.nchoice), _offsets(blk.nbranch))
     moving = blk.target != blk.keys[owner]
@@ -368,11 +372,33 @@ def split_sinks(blk: Block) -> tuple[Block, Block]:
             _subset(blk, rest, [blk.layers[0] - len(idx), *blk.layers[1:]]))
 
 
+def _cut(blk: Block, k: int) -> tuple[Block, Block]:
+    """split_sinks of a block whose absorbing states are its first `k`: its arrays cut
+    (views) where split_sinks would gather them."""
+    ch = int(blk.nchoice[:k].sum())
+    br = int(blk.nbranch[:ch].sum())
+    cuts = [int(np.searchsorted(at, ch)) for at, _ in blk.reward]
+    cmd = blk.command
+    head = Block(blk.keys[:k], blk.nchoice[:k], blk.nbranch[:ch], blk.target[:br],
+                 blk.prob[:br], [(at[:j], v[:j]) for (at, v), j in zip(blk.reward, cuts, strict=True)],
+                 [x[:k] for x in blk.labels], [k] if k else [], cmd[:ch] if len(cmd) else cmd)
+    tail = Block(blk.keys[k:], blk.nchoice[k:], blk.nbranch[ch:], blk.target[br:],
+                 blk.prob[br:],
+                 [(at[j:] - ch, v[j:]) for (at, v), j in zip(blk.reward, cuts, strict=True)],
+                 [x[k:] for x in blk.labels],
+                 [s for s in [blk.layers[0] - k, *blk.layers[1:]] if s],
+                 cmd[ch:] if len(cmd) else cmd)
+    return head, tail
+
+
 def _block(c: Compiled, table: ProbTable, found: _Sorted | _Hashed,
-           parts: list[tuple[I64, Expansion]], fast: bool) -> Block:
+           parts: list[tuple[I64, Expansion]], fast: bool, sinks_first: bool = False
+           ) -> Block:
     """The block of the explored `parts` (states in the order they were expanded, those
     `found`), its states sorted topologically (Kahn, backwards) by the edges within it;
-    `fast`: the probabilities coded by the compiled kernel."""
+    `fast`: the probabilities coded by the compiled kernel; `sinks_first`: the absorbing
+    states first in the first layer, so that split_sinks cuts the block rather than
+    gathering both parts."""
     if not parts:
         z, w = np.zeros(0, np.int64), np.zeros(0, np.int32)
         return Block(z, w, w, z, np.zeros(0, np.uint32), [_no_pairs() for _ in c.state_rewards],
@@ -394,11 +420,13 @@ def _block(c: Compiled, table: ProbTable, found: _Sorted | _Hashed,
     np.cumsum(nbranch, out=choices[1:])
     inside, at = found.inside(keys, target)
     local = acyclic._state_of_branches(states, choices)  # out of the block: as a self-loop
+    sink = np.bincount(local[target != keys[local]], minlength=n) == 0 if sinks_first else None
     local[inside] = at
     layers = acyclic.layers_of(states, choices, local)
     del local, inside, at
     if layers is None:
         raise GiveUp("a cycle of more than one state")
+    lead = -1 if sink is None else _sinks_first(layers, sink)
     perm = np.concatenate(layers)
     old_choice = acyclic._ranges(states[perm], states[perm + 1])
     branch = acyclic._ranges(choices[old_choice], choices[old_choice + 1])
@@ -415,7 +443,19 @@ def _block(c: Compiled, table: ProbTable, found: _Sorted | _Hashed,
         out_rewards.append((nz.astype(np.int32), full_reward[nz]))
     return Block(keys, nchoice, nbranch[old_choice], target[branch], table.encode(prob[branch], fast),
                  out_rewards, labels, [len(x) for x in layers],
-                 command[old_choice] if c.keep else command)
+                 command[old_choice] if c.keep else command, lead)
+
+
+def _sinks_first(layers: list[I64], sink: Bools) -> int:
+    """The absorbing states (`sink`) of the first layer moved to its front, the order of
+    both kinds kept, so that the block's order after split_sinks is the one it gives
+    otherwise; their number, or -1 if one lies past the first layer."""
+    if not layers or sink[layers[0]].sum() != sink.sum():
+        return -1
+    first = layers[0]
+    absorbing = sink[first]
+    layers[0] = np.concatenate([first[absorbing], first[~absorbing]])
+    return int(absorbing.sum())
 
 
 @dataclass
