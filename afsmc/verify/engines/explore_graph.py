@@ -238,10 +238,13 @@ class _Sorted:
 
 class _Hashed:
     """The keys a bucket has found (the compiled path): a hash set of them and of the
-    keys to skip, each round's new keys sorted alone, as _Sorted gives them."""
+    keys to skip, each round's new keys sorted alone, as _Sorted gives them. `span`: the
+    keys of the bucket lie in [lo, hi) (a successor outside is in another bucket)."""
 
-    def __init__(self, start: I64, skip: I64 | None) -> None:
+    def __init__(self, start: I64, skip: I64 | None, span: tuple[int, int] = (0, -1)) -> None:
         from afsmc.verify.kernels.hashing import KeySet
+
+        self.span = span
 
         self.set = KeySet(len(start) + (0 if skip is None else len(skip)))
         # per entry of the set: its position in the order expanded (-1: skipped)
@@ -271,7 +274,7 @@ class _Hashed:
 
     def inside(self, expanded: I64, target: I64) -> tuple[Bools, I64]:
         """As _Sorted.inside, by one lookup of each target."""
-        entry = self.set.find(target)
+        entry = self.set.find(target, *self.span) if self.span[1] >= 0 else self.set.find(target)
         position = np.concatenate(self.position) if self.position else np.zeros(0, np.int64)
         at = np.where(entry >= 0, position[entry], -1) if len(position) else entry
         inside = at >= 0
@@ -291,7 +294,7 @@ def explore_bucket(c: Compiled, table: ProbTable, start: I64, b: int | None,
     with `rounds` (those of earlier buckets), GiveUp as soon as the states come too few
     per round (see NARROW_ROUNDS), rather than at the end of the chain."""
     fast = kernels.enabled(counted + len(start))
-    found = _Hashed(start, exclude) if fast else _Sorted(start, exclude)
+    found = _Hashed(start, exclude, _span(c, b)) if fast else _Sorted(start, exclude)
     frontier = found.first
     parts: list[tuple[I64, Expansion]] = []
     while frontier.size:
@@ -313,6 +316,12 @@ def explore_bucket(c: Compiled, table: ProbTable, start: I64, b: int | None,
         if rounds is not None:
             narrow(counted + found.size, rounds + len(parts))
     return _block(c, table, found, parts, fast, fast and b is not None), found.sorted(), len(parts)
+
+
+def _span(c: Compiled, b: int | None) -> tuple[int, int]:
+    """The keys of bucket `b`: [lo, hi); (0, -1) for any key."""
+    f = c.layout.bucket
+    return (0, -1) if f is None or b is None else (b << f.shift, (b + 1) << f.shift)
 
 
 def _offsets(counts: Counts) -> I64:

@@ -29,6 +29,7 @@ Slots = npt.NDArray[Any]  # int32 or int64 entry numbers
 _GOLDEN = np.uint64(0x9E3779B97F4A7C15)
 _HIGH = np.uint64(29)  # the product's bits from here on pick the slot (good to 2**35 slots)
 LOAD = 0.5  # a table holds at most this many keys per slot (linear probing stays short)
+_TOP = (1 << 63) - 1
 
 
 @jit
@@ -38,13 +39,13 @@ def _home(key: int, mask: int) -> int:
 
 @jit
 def _find(slots: Slots, dense: I64, start: I64, mask: I64, shift: int, keys: I64,
-          out: I64) -> None:
-    """out[i] = the entry holding keys[i], or -1."""
+          out: I64, lo: int, hi: int) -> None:
+    """out[i] = the entry holding keys[i], or -1 (at once if outside [lo, hi))."""
     for i in range(len(keys)):
         k = keys[i]
         r = k >> shift
         out[i] = -1
-        if r < 0 or r >= len(start):
+        if k < lo or k >= hi or r < 0 or r >= len(start):
             continue
         base, m = start[r], mask[r]
         s = _home(k, m)
@@ -142,11 +143,12 @@ class KeySet:
         _place(self.slots, self.dense[:self.size], _ZERO, np.array([len(self.slots) - 1]),
                63, 0)
 
-    def find(self, keys: I64) -> I64:
-        """The entry of each key (its rank among the keys added), -1 where absent."""
+    def find(self, keys: I64, lo: int = 0, hi: int = _TOP) -> I64:
+        """The entry of each key (its rank among the keys added), -1 where absent; every
+        key added lies in [lo, hi): the others are not looked for."""
         out = np.empty(len(keys), np.int64)
         _find(self.slots, self.dense, _ZERO, np.array([len(self.slots) - 1]), 63,
-              np.ascontiguousarray(keys), out)
+              np.ascontiguousarray(keys), out, lo, hi)
         return out
 
 
@@ -174,7 +176,7 @@ class Regions:
         """The position of each key in the keys indexed, -1 where absent."""
         out = np.empty(len(keys), np.int64)
         _find(self.slots, self.dense, self.start, self.mask, self.shift,
-              np.ascontiguousarray(keys), out)
+              np.ascontiguousarray(keys), out, 0, _TOP)
         return out
 
 
