@@ -179,14 +179,11 @@ class Frontiers:
             self.pending.setdefault(int(b), []).append(_unique(part))
 
     def _add_hashed(self, buckets: I64, keys: I64) -> None:
-        from afsmc.verify.kernels.hashing import KeySet
+        from afsmc.verify.kernels.hashing import KeySet, grouped
 
         for gone in [b for b in self.sets if b not in self.pending]:
             del self.sets[gone]  # taken by a caller that pops `pending` itself
-        lo = int(buckets.min())
-        counts = np.bincount(buckets - lo)
-        for b in (np.flatnonzero(counts) + lo).tolist():
-            part = keys[buckets == b] if len(counts) > 1 else keys
+        for b, part in grouped(buckets, keys):
             hashed = self.sets.get(b)
             if hashed is None:
                 hashed = self.sets[b] = KeySet(len(part))

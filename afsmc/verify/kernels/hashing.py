@@ -60,7 +60,7 @@ def _find(slots: Slots, dense: I64, start: I64, mask: I64, shift: int, keys: I64
 
 
 @jit
-def _insert_new(slots: I64, dense: I64, n: int, keys: I64, new: I64) -> int:
+def _insert_new(slots: Slots, dense: I64, n: int, keys: I64, new: I64) -> int:
     """Insert the keys absent from the one-region table holding `n` entries, each as the
     next entry, writing them (first-seen order) to `new`; the number of entries after."""
     m = len(slots) - 1
@@ -103,10 +103,11 @@ def _capacity(count: int) -> int:
 
 class KeySet:
     """The distinct keys added so far, numbered in the order first seen (one region,
-    grown by doubling)."""
+    grown by doubling; int32 entries, half the slots' bytes: a set holds the keys of one
+    bucket)."""
 
     def __init__(self, expect: int = 0) -> None:
-        self.slots = np.full(_capacity(expect), -1, np.int64)
+        self.slots = np.full(_capacity(expect), -1, np.int32)
         self.dense = np.empty(max(expect, 16), np.int64)
         self.size = 0
 
@@ -139,7 +140,7 @@ class KeySet:
         return out
 
     def _grow(self) -> None:
-        self.slots = np.full(2 * len(self.slots), -1, np.int64)
+        self.slots = np.full(2 * len(self.slots), -1, np.int32)
         _place(self.slots, self.dense[:self.size], _ZERO, np.array([len(self.slots) - 1]),
                63, 0)
 
@@ -153,6 +154,32 @@ class KeySet:
 
 
 _ZERO = np.zeros(1, np.int64)
+
+
+@jit
+def _group(buckets: I64, keys: I64, lo: int, out: I64, first: I64) -> None:
+    """`keys` grouped by bucket (a counting sort, stable): bucket lo + j's are
+    out[first[j]:first[j + 1]]."""
+    for i in range(len(buckets)):
+        first[buckets[i] - lo + 1] += 1
+    for j in range(1, len(first)):
+        first[j] += first[j - 1]
+    at = first[:-1].copy()
+    for i in range(len(buckets)):
+        j = buckets[i] - lo
+        out[at[j]] = keys[i]
+        at[j] += 1
+
+
+def grouped(buckets: I64, keys: I64) -> list[tuple[int, I64]]:
+    """(bucket, its keys in their order) for each bucket present in `buckets`."""
+    if not len(buckets):
+        return []
+    lo = int(buckets.min())
+    out = np.empty(len(keys), np.int64)
+    first = np.zeros(int(buckets.max()) - lo + 2, np.int64)
+    _group(np.ascontiguousarray(buckets), np.ascontiguousarray(keys), lo, out, first)
+    return [(lo + j, out[first[j]:first[j + 1]]) for j in np.flatnonzero(np.diff(first)).tolist()]
 
 
 class Regions:

@@ -89,6 +89,17 @@ def test_a_key_set_resolves_collisions_and_grows() -> None:
 
 
 @settings(max_examples=60, deadline=None)
+@given(st.lists(st.tuples(st.integers(0, 6), st.integers(0, 1 << 40)), max_size=100))
+def test_keys_grouped_by_bucket_keep_their_order(pairs: list[tuple[int, int]]) -> None:
+    want: dict[int, list[int]] = {}
+    for b, k in pairs:
+        want.setdefault(b + 40, []).append(k)
+    got = hashing.grouped(np.array([b + 40 for b, _ in pairs], np.int64),
+                          np.array([k for _, k in pairs], np.int64))
+    assert [(b, part.tolist()) for b, part in got] == sorted(want.items())
+
+
+@settings(max_examples=60, deadline=None)
 @given(st.sets(st.tuples(st.integers(0, 5), st.integers(0, (1 << 20) - 1)), max_size=300),
        st.lists(st.tuples(st.integers(0, 9), st.integers(0, (1 << 20) - 1)), max_size=50))
 def test_regions_number_the_keys_by_position(entries: set[tuple[int, int]],
