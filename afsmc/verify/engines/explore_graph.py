@@ -39,6 +39,7 @@ Counts = npt.NDArray[np.int32]  # choices of a state, branches of a choice
 Codes = npt.NDArray[np.uint32]
 Commands = npt.NDArray[np.int32]
 Pairs = tuple[npt.NDArray[np.int32], F64]  # a sparse vector: (positions, values)
+ANY_KEY = (1 << 63) - 1  # above every key
 
 
 def _no_pairs() -> Pairs:
@@ -238,7 +239,8 @@ class _Hashed:
     keys to skip, each round's new keys sorted alone, as _Sorted gives them. `span`: the
     keys of the bucket lie in [lo, hi) (a successor outside is in another bucket)."""
 
-    def __init__(self, start: I64, skip: I64 | None, span: tuple[int, int] = (0, -1)) -> None:
+    def __init__(self, start: I64, skip: I64 | None, span: tuple[int, int] = (0, ANY_KEY)
+                 ) -> None:
         from afsmc.verify.kernels.hashing import KeySet
 
         self.span = span
@@ -271,9 +273,9 @@ class _Hashed:
 
     def inside(self, expanded: I64, target: I64) -> tuple[Bools, I64]:
         """As _Sorted.inside, by one lookup of each target."""
-        entry = self.set.find(target, *self.span) if self.span[1] >= 0 else self.set.find(target)
-        position = np.concatenate(self.position) if self.position else np.zeros(0, np.int64)
-        at = np.where(entry >= 0, position[entry], -1) if len(position) else entry
+        if not self.position:
+            return np.zeros(len(target), bool), np.zeros(0, np.int64)
+        at = self.set.find(target, *self.span, np.concatenate(self.position))
         inside = at >= 0
         out: I64 = at[inside]
         return inside, out
@@ -316,9 +318,9 @@ def explore_bucket(c: Compiled, table: ProbTable, start: I64, b: int | None,
 
 
 def _span(c: Compiled, b: int | None) -> tuple[int, int]:
-    """The keys of bucket `b`: [lo, hi); (0, -1) for any key."""
+    """The keys of bucket `b`: [lo, hi) (None: any key)."""
     f = c.layout.bucket
-    return (0, -1) if f is None or b is None else (b << f.shift, (b + 1) << f.shift)
+    return (0, ANY_KEY) if f is None or b is None else (b << f.shift, (b + 1) << f.shift)
 
 
 def _offsets(counts: Counts) -> I64:
@@ -402,7 +404,7 @@ def _block(c: Compiled, table: ProbTable, found: _Sorted | _Hashed,
            ) -> Block:
     """The block of the explored `parts` (states in the order they were expanded, those
     `found`), its states sorted topologically (Kahn, backwards) by the edges within it;
-    `fast`: the probabilities coded by the compiled kernel; `sinks_first`: the absorbing
+    `fast`: reordered and coded by compiled kernels; `sinks_first`: the absorbing
     states first in the first layer, so that split_sinks cuts the block rather than
     gathering both parts."""
     if not parts:
@@ -426,7 +428,11 @@ def _block(c: Compiled, table: ProbTable, found: _Sorted | _Hashed,
     np.cumsum(nbranch, out=choices[1:])
     inside, at = found.inside(keys, target)
     local = acyclic._state_of_branches(states, choices)  # out of the block: as a self-loop
-    sink = np.bincount(local[target != keys[local]], minlength=n) == 0 if sinks_first else None
+    sink = None
+    if sinks_first:
+        from afsmc.verify.kernels.blocks import absorbing
+
+        sink = absorbing(states, choices, target, keys)
     local[inside] = at
     layers = acyclic.layers_of(states, choices, local)
     del local, inside, at
@@ -434,8 +440,8 @@ def _block(c: Compiled, table: ProbTable, found: _Sorted | _Hashed,
         raise GiveUp("a cycle of more than one state")
     lead = -1 if sink is None else _sinks_first(layers, sink)
     perm = np.concatenate(layers)
-    old_choice = acyclic._ranges(states[perm], states[perm + 1])
-    branch = acyclic._ranges(choices[old_choice], choices[old_choice + 1])
+    old_choice, nbranch, target, prob = _permuted(perm, states, choices, nbranch, target, prob,
+                                                  fast)
     keys, nchoice = keys[perm], nchoice[perm]
     fr = frame(c.layout.decode(keys))
     labels = [full(t(fr), n, bool) for t in c.targets]
@@ -447,9 +453,22 @@ def _block(c: Compiled, table: ProbTable, found: _Sorted | _Hashed,
         full_reward = r[old_choice] + np.repeat(per_state, nchoice)
         nz = np.flatnonzero(full_reward)
         out_rewards.append((nz.astype(np.int32), full_reward[nz]))
-    return Block(keys, nchoice, nbranch[old_choice], target[branch], table.encode(prob[branch], fast),
+    return Block(keys, nchoice, nbranch, target, table.encode(prob, fast),
                  out_rewards, labels, [len(x) for x in layers],
                  command[old_choice] if c.keep else command, lead)
+
+
+def _permuted(perm: I64, states: I64, choices: I64, nbranch: Counts, target: I64, prob: F64,
+              fast: bool) -> tuple[I64, Counts, I64, F64]:
+    """The states in the order `perm`: each choice's old index, its branch count, each
+    branch's target and probability; `fast`: in one pass of a compiled kernel."""
+    if fast:
+        from afsmc.verify.kernels.blocks import permuted
+
+        return permuted(perm, states, choices, nbranch, target, prob)
+    old_choice = acyclic._ranges(states[perm], states[perm + 1])
+    branch = acyclic._ranges(choices[old_choice], choices[old_choice + 1])
+    return old_choice, nbranch[old_choice], target[branch], prob[branch]
 
 
 def _sinks_first(layers: list[I64], sink: Bools) -> int:

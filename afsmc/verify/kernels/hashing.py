@@ -39,8 +39,10 @@ def _home(key: int, mask: int) -> int:
 
 @jit
 def _find(slots: Slots, dense: I64, start: I64, mask: I64, shift: int, keys: I64,
-          out: I64, lo: int, hi: int) -> None:
-    """out[i] = the entry holding keys[i], or -1 (at once if outside [lo, hi))."""
+          out: I64, lo: int, hi: int, values: I64) -> None:
+    """out[i] = the entry holding keys[i] (its value, if `values` is not empty), or -1
+    (at once if outside [lo, hi))."""
+    mapped = len(values) > 0
     for i in range(len(keys)):
         k = keys[i]
         r = k >> shift
@@ -54,7 +56,7 @@ def _find(slots: Slots, dense: I64, start: I64, mask: I64, shift: int, keys: I64
             if e < 0:
                 break
             if dense[e] == k:
-                out[i] = e
+                out[i] = values[e] if mapped else e
                 break
             s = (s + 1) & m
 
@@ -144,16 +146,18 @@ class KeySet:
         _place(self.slots, self.dense[:self.size], _ZERO, np.array([len(self.slots) - 1]),
                63, 0)
 
-    def find(self, keys: I64, lo: int = 0, hi: int = _TOP) -> I64:
-        """The entry of each key (its rank among the keys added), -1 where absent; every
-        key added lies in [lo, hi): the others are not looked for."""
+    def find(self, keys: I64, lo: int = 0, hi: int = _TOP, values: I64 | None = None
+             ) -> I64:
+        """The entry of each key (its rank among the keys added), or `values[entry]`; -1
+        where absent. Every key added lies in [lo, hi): the others are not looked for."""
         out = np.empty(len(keys), np.int64)
         _find(self.slots, self.dense, _ZERO, np.array([len(self.slots) - 1]), 63,
-              np.ascontiguousarray(keys), out, lo, hi)
+              np.ascontiguousarray(keys), out, lo, hi, _NONE if values is None else values)
         return out
 
 
 _ZERO = np.zeros(1, np.int64)
+_NONE = np.zeros(0, np.int64)
 
 
 @jit
@@ -203,7 +207,7 @@ class Regions:
         """The position of each key in the keys indexed, -1 where absent."""
         out = np.empty(len(keys), np.int64)
         _find(self.slots, self.dense, self.start, self.mask, self.shift,
-              np.ascontiguousarray(keys), out, 0, _TOP)
+              np.ascontiguousarray(keys), out, 0, _TOP, _NONE)
         return out
 
 

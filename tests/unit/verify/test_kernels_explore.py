@@ -18,7 +18,7 @@ from hypothesis import strategies as st
 from afsmc.verify import kernels, run
 from afsmc.verify.engines import explore_graph
 from afsmc.verify.engines.explore import GiveUp
-from afsmc.verify.kernels import hashing
+from afsmc.verify.kernels import blocks, hashing
 from afsmc.verify.stream import layers, scratch, sweep
 from tests.unit.verify.test_streaming import CASES, _loops, _plan
 
@@ -70,6 +70,11 @@ def test_a_key_set_adds_the_absent_keys_in_first_seen_order(rounds: list[list[in
         assert s.keys().tolist() == list(order)
     probe = [k for keys in rounds for k in keys] + [1 << 61, 7, 0, -5]
     assert s.find(np.array(probe, np.int64)).tolist() == [order.get(k, -1) for k in probe]
+    # mapped through values, only keys in [lo, hi) looked for
+    values = np.arange(s.size, dtype=np.int64) * 3 + 1
+    lo, hi = 5, 1 << 61
+    assert s.find(np.array(probe, np.int64), lo, hi, values).tolist() == [
+        3 * order[k] + 1 if k in order and lo <= k < hi else -1 for k in probe]
 
 
 def test_a_key_set_resolves_collisions_and_grows() -> None:
@@ -146,6 +151,29 @@ def test_frontiers_in_hash_sets_wait_with_the_same_keys(rounds: list[tuple[list[
     assert sorted(sorted_.pending) == sorted(hashed.pending)
     for b in sorted(sorted_.pending):
         assert hashed.take(b).tolist() == sorted_.take(b).tolist()
+
+
+@settings(max_examples=60, deadline=None)
+@given(st.lists(st.lists(st.lists(st.integers(0, 4), min_size=1, max_size=3), min_size=1,
+                         max_size=3), max_size=12), st.randoms(use_true_random=False))
+def test_a_block_reordered_by_the_kernel_is_numpys_gather(
+        graph: list[list[list[int]]], rnd: Any) -> None:
+    # states -> choices -> branches (successor keys 0..4; state s has key s)
+    n = len(graph)
+    nchoice = np.array([len(ch) for ch in graph], np.int32)
+    nbranch = np.array([len(br) for ch in graph for br in ch], np.int32)
+    target = np.array([t for ch in graph for br in ch for t in br], np.int64)
+    prob = np.arange(len(target)) / 7.0
+    states, choices = explore_graph._offsets(nchoice), explore_graph._offsets(nbranch)
+    keys = np.arange(n, dtype=np.int64)
+    perm = np.array(rnd.sample(range(n), n), np.int64)
+    want = explore_graph._permuted(perm, states, choices, nbranch, target, prob, False)
+    got = blocks.permuted(perm, states, choices, nbranch, target, prob)
+    assert _differences(list(want), list(got)) == []
+    owner = np.repeat(np.repeat(np.arange(n), nchoice), nbranch)
+    sink = [all(t == s for br in ch for t in br) for s, ch in enumerate(graph)]
+    assert (np.bincount(owner[target != owner], minlength=n) == 0).tolist() == sink
+    assert blocks.absorbing(states, choices, target, keys).tolist() == sink
 
 
 def _blocks_with(targets: list[int]) -> list[explore_graph.Block]:
