@@ -31,15 +31,15 @@ from afsmc.verify.engines.explore import (
     full,
 )
 from afsmc.verify.engines.explore_eval import frame
+from afsmc.verify.kernels import ANY_KEY
 
 if TYPE_CHECKING:
-    from afsmc.verify.kernels.hashing import KeySet
+    from afsmc.verify.kernels.hashing import Found, KeySet
 
 Counts = npt.NDArray[np.int32]  # choices of a state, branches of a choice
 Codes = npt.NDArray[np.uint32]
 Commands = npt.NDArray[np.int32]
 Pairs = tuple[npt.NDArray[np.int32], F64]  # a sparse vector: (positions, values)
-ANY_KEY = (1 << 63) - 1  # above every key
 
 
 def _no_pairs() -> Pairs:
@@ -234,53 +234,6 @@ class _Sorted:
         return inside, sorter[np.searchsorted(known, target[inside])]
 
 
-class _Hashed:
-    """The keys a bucket has found (the compiled path): a hash set of them and of the
-    keys to skip, each round's new keys sorted alone, as _Sorted gives them. `span`: the
-    keys of the bucket lie in [lo, hi) (a successor outside is in another bucket)."""
-
-    def __init__(self, start: I64, skip: I64 | None, span: tuple[int, int] = (0, ANY_KEY)
-                 ) -> None:
-        from afsmc.verify.kernels.hashing import KeySet
-
-        self.span = span
-
-        self.set = KeySet(len(start) + (0 if skip is None else len(skip)))
-        # per entry of the set: its position in the order expanded (-1: skipped)
-        self.position: list[I64] = []
-        if skip is not None and len(skip):
-            self.position.append(np.full(len(self.set.add(skip)), -1, np.int64))
-        self.size = 0
-        self.runs: list[I64] = []
-        self.first = self.add(start)
-
-    def add(self, targets: I64) -> I64:
-        """The keys of `targets` not found (nor skipped) before, sorted; now found."""
-        new = self.set.add(targets)
-        order = np.argsort(new)
-        frontier: I64 = new[order]
-        at = np.empty(len(new), np.int64)
-        at[order] = np.arange(self.size, self.size + len(new))
-        self.position.append(at)
-        self.size += len(new)
-        self.runs.append(frontier)
-        return frontier
-
-    def sorted(self) -> I64:
-        if len(self.runs) > 1:  # sorted runs: timsort merges them
-            self.runs = [np.sort(np.concatenate(self.runs), kind="stable")]
-        return self.runs[0] if self.runs else np.zeros(0, np.int64)
-
-    def inside(self, expanded: I64, target: I64) -> tuple[Bools, I64]:
-        """As _Sorted.inside, by one lookup of each target."""
-        if not self.position:
-            return np.zeros(len(target), bool), np.zeros(0, np.int64)
-        at = self.set.find(target, *self.span, np.concatenate(self.position))
-        inside = at >= 0
-        out: I64 = at[inside]
-        return inside, out
-
-
 def explore_bucket(c: Compiled, table: ProbTable, start: I64, b: int | None,
                    waiting: Frontiers, exclude: I64 | None = None, *, counted: int = 0,
                    max_states: int | None = None, rounds: int | None = None
@@ -293,7 +246,13 @@ def explore_bucket(c: Compiled, table: ProbTable, start: I64, b: int | None,
     with `rounds` (those of earlier buckets), GiveUp as soon as the states come too few
     per round (see NARROW_ROUNDS), rather than at the end of the chain."""
     fast = kernels.enabled(counted + len(start))
-    found = _Hashed(start, exclude, _span(c, b)) if fast else _Sorted(start, exclude)
+    found: _Sorted | Found
+    if fast:
+        from afsmc.verify.kernels.hashing import Found
+
+        found = Found(start, exclude, _span(c, b))
+    else:
+        found = _Sorted(start, exclude)
     frontier = found.first
     parts: list[tuple[I64, Expansion]] = []
     while frontier.size:
@@ -399,7 +358,7 @@ def _cut(blk: Block, k: int) -> tuple[Block, Block]:
     return head, tail
 
 
-def _block(c: Compiled, table: ProbTable, found: _Sorted | _Hashed,
+def _block(c: Compiled, table: ProbTable, found: _Sorted | Found,
            parts: list[tuple[I64, Expansion]], fast: bool, sinks_first: bool = False
            ) -> Block:
     """The block of the explored `parts` (states in the order they were expanded, those

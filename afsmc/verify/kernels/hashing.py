@@ -18,10 +18,11 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
-from afsmc.verify.kernels import jit
+from afsmc.verify.kernels import ANY_KEY, jit
 
 I64 = npt.NDArray[np.int64]
 F64 = npt.NDArray[np.float64]
+Bools = npt.NDArray[np.bool_]
 Slots = npt.NDArray[Any]  # int32 or int64 entry numbers
 
 # 2**64 / golden ratio: Knuth's multiplicative hash spreads keys that differ in a few
@@ -29,7 +30,6 @@ Slots = npt.NDArray[Any]  # int32 or int64 entry numbers
 _GOLDEN = np.uint64(0x9E3779B97F4A7C15)
 _HIGH = np.uint64(29)  # the product's bits from here on pick the slot (good to 2**35 slots)
 LOAD = 0.5  # a table holds at most this many keys per slot (linear probing stays short)
-_TOP = (1 << 63) - 1
 
 
 @jit
@@ -146,7 +146,7 @@ class KeySet:
         _place(self.slots, self.dense[:self.size], _ZERO, np.array([len(self.slots) - 1]),
                63, 0)
 
-    def find(self, keys: I64, lo: int = 0, hi: int = _TOP, values: I64 | None = None
+    def find(self, keys: I64, lo: int = 0, hi: int = ANY_KEY, values: I64 | None = None
              ) -> I64:
         """The entry of each key (its rank among the keys added), or `values[entry]`; -1
         where absent. Every key added lies in [lo, hi): the others are not looked for."""
@@ -207,7 +207,7 @@ class Regions:
         """The position of each key in the keys indexed, -1 where absent."""
         out = np.empty(len(keys), np.int64)
         _find(self.slots, self.dense, self.start, self.mask, self.shift,
-              np.ascontiguousarray(keys), out, 0, _TOP, _NONE)
+              np.ascontiguousarray(keys), out, 0, ANY_KEY, _NONE)
         return out
 
 
@@ -240,3 +240,50 @@ def encode(known: F64, code: npt.NDArray[np.uint32], prob: F64
     if not _encode(known, code, np.ascontiguousarray(prob), out):
         return None
     return out
+
+
+class Found:
+    """The keys a bucket has found, for afsmc.verify.engines.explore_graph.explore_bucket's
+    compiled path (its numpy reference: explore_graph._Sorted): a KeySet of them and of
+    the keys to skip; each round's new keys sorted alone, as _Sorted gives them. `span`:
+    the bucket's keys lie in [lo, hi) (a successor outside is in another bucket)."""
+
+    def __init__(self, start: I64, skip: I64 | None, span: tuple[int, int] = (0, ANY_KEY)
+                 ) -> None:
+        self.span = span
+        self.set = KeySet(len(start) + (0 if skip is None else len(skip)))
+        # per entry of the set: its position in the order expanded (-1: skipped)
+        self.position: list[I64] = []
+        if skip is not None and len(skip):
+            self.position.append(np.full(len(self.set.add(skip)), -1, np.int64))
+        self.size = 0
+        self.runs: list[I64] = []
+        self.first = self.add(start)
+
+    def add(self, targets: I64) -> I64:
+        """The keys of `targets` not found (nor skipped) before, sorted; now found."""
+        new = self.set.add(targets)
+        order = np.argsort(new)
+        frontier: I64 = new[order]
+        at = np.empty(len(new), np.int64)
+        at[order] = np.arange(self.size, self.size + len(new))
+        self.position.append(at)
+        self.size += len(new)
+        self.runs.append(frontier)
+        return frontier
+
+    def sorted(self) -> I64:
+        """Every key found, sorted."""
+        if len(self.runs) > 1:  # sorted runs: timsort merges them
+            self.runs = [np.sort(np.concatenate(self.runs), kind="stable")]
+        return self.runs[0] if self.runs else np.zeros(0, np.int64)
+
+    def inside(self, expanded: I64, target: I64) -> tuple[Bools, I64]:
+        """Which of `target` were found, and the position of each of those in the order
+        expanded (`expanded`, which _Sorted.inside needs), by one lookup of each."""
+        if not self.position:
+            return np.zeros(len(target), bool), np.zeros(0, np.int64)
+        at = self.set.find(target, *self.span, np.concatenate(self.position))
+        inside = at >= 0
+        out: I64 = at[inside]
+        return inside, out
