@@ -256,7 +256,7 @@ def explore_bucket(c: Compiled, table: ProbTable, start: I64, b: int | None,
     frontier = found.first
     parts: list[tuple[I64, Expansion]] = []
     while frontier.size:
-        x = expand(c, frontier)
+        x = expand(c, frontier, fast)
         parts.append((frontier, x))
         same = np.ones(len(x.target), bool)
         if b is not None:

@@ -1,7 +1,8 @@
 """Compiled kernels (numba) of a block's arrays in afsmc.verify.engines.explore_graph._block:
-which states are absorbing, and the block's choices and branches in its layered order,
-each one pass over the arrays where numpy builds index arrays first and gathers through
-them (its code there is the reference the tests compare these with)."""
+which states are absorbing, and the block's choices and branches in its layered order;
+and of afsmc.verify.engines.explore._ordered, an expansion's choices sorted by state.
+Each is one pass over the arrays where numpy sorts or builds index arrays first and
+gathers through them (its code there is the reference the tests compare these with)."""
 
 from __future__ import annotations
 
@@ -64,3 +65,28 @@ def permuted(perm: I64, states: I64, choices: I64, nbranch: Any, target: I64, pr
     _permute(perm, states, choices, nbranch, target, prob, old_choice, nbranch_out, target_out,
              prob_out)
     return old_choice, nbranch_out, target_out, prob_out
+
+
+@jit
+def _by_state(state: I64, per_state: I64, first: I64, order: I64, branch: I64) -> None:
+    at = np.zeros(len(per_state) + 1, np.int64)
+    for s in range(len(per_state)):
+        at[s + 1] = at[s] + per_state[s]
+    for c in range(len(state)):  # a counting sort: stable
+        order[at[state[c]]] = c
+        at[state[c]] += 1
+    b_at = 0
+    for c in order:
+        for b in range(first[c], first[c + 1]):
+            branch[b_at] = b
+            b_at += 1
+
+
+def by_state(state: I64, per_state: I64, first: I64) -> tuple[I64, I64]:
+    """The choices (each of state `state[c]`, `per_state` of each state; choice c's
+    branches first[c]:first[c + 1]) in the order of their states, stably: the order of
+    the choices, and of the branches."""
+    order = np.empty(len(state), np.int64)
+    branch = np.empty(int(first[-1]), np.int64)
+    _by_state(state, per_state, first, order, branch)
+    return order, branch

@@ -16,7 +16,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from afsmc.verify import kernels, run
-from afsmc.verify.engines import explore_graph
+from afsmc.verify.engines import acyclic, explore_graph
 from afsmc.verify.engines.explore import GiveUp
 from afsmc.verify.kernels import blocks, hashing
 from afsmc.verify.stream import layers, scratch, sweep
@@ -174,6 +174,19 @@ def test_a_block_reordered_by_the_kernel_is_numpys_gather(
     sink = [all(t == s for br in ch for t in br) for s, ch in enumerate(graph)]
     assert (np.bincount(owner[target != owner], minlength=n) == 0).tolist() == sink
     assert blocks.absorbing(states, choices, target, keys).tolist() == sink
+
+
+@settings(max_examples=60, deadline=None)
+@given(st.lists(st.tuples(st.integers(0, 5), st.integers(0, 3)), max_size=40))
+def test_choices_sorted_by_state_by_the_kernel_are_numpys_stable_sort(
+        choices: list[tuple[int, int]]) -> None:
+    # each choice: (its state, its number of branches)
+    state = np.array([s for s, _ in choices], np.int64)
+    first = explore_graph._offsets(np.array([k for _, k in choices], np.int32))
+    order, branch = blocks.by_state(state, np.bincount(state, minlength=6), first)
+    want = np.argsort(state, kind="stable")
+    assert order.tolist() == want.tolist()
+    assert branch.tolist() == acyclic._ranges(first[want], first[want + 1]).tolist()
 
 
 def _blocks_with(targets: list[int]) -> list[explore_graph.Block]:
