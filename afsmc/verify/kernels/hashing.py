@@ -9,6 +9,11 @@ in cache while a block's successors are resolved, instead of the whole table.
 
 Keys are non-negative (afsmc.verify.engines.explore packs them into 62 bits); -1 marks an
 empty slot and, in a lookup's answer, a key that is absent.
+
+Built on them: `KeySet` (insertion-ordered, growing: a bucket's waiting keys), `Found` (a
+bucket's found keys and their positions in the order expanded), `Regions` (every state's
+number, static); besides, `grouped` (keys by bucket, a counting sort) and `encode` (a
+branch probability's code among the few known values).
 """
 
 from __future__ import annotations
