@@ -442,8 +442,9 @@ class PointTable:
                          "elsewhere")
 
 
-def expand(c: Compiled, keys: I64) -> Expansion:
-    """Every choice of the states `keys`."""
+def expand(c: Compiled, keys: I64, fast: bool = False) -> Expansion:
+    """Every choice of the states `keys`; `fast`: sorted by state by a compiled kernel
+    (afsmc.verify.kernels.blocks.by_state)."""
     lay = c.layout
     mf = lay.fields["mode"]
     mode = ((keys >> mf.shift) & mf.mask) + mf.lo
@@ -476,7 +477,7 @@ def expand(c: Compiled, keys: I64) -> Expansion:
                 for i, r in enumerate(rw):
                     rws[i].append(r)
                 choices += len(sel)
-    return _ordered(len(keys), states, rows, tks, prs, rws, cmds, c.dtmc)
+    return _ordered(len(keys), states, rows, tks, prs, rws, cmds, c.dtmc, fast)
 
 
 def _cat(parts: list[Any], dtype: Any) -> Any:
@@ -484,9 +485,10 @@ def _cat(parts: list[Any], dtype: Any) -> Any:
 
 
 def _ordered(n: int, states: list[I64], rows: list[I64], tks: list[I64], prs: list[F64],
-             rws: list[list[F64]], cmds: list[npt.NDArray[np.int32]], dtmc: bool
-             ) -> Expansion:
-    """The choices sorted by state (command order kept within a state)."""
+             rws: list[list[F64]], cmds: list[npt.NDArray[np.int32]], dtmc: bool,
+             fast: bool = False) -> Expansion:
+    """The choices sorted by state (command order kept within a state); `fast`: by a
+    compiled counting sort."""
     state = _cat(states, np.int64)
     per_state = np.bincount(state, minlength=n)
     if n and (per_state.min() == 0 or (dtmc and per_state.max() > 1)):
@@ -494,10 +496,15 @@ def _ordered(n: int, states: list[I64], rows: list[I64], tks: list[I64], prs: li
                      else "a DTMC state with two commands")
     row = _cat(rows, np.int64)
     counts = np.bincount(row, minlength=len(state))
-    order = np.argsort(state, kind="stable")
     old_first = np.zeros(len(state) + 1, np.int64)
     np.cumsum(counts, out=old_first[1:])
-    branch = acyclic._ranges(old_first[order], old_first[order + 1])
+    if fast:
+        from afsmc.verify.kernels.blocks import by_state
+
+        order, branch = by_state(state, per_state, old_first)
+    else:
+        order = np.argsort(state, kind="stable")
+        branch = acyclic._ranges(old_first[order], old_first[order + 1])
     first = np.zeros(len(state) + 1, np.int64)
     np.cumsum(counts[order], out=first[1:])
     return Expansion(state[order], first, _cat(tks, np.int64)[branch],

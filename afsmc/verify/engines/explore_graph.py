@@ -11,12 +11,14 @@ ignored) orders the states; a cycle of more than one state gives up.
 from __future__ import annotations
 
 import time
+from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import numpy.typing as npt
 
+from afsmc.verify import kernels
 from afsmc.verify.engines import acyclic, umb
 from afsmc.verify.engines.acyclic import F64, I64, Arrays, Bools
 from afsmc.verify.engines.explore import (
@@ -29,6 +31,10 @@ from afsmc.verify.engines.explore import (
     full,
 )
 from afsmc.verify.engines.explore_eval import frame
+from afsmc.verify.kernels import ANY_KEY
+
+if TYPE_CHECKING:
+    from afsmc.verify.kernels.hashing import Found, KeySet
 
 Counts = npt.NDArray[np.int32]  # choices of a state, branches of a choice
 Codes = npt.NDArray[np.uint32]
@@ -49,9 +55,16 @@ class ProbTable:
         self.known = np.zeros(0)  # the values met so far, sorted ...
         self.code = np.zeros(0, np.uint32)  # ... and their codes
 
-    def encode(self, prob: F64) -> Codes:
+    def encode(self, prob: F64, fast: bool = False) -> Codes:
         """The codes of `prob`: looked up among the known values (a model's are few),
-        the new ones added first."""
+        the new ones added first; `fast`: by the compiled kernel while every value is
+        known already."""
+        if fast and len(self.known):
+            from afsmc.verify.kernels import hashing
+
+            codes = hashing.encode(self.known, self.code, prob)
+            if codes is not None:
+                return codes
         pos = np.searchsorted(self.known, prob)
         hit = self.known[np.minimum(pos, len(self.known) - 1)] == prob \
             if len(self.known) else np.zeros(len(prob), bool)
@@ -88,6 +101,8 @@ class Block:
     labels: list[Bools]  # per target: per state
     layers: list[int]  # the layers' sizes
     command: Commands  # per choice: its lowered command (empty unless Compiled.keep)
+    # the absorbing states (see split_sinks) are the first `sinks` ones; -1: not known
+    sinks: int = -1
 
 
 def _unique(a: I64) -> I64:
@@ -144,17 +159,79 @@ class _Keys:
 
 @dataclass
 class Frontiers:
-    """What waits to be explored: keys by bucket, and the late ones."""
+    """What waits to be explored: keys by bucket (the union of each bucket's arrays), and
+    the late ones. The compiled path keeps a bucket's keys in a hash set instead (`sets`),
+    its list in `pending` then holding them once, as one array."""
 
     pending: dict[int, list[I64]] = field(default_factory=dict)
     late: list[I64] = field(default_factory=list)
+    sets: dict[int, KeySet] = field(default_factory=dict)
 
-    def add(self, buckets: I64, keys: I64) -> None:
+    def add(self, buckets: I64, keys: I64, fast: bool = False) -> None:
+        """Add `keys`, each of bucket `buckets[i]`; `fast`: into hash sets (a bucket's
+        keys once, not sorted round after round)."""
+        if fast or self.sets:
+            self._add_hashed(buckets, keys)
+            return
         order = np.argsort(buckets, kind="stable")
         buckets, keys = buckets[order], keys[order]
         cuts = np.flatnonzero(np.diff(buckets)) + 1
         for part, b in zip(np.split(keys, cuts), buckets[np.r_[0, cuts]].tolist(), strict=True):
             self.pending.setdefault(int(b), []).append(_unique(part))
+
+    def _add_hashed(self, buckets: I64, keys: I64) -> None:
+        from afsmc.verify.kernels.hashing import KeySet, grouped
+
+        for gone in [b for b in self.sets if b not in self.pending]:
+            del self.sets[gone]  # taken by a caller that pops `pending` itself
+        for b, part in grouped(buckets, keys):
+            hashed = self.sets.get(b)
+            if hashed is None:
+                hashed = self.sets[b] = KeySet(len(part))
+                for earlier in self.pending.get(b, []):  # added by the numpy path
+                    hashed.add(earlier)
+            hashed.add(part)
+            self.pending[b] = [hashed.keys()]
+
+    def take(self, b: int) -> I64:
+        """The sorted distinct keys waiting in bucket `b`, no longer waiting."""
+        parts = self.pending.pop(b)
+        if self.sets.pop(b, None) is not None:
+            return np.sort(parts[0])  # distinct already
+        return _unique(np.concatenate(parts))
+
+
+class _Sorted:
+    """The keys a bucket has found (the numpy reference): sorted runs (_Keys), each
+    round's candidates sorted and searched there and among the keys to skip."""
+
+    def __init__(self, start: I64, skip: I64 | None) -> None:
+        self.skip = np.zeros(0, np.int64) if skip is None else skip
+        first = _unique(start)
+        self.first: I64 = first[~_found(self.skip, first)]
+        self.keys = _Keys(self.first)
+
+    @property
+    def size(self) -> int:
+        return self.keys.size
+
+    def add(self, targets: I64) -> I64:
+        """The keys of `targets` not found (nor skipped) before, sorted; now found."""
+        cand = _unique(targets)
+        frontier = cand[~self.keys.found(cand) & ~_found(self.skip, cand)]
+        self.keys.add(frontier)  # disjoint from what it has
+        return frontier
+
+    def sorted(self) -> I64:
+        return self.keys.sorted()
+
+    def inside(self, expanded: I64, target: I64) -> tuple[Bools, I64]:
+        """Which of `target` were found, and the position of each of those in `expanded`
+        (the found keys in the order they were expanded)."""
+        known = self.sorted()
+        sorter = np.argsort(expanded)
+        inside = _found(known, target)
+        return inside, sorter[np.searchsorted(known, target[inside])]
 
 
 def explore_bucket(c: Compiled, table: ProbTable, start: I64, b: int | None,
@@ -168,15 +245,18 @@ def explore_bucket(c: Compiled, table: ProbTable, start: I64, b: int | None,
     bucket's pass `max_states`: a bucket may be deep (a long chain, round after round);
     with `rounds` (those of earlier buckets), GiveUp as soon as the states come too few
     per round (see NARROW_ROUNDS), rather than at the end of the chain."""
-    none = np.zeros(0, np.int64)
-    skip = none if exclude is None else exclude
-    first = _unique(start)
-    first = first[~_found(skip, first)]
-    frontier = first
-    found = _Keys(first)
+    fast = kernels.enabled(counted + len(start))
+    found: _Sorted | Found
+    if fast:
+        from afsmc.verify.kernels.hashing import Found
+
+        found = Found(start, exclude, _span(c, b))
+    else:
+        found = _Sorted(start, exclude)
+    frontier = found.first
     parts: list[tuple[I64, Expansion]] = []
     while frontier.size:
-        x = expand(c, frontier)
+        x = expand(c, frontier, fast)
         parts.append((frontier, x))
         same = np.ones(len(x.target), bool)
         if b is not None:
@@ -184,19 +264,22 @@ def explore_bucket(c: Compiled, table: ProbTable, start: I64, b: int | None,
             same = tb == b
             later = tb > b
             if later.any():
-                waiting.add(tb[later], x.target[later])
+                waiting.add(tb[later], x.target[later], fast)
             earlier = tb < b
             if earlier.any():
                 waiting.late.append(_unique(x.target[earlier]))
-        cand = _unique(x.target[same])
-        frontier = cand[~found.found(cand) & ~_found(skip, cand)]
-        found.add(frontier)  # disjoint from what it has
+        frontier = found.add(x.target[same])
         if max_states is not None and counted + found.size > max_states:
             raise TooManyStates(counted + found.size, partial=True)
         if rounds is not None:
             narrow(counted + found.size, rounds + len(parts))
-    known = found.sorted()
-    return _block(c, table, known, parts), known, len(parts)
+    return _block(c, table, found, parts, fast, fast and b is not None), found.sorted(), len(parts)
+
+
+def _span(c: Compiled, b: int | None) -> tuple[int, int]:
+    """The keys of bucket `b`: [lo, hi) (None: any key)."""
+    f = c.layout.bucket
+    return (0, ANY_KEY) if f is None or b is None else (b << f.shift, (b + 1) << f.shift)
 
 
 def _offsets(counts: Counts) -> I64:
@@ -241,6 +324,8 @@ def split_sinks(blk: Block) -> tuple[Block, Block]:
     """(the block's absorbing states, whose every branch loops, and the others). The
     absorbing ones are in its first layer: they may come first of all, before the
     states that reach them by a transition that sets the clock back."""
+    if blk.sinks >= 0:
+        return _cut(blk, blk.sinks)
     n = len(blk.keys)
     owner = acyclic._state_of_branches(_offsets(blk.nchoice), _offsets(blk.nbranch))
     moving = blk.target != blk.keys[owner]
@@ -254,10 +339,33 @@ def split_sinks(blk: Block) -> tuple[Block, Block]:
             _subset(blk, rest, [blk.layers[0] - len(idx), *blk.layers[1:]]))
 
 
-def _block(c: Compiled, table: ProbTable, known: I64, parts: list[tuple[I64, Expansion]]
+def _cut(blk: Block, k: int) -> tuple[Block, Block]:
+    """split_sinks of a block whose absorbing states are its first `k`: its arrays cut
+    (views) where split_sinks would gather them."""
+    ch = int(blk.nchoice[:k].sum())
+    br = int(blk.nbranch[:ch].sum())
+    cuts = [int(np.searchsorted(at, ch)) for at, _ in blk.reward]
+    cmd = blk.command
+    head = Block(blk.keys[:k], blk.nchoice[:k], blk.nbranch[:ch], blk.target[:br],
+                 blk.prob[:br], [(at[:j], v[:j]) for (at, v), j in zip(blk.reward, cuts, strict=True)],
+                 [x[:k] for x in blk.labels], [k] if k else [], cmd[:ch] if len(cmd) else cmd)
+    tail = Block(blk.keys[k:], blk.nchoice[k:], blk.nbranch[ch:], blk.target[br:],
+                 blk.prob[br:],
+                 [(at[j:] - ch, v[j:]) for (at, v), j in zip(blk.reward, cuts, strict=True)],
+                 [x[k:] for x in blk.labels],
+                 [s for s in [blk.layers[0] - k, *blk.layers[1:]] if s],
+                 cmd[ch:] if len(cmd) else cmd)
+    return head, tail
+
+
+def _block(c: Compiled, table: ProbTable, found: _Sorted | Found,
+           parts: list[tuple[I64, Expansion]], fast: bool, sinks_first: bool = False
            ) -> Block:
-    """The block of the explored `parts` (states in the order they were expanded), its
-    states sorted topologically (Kahn, backwards) by the edges within it."""
+    """The block of the explored `parts` (states in the order they were expanded, those
+    `found`), its states sorted topologically (Kahn, backwards) by the edges within it;
+    `fast`: reordered and coded by compiled kernels; `sinks_first`: the absorbing
+    states first in the first layer, so that split_sinks cuts the block rather than
+    gathering both parts."""
     if not parts:
         z, w = np.zeros(0, np.int64), np.zeros(0, np.int32)
         return Block(z, w, w, z, np.zeros(0, np.uint32), [_no_pairs() for _ in c.state_rewards],
@@ -277,17 +385,22 @@ def _block(c: Compiled, table: ProbTable, known: I64, parts: list[tuple[I64, Exp
     np.cumsum(nchoice, out=states[1:])
     choices = np.zeros(len(nbranch) + 1, np.int64)
     np.cumsum(nbranch, out=choices[1:])
-    sorter = np.argsort(keys)
-    inside = _found(known, target)
+    inside, at = found.inside(keys, target)
     local = acyclic._state_of_branches(states, choices)  # out of the block: as a self-loop
-    local[inside] = sorter[np.searchsorted(known, target[inside])]
+    sink = None
+    if sinks_first:
+        from afsmc.verify.kernels.blocks import absorbing
+
+        sink = absorbing(states, choices, target, keys)
+    local[inside] = at
     layers = acyclic.layers_of(states, choices, local)
-    del local, inside, sorter
+    del local, inside, at
     if layers is None:
         raise GiveUp("a cycle of more than one state")
+    lead = -1 if sink is None else _sinks_first(layers, sink)
     perm = np.concatenate(layers)
-    old_choice = acyclic._ranges(states[perm], states[perm + 1])
-    branch = acyclic._ranges(choices[old_choice], choices[old_choice + 1])
+    old_choice, nbranch, target, prob = _permuted(perm, states, choices, nbranch, target, prob,
+                                                  fast)
     keys, nchoice = keys[perm], nchoice[perm]
     fr = frame(c.layout.decode(keys))
     labels = [full(t(fr), n, bool) for t in c.targets]
@@ -299,9 +412,34 @@ def _block(c: Compiled, table: ProbTable, known: I64, parts: list[tuple[I64, Exp
         full_reward = r[old_choice] + np.repeat(per_state, nchoice)
         nz = np.flatnonzero(full_reward)
         out_rewards.append((nz.astype(np.int32), full_reward[nz]))
-    return Block(keys, nchoice, nbranch[old_choice], target[branch], table.encode(prob[branch]),
+    return Block(keys, nchoice, nbranch, target, table.encode(prob, fast),
                  out_rewards, labels, [len(x) for x in layers],
-                 command[old_choice] if c.keep else command)
+                 command[old_choice] if c.keep else command, lead)
+
+
+def _permuted(perm: I64, states: I64, choices: I64, nbranch: Counts, target: I64, prob: F64,
+              fast: bool) -> tuple[I64, Counts, I64, F64]:
+    """The states in the order `perm`: each choice's old index, its branch count, each
+    branch's target and probability; `fast`: in one pass of a compiled kernel."""
+    if fast:
+        from afsmc.verify.kernels.blocks import permuted
+
+        return permuted(perm, states, choices, nbranch, target, prob)
+    old_choice = acyclic._ranges(states[perm], states[perm + 1])
+    branch = acyclic._ranges(choices[old_choice], choices[old_choice + 1])
+    return old_choice, nbranch[old_choice], target[branch], prob[branch]
+
+
+def _sinks_first(layers: list[I64], sink: Bools) -> int:
+    """The absorbing states (`sink`) of the first layer moved to its front, the order of
+    both kinds kept, so that the block's order after split_sinks is the one it gives
+    otherwise; their number, or -1 if one lies past the first layer."""
+    if not layers or sink[layers[0]].sum() != sink.sum():
+        return -1
+    first = layers[0]
+    absorbing = sink[first]
+    layers[0] = np.concatenate([first[absorbing], first[~absorbing]])
+    return int(absorbing.sum())
 
 
 @dataclass
@@ -352,7 +490,7 @@ def explore(c: Compiled, notify: Notify | None = None, max_states: int | None = 
     shown = time.monotonic()
     while waiting.pending:
         b = min(waiting.pending)
-        start = _unique(np.concatenate(waiting.pending.pop(b)))
+        start = waiting.take(b)
         block, known, took = explore_bucket(c, table, start, b, waiting, counted=count,
                                             max_states=max_states, rounds=rounds)
         rounds += took
@@ -436,12 +574,15 @@ def assemble(blocks: list[Block], c: Compiled, table: ProbTable) -> Explored:
     np.cumsum(sizes, out=layers[1:])
     for b in blocks:
         b.labels = []
-    order = np.argsort(keys)
-    sorted_keys = keys[order]
     kept = keys if c.keep else None  # a strategy's: the states' values and ranks
-    del keys
-    target, initial = _targets(blocks, order, sorted_keys, c.initial)
-    del order, sorted_keys
+    if kernels.enabled(n):
+        target, initial = _targets_hashed(blocks, keys, c)
+    else:
+        order = np.argsort(keys)
+        sorted_keys = keys[order]
+        del keys
+        target, initial = _targets(blocks, order, sorted_keys, c.initial)
+        del order, sorted_keys
     acyclic.trim_heap()
     stay = acyclic.self_loops(states, choices, target, prob)
     arrays = Arrays(states, choices, target, prob, stay, layers, initial, labels,
@@ -454,20 +595,49 @@ def _targets(blocks: list[Block], order: I64, sorted_keys: I64, initial_key: int
              ) -> tuple[acyclic.Idx, int]:
     """Each branch's successor as a state number (the state of key `sorted_keys[i]` is
     `order[i]`), a block at a time; and the initial state's number."""
+
+    def numbers(part: I64) -> I64:
+        # the part's successors lie among a few buckets' keys: searched there, in cache
+        w0, w1 = np.searchsorted(sorted_keys, [part.min(), part.max()])
+        window = sorted_keys[w0:w1 + 1]
+        pos = np.searchsorted(window, part)
+        if not len(window) or (window[np.minimum(pos, len(window) - 1)] != part).any():
+            raise GiveUp("a successor that was not explored")
+        out: I64 = order[pos + w0]
+        return out
+
+    return _renumbered(blocks, numbers), int(order[np.searchsorted(sorted_keys, initial_key)])
+
+
+def _targets_hashed(blocks: list[Block], keys: I64, c: Compiled) -> tuple[acyclic.Idx, int]:
+    """As _targets, by the compiled hash table of `keys` (the states' keys by number),
+    a region per bucket: a block's successors lie in a few buckets, whose regions stay in
+    cache while it is resolved."""
+    from afsmc.verify.kernels.hashing import Regions
+
+    bucket = c.layout.bucket
+    index = Regions(keys, bucket.shift if bucket is not None else 63)
+
+    def numbers(part: I64) -> I64:
+        out = index.find(part)
+        if out.min() < 0:
+            raise GiveUp("a successor that was not explored")
+        return out
+
+    return _renumbered(blocks, numbers), int(numbers(np.array([c.initial], np.int64))[0])
+
+
+def _renumbered(blocks: list[Block], numbers: Callable[[I64], I64]) -> acyclic.Idx:
+    """Each block's branch successors (keys) as state numbers, `numbers` of a chunk at a
+    time, each block's keys freed once done."""
     target = np.empty(sum(len(b.target) for b in blocks), np.int32)
     at = 0
     for k, b in enumerate(blocks):
         for i in range(0, len(b.target), acyclic.CHUNK):
             part = b.target[i:i + acyclic.CHUNK]
-            # the part's successors lie among a few buckets' keys: searched there, in cache
-            w0, w1 = np.searchsorted(sorted_keys, [part.min(), part.max()])
-            window = sorted_keys[w0:w1 + 1]
-            pos = np.searchsorted(window, part)
-            if not len(window) or (window[np.minimum(pos, len(window) - 1)] != part).any():
-                raise GiveUp("a successor that was not explored")
-            target[at:at + len(part)] = order[pos + w0]
+            target[at:at + len(part)] = numbers(part)
             at += len(part)
         b.target = np.zeros(0, np.int64)
         if k % TRIM_BUCKETS == TRIM_BUCKETS - 1:
             acyclic.trim_heap()
-    return target, int(order[np.searchsorted(sorted_keys, initial_key)])
+    return target

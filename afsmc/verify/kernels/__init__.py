@@ -20,6 +20,8 @@ F = TypeVar("F", bound=Callable[..., Any])
 # is used: below it, numpy's vectorised code finishes before numba is even imported.
 THRESHOLD = 200_000
 
+ANY_KEY = (1 << 63) - 1  # above every state key (they are packed into 62 bits)
+
 
 def enabled(size: int) -> bool:
     """Take the compiled kernel for a call on `size` elements? AFSMC_KERNELS=numpy keeps
