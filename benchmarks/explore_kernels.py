@@ -1,4 +1,4 @@
-"""afsmc's exploration (afsmc.verify.engines.explore_graph.explore) with its bookkeeping
+"""afsmc's exploration (afsmc.verify.explorer.explore_graph.explore) with its bookkeeping
 compiled (AFSMC_KERNELS=numba: afsmc.verify.kernels.hashing) against the numpy reference
 (AFSMC_KERNELS=numpy), alternately, each in a fresh process.
 
@@ -66,7 +66,8 @@ def child(instance: str) -> dict[str, Any]:
     from afsmc.backends.prism import property_variants
     from afsmc.compiler import load, lowered
     from afsmc.verify import kernels
-    from afsmc.verify.engines import explicit, explore, explore_graph
+    from afsmc.verify.engines import explicit
+    from afsmc.verify.explorer import explore, explore_graph
 
     low = lowered(load(os.path.join(ROOT, "examples", "uav.afsm"), INSTANCES[instance]).model,
                   "nondet")

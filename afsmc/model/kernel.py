@@ -7,7 +7,7 @@ Each operator has two forms, defined side by side and tested equal element by el
   constants and of state-free parts, the resolver, the reductions. Integers are exact.
 - `vector`: numpy arrays of many states (or runs) at once, scalars broadcast: the
   checks' enumeration, the simulator's closures (:mod:`afsmc.sim.compile`) and the
-  explorer's (:mod:`afsmc.verify.engines.explore_eval`). Integers are int64.
+  explorer's (:mod:`afsmc.verify.explorer.explore_eval`). Integers are int64.
 
 :func:`afsmc.model.evaluate.evaluate` walks an expression with them; the simulator and
 the explorer compile closures that call them. So an operator changes here and nowhere

@@ -23,9 +23,11 @@ from afsmc.diagnostics import CompileError, Diagnostic, Severity, codes
 from afsmc.lower.lowering import Lowered
 from afsmc.model import expr as E
 from afsmc.sim.compile import SimError
-from afsmc.verify.engines import acyclic, explicit, explore, explore_graph, strategy_arrays
+from afsmc.verify.arrays import acyclic
+from afsmc.verify.arrays.umb import LABEL
+from afsmc.verify.engines import explicit, strategy_arrays
 from afsmc.verify.engines.strategy_storm import Extract, Extracted
-from afsmc.verify.engines.umb import LABEL
+from afsmc.verify.explorer import explore, explore_graph
 
 Under = Literal["min", "max", "value"]
 # per property: each scheduler's (whole value, each part's value), and the paths into

@@ -51,7 +51,8 @@ STAGES: tuple[tuple[str, tuple[str, ...]], ...] = (
     # lowered IR -> PRISM/JANI/DOT text, simulated runs, Storm's and afsmc's numbers
     ("engines", ("afsmc.backends", "afsmc.controllers", "afsmc.sim", "afsmc.conform",
                  "afsmc.verify.plan", "afsmc.verify.engines", "afsmc.verify.lifting",
-                 "afsmc.verify.stream", "afsmc.verify.kernels")),
+                 "afsmc.verify.stream", "afsmc.verify.kernels", "afsmc.verify.explorer",
+                 "afsmc.verify.arrays")),
     # numbers -> one typed answer per property (verify.core drives the engines)
     ("answer", ("afsmc.verify.outcome", "afsmc.verify.core")),
     # many answers (sweeps, regions) and the reports rendered from answers; afsmc.verify,

@@ -1,5 +1,5 @@
 """A job's queries answered without Storm: afsmc's own exploration of the lowered model
-(:mod:`afsmc.verify.engines.explore`) and one exact backward pass (:mod:`afsmc.verify.engines.acyclic`).
+(:mod:`afsmc.verify.explorer.explore`) and one exact backward pass (:mod:`afsmc.verify.arrays.acyclic`).
 
 It applies to the queries P [F T] and R [F T] (min and max on an MDP) of a model whose
 clock only grows: states, choices and transitions are those Storm would build, and the
@@ -23,8 +23,10 @@ from afsmc.lower.lowering import Lowered
 from afsmc.model import expr as E
 from afsmc.model import ir
 from afsmc.sim.compile import SimError
-from afsmc.verify.engines import acyclic, explore, explore_graph, strategy_arrays
+from afsmc.verify.arrays import acyclic
+from afsmc.verify.engines import strategy_arrays
 from afsmc.verify.engines.strategy_storm import Extract, Extracted
+from afsmc.verify.explorer import explore, explore_graph
 
 Notify = Callable[[str, Any], None]
 

@@ -364,7 +364,7 @@ class _Watch:
             self.built = states
             self.say(f"built the {what}: {states:,} states, {transitions:,} transitions "
                      f"in {secs:.1f} s")
-        elif event == "solver":  # which path solves the queries (afsmc.verify.engines.acyclic)
+        elif event == "solver":  # which path solves the queries (afsmc.verify.arrays.acyclic)
             self.say(data)
         elif event == "refused":
             self.say(f"the hybrid engine cannot check {', '.join(data)}: E404 follows "

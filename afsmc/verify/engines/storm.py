@@ -17,7 +17,8 @@ from collections.abc import Callable
 from dataclasses import dataclass, field, replace
 from typing import Any, Literal
 
-from afsmc.verify.engines import acyclic, explicit, strategy_arrays, umb
+from afsmc.verify.arrays import acyclic, umb
+from afsmc.verify.engines import explicit, strategy_arrays
 from afsmc.verify.engines.storm_solvers import Solver, solver_for, value_iteration
 from afsmc.verify.engines.strategy_storm import Extract, Extracted, analyse, builder_options
 from afsmc.verify.plan import fairness, precision
@@ -523,7 +524,7 @@ def _check_each(stormpy: Any, built: _Built, check_env: Any, res: JobResult,
 
 def _acyclic(stormpy: Any, built: _Built, res: JobResult, notify: Notify, job: Job,
              program: Any) -> None:
-    """Answer what one backward pass can (afsmc.verify.engines.acyclic) if the sparse model is
+    """Answer what one backward pass can (afsmc.verify.arrays.acyclic) if the sparse model is
     acyclic but for self-loops; the rest stays in `built` for Storm's solver."""
     p = acyclic.plan(built.names, built.props, res.kind == "mdp")
     if not p.queries:

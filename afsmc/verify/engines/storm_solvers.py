@@ -12,7 +12,7 @@ from afsmc.verify.plan.precision import iterative_environment
 
 # How Storm solves the equation systems on the sparse and hybrid engines. "auto": value
 # iteration on hybrid; on sparse, one exact backward pass where the model is acyclic but for
-# self-loops (afsmc.verify.engines.acyclic, reported as "acyclic"), else Storm's topological solver,
+# self-loops (afsmc.verify.arrays.acyclic, reported as "acyclic"), else Storm's topological solver,
 # which on a mission whose clock only grows finds one component per state (on scenario 1,
 # 137 s of a 394 s query that value iteration answered in 276 s; docs/benchmarks.md).
 Solver = Literal["auto", "topological", "value-iteration"]

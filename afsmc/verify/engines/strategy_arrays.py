@@ -1,7 +1,7 @@
 """Schedulers and most probable paths from the exact backward pass (inside the Storm
 process), without Storm's scheduler, its induced DTMC or its state valuations.
 
-On a model that is acyclic but for self-loops (:mod:`afsmc.verify.engines.acyclic`), the pass that
+On a model that is acyclic but for self-loops (:mod:`afsmc.verify.arrays.acyclic`), the pass that
 computes a query's values also gives each state's optimal choice: the first choice whose
 value is the state's optimum, which is the choice Storm's topological solver keeps (its
 trivial components are solved row by row, a later row replacing the best only if strictly
@@ -38,7 +38,7 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
-from afsmc.verify.engines import acyclic, umb
+from afsmc.verify.arrays import acyclic, umb
 from afsmc.verify.engines.strategy_storm import SAME, Extract, Extracted, Group, RawPath, _groups
 
 I64 = npt.NDArray[np.int64]

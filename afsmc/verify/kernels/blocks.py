@@ -1,6 +1,6 @@
-"""Compiled kernels (numba) of a block's arrays in afsmc.verify.engines.explore_graph._block:
+"""Compiled kernels (numba) of a block's arrays in afsmc.verify.explorer.explore_graph._block:
 which states are absorbing, and the block's choices and branches in its layered order;
-and of afsmc.verify.engines.explore._ordered, an expansion's choices sorted by state.
+and of afsmc.verify.explorer.explore._ordered, an expansion's choices sorted by state.
 Each is one pass over the arrays where numpy sorts or builds index arrays first and
 gathers through them (its code there is the reference the tests compare these with)."""
 

@@ -1,5 +1,5 @@
 """Open-addressing hash tables of int64 state keys (numba): the compiled bookkeeping of
-afsmc.verify.engines.explore_graph, whose numpy counterparts sort and binary-search.
+afsmc.verify.explorer.explore_graph, whose numpy counterparts sort and binary-search.
 
 A table is a slot array of entry numbers (-1: empty) over a dense array of keys (entry e
 holds key `dense[e]`), probed linearly from a multiplicative hash of the key. It may be
@@ -7,7 +7,7 @@ cut into **regions**, one per value of `key >> shift` (a bucket of the mission c
 each a power of two of slots: a lookup then probes only its bucket's region, which stays
 in cache while a block's successors are resolved, instead of the whole table.
 
-Keys are non-negative (afsmc.verify.engines.explore packs them into 62 bits); -1 marks an
+Keys are non-negative (afsmc.verify.explorer.explore packs them into 62 bits); -1 marks an
 empty slot and, in a lookup's answer, a key that is absent.
 
 Built on them: `KeySet` (insertion-ordered, growing: a bucket's waiting keys), `Found` (a
@@ -239,7 +239,7 @@ def _encode(known: F64, code: npt.NDArray[np.uint32], prob: F64,
 
 def encode(known: F64, code: npt.NDArray[np.uint32], prob: F64
            ) -> npt.NDArray[np.uint32] | None:
-    """The codes of `prob` (afsmc.verify.engines.explore_graph.ProbTable's), or None if
+    """The codes of `prob` (afsmc.verify.explorer.keysets.ProbTable's), or None if
     some value is not known yet."""
     out = np.empty(len(prob), np.uint32)
     if not _encode(known, code, np.ascontiguousarray(prob), out):
@@ -248,8 +248,8 @@ def encode(known: F64, code: npt.NDArray[np.uint32], prob: F64
 
 
 class Found:
-    """The keys a bucket has found, for afsmc.verify.engines.explore_graph.explore_bucket's
-    compiled path (its numpy reference: explore_graph._Sorted): a KeySet of them and of
+    """The keys a bucket has found, for afsmc.verify.explorer.explore_graph.explore_bucket's
+    compiled path (its numpy reference: keysets.Sorted): a KeySet of them and of
     the keys to skip; each round's new keys sorted alone, as _Sorted gives them. `span`:
     the bucket's keys lie in [lo, hi) (a successor outside is in another bucket)."""
 

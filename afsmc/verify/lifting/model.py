@@ -1,7 +1,7 @@
 """The explored model of a mission with interval probabilities, each branch probability
 known as a function of them (afsmc.verify.lifting).
 
-afsmc's explorer (afsmc.verify.engines.explore) explores the model once, at a generic
+afsmc's explorer (afsmc.verify.explorer.explore) explores the model once, at a generic
 point p0 of the box (not its midpoint, where distinct functions such as P and a constant
 0.5 could coincide), and evaluates each branch's probability at the box's 2^k corners
 too, merged as the branches are. Every probability is multilinear in the parameters
@@ -26,8 +26,9 @@ from afsmc.model import expr as E
 from afsmc.model import ir
 from afsmc.model.semantics import inline
 from afsmc.sim.compile import SimError
-from afsmc.verify.engines import acyclic, explore, explore_graph
-from afsmc.verify.engines.acyclic import F64, Arrays
+from afsmc.verify.arrays import acyclic
+from afsmc.verify.arrays.acyclic import F64, Arrays
+from afsmc.verify.explorer import explore, explore_graph
 from afsmc.verify.lifting.symbolic import multilinear
 
 Box = Mapping[str, tuple[float, float]]

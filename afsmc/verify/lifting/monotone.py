@@ -48,8 +48,8 @@ from dataclasses import dataclass
 import numpy as np
 import numpy.typing as npt
 
-from afsmc.verify.engines import acyclic, umb
-from afsmc.verify.engines.acyclic import F64
+from afsmc.verify.arrays import acyclic, umb
+from afsmc.verify.arrays.acyclic import F64
 from afsmc.verify.lifting import passes
 from afsmc.verify.lifting.model import Box, Lifted, Query, center, corners_of
 

@@ -17,8 +17,8 @@ import dataclasses
 
 import numpy as np
 
-from afsmc.verify.engines import acyclic
-from afsmc.verify.engines.acyclic import I64
+from afsmc.verify.arrays import acyclic
+from afsmc.verify.arrays.acyclic import I64
 from afsmc.verify.lifting import passes
 from afsmc.verify.lifting.model import Lifted
 

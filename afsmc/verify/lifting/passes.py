@@ -1,7 +1,7 @@
 """The backward passes of parameter lifting on the explored model (afsmc.verify.lifting).
 
 One pass visits the layers from the absorbing states back to the initial one, as the
-exact pass does (afsmc.verify.engines.acyclic), with each branch's probability given per
+exact pass does (afsmc.verify.arrays.acyclic), with each branch's probability given per
 column of a table (afsmc.verify.lifting.model.Lifted.values_at):
 
 * **at points** (`lift=False`): each query with its own valuation of the parameters; the
@@ -29,8 +29,8 @@ from collections.abc import Sequence
 import numpy as np
 import numpy.typing as npt
 
-from afsmc.verify.engines import acyclic, umb
-from afsmc.verify.engines.acyclic import F64, I64
+from afsmc.verify.arrays import acyclic, umb
+from afsmc.verify.arrays.acyclic import F64, I64
 from afsmc.verify.lifting.model import Lifted, Query
 
 # the most elements (branches x boxes x corners x queries) a span of states computes at a

@@ -17,7 +17,7 @@ from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
 
-from afsmc.verify.engines.acyclic import F64
+from afsmc.verify.arrays.acyclic import F64
 from afsmc.verify.lifting import monotone, order
 from afsmc.verify.lifting.bounds import VALUE_BYTES
 from afsmc.verify.lifting.model import Box, Lifted, Query

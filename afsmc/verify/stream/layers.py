@@ -1,4 +1,4 @@
-"""afsmc's exploration (afsmc.verify.engines.explore_graph) with each bucket's layers
+"""afsmc's exploration (afsmc.verify.explorer.explore_graph) with each bucket's layers
 written to the scratch directory as soon as its successors are known.
 
 The clock only grows: a transition from bucket b lands in a bucket from b to the largest
@@ -30,10 +30,12 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
-from afsmc.verify.engines import acyclic, explore_graph
-from afsmc.verify.engines.acyclic import I64
-from afsmc.verify.engines.explore import Compiled, GiveUp, Notify, TooManyStates
-from afsmc.verify.engines.explore_graph import Block, Frontiers, ProbTable, _found, _unique
+from afsmc.verify.arrays import acyclic
+from afsmc.verify.arrays.acyclic import I64
+from afsmc.verify.explorer import explore_graph
+from afsmc.verify.explorer.explore import Compiled, GiveUp, Notify, TooManyStates
+from afsmc.verify.explorer.explore_graph import Block
+from afsmc.verify.explorer.keysets import Frontiers, ProbTable, found_in, unique
 from afsmc.verify.stream.scratch import Scratch
 
 
@@ -65,7 +67,7 @@ class Streamed:
 
 class _Index:
     """Sorted keys with a number each, as a few sorted runs merged like a binary
-    counter (see explore_graph._Keys)."""
+    counter (see keysets.Keys)."""
 
     def __init__(self) -> None:
         self.runs: list[tuple[I64, I64]] = []
@@ -86,7 +88,7 @@ class _Index:
             idx = np.flatnonzero(todo)
             if not idx.size or not len(sk):
                 continue
-            hit = _found(sk, keys[idx])
+            hit = found_in(sk, keys[idx])
             out[idx[hit]] = nums[np.searchsorted(sk, keys[idx[hit]])]
             todo[idx[hit]] = False
 
@@ -135,7 +137,7 @@ def explore(c: Compiled, s: Scratch, notify: Notify | None = None,
     initial = np.array([c.initial], np.int64)
     while waiting.pending:
         b = min(waiting.pending)
-        begin = _unique(np.concatenate(waiting.pending.pop(b)))
+        begin = unique(np.concatenate(waiting.pending.pop(b)))
         block, known, took = explore_graph.explore_bucket(
             c, table, begin, b, waiting, counted=count, max_states=max_states, rounds=rounds)
         rounds += took
@@ -198,7 +200,7 @@ def _resolve(window: tuple[I64, I64], sinks: _Index, keys: I64) -> tuple[I64, ac
     out = keys.copy()
     todo = np.ones(len(keys), bool)
     if len(sk):
-        hit = _found(sk, keys)
+        hit = found_in(sk, keys)
         out[hit] = nums[np.searchsorted(sk, keys[hit])]
         todo[hit] = False
     other = np.zeros(len(keys), np.int64)
@@ -263,7 +265,7 @@ def widen(stored: npt.NDArray[np.signedinteger[Any]], first: int) -> I64:
 def _dies(target: I64, w: _Waiting, seen: dict[int, tuple[int, acyclic.Bools]]) -> I64:
     """The regular states (sorted numbers) that bucket `w` points at and no earlier bucket
     did, and those of its own that nothing points at but the initial state; marked seen."""
-    points = _unique(target[target >= 0])
+    points = unique(target[target >= 0])
     out = []
     for t in sorted(seen):
         if not w.bucket <= t <= w.reach:
@@ -309,5 +311,5 @@ def _check_late(c: Compiled, s: Scratch, late: I64, buckets: list[int]) -> None:
     for b in np.unique(tb).tolist():
         i = int(np.searchsorted(buckets, b))
         if i < len(buckets) and buckets[i] == b and \
-                _found(s.load(f"keys{i}")["keys"], late[tb == b]).any():
+                found_in(s.load(f"keys{i}")["keys"], late[tb == b]).any():
             raise GiveUp("a state reached both before and after its clock went back")

@@ -13,8 +13,9 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from afsmc.verify.engines import explicit, explore_graph
-from afsmc.verify.engines.explore import Compiled
+from afsmc.verify.engines import explicit
+from afsmc.verify.explorer import explore_graph
+from afsmc.verify.explorer.explore import Compiled
 from afsmc.verify.stream import layers, sweep
 from afsmc.verify.stream.scratch import Scratch, clear, unusable
 

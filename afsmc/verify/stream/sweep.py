@@ -1,7 +1,7 @@
 """The backward pass over the streamed layers (afsmc.verify.stream.layers): the files read
 back in reverse (the sinks, the late states, then the buckets from the last explored to
 the first), every query of the run in one sweep, each layer by the same step as the
-in-memory pass (:func:`afsmc.verify.engines.acyclic.settle`).
+in-memory pass (:func:`afsmc.verify.arrays.acyclic.settle`).
 
 Values kept: those of the sinks and late states ("other"), and of the regular states that
 are live: solved, and pointed at by a bucket not yet solved (each bucket's "dies", recorded
@@ -23,8 +23,9 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
-from afsmc.verify.engines import acyclic, explore_graph
-from afsmc.verify.engines.acyclic import F64, I64, Query, Sense
+from afsmc.verify.arrays import acyclic
+from afsmc.verify.arrays.acyclic import F64, I64, Query, Sense
+from afsmc.verify.explorer import keysets
 from afsmc.verify.stream.layers import Streamed, widen
 
 LATE = np.iinfo(np.int64).min  # a branch into a late state, before it is numbered
@@ -184,7 +185,7 @@ def _pairs(part: Part, lo: int, hi: int) -> int:
     reg, oth = part.reg[b0:b1], part.oth[b0:b1]
     succ = np.where(reg >= 0, 2 * reg, 2 * oth + 1)  # the two spaces apart
     # distinct by a sort (np.unique hashes int64 keys far slower)
-    return len(explore_graph._unique(succ * acyclic.SPAN + owner))
+    return len(keysets.unique(succ * acyclic.SPAN + owner))
 
 
 def groups_of(queries: list[Query], reward_names: list[str], most: int | None = None

@@ -15,7 +15,7 @@ from afsmc.model import expr as E
 from afsmc.model import kernel
 from afsmc.model.evaluate import Env, EvalError, evaluate
 from afsmc.sim.compile import Scope, SimError, compile_expr, fold
-from afsmc.verify.engines.explore_eval import Compiler, frame
+from afsmc.verify.explorer.explore_eval import Compiler, frame
 from tests.unit.model.exprgen import (
     VARS,
     any_expression,

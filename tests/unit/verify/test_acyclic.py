@@ -1,4 +1,4 @@
-"""The backward pass over an acyclic model (afsmc.verify.engines.acyclic) gives Storm's values.
+"""The backward pass over an acyclic model (afsmc.verify.arrays.acyclic) gives Storm's values.
 
 The oracle is Storm itself: `--solver topological` is the path afsmc took before, on the
 same built model. Every example and test machine is checked both ways; the patrol robot
@@ -14,7 +14,7 @@ import pytest
 
 from afsmc.compiler import load
 from afsmc.verify import run
-from afsmc.verify.engines import acyclic
+from afsmc.verify.arrays import acyclic
 from tests.conftest import EXAMPLES
 from tests.unit.backends.test_prism import SMALL
 from tests.unit.verify.models import TEXT

@@ -1,4 +1,4 @@
-"""afsmc's own exploration and backward pass (afsmc.verify.engines.explore, explicit) give
+"""afsmc's own exploration and backward pass (afsmc.verify.explorer.explore, explicit) give
 Storm's model and Storm's values.
 
 The oracle is Storm: `--solver topological` builds the model with Storm and solves it with
@@ -17,7 +17,8 @@ import pytest
 from afsmc.backends.prism import property_variants
 from afsmc.compiler import load, lowered
 from afsmc.verify import run
-from afsmc.verify.engines import explicit, explore, explore_graph
+from afsmc.verify.engines import explicit
+from afsmc.verify.explorer import explore, explore_graph, keysets
 from tests.conftest import EXAMPLES
 from tests.unit.backends.test_prism import SMALL
 from tests.unit.verify.models import TEXT
@@ -186,7 +187,7 @@ def test_a_buckets_keys_grow_in_sorted_runs_that_agree_with_a_set() -> None:
     rng = np.random.default_rng(7)
     pool = rng.permutation(200_000).astype(np.int64)
     first, at = np.sort(pool[:3]), 3
-    keys, oracle = explore_graph._Keys(first), set(first.tolist())
+    keys, oracle = keysets.Keys(first), set(first.tolist())
     for size in rng.integers(0, 300, 400).tolist():
         new = np.sort(pool[at:at + size])
         at += size

@@ -1,5 +1,5 @@
 """The compiled bookkeeping of afsmc's explorer (afsmc.verify.kernels.hashing, taken by
-afsmc.verify.engines.explore_graph when `kernels.enabled` says so) against its oracles:
+afsmc.verify.explorer.explore_graph when `kernels.enabled` says so) against its oracles:
 the hash tables against Python sets and dicts, the coded probabilities against the numpy
 ProbTable, and whole explorations with AFSMC_KERNELS=numba against AFSMC_KERNELS=numpy,
 bit for bit (the order of the states is part of the output: strategies, witnesses)."""
@@ -16,8 +16,9 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from afsmc.verify import kernels, run
-from afsmc.verify.engines import acyclic, explore_graph
-from afsmc.verify.engines.explore import GiveUp
+from afsmc.verify.arrays import acyclic
+from afsmc.verify.explorer import explore_graph, keysets
+from afsmc.verify.explorer.explore import GiveUp
 from afsmc.verify.kernels import blocks, hashing
 from afsmc.verify.stream import layers, scratch, sweep
 from tests.unit.verify.test_streaming import CASES, _loops, _plan
@@ -122,7 +123,7 @@ def test_regions_number_the_keys_by_position(entries: set[tuple[int, int]],
        st.lists(st.sampled_from([0.1, 0.25, 1 / 3, 0.5, 0.9, 1.0, 2 / 3, 0.7]), max_size=50))
 def test_probabilities_coded_by_the_kernel_are_the_tables_codes(
         first: list[float], then: list[float]) -> None:
-    reference, compiled = explore_graph.ProbTable(), explore_graph.ProbTable()
+    reference, compiled = keysets.ProbTable(), keysets.ProbTable()
     for values in (first, then, first + then):
         prob = np.array(values)
         want = reference.encode(prob)
@@ -142,7 +143,7 @@ def test_frontiers_in_hash_sets_wait_with_the_same_keys(rounds: list[tuple[list[
                                                         ) -> None:
     # bucket = key >> 8; each round's keys spread over buckets 0..3, some added by the
     # numpy path first (a model whose kernels start part way)
-    sorted_, hashed = explore_graph.Frontiers(), explore_graph.Frontiers()
+    sorted_, hashed = keysets.Frontiers(), keysets.Frontiers()
     for i, (buckets, fast) in enumerate(rounds):
         b = np.array(buckets, np.int64)
         keys = b << 8 | (np.arange(len(b)) * 7 + i) % 5
@@ -249,7 +250,7 @@ def test_kernels_taken_part_way_through_give_the_same_exploration(
     want = _explored(path, consts, "numpy", monkeypatch)
     monkeypatch.delenv("AFSMC_KERNELS")
     monkeypatch.setattr(kernels, "THRESHOLD", want.states // 3)
-    taken = {explore_graph._Sorted: 0, hashing.Found: 0}  # buckets explored by each
+    taken = {keysets.Sorted: 0, hashing.Found: 0}  # buckets explored by each
     for cls in list(taken):
 
         def counting(self: Any, *args: Any, real: Any = cls.__init__, cls: Any = cls
@@ -274,7 +275,7 @@ def test_the_streamed_exploration_is_the_same_under_the_kernels(
         with scratch.made(str(tmp_path)) as where:
             st_ = layers.explore(c, scratch.Scratch(where))
             values, pairs = sweep.run(st_, p.queries, c.reward_names, len(p.targets))
-            files = {f"b{i}": st_.scratch.load(f"b{i}", "target") for i in range(len(st_.start))}
+            files = {f"b{i}": st_.scratch.load(f"b{i}")["target"] for i in range(len(st_.start))}
         got.append((dataclasses.replace(st_, scratch=None), values, pairs, files))
     assert _differences(got[0], got[1]) == []
 

@@ -20,8 +20,8 @@ from afsmc.model import expr as E
 from afsmc.model import ir
 from afsmc.verify import run
 from afsmc.verify.core.uncertainty import LIFTING, PARAMETRIC
-from afsmc.verify.engines import explore, explore_graph
 from afsmc.verify.engines.parametric import Extreme, extremes, interval_box
+from afsmc.verify.explorer import explore, explore_graph
 from afsmc.verify.lifting import bounds, passes, route
 from afsmc.verify.lifting.model import NotLiftable, build, queries
 from afsmc.verify.lifting.symbolic import multilinear

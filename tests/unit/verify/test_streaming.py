@@ -1,6 +1,6 @@
 """`verify --scratch DIR`: afsmc's own exploration written layer by layer to a scratch
 directory and read back by one backward pass (afsmc.verify.stream). Oracle: the in-memory
-exploration and pass (afsmc.verify.engines.explore_graph, acyclic), the reference route,
+exploration and pass (afsmc.verify.explorer.explore_graph, acyclic), the reference route,
 equal to 1e-12 on every query, the uniform DTMC's means included; and the scratch
 directory left empty after a success, an error, a full disk and an interrupt."""
 
@@ -19,7 +19,9 @@ from afsmc.compiler import load, lowered
 from afsmc.diagnostics import CompileError
 from afsmc.verify import run
 from afsmc.verify import sweep as sweep_points
-from afsmc.verify.engines import acyclic, explicit, explore, explore_graph
+from afsmc.verify.arrays import acyclic
+from afsmc.verify.engines import explicit
+from afsmc.verify.explorer import explore, explore_graph
 from afsmc.verify.stream import layers, scratch, sweep
 from tests.conftest import EXAMPLES, run_cli
 from tests.unit.backends.test_prism import SMALL

@@ -17,7 +17,8 @@ from afsmc.backends.prism import property_variants
 from afsmc.compiler import load, lowered
 from afsmc.diagnostics import CompileError
 from afsmc.verify import run
-from afsmc.verify.engines import explicit, explore_graph
+from afsmc.verify.engines import explicit
+from afsmc.verify.explorer import explore_graph
 from afsmc.verify.stream import route
 from tests.conftest import EXAMPLES, run_cli
 from tests.unit.backends.test_prism import SMALL

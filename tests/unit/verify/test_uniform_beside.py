@@ -1,5 +1,5 @@
 """The uniform DTMC answered by the MDP's own exploration: each state's value the mean of
-its floor/ceil choices (afsmc.verify.engines.acyclic, opt "mean"), with no exploration of
+its floor/ceil choices (afsmc.verify.arrays.acyclic, opt "mean"), with no exploration of
 its own. Oracles: Storm's exact engine on the uniform DTMC it builds from the PRISM text
 (rationals), and Storm's topological solver on the same DTMC."""
 

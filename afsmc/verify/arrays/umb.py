@@ -1,6 +1,6 @@
 """Storm's sparse model as numpy arrays, through its binary export (UMB: the matrix,
 labels, rewards and choice labels as flat arrays in an uncompressed archive): what the
-backward pass (afsmc.verify.engines.acyclic) and the strategies' arrays
+backward pass (afsmc.verify.arrays.acyclic) and the strategies' arrays
 (afsmc.verify.engines.strategy_arrays) read of a model Storm built. Runs inside the Storm
 process."""
 
@@ -19,7 +19,7 @@ import numpy as np
 import numpy.typing as npt
 
 if TYPE_CHECKING:
-    from afsmc.verify.engines.acyclic import Plan
+    from afsmc.verify.arrays.acyclic import Plan
 
 F64 = npt.NDArray[np.float64]
 I64 = npt.NDArray[np.int64]

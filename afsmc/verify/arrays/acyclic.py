@@ -9,7 +9,7 @@ topological solver (one per state here).
 
 How: Storm builds the sparse model and decides each query's target states (its own
 semantics of labels and expressions); the model goes to numpy through Storm's binary export
-(UMB: the matrix, labels and rewards as flat arrays; afsmc.verify.engines.umb); the states are sorted into layers
+(UMB: the matrix, labels and rewards as flat arrays; afsmc.verify.arrays.umb); the states are sorted into layers
 (every successor of a state lies in an earlier layer), renumbered so that each layer's
 states, choices and branches are contiguous, and each query is then one loop over the
 layers, vectorised within each. A model with any other cycle, or a query of another shape
@@ -34,7 +34,7 @@ from typing import Any, Literal, Protocol
 import numpy as np
 import numpy.typing as npt
 
-from afsmc.verify.engines.umb import LABEL, Raw, read
+from afsmc.verify.arrays.umb import LABEL, Raw, read
 
 F64 = npt.NDArray[np.float64]
 I64 = npt.NDArray[np.int64]

@@ -1,4 +1,4 @@
-"""The states of afsmc's own exploration (afsmc.verify.engines.explore) bucket by bucket, each
+"""The states of afsmc's own exploration (afsmc.verify.explorer.explore) bucket by bucket, each
 bucket's in topological order, and the whole as the arrays of the backward pass.
 
 Buckets are explored in increasing order of the clock, each to a fixpoint; then the late
@@ -12,16 +12,16 @@ from __future__ import annotations
 
 import time
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import numpy.typing as npt
 
 from afsmc.verify import kernels
-from afsmc.verify.engines import acyclic, umb
-from afsmc.verify.engines.acyclic import F64, I64, Arrays, Bools
-from afsmc.verify.engines.explore import (
+from afsmc.verify.arrays import acyclic, umb
+from afsmc.verify.arrays.acyclic import F64, I64, Arrays, Bools
+from afsmc.verify.explorer.explore import (
     Compiled,
     Expansion,
     GiveUp,
@@ -30,61 +30,20 @@ from afsmc.verify.engines.explore import (
     expand,
     full,
 )
-from afsmc.verify.engines.explore_eval import frame
+from afsmc.verify.explorer.explore_eval import frame
+from afsmc.verify.explorer.keysets import Codes, Frontiers, ProbTable, Sorted, found_in, unique
 from afsmc.verify.kernels import ANY_KEY
 
 if TYPE_CHECKING:
-    from afsmc.verify.kernels.hashing import Found, KeySet
+    from afsmc.verify.kernels.hashing import Found
 
 Counts = npt.NDArray[np.int32]  # choices of a state, branches of a choice
-Codes = npt.NDArray[np.uint32]
 Commands = npt.NDArray[np.int32]
 Pairs = tuple[npt.NDArray[np.int32], F64]  # a sparse vector: (positions, values)
 
 
 def _no_pairs() -> Pairs:
     return np.zeros(0, np.int32), np.zeros(0)
-
-
-class ProbTable:
-    """The distinct probabilities of the explored branches: each branch keeps its
-    probability's code (4 bytes instead of 8; 2 once assembled, if few)."""
-
-    def __init__(self) -> None:
-        self.index: dict[float, int] = {}
-        self.known = np.zeros(0)  # the values met so far, sorted ...
-        self.code = np.zeros(0, np.uint32)  # ... and their codes
-
-    def encode(self, prob: F64, fast: bool = False) -> Codes:
-        """The codes of `prob`: looked up among the known values (a model's are few),
-        the new ones added first; `fast`: by the compiled kernel while every value is
-        known already."""
-        if fast and len(self.known):
-            from afsmc.verify.kernels import hashing
-
-            codes = hashing.encode(self.known, self.code, prob)
-            if codes is not None:
-                return codes
-        pos = np.searchsorted(self.known, prob)
-        hit = self.known[np.minimum(pos, len(self.known) - 1)] == prob \
-            if len(self.known) else np.zeros(len(prob), bool)
-        if not hit.all():
-            for v in np.unique(prob[~hit]).tolist():
-                self.index.setdefault(float(v), len(self.index))
-            self.known = np.array(sorted(self.index))
-            self.code = np.array([self.index[v] for v in self.known.tolist()], np.uint32)
-            pos = np.searchsorted(self.known, prob)
-        out: Codes = self.code[pos]
-        return out
-
-    def table(self) -> F64:
-        out = np.empty(len(self.index))
-        for v, k in self.index.items():
-            out[k] = v
-        return out
-
-    def dtype(self) -> Any:
-        return np.uint16 if len(self.index) <= 1 << 16 else np.uint32
 
 
 @dataclass
@@ -105,135 +64,6 @@ class Block:
     sinks: int = -1
 
 
-def _unique(a: I64) -> I64:
-    """The sorted distinct values (numpy 2's np.unique hashes int64 keys ~30 times slower
-    than it sorts them)."""
-    s = np.sort(a)
-    if s.size < 2:
-        return s
-    out: I64 = s[np.concatenate(([True], s[1:] != s[:-1]))]
-    return out
-
-
-def _found(sorted_keys: I64, keys: I64) -> Bools:
-    pos = np.searchsorted(sorted_keys, keys)
-    pos[pos == len(sorted_keys)] = 0
-    out: Bools = sorted_keys[pos] == keys if len(sorted_keys) else np.zeros(len(keys), bool)
-    return out
-
-
-class _Keys:
-    """The keys a bucket has found so far, as a few sorted runs whose sizes at least halve
-    from one to the next (merged like the digits of a binary counter): adding a round's
-    keys costs about their number times the log of the total, not a sort of everything
-    found so far, which made a long chain (a round or two of new states per step)
-    quadratic."""
-
-    def __init__(self, first: I64) -> None:
-        self.runs: list[I64] = [first]
-        self.size = len(first)
-
-    def add(self, keys: I64) -> None:
-        """Add sorted keys, none of them present already."""
-        self.runs.append(keys)
-        self.size += len(keys)
-        while len(self.runs) > 1 and len(self.runs[-2]) <= 2 * len(self.runs[-1]):
-            last = self.runs.pop()
-            # two sorted runs: the stable sort (timsort) merges them in linear time
-            self.runs[-1] = np.sort(np.concatenate([self.runs[-1], last]), kind="stable")
-
-    def found(self, keys: I64) -> Bools:
-        out = np.zeros(len(keys), bool)
-        for run in self.runs:
-            if len(run):
-                out |= _found(run, keys)
-        return out
-
-    def sorted(self) -> I64:
-        """Every key, sorted."""
-        while len(self.runs) > 1:
-            last = self.runs.pop()
-            self.runs[-1] = np.sort(np.concatenate([self.runs[-1], last]), kind="stable")
-        return self.runs[0]
-
-
-@dataclass
-class Frontiers:
-    """What waits to be explored: keys by bucket (the union of each bucket's arrays), and
-    the late ones. The compiled path keeps a bucket's keys in a hash set instead (`sets`),
-    its list in `pending` then holding them once, as one array."""
-
-    pending: dict[int, list[I64]] = field(default_factory=dict)
-    late: list[I64] = field(default_factory=list)
-    sets: dict[int, KeySet] = field(default_factory=dict)
-
-    def add(self, buckets: I64, keys: I64, fast: bool = False) -> None:
-        """Add `keys`, each of bucket `buckets[i]`; `fast`: into hash sets (a bucket's
-        keys once, not sorted round after round)."""
-        if fast or self.sets:
-            self._add_hashed(buckets, keys)
-            return
-        order = np.argsort(buckets, kind="stable")
-        buckets, keys = buckets[order], keys[order]
-        cuts = np.flatnonzero(np.diff(buckets)) + 1
-        for part, b in zip(np.split(keys, cuts), buckets[np.r_[0, cuts]].tolist(), strict=True):
-            self.pending.setdefault(int(b), []).append(_unique(part))
-
-    def _add_hashed(self, buckets: I64, keys: I64) -> None:
-        from afsmc.verify.kernels.hashing import KeySet, grouped
-
-        for gone in [b for b in self.sets if b not in self.pending]:
-            del self.sets[gone]  # taken by a caller that pops `pending` itself
-        for b, part in grouped(buckets, keys):
-            hashed = self.sets.get(b)
-            if hashed is None:
-                hashed = self.sets[b] = KeySet(len(part))
-                for earlier in self.pending.get(b, []):  # added by the numpy path
-                    hashed.add(earlier)
-            hashed.add(part)
-            self.pending[b] = [hashed.keys()]
-
-    def take(self, b: int) -> I64:
-        """The sorted distinct keys waiting in bucket `b`, no longer waiting."""
-        parts = self.pending.pop(b)
-        if self.sets.pop(b, None) is not None:
-            return np.sort(parts[0])  # distinct already
-        return _unique(np.concatenate(parts))
-
-
-class _Sorted:
-    """The keys a bucket has found (the numpy reference): sorted runs (_Keys), each
-    round's candidates sorted and searched there and among the keys to skip."""
-
-    def __init__(self, start: I64, skip: I64 | None) -> None:
-        self.skip = np.zeros(0, np.int64) if skip is None else skip
-        first = _unique(start)
-        self.first: I64 = first[~_found(self.skip, first)]
-        self.keys = _Keys(self.first)
-
-    @property
-    def size(self) -> int:
-        return self.keys.size
-
-    def add(self, targets: I64) -> I64:
-        """The keys of `targets` not found (nor skipped) before, sorted; now found."""
-        cand = _unique(targets)
-        frontier = cand[~self.keys.found(cand) & ~_found(self.skip, cand)]
-        self.keys.add(frontier)  # disjoint from what it has
-        return frontier
-
-    def sorted(self) -> I64:
-        return self.keys.sorted()
-
-    def inside(self, expanded: I64, target: I64) -> tuple[Bools, I64]:
-        """Which of `target` were found, and the position of each of those in `expanded`
-        (the found keys in the order they were expanded)."""
-        known = self.sorted()
-        sorter = np.argsort(expanded)
-        inside = _found(known, target)
-        return inside, sorter[np.searchsorted(known, target[inside])]
-
-
 def explore_bucket(c: Compiled, table: ProbTable, start: I64, b: int | None,
                    waiting: Frontiers, exclude: I64 | None = None, *, counted: int = 0,
                    max_states: int | None = None, rounds: int | None = None
@@ -246,13 +76,13 @@ def explore_bucket(c: Compiled, table: ProbTable, start: I64, b: int | None,
     with `rounds` (those of earlier buckets), GiveUp as soon as the states come too few
     per round (see NARROW_ROUNDS), rather than at the end of the chain."""
     fast = kernels.enabled(counted + len(start))
-    found: _Sorted | Found
+    found: Sorted | Found
     if fast:
         from afsmc.verify.kernels.hashing import Found
 
         found = Found(start, exclude, _span(c, b))
     else:
-        found = _Sorted(start, exclude)
+        found = Sorted(start, exclude)
     frontier = found.first
     parts: list[tuple[I64, Expansion]] = []
     while frontier.size:
@@ -267,7 +97,7 @@ def explore_bucket(c: Compiled, table: ProbTable, start: I64, b: int | None,
                 waiting.add(tb[later], x.target[later], fast)
             earlier = tb < b
             if earlier.any():
-                waiting.late.append(_unique(x.target[earlier]))
+                waiting.late.append(unique(x.target[earlier]))
         frontier = found.add(x.target[same])
         if max_states is not None and counted + found.size > max_states:
             raise TooManyStates(counted + found.size, partial=True)
@@ -300,7 +130,7 @@ def _subset(blk: Block, idx: I64, layers: list[int]) -> Block:
 def _pairs_at(r: Pairs, idx: I64) -> Pairs:
     """The entries of `r` at the positions `idx` (sorted), renumbered 0, 1, ... along it."""
     at, values = r
-    keep = _found(idx, at.astype(np.int64))
+    keep = found_in(idx, at.astype(np.int64))
     return np.searchsorted(idx, at[keep]).astype(np.int32), values[keep]
 
 
@@ -358,7 +188,7 @@ def _cut(blk: Block, k: int) -> tuple[Block, Block]:
     return head, tail
 
 
-def _block(c: Compiled, table: ProbTable, found: _Sorted | Found,
+def _block(c: Compiled, table: ProbTable, found: Sorted | Found,
            parts: list[tuple[I64, Expansion]], fast: bool, sinks_first: bool = False
            ) -> Block:
     """The block of the explored `parts` (states in the order they were expanded, those
@@ -516,7 +346,7 @@ def explore(c: Compiled, notify: Notify | None = None, max_states: int | None = 
         block, known, _ = explore_bucket(c, table, np.concatenate(waiting.late), None,
                                          Frontiers(), absorbing, counted=count,
                                          max_states=max_states)
-        if _found(np.concatenate(regular), known).any():
+        if found_in(np.concatenate(regular), known).any():
             raise GiveUp("a state reached both before and after its clock went back")
         blocks.append(block)
     del regular

@@ -17,7 +17,7 @@ the transitions as flat arrays, explored with numpy a bucket at a time:
 
 Each choice is one enabled command (an MDP's), its branches those of non-zero probability
 with equal successors merged, as Storm builds them, so the counts of states, choices and
-transitions equal Storm's. The result is :class:`afsmc.verify.engines.acyclic.Arrays`: the states
+transitions equal Storm's. The result is :class:`afsmc.verify.arrays.acyclic.Arrays`: the states
 numbered so that every successor of a state lies in an earlier layer, for its backward
 pass. Everything is vectorised per bucket, per mode and per command.
 """
@@ -39,9 +39,9 @@ from afsmc.model import expr as E
 from afsmc.model import ir
 from afsmc.model.bounds import bounds
 from afsmc.sim.compile import Scope, fold, static
-from afsmc.verify.engines import acyclic
-from afsmc.verify.engines.acyclic import F64, I64
-from afsmc.verify.engines.explore_eval import MEMO, Compiler, Fn, frame
+from afsmc.verify.arrays import acyclic
+from afsmc.verify.arrays.acyclic import F64, I64
+from afsmc.verify.explorer.explore_eval import MEMO, Compiler, Fn, frame
 
 KEY_BITS = 62  # a state's key must fit in a signed 64-bit integer
 SUM_TOLERANCE = 1e-6  # Storm's default check that a command's probabilities sum to 1

@@ -1,5 +1,5 @@
 """Folded expressions of the lowered model -> closures over a frame of states, each
-distinct subexpression evaluated once per frame (for afsmc.verify.engines.explore).
+distinct subexpression evaluated once per frame (for afsmc.verify.explorer.explore).
 
 The explorer evaluates every command of a mode over the same states: the floor/ceil
 variants of an action share their guard and probabilities, and the formulas the lowering
