@@ -27,13 +27,14 @@ from __future__ import annotations
 import contextlib
 import ctypes
 import itertools
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
 from typing import Any, Literal, Protocol
 
 import numpy as np
 import numpy.typing as npt
 
+from afsmc.verify import kernels
 from afsmc.verify.engines.umb import LABEL, Raw, read
 
 F64 = npt.NDArray[np.float64]
@@ -143,6 +144,14 @@ class Sparse:
     @property
     def nbytes(self) -> int:
         return int(self.at.nbytes + self.values.nbytes)
+
+
+def table_codes(prob: Vec) -> tuple[F64, npt.NDArray[np.unsignedinteger[Any]]]:
+    """A probability vector as a compiled kernel reads it: branch b's probability is
+    table[codes[b]], or table[b] where `codes` is empty (a plain array)."""
+    if isinstance(prob, Coded):
+        return prob.table, prob.codes
+    return np.asarray(prob[0:len(prob)], np.float64), np.zeros(0, np.uint8)
 
 
 def sparse_or_dense(size: int, at: I64, values: F64) -> Vec:
@@ -261,8 +270,14 @@ def renumber(states: I64, choices: I64, target: Idx, prob: F64,
 
 def self_loops(states: I64, choices: I64, target: Idx, prob: Vec) -> Vec | None:
     """Each choice's probability of staying in its state (sparse where few choices loop);
-    None if no choice loops. A slice of choices at a time."""
+    None if no choice loops. A slice of choices at a time (or by the compiled kernel,
+    afsmc.verify.kernels.passes, on a large model)."""
     m = len(choices) - 1
+    if kernels.enabled(len(states) - 1):
+        from afsmc.verify.kernels import passes
+
+        where, stays = passes.self_loops(states, choices, target, *table_codes(prob))
+        return sparse_or_dense(m, where, stays) if len(where) else None
     at: list[I64] = []
     sums: list[F64] = []
     for c in range(0, m, CHUNK):
@@ -384,30 +399,46 @@ def solve_many(a: Arrays, queries: list[Query]) -> dict[str, float]:
 def _pass(a: Arrays, qs: list[Query], best: npt.NDArray[np.integer[Any]] | None = None,
           value: F64 | None = None, policy: Policy | None = None) -> list[float]:
     """One pass over the layers for queries of one kind, from the absorbing states back
-    to the initial one: per layer, the choices' values are one sparse product (its
-    branches' probabilities times their successors' values), then each state's is the
-    min or max over its choices. With `best` (n x queries): each state's first choice
-    (number within the state) whose value is the optimum of each query, which is the
-    choice Storm's topological solver keeps; with `value` (n x queries): every state's
-    value. With `policy`, no optimum: each query's states take the choices of its
-    policy."""
-    from scipy.sparse import csr_matrix
-
+    to the initial one: per layer, the choices' values (their branches' probabilities
+    times their successors' values), then each state's is the min or max over its
+    choices. With `best` (n x queries): each state's first choice (number within the
+    state) whose value is the optimum of each query, which is the choice Storm's
+    topological solver keeps; with `value` (n x queries): every state's value. With
+    `policy`, no optimum: each query's states take the choices of its policy. A large
+    model's spans are solved by the compiled kernel (afsmc.verify.kernels.passes), a
+    small one's by numpy (:func:`_numpy_step`), to the same values."""
     k, n = len(qs), len(a.states) - 1
     if value is None:
         value = np.zeros((n, k))
-    on_target = [a.labels[LABEL + str(q.target)] for q in qs]
-    reward = [a.rewards[q.reward] for q in qs] if qs[0].kind == "R" else None
     assert not (qs[0].opt == "mean" and (best is not None or policy is not None))
-    sense = Sense.of(qs)
+    step = (_kernel_step if kernels.enabled(n) else _numpy_step)(a, qs, best, value, policy)
     for i, (lo, hi) in enumerate(_spans(a.layers)):
         if i % TRIM_EVERY == TRIM_EVERY - 1:
             trim_heap()
+        step(lo, hi)
+    return [float(v) for v in value[a.initial]]
+
+
+Step = Callable[[int, int], None]  # solves the states lo..hi of a layer into the values
+
+
+def _numpy_step(a: Arrays, qs: list[Query], best: npt.NDArray[np.integer[Any]] | None,
+                value: F64, policy: Policy | None) -> Step:
+    """A span's states solved by numpy: the choices' values are one sparse product (a
+    CSR matrix of the span's branches times the value matrix), then :func:`settle`."""
+    from scipy.sparse import csr_matrix
+
+    n = len(a.states) - 1
+    on_target = [a.labels[LABEL + str(q.target)] for q in qs]
+    reward = [a.rewards[q.reward] for q in qs] if qs[0].kind == "R" else None
+    sense = Sense.of(qs)
+
+    def step(lo: int, hi: int) -> None:
         c0, c1 = int(a.states[lo]), int(a.states[hi])
         b0, b1 = int(a.choices[c0]), int(a.choices[c1])
         rows = (a.choices[c0:c1 + 1] - b0).astype(np.int32 if b1 - b0 < 2**31 else np.int64)
-        step = csr_matrix((a.prob[b0:b1], a.target[b0:b1], rows), shape=(c1 - c0, n))
-        per_choice = np.asarray(step @ value)
+        matrix = csr_matrix((a.prob[b0:b1], a.target[b0:b1], rows), shape=(c1 - c0, n))
+        per_choice = np.asarray(matrix @ value)
         if reward is not None:
             per_choice += np.stack([r[c0:c1] for r in reward], axis=1)
         picked = None if policy is None else policy.offsets[lo:hi][:, policy.columns]
@@ -415,7 +446,42 @@ def _pass(a: Arrays, qs: list[Query], best: npt.NDArray[np.integer[Any]] | None 
                               a.states[lo:hi + 1] - c0,
                               np.stack([t[lo:hi] for t in on_target], axis=1), sense,
                               None if best is None else best[lo:hi], picked)
-    return [float(v) for v in value[a.initial]]
+
+    return step
+
+
+def _kernel_step(a: Arrays, qs: list[Query], best: npt.NDArray[np.integer[Any]] | None,
+                 value: F64, policy: Policy | None) -> Step:
+    """A span's states solved by the compiled kernel (afsmc.verify.kernels.passes.span),
+    which visits each branch once per query and builds no matrix. Each distinct target
+    and reward model is sliced once per span, the queries pointing at their columns."""
+    from afsmc.verify.kernels import passes
+
+    k = len(qs)
+    sense = Sense.of(qs)
+    table, codes = table_codes(a.prob)
+    targets = sorted({q.target for q in qs})
+    labels = [a.labels[LABEL + str(t)] for t in targets]
+    ocol = np.array([targets.index(q.target) for q in qs], np.int64)
+    names = sorted({q.reward for q in qs}) if qs[0].kind == "R" else []
+    rewards = [a.rewards[r] for r in names]
+    rcol = np.array([names.index(q.reward) if names else 0 for q in qs], np.int64)
+    sign = np.where(sense.low, 1.0, -1.0)
+    no_best = np.zeros((0, k), np.int32)
+    picked = np.zeros((0, 1), np.int32) if policy is None else policy.offsets
+    pcol = np.zeros(k, np.int64) if policy is None else np.asarray(policy.columns, np.int64)
+
+    def step(lo: int, hi: int) -> None:
+        c0, c1 = int(a.states[lo]), int(a.states[hi])
+        reward = (np.stack([r[c0:c1] for r in rewards], axis=1) if rewards
+                  else np.zeros((0, 0)))
+        stay = np.zeros(0) if a.stay is None else np.asarray(a.stay[c0:c1], np.float64)
+        on = np.stack([t[lo:hi] for t in labels], axis=1)
+        passes.span(lo, hi, a.states, a.choices, a.target, table, codes, value, reward, rcol,
+                    stay, on, ocol, sense.stuck, sense.reached, sense.mean, sign,
+                    no_best if best is None else best, picked, pcol)
+
+    return step
 
 
 @dataclass(frozen=True)
@@ -449,6 +515,15 @@ def settle(per_choice: F64, stay: Vec | None, offsets: I64, on: Bools, sense: Se
     each state's first optimal choice, written there), or its policy's choice
     (`picked`: states x queries, the choice's number within its state), or the mean."""
     k = per_choice.shape[1]
+    if kernels.enabled(len(per_choice)):
+        from afsmc.verify.kernels import passes
+
+        got: F64 = passes.settle(
+            per_choice, np.zeros(0) if stay is None else np.asarray(stay, np.float64),
+            offsets, on, sense.stuck, sense.reached, sense.mean, np.where(sense.low, 1.0, -1.0),
+            np.zeros((0, k), np.int32) if best is None else best,
+            np.zeros((0, k), np.int32) if picked is None else picked)
+        return got
     if sense.mean:
         per_state = _mean(per_choice, None if stay is None else np.asarray(stay, np.float64),
                           offsets, sense.stuck)
