@@ -146,14 +146,6 @@ class Sparse:
         return int(self.at.nbytes + self.values.nbytes)
 
 
-def table_codes(prob: Vec) -> tuple[F64, npt.NDArray[np.unsignedinteger[Any]]]:
-    """A probability vector as a compiled kernel reads it: branch b's probability is
-    table[codes[b]], or table[b] where `codes` is empty (a plain array)."""
-    if isinstance(prob, Coded):
-        return prob.table, prob.codes
-    return np.asarray(prob[0:len(prob)], np.float64), np.zeros(0, np.uint8)
-
-
 def sparse_or_dense(size: int, at: I64, values: F64) -> Vec:
     """The vector of `values` at `at` (sorted), 0 elsewhere, in the smaller form."""
     if 2 * len(at) < size:
@@ -276,7 +268,7 @@ def self_loops(states: I64, choices: I64, target: Idx, prob: Vec) -> Vec | None:
     if kernels.enabled(len(states) - 1):
         from afsmc.verify.kernels import passes
 
-        where, stays = passes.self_loops(states, choices, target, *table_codes(prob))
+        where, stays = passes.self_loops(states, choices, target, *passes.table_codes(prob))
         return sparse_or_dense(m, where, stays) if len(where) else None
     at: list[I64] = []
     sums: list[F64] = []
@@ -411,7 +403,12 @@ def _pass(a: Arrays, qs: list[Query], best: npt.NDArray[np.integer[Any]] | None 
     if value is None:
         value = np.zeros((n, k))
     assert not (qs[0].opt == "mean" and (best is not None or policy is not None))
-    step = (_kernel_step if kernels.enabled(n) else _numpy_step)(a, qs, best, value, policy)
+    if kernels.enabled(n):
+        from afsmc.verify.kernels import passes
+
+        step = passes.stepper(a, qs, best, value, policy)
+    else:
+        step = _numpy_step(a, qs, best, value, policy)
     for i, (lo, hi) in enumerate(_spans(a.layers)):
         if i % TRIM_EVERY == TRIM_EVERY - 1:
             trim_heap()
@@ -450,40 +447,6 @@ def _numpy_step(a: Arrays, qs: list[Query], best: npt.NDArray[np.integer[Any]] |
     return step
 
 
-def _kernel_step(a: Arrays, qs: list[Query], best: npt.NDArray[np.integer[Any]] | None,
-                 value: F64, policy: Policy | None) -> Step:
-    """A span's states solved by the compiled kernel (afsmc.verify.kernels.passes.span),
-    which visits each branch once per query and builds no matrix. Each distinct target
-    and reward model is sliced once per span, the queries pointing at their columns."""
-    from afsmc.verify.kernels import passes
-
-    k = len(qs)
-    sense = Sense.of(qs)
-    table, codes = table_codes(a.prob)
-    targets = sorted({q.target for q in qs})
-    labels = [a.labels[LABEL + str(t)] for t in targets]
-    ocol = np.array([targets.index(q.target) for q in qs], np.int64)
-    names = sorted({q.reward for q in qs}) if qs[0].kind == "R" else []
-    rewards = [a.rewards[r] for r in names]
-    rcol = np.array([names.index(q.reward) if names else 0 for q in qs], np.int64)
-    sign = np.where(sense.low, 1.0, -1.0)
-    no_best = np.zeros((0, k), np.int32)
-    picked = np.zeros((0, 1), np.int32) if policy is None else policy.offsets
-    pcol = np.zeros(k, np.int64) if policy is None else np.asarray(policy.columns, np.int64)
-
-    def step(lo: int, hi: int) -> None:
-        c0, c1 = int(a.states[lo]), int(a.states[hi])
-        reward = (np.stack([r[c0:c1] for r in rewards], axis=1) if rewards
-                  else np.zeros((0, 0)))
-        stay = np.zeros(0) if a.stay is None else np.asarray(a.stay[c0:c1], np.float64)
-        on = np.stack([t[lo:hi] for t in labels], axis=1)
-        passes.span(lo, hi, a.states, a.choices, a.target, table, codes, value, reward, rcol,
-                    stay, on, ocol, sense.stuck, sense.reached, sense.mean, sign,
-                    no_best if best is None else best, picked, pcol)
-
-    return step
-
-
 @dataclass(frozen=True)
 class Sense:
     """What the queries of one pass share: their kind's value on the target and of a
@@ -518,12 +481,7 @@ def settle(per_choice: F64, stay: Vec | None, offsets: I64, on: Bools, sense: Se
     if kernels.enabled(len(per_choice)):
         from afsmc.verify.kernels import passes
 
-        got: F64 = passes.settle(
-            per_choice, np.zeros(0) if stay is None else np.asarray(stay, np.float64),
-            offsets, on, sense.stuck, sense.reached, sense.mean, np.where(sense.low, 1.0, -1.0),
-            np.zeros((0, k), np.int32) if best is None else best,
-            np.zeros((0, k), np.int32) if picked is None else picked)
-        return got
+        return passes.settled(per_choice, stay, offsets, on, sense, best, picked)
     if sense.mean:
         per_state = _mean(per_choice, None if stay is None else np.asarray(stay, np.float64),
                           offsets, sense.stuck)

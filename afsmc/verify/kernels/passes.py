@@ -14,17 +14,22 @@ the same floating-point order, so that the values are the same to the bit:
   `add.reduceat`: the first term plus the pairwise sum of the others (:func:`_pairwise`).
 
 Without the CSR matrix, the value matrix of each span or the temporaries of numpy's
-min/max over choices, a pass does one visit per branch and query.
+min/max over choices, a pass does one visit per branch and query. :func:`stepper`,
+:func:`settled` and :func:`table_codes` put acyclic's arrays in the kernels' form.
 """
 
 from __future__ import annotations
 
-from typing import Any
+from collections.abc import Callable
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import numpy.typing as npt
 
 from afsmc.verify.kernels import jit
+
+if TYPE_CHECKING:  # (acyclic imports this module when it takes the kernels)
+    from afsmc.verify.engines.acyclic import Arrays, Policy, Query, Sense, Vec
 
 F64 = npt.NDArray[np.float64]
 I64 = npt.NDArray[np.int64]
@@ -258,3 +263,61 @@ def self_loops(states: I64, choices: I64, target: Ints, table: F64,
                 sums[i] = _reduceat(buf, 0, here)
                 i += 1
     return at[:i].copy(), sums[:i].copy()
+
+
+def table_codes(prob: Vec) -> tuple[F64, npt.NDArray[np.unsignedinteger[Any]]]:
+    """A probability vector as a kernel reads it: branch b's probability is
+    table[codes[b]], or table[b] where `codes` is empty (a plain array)."""
+    from afsmc.verify.engines.acyclic import Coded
+
+    if isinstance(prob, Coded):
+        return prob.table, prob.codes
+    return np.asarray(prob[0:len(prob)], np.float64), np.zeros(0, np.uint8)
+
+
+def stepper(a: Arrays, qs: list[Query], best: Ints | None, value: F64,
+            policy: Policy | None) -> Callable[[int, int], None]:
+    """acyclic._pass's step by :func:`span`: solves the states lo..hi of a layer into
+    `value` (and `best`), visiting each branch once per query and building no matrix.
+    Each distinct target and reward model is sliced once per span, the queries pointing
+    at their columns."""
+    from afsmc.verify.engines.acyclic import Sense
+    from afsmc.verify.engines.umb import LABEL
+
+    k = len(qs)
+    sense = Sense.of(qs)
+    table, codes = table_codes(a.prob)
+    targets = sorted({q.target for q in qs})
+    labels = [a.labels[LABEL + str(t)] for t in targets]
+    ocol = np.array([targets.index(q.target) for q in qs], np.int64)
+    names = sorted({q.reward for q in qs}) if qs[0].kind == "R" else []
+    rewards = [a.rewards[r] for r in names]
+    rcol = np.array([names.index(q.reward) if names else 0 for q in qs], np.int64)
+    sign = np.where(sense.low, 1.0, -1.0)
+    no_best = np.zeros((0, k), np.int32)
+    picked = np.zeros((0, 1), np.int32) if policy is None else policy.offsets
+    pcol = np.zeros(k, np.int64) if policy is None else np.asarray(policy.columns, np.int64)
+
+    def step(lo: int, hi: int) -> None:
+        c0, c1 = int(a.states[lo]), int(a.states[hi])
+        reward = (np.stack([r[c0:c1] for r in rewards], axis=1) if rewards
+                  else np.zeros((0, 0)))
+        stay = np.zeros(0) if a.stay is None else np.asarray(a.stay[c0:c1], np.float64)
+        on = np.stack([t[lo:hi] for t in labels], axis=1)
+        span(lo, hi, a.states, a.choices, a.target, table, codes, value, reward, rcol, stay,
+             on, ocol, sense.stuck, sense.reached, sense.mean, sign,
+             no_best if best is None else best, picked, pcol)
+
+    return step
+
+
+def settled(per_choice: F64, stay: Vec | None, offsets: I64, on: Bools, sense: Sense,
+            best: Ints | None, picked: Ints | None) -> F64:
+    """acyclic.settle by the :func:`settle` kernel (its arguments, the same values)."""
+    k = per_choice.shape[1]
+    out: F64 = settle(per_choice, np.zeros(0) if stay is None else np.asarray(stay, np.float64),
+                      offsets, on, sense.stuck, sense.reached, sense.mean,
+                      np.where(sense.low, 1.0, -1.0),
+                      np.zeros((0, k), np.int32) if best is None else best,
+                      np.zeros((0, k), np.int32) if picked is None else picked)
+    return out
