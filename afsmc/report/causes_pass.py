@@ -24,7 +24,7 @@ from afsmc.lower.lowering import Lowered
 from afsmc.model import expr as E
 from afsmc.sim.compile import SimError
 from afsmc.verify.arrays import acyclic
-from afsmc.verify.arrays.umb import LABEL
+from afsmc.verify.arrays.acyclic import LABEL
 from afsmc.verify.engines import explicit, strategy_arrays
 from afsmc.verify.engines.strategy_storm import Extract, Extracted
 from afsmc.verify.explorer import explore, explore_graph

@@ -27,15 +27,17 @@ from __future__ import annotations
 import contextlib
 import ctypes
 import itertools
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
 from typing import Any, Literal, Protocol
 
 import numpy as np
 import numpy.typing as npt
 
-from afsmc.verify.arrays.umb import LABEL, Raw, read
+from afsmc.verify import kernels
 
+# the labels of each query's target states in the arrays (Storm's export adds them too)
+LABEL = "__afsmc_target_"
 F64 = npt.NDArray[np.float64]
 I64 = npt.NDArray[np.int64]
 Bools = npt.NDArray[np.bool_]
@@ -261,8 +263,14 @@ def renumber(states: I64, choices: I64, target: Idx, prob: F64,
 
 def self_loops(states: I64, choices: I64, target: Idx, prob: Vec) -> Vec | None:
     """Each choice's probability of staying in its state (sparse where few choices loop);
-    None if no choice loops. A slice of choices at a time."""
+    None if no choice loops. A slice of choices at a time (or by the compiled kernel,
+    afsmc.verify.kernels.passes, on a large model)."""
     m = len(choices) - 1
+    if kernels.enabled(len(states) - 1):
+        from afsmc.verify.kernels import passes
+
+        where, stays = passes.self_loops(states, choices, target, *passes.table_codes(prob))
+        return sparse_or_dense(m, where, stays) if len(where) else None
     at: list[I64] = []
     sums: list[F64] = []
     for c in range(0, m, CHUNK):
@@ -384,30 +392,51 @@ def solve_many(a: Arrays, queries: list[Query]) -> dict[str, float]:
 def _pass(a: Arrays, qs: list[Query], best: npt.NDArray[np.integer[Any]] | None = None,
           value: F64 | None = None, policy: Policy | None = None) -> list[float]:
     """One pass over the layers for queries of one kind, from the absorbing states back
-    to the initial one: per layer, the choices' values are one sparse product (its
-    branches' probabilities times their successors' values), then each state's is the
-    min or max over its choices. With `best` (n x queries): each state's first choice
-    (number within the state) whose value is the optimum of each query, which is the
-    choice Storm's topological solver keeps; with `value` (n x queries): every state's
-    value. With `policy`, no optimum: each query's states take the choices of its
-    policy."""
-    from scipy.sparse import csr_matrix
-
+    to the initial one: per layer, the choices' values (their branches' probabilities
+    times their successors' values), then each state's is the min or max over its
+    choices. With `best` (n x queries): each state's first choice (number within the
+    state) whose value is the optimum of each query, which is the choice Storm's
+    topological solver keeps; with `value` (n x queries): every state's value. With
+    `policy`, no optimum: each query's states take the choices of its policy. A large
+    model's spans are solved by the compiled kernel (afsmc.verify.kernels.passes), a
+    small one's by numpy (:func:`_numpy_step`), to the same values."""
     k, n = len(qs), len(a.states) - 1
     if value is None:
         value = np.zeros((n, k))
-    on_target = [a.labels[LABEL + str(q.target)] for q in qs]
-    reward = [a.rewards[q.reward] for q in qs] if qs[0].kind == "R" else None
     assert not (qs[0].opt == "mean" and (best is not None or policy is not None))
-    sense = Sense.of(qs)
+    if kernels.enabled(n):
+        from afsmc.verify.kernels import passes
+
+        step = passes.stepper(a, qs, best, value, policy)
+    else:
+        step = _numpy_step(a, qs, best, value, policy)
     for i, (lo, hi) in enumerate(_spans(a.layers)):
         if i % TRIM_EVERY == TRIM_EVERY - 1:
             trim_heap()
+        step(lo, hi)
+    return [float(v) for v in value[a.initial]]
+
+
+Step = Callable[[int, int], None]  # solves the states lo..hi of a layer into the values
+
+
+def _numpy_step(a: Arrays, qs: list[Query], best: npt.NDArray[np.integer[Any]] | None,
+                value: F64, policy: Policy | None) -> Step:
+    """A span's states solved by numpy: the choices' values are one sparse product (a
+    CSR matrix of the span's branches times the value matrix), then :func:`settle`."""
+    from scipy.sparse import csr_matrix
+
+    n = len(a.states) - 1
+    on_target = [a.labels[LABEL + str(q.target)] for q in qs]
+    reward = [a.rewards[q.reward] for q in qs] if qs[0].kind == "R" else None
+    sense = Sense.of(qs)
+
+    def step(lo: int, hi: int) -> None:
         c0, c1 = int(a.states[lo]), int(a.states[hi])
         b0, b1 = int(a.choices[c0]), int(a.choices[c1])
         rows = (a.choices[c0:c1 + 1] - b0).astype(np.int32 if b1 - b0 < 2**31 else np.int64)
-        step = csr_matrix((a.prob[b0:b1], a.target[b0:b1], rows), shape=(c1 - c0, n))
-        per_choice = np.asarray(step @ value)
+        matrix = csr_matrix((a.prob[b0:b1], a.target[b0:b1], rows), shape=(c1 - c0, n))
+        per_choice = np.asarray(matrix @ value)
         if reward is not None:
             per_choice += np.stack([r[c0:c1] for r in reward], axis=1)
         picked = None if policy is None else policy.offsets[lo:hi][:, policy.columns]
@@ -415,7 +444,8 @@ def _pass(a: Arrays, qs: list[Query], best: npt.NDArray[np.integer[Any]] | None 
                               a.states[lo:hi + 1] - c0,
                               np.stack([t[lo:hi] for t in on_target], axis=1), sense,
                               None if best is None else best[lo:hi], picked)
-    return [float(v) for v in value[a.initial]]
+
+    return step
 
 
 @dataclass(frozen=True)
@@ -449,6 +479,10 @@ def settle(per_choice: F64, stay: Vec | None, offsets: I64, on: Bools, sense: Se
     each state's first optimal choice, written there), or its policy's choice
     (`picked`: states x queries, the choice's number within its state), or the mean."""
     k = per_choice.shape[1]
+    if kernels.enabled(len(per_choice)):
+        from afsmc.verify.kernels import passes
+
+        return passes.settled(per_choice, stay, offsets, on, sense, best, picked)
     if sense.mean:
         per_state = _mean(per_choice, None if stay is None else np.asarray(stay, np.float64),
                           offsets, sense.stuck)
@@ -532,48 +566,6 @@ def _first_best(per_choice: F64, per_state: F64, offsets: I64) -> I64:
     hit = per_choice == np.repeat(per_state, sizes)
     out: I64 = np.minimum.reduceat(np.where(hit, local, np.int64(1) << 40), offsets[:-1])
     return np.where(out == np.int64(1) << 40, 0, out)
-
-
-def arrange(raw: Raw) -> Arrays | None:
-    """Layer and renumber the exported model; None if it has a cycle (other than
-    self-loops) or a transition of probability 0."""
-    if (raw.prob <= 0).any():
-        return None
-    layers = layers_of(raw.states, raw.choices, raw.target)
-    if layers is None:
-        return None
-    perm = np.concatenate(layers)
-    bounds = np.zeros(len(layers) + 1, np.int64)
-    np.cumsum([len(x) for x in layers], out=bounds[1:])
-    del layers
-    states, choices, old_choice, target, prob, inv = renumber(
-        raw.states, raw.choices, raw.target, raw.prob, perm)
-    raw.target, raw.prob = np.zeros(0, np.int32), np.zeros(0)  # freed
-    rewards: dict[str, Vec] = {}
-    for name, parts in raw.state_rewards.items():
-        per_choice = np.zeros(len(choices) - 1)
-        for where, vals in parts:
-            if where == "states":
-                per_choice += np.repeat(vals[perm], np.diff(states))
-            else:
-                per_choice += vals[old_choice]
-        rewards[name] = per_choice
-    labels = {k: v[perm] for k, v in raw.labels.items()}
-    stay = self_loops(states, choices, target, prob)
-    out = Arrays(states, choices, target, prob, stay, bounds, int(inv[raw.initial]),
-                 labels, rewards)
-    if raw.packed is not None and raw.actions is not None:
-        out.order, out.actions, out.action_names = perm, raw.actions[old_choice], raw.action_names
-        out.packed, raw.packed, raw.actions = raw.packed, None, None
-    del perm, old_choice
-    return out
-
-
-def prepare(stormpy: Any, model: Any, p: Plan) -> Arrays | None:
-    """The layered arrays of Storm's sparse `model`; None if it has cycles (or Storm's
-    export is not of the expected form)."""
-    raw = read(stormpy, model, p)
-    return None if raw is None else arrange(raw)
 
 
 def pick(v: Vec, at: I64) -> F64:

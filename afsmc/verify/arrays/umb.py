@@ -13,20 +13,26 @@ import shutil
 import tarfile
 import tempfile
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 import numpy.typing as npt
 
-if TYPE_CHECKING:
-    from afsmc.verify.arrays.acyclic import Plan
+from afsmc.verify.arrays.acyclic import (
+    LABEL,
+    Arrays,
+    Plan,
+    Vec,
+    layers_of,
+    renumber,
+    self_loops,
+)
 
 F64 = npt.NDArray[np.float64]
 I64 = npt.NDArray[np.int64]
 Bools = npt.NDArray[np.bool_]
 Idx = npt.NDArray[np.int32]  # state numbers (a model of 2^31 states or branches is Storm's)
 
-LABEL = "__afsmc_target_"  # the labels the export adds for each query's target states
 READ_CHUNK = 1 << 22  # entries converted at a time while reading (bounds the temporaries)
 
 
@@ -189,3 +195,45 @@ def read(stormpy: Any, model: Any, p: Plan, packed: tuple[str, ...] | None = Non
                         sorted({q.reward for q in p.queries if q.kind == "R"}), packed)
     finally:
         shutil.rmtree(folder, ignore_errors=True)
+
+
+def arrange(raw: Raw) -> Arrays | None:
+    """Layer and renumber the exported model; None if it has a cycle (other than
+    self-loops) or a transition of probability 0."""
+    if (raw.prob <= 0).any():
+        return None
+    layers = layers_of(raw.states, raw.choices, raw.target)
+    if layers is None:
+        return None
+    perm = np.concatenate(layers)
+    bounds = np.zeros(len(layers) + 1, np.int64)
+    np.cumsum([len(x) for x in layers], out=bounds[1:])
+    del layers
+    states, choices, old_choice, target, prob, inv = renumber(
+        raw.states, raw.choices, raw.target, raw.prob, perm)
+    raw.target, raw.prob = np.zeros(0, np.int32), np.zeros(0)  # freed
+    rewards: dict[str, Vec] = {}
+    for name, parts in raw.state_rewards.items():
+        per_choice = np.zeros(len(choices) - 1)
+        for where, vals in parts:
+            if where == "states":
+                per_choice += np.repeat(vals[perm], np.diff(states))
+            else:
+                per_choice += vals[old_choice]
+        rewards[name] = per_choice
+    labels = {k: v[perm] for k, v in raw.labels.items()}
+    stay = self_loops(states, choices, target, prob)
+    out = Arrays(states, choices, target, prob, stay, bounds, int(inv[raw.initial]),
+                 labels, rewards)
+    if raw.packed is not None and raw.actions is not None:
+        out.order, out.actions, out.action_names = perm, raw.actions[old_choice], raw.action_names
+        out.packed, raw.packed, raw.actions = raw.packed, None, None
+    del perm, old_choice
+    return out
+
+
+def prepare(stormpy: Any, model: Any, p: Plan) -> Arrays | None:
+    """The layered arrays of Storm's sparse `model`; None if it has cycles (or Storm's
+    export is not of the expected form)."""
+    raw = read(stormpy, model, p)
+    return None if raw is None else arrange(raw)

@@ -23,6 +23,7 @@ from afsmc.lower.lowering import Lowered
 from afsmc.model import expr as E
 from afsmc.model import ir
 from afsmc.sim.compile import SimError
+from afsmc.verify import kernels
 from afsmc.verify.arrays import acyclic
 from afsmc.verify.engines import strategy_arrays
 from afsmc.verify.engines.strategy_storm import Extract, Extracted
@@ -308,9 +309,15 @@ def fill(job: Any, res: Any, notify: Notify, too_big: Callable[[Any, int, bool],
 
 def _mean_transitions(a: acyclic.Arrays) -> int:
     """The transitions of the DTMC that picks each state's choices uniformly (queries
-    "mean"): each state's distinct successors over all its choices, a span at a time."""
+    "mean"): each state's distinct successors over all its choices, a span at a time
+    (or in one pass by the compiled kernel, afsmc.verify.kernels.passes, on a large
+    model)."""
     total = 0
     n = len(a.states) - 1
+    if kernels.enabled(n):
+        from afsmc.verify.kernels import passes
+
+        return int(passes.distinct_successors(a.states, a.choices, a.target))
     for lo, hi in acyclic._spans(a.layers):
         c0, c1 = int(a.states[lo]), int(a.states[hi])
         b0, b1 = int(a.choices[c0]), int(a.choices[c1])

@@ -535,7 +535,7 @@ def _acyclic(stormpy: Any, built: _Built, res: JobResult, notify: Notify, job: J
     if raw is not None and not p.left:
         built.model = None  # one model in memory at a time: the arrays hold all it needs
         _give_back()
-    arrays = None if raw is None else acyclic.arrange(raw)
+    arrays = None if raw is None else umb.arrange(raw)
     del raw
     if arrays is None:
         notify("solver", f"the {job.what} has cycles: Storm's topological solver checks it")

@@ -195,7 +195,7 @@ def run(stormpy: Any, built: Any, res: Any, notify: Callable[[str, Any], None], 
     raw = umb.read(stormpy, built.model, p, _label_bits(stormpy, built.model, program))
     built.model = None  # one model in memory at a time: the arrays hold all it needs
     _give_back()
-    arrays = None if raw is None else acyclic.arrange(raw)
+    arrays = None if raw is None else umb.arrange(raw)
     del raw
     if arrays is None or arrays.order is None:
         # built again with state valuations, rather than kept for a case this rare
@@ -266,7 +266,7 @@ def extract_query(a: acyclic.Arrays, q: acyclic.Query, extract: Extract, view: V
                 "probability", "")
             out.witness_note = f"the {what} is 0: no path reaches a target state{under}"
             return result
-        target = a.labels[umb.LABEL + str(q.target)]
+        target = a.labels[acyclic.LABEL + str(q.target)]
         _Paths(a, chosen, value > 0, target, view).collect(w.k, out)
     return result
 

@@ -19,7 +19,7 @@ import numpy as np
 import numpy.typing as npt
 
 from afsmc.verify import kernels
-from afsmc.verify.arrays import acyclic, umb
+from afsmc.verify.arrays import acyclic
 from afsmc.verify.arrays.acyclic import F64, I64, Arrays, Bools
 from afsmc.verify.explorer.explore import (
     Compiled,
@@ -397,7 +397,7 @@ def assemble(blocks: list[Block], c: Compiled, table: ProbTable) -> Explored:
     np.cumsum(_cat_free(blocks, "nbranch", np.int32), out=choices[1:])
     prob = acyclic.Coded(table.table(), _cat_free(blocks, "prob", table.dtype()))
     command = _cat_free(blocks, "command", np.int32)
-    labels = {umb.LABEL + str(i): np.concatenate([b.labels[i] for b in blocks])
+    labels = {acyclic.LABEL + str(i): np.concatenate([b.labels[i] for b in blocks])
               for i in range(len(c.targets))}
     sizes = [s for b in blocks for s in b.layers if s]
     layers = np.zeros(len(sizes) + 1, np.int64)

@@ -48,7 +48,7 @@ from dataclasses import dataclass
 import numpy as np
 import numpy.typing as npt
 
-from afsmc.verify.arrays import acyclic, umb
+from afsmc.verify.arrays import acyclic
 from afsmc.verify.arrays.acyclic import F64
 from afsmc.verify.lifting import passes
 from afsmc.verify.lifting.model import Box, Lifted, Query, center, corners_of
@@ -145,7 +145,7 @@ def _pass(lifted: Lifted, q: Query, value: F64, probs: F64, deriv: F64) -> F64:
     n, k = len(a.states) - 1, len(lifted.names)
     corners = probs.shape[1]
     slope = np.zeros((n, k, 2))
-    on_target = a.labels[umb.LABEL + str(q.target)]
+    on_target = a.labels[acyclic.LABEL + str(q.target)]
     finite: npt.NDArray[np.bool_] = np.asarray(np.isfinite(value).all(axis=1))
     varies = (probs != probs[:, :1]).any(axis=1)
     fixed = np.where(varies, 0.0, probs[:, 0])

@@ -29,7 +29,7 @@ from collections.abc import Sequence
 import numpy as np
 import numpy.typing as npt
 
-from afsmc.verify.arrays import acyclic, umb
+from afsmc.verify.arrays import acyclic
 from afsmc.verify.arrays.acyclic import F64, I64
 from afsmc.verify.lifting.model import Lifted, Query
 
@@ -77,7 +77,7 @@ def sweep(lifted: Lifted, qs: Sequence[Query], probs: F64, *, lift: bool, every:
     kind = qs[0].kind
     if any(x.kind != kind for x in qs):
         raise ValueError("one pass answers queries of one kind")
-    on_target = np.stack([a.labels[umb.LABEL + str(x.target)] for x in qs], axis=1)
+    on_target = np.stack([a.labels[acyclic.LABEL + str(x.target)] for x in qs], axis=1)
     reward = (np.stack([_dense(a.rewards[x.reward]) for x in qs], axis=1)
               if kind == "R" else None)
     stuck, reached = (0.0, 1.0) if kind == "P" else (np.inf, 0.0)

@@ -14,7 +14,7 @@ import pytest
 
 from afsmc.compiler import load
 from afsmc.verify import run
-from afsmc.verify.arrays import acyclic
+from afsmc.verify.arrays import acyclic, umb
 from tests.conftest import EXAMPLES
 from tests.unit.backends.test_prism import SMALL
 from tests.unit.verify.models import TEXT
@@ -114,7 +114,7 @@ def test_self_loops_and_every_kind_of_reward_as_storm(tmp_path: Path) -> None:
     names = [p.get_name() for p in props]
     plan = acyclic.plan(names, props, mdp=True)
     assert plan.left == ["q8", "q9"]  # bounded and cumulative: Storm's
-    arrays = acyclic.prepare(stormpy, model, plan)
+    arrays = umb.prepare(stormpy, model, plan)
     assert arrays is not None
     expected = {p.get_name(): stormpy.model_checking(model, p).get_value(
         model.initial_states[0]) for p in props}
@@ -131,7 +131,7 @@ def test_a_cycle_of_two_states_is_left_to_storm(tmp_path: Path) -> None:
     cyclic = LOOPS.replace("[e] s=2 -> 0.6:(s'=4)", "[e] s=2 -> 0.6:(s'=0)")
     stormpy, model, props = _storm(cyclic, tmp_path)
     plan = acyclic.plan([p.get_name() for p in props], props, mdp=True)
-    assert acyclic.prepare(stormpy, model, plan) is None
+    assert umb.prepare(stormpy, model, plan) is None
 
 
 def test_layers_put_every_successor_first() -> None:
