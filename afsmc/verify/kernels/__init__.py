@@ -17,8 +17,9 @@ from typing import Any, TypeVar, cast
 F = TypeVar("F", bound=Callable[..., Any])
 
 # The size (states, keys or branches, as the caller counts) from which a compiled kernel
-# is used: below it, numpy's vectorised code finishes before numba is even imported.
-THRESHOLD = 200_000
+# is used: below it, numpy's vectorised code finishes before numba's import and cache
+# load are paid back (docs/benchmarks.md, "Compiled explorer").
+THRESHOLD = 1_000_000
 
 ANY_KEY = (1 << 63) - 1  # above every state key (they are packed into 62 bits)
 
