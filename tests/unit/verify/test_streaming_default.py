@@ -8,6 +8,7 @@ it was."""
 
 from __future__ import annotations
 
+import math
 import tempfile
 from pathlib import Path
 
@@ -29,8 +30,8 @@ GB = 10**9
 
 def _room(bound: int) -> int:
     """The memory in which `bound` states just fit comfortably."""
-    return int(bound * route.BLOCK_BYTES_PER_STATE * explore_graph.PEAK_FACTOR
-               / route.COMFORT)
+    return math.ceil(bound * route.BLOCK_BYTES_PER_STATE * explore_graph.PEAK_FACTOR
+                     / route.COMFORT)
 
 
 def test_a_bound_that_surely_fits_stays_in_memory_and_one_byte_less_room_does_not() -> None:
