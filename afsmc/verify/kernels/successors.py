@@ -200,7 +200,7 @@ def _imod(a, b):
 
 @numba.njit(cache=True, nogil=True)
 def _fmod(a, b):
-    r = math.fmod(a, b)
+    r = np.fmod(a, b)
     if a >= 0:
         return r
     return r + b
