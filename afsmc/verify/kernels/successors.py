@@ -410,6 +410,12 @@ def kernel(c: Any) -> Callable[..., tuple[int, int, int]] | None:
     return c.successors or None
 
 
+# Choices and branches per state seen by each kernel (by id), for the capacity of the
+# next call's outputs (a call that fills them runs again with twice as much)
+_RATIO: dict[int, tuple[float, float]] = {}
+RATIO_FROM = 1000  # from this many states on, a call's counts are taken as typical
+
+
 def run(fn: Callable[..., tuple[int, int, int]], keys: I64, order: I64, starts: I64,
         ends: I64, group_mode: I64, branches: int, rewards: int) -> Raw | None:
     """The raw choices of `keys` (grouped by mode: `order`, `starts`, `ends`,
@@ -420,7 +426,8 @@ def run(fn: Callable[..., tuple[int, int, int]], keys: I64, order: I64, starts: 
     tks = np.empty((n, max(branches, 1)), np.int64)
     prs = np.empty((n, max(branches, 1)))
     rws = np.empty((n, max(rewards, 1)))
-    cap_c, cap_b = 2 * n + 16, 4 * n + 64
+    per_c, per_b = _RATIO.get(id(fn), (2.0, 4.0))
+    cap_c, cap_b = int(per_c * n) + 16, int(per_b * n) + 64
     while True:
         o_state, o_cmd = np.empty(cap_c, np.int64), np.empty(cap_c, np.int32)
         o_row, o_tk, o_pr = np.empty(cap_b, np.int64), np.empty(cap_b, np.int64), np.empty(cap_b)
@@ -428,6 +435,8 @@ def run(fn: Callable[..., tuple[int, int, int]], keys: I64, order: I64, starts: 
         status, nc, nb = fn(keys, order, starts, ends, group_mode, sel, tks, prs, rws,
                             o_state, o_row, o_tk, o_pr, o_cmd, o_rw)
         if status == OK:
+            if n >= RATIO_FROM:  # the next call's capacities: this one's counts, and a margin
+                _RATIO[id(fn)] = (max(per_c, 1.25 * nc / n), max(per_b, 1.25 * nb / n))
             return Raw(o_state[:nc], o_cmd[:nc], o_row[:nb], o_tk[:nb], o_pr[:nb],
                        [o_rw[i, :nc] for i in range(rewards)])
         if status == FALLBACK:
