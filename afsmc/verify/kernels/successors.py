@@ -302,10 +302,14 @@ def source(c: Any) -> str:
     for mode, cmds in sorted(c.modes.items()):
         if not cmds:
             continue
-        body.append(f"        if md == {int(mode)}:")
+        body += [f"        if md == {int(mode)}:", "            cnt = -1"]
+        last = None
         for cmd in cmds:
             name = _command(em, cmd, decode)
-            body += [f"            cnt = {name}(keys, order, a, b, sel, tks, prs, rws)",
+            # the previous command's guard (a floor/ceil variant's): its states in `sel`
+            known = "cnt" if last is not None and cmd.guard_key == last else "-1"
+            last = cmd.guard_key
+            body += [f"            cnt = {name}(keys, order, a, b, sel, {known}, tks, prs, rws)",
                      "            if cnt < 0:",
                      f"                return {FALLBACK}, 0, 0",
                      f"            status, choices, nb = _batch(cnt, {len(cmd.branches)}, "
@@ -322,16 +326,19 @@ def source(c: Any) -> str:
 def _command(em: _Emitter, cmd: Any, decode: list[str]) -> str:
     """The function of one command's batch (its name): the states of `order[a:b]` where
     its guard holds into `sel`, their branches' probabilities, successors and action
-    rewards into `tks`, `prs`, `rws`; their count, or -1."""
+    rewards into `tks`, `prs`, `rws`; their count, or -1. `known` >= 0: the guard is the
+    previous command's, whose `known` states are in `sel` already."""
     out, ind = em.lines, " " * 8
     if cmd.guard_expr is None or cmd.reward_exprs is None \
             or any(b.source is None for b in cmd.branches):
         raise Untranslatable("a command compiled without its expressions")
     k, name = len(cmd.branches), f"command{cmd.index}"
     out += ["@numba.njit(cache=True, nogil=True)",
-            f"def {name}(keys, order, a, b, sel, tks, prs, rws):",
-            "    cnt = 0",
-            "    for t in range(a, b):",
+            f"def {name}(keys, order, a, b, sel, known, tks, prs, rws):",
+            "    cnt = known",
+            "    if known < 0:",
+            "        cnt = 0",
+            "    for t in range(a if known < 0 else b, b):",
             "        i = order[t]",
             "        key = keys[i]"]
     out += [ind + d for d in decode]
