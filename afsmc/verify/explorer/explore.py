@@ -25,6 +25,7 @@ pass. Everything is vectorised per bucket, per mode and per command.
 from __future__ import annotations
 
 import dataclasses
+import os
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any
@@ -161,6 +162,9 @@ class CBranch:
     bits: int = 0  # ... and their new bits
     # its probability at further valuations of the interval probabilities (`Compiled.at`)
     others: list[Fn] = field(default_factory=list)
+    # the folded expressions of `prob` and of each update's value, in the order of
+    # `updates` (afsmc.verify.kernels.successors translates them)
+    source: tuple[E.Expr, list[E.Expr]] | None = None
 
 
 @dataclass
@@ -170,6 +174,8 @@ class CCommand:
     guard_key: int | None  # the guard's subexpression number: commands with one share states
     branches: list[CBranch]
     rewards: list[Fn | None]  # per reward structure asked: its action reward (None: none)
+    guard_expr: E.Expr | None = None  # the folded guard (afsmc.verify.kernels.successors)
+    reward_exprs: list[E.Expr | None] | None = None  # ... and the folded `rewards`
 
 
 @dataclass
@@ -187,6 +193,9 @@ class Compiled:
     # explored arrays) maps to its values at the others, merged as the branches are
     # (afsmc.verify.lifting; PointTable).
     at: PointTable | None = None
+    # the compiled successor kernel (afsmc.verify.kernels.successors), once built; False:
+    # the model is not translated
+    successors: Any = field(default=None, repr=False, compare=False)
 
 
 def storm_order(low: Lowered) -> dict[int, tuple[int, int, int]]:
@@ -236,11 +245,12 @@ def compile_model(low: Lowered, targets: list[E.Expr], rewards: list[str],
             for b, cb in zip(cmd.branches, branches, strict=True):
                 cb.others = [compile_expr(fold(b.prob, dataclasses.replace(sc, consts={**consts, **p})))
                              for p in points[1:]]
-            acts: list[Fn | None] = []
-            for r in structs:
-                items = [] if cmd.silent else [it for it in r.items if it.action == cmd.action]
-                acts.append(_sum_items(items, sc, compile_expr))
-            cmds.append(CCommand(i, compile_expr(g), compile_expr.key(g), branches, acts))
+            sums = [_sum_items([] if cmd.silent else
+                               [it for it in r.items if it.action == cmd.action], sc)
+                    for r in structs]
+            acts = [None if e is None else compile_expr(e) for e in sums]
+            cmds.append(CCommand(i, compile_expr(g), compile_expr.key(g), branches, acts, g,
+                                 sums))
         modes[m.number] = sorted(cmds, key=lambda c: rank[c.index])
     state = [[(compile_expr(fold(it.guard, base)), compile_expr(fold(it.value, base)))
               for it in r.items if it.action is None] for r in structs]
@@ -253,7 +263,8 @@ def compile_model(low: Lowered, targets: list[E.Expr], rewards: list[str],
 
 def _branch(prob: E.Expr, updates: tuple[tuple[str, E.Expr], ...], sc: Scope, lay: Layout,
             low: Lowered, compile_expr: Compiler) -> CBranch:
-    out = CBranch(compile_expr(fold(prob, sc)), [])
+    p, values = fold(prob, sc), list[E.Expr]()
+    out = CBranch(compile_expr(p), [], source=(p, values))
     for var, val in updates:
         f, v = lay.fields[var], fold(val, sc)
         if isinstance(v, E.Lit):
@@ -264,6 +275,7 @@ def _branch(prob: E.Expr, updates: tuple[tuple[str, E.Expr], ...], sc: Scope, la
             out.bits |= (k - f.lo) << f.shift
         else:
             out.updates.append((f, compile_expr(v), _may_leave(val, f, low)))
+            values.append(v)
     return out
 
 
@@ -286,14 +298,15 @@ def model_reward(model: ir.Model, name: str) -> ir.RewardStruct:
     raise GiveUp(f"no reward structure {name}")
 
 
-def _sum_items(items: list[ir.RewardItem], sc: Scope, compile_expr: Compiler) -> Fn | None:
+def _sum_items(items: list[ir.RewardItem], sc: Scope) -> E.Expr | None:
+    """The folded sum of the action reward items (None: none)."""
     if not items:
         return None
     total: E.Expr = E.Ite(items[0].guard, items[0].value, E.Lit(0, E.Type.INT), items[0].value.type)
     for it in items[1:]:
         total = E.Binary("+", total, E.Ite(it.guard, it.value, E.Lit(0, E.Type.INT),
                                            it.value.type), E.Type.DOUBLE)
-    return compile_expr(fold(total, sc))
+    return fold(total, sc)
 
 
 def full(v: Any, n: int, dtype: Any) -> Any:
@@ -450,6 +463,10 @@ def expand(c: Compiled, keys: I64, fast: bool = False) -> Expansion:
     mode = ((keys >> mf.shift) & mf.mask) + mf.lo
     order = np.argsort(mode, kind="stable")
     bounds = np.flatnonzero(np.diff(mode[order])) + 1
+    if fast and len(keys) and os.environ.get("AFSMC_SUCCESSORS") == "numba":
+        x = _compiled(c, keys, mode, order, bounds)
+        if x is not None:
+            return x
     states, rows, tks, prs, cmds = [], [], [], [], []
     rws: list[list[F64]] = [[] for _ in range(len(c.state_rewards))]
     choices = 0
@@ -478,6 +495,25 @@ def expand(c: Compiled, keys: I64, fast: bool = False) -> Expansion:
                     rws[i].append(r)
                 choices += len(sel)
     return _ordered(len(keys), states, rows, tks, prs, rws, cmds, c.dtmc, fast)
+
+
+def _compiled(c: Compiled, keys: I64, mode: I64, order: I64, bounds: I64) -> Expansion | None:
+    """`expand` by the model's compiled kernel (afsmc.verify.kernels.successors); None
+    where it has none or leaves these states to the numpy path."""
+    from afsmc.verify.kernels import successors
+
+    fn = successors.kernel(c)
+    if fn is None:
+        return None
+    starts = np.concatenate([[0], bounds]).astype(np.int64)
+    ends = np.concatenate([bounds, [len(keys)]]).astype(np.int64)
+    most = max((len(cmd.branches) for cmds in c.modes.values() for cmd in cmds), default=1)
+    raw = successors.run(fn, keys, order, starts, ends, mode[order[starts]], most,
+                         len(c.reward_names))
+    if raw is None:
+        return None
+    return _ordered(len(keys), [raw.state], [raw.row], [raw.target], [raw.prob],
+                    [[r] for r in raw.rewards], [raw.command], c.dtmc, True)
 
 
 def _cat(parts: list[Any], dtype: Any) -> Any:
