@@ -34,10 +34,12 @@ def die_with_parent(parent: int) -> None:
 
     It also dies at a SIGTERM again. A forked child inherits the CLI's Python handler,
     which turns SIGTERM into an exception; a pool worker catches that as the failure of
-    its batch and goes on with the next, so the parent's `terminate()` would not stop it."""
+    its batch and goes on with the next, so the parent's `terminate()` would not stop it.
+    It inherits the forking thread's signal mask too: SIGTERM is unblocked."""
     import ctypes
 
     signal.signal(signal.SIGTERM, signal.SIG_DFL)
+    signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGTERM})
 
     try:
         libc = ctypes.CDLL(None, use_errno=True)

@@ -19,6 +19,16 @@ def _spin(seconds: float) -> int:
     return os.getpid()
 
 
+def _signals(pid: int | None) -> str:
+    """The signal lines of a live process's status (blocked, ignored, caught), for the
+    message of a failure."""
+    try:
+        with open(f"/proc/{pid}/status", encoding="ascii") as f:
+            return " ".join(line.strip() for line in f if line.startswith(("State", "Sig")))
+    except OSError as exc:
+        return str(exc)
+
+
 def test_a_forked_pool_worker_dies_at_sigterm_despite_the_clis_handler() -> None:
     # The CLI turns SIGTERM into an exception; a forked worker inherits that handler, and
     # without die_with_parent resetting it the worker would catch the exception as its
@@ -35,8 +45,9 @@ def test_a_forked_pool_worker_dies_at_sigterm_despite_the_clis_handler() -> None
         for proc in procs:
             proc.terminate()
         for proc in procs:
-            proc.join(timeout=10)
-        assert [proc.exitcode for proc in procs] == [-signal.SIGTERM] * len(procs)
+            proc.join(timeout=30)
+        states = [_signals(proc.pid) for proc in procs if proc.exitcode is None]
+        assert [proc.exitcode for proc in procs] == [-signal.SIGTERM] * len(procs), states
     finally:
         signal.signal(signal.SIGTERM, previous)
         pool.shutdown(wait=False, cancel_futures=True)
