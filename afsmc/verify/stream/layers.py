@@ -5,10 +5,11 @@ The clock only grows: a transition from bucket b lands in a bucket from b to the
 bucket b's states reach (its "reach", recorded while exploring), in the absorbing states
 split off every bucket (the sinks), or in the late states (the clock set back). So a
 bucket's successors are resolved into state numbers once every bucket up to its reach is
-explored: each bucket is written at once with its successors' keys in a file of their own,
-which is read back then, its numbers appended to the bucket's file and the keys' file
-removed, so that only the sorted keys of the buckets not yet
-resolved (and of those they reach) stay in memory. Numbers: the regular
+explored: each bucket is written at once, its successors' keys held in memory (or, past
+HOLD_BYTES of them, in a file of their own, read back then and removed) until its
+numbers are appended to the bucket's file, so that only the keys of the buckets not yet
+resolved (and of those they reach) stay in memory: sorted, or in hash sets on large
+models (afsmc.verify.kernels.streamed). Numbers: the regular
 states in exploration order, a bucket's states in its layered order (global, from 0); the
 sinks and then the late states in a space of their own ("other", stored as -1 - o). A
 branch into a late state keeps its key (the late states are numbered at the end) and is
@@ -25,11 +26,12 @@ from __future__ import annotations
 
 import time
 from dataclasses import dataclass, field
-from typing import Any
+from typing import TYPE_CHECKING, Any, Union
 
 import numpy as np
 import numpy.typing as npt
 
+from afsmc.verify import kernels
 from afsmc.verify.arrays import acyclic
 from afsmc.verify.arrays.acyclic import I64
 from afsmc.verify.explorer import explore_graph
@@ -37,6 +39,9 @@ from afsmc.verify.explorer.explore import Compiled, GiveUp, Notify, TooManyState
 from afsmc.verify.explorer.explore_graph import Block
 from afsmc.verify.explorer.keysets import Frontiers, ProbTable, found_in, unique
 from afsmc.verify.stream.scratch import Scratch
+
+if TYPE_CHECKING:
+    from afsmc.verify.kernels.streamed import Numbered
 
 
 @dataclass
@@ -82,6 +87,10 @@ class _Index:
             o = np.argsort(keys_, kind="stable")
             self.runs[-1] = (keys_[o], nums[o])
 
+    def sorted_keys(self) -> I64:
+        return np.sort(np.concatenate([k for k, _ in self.runs])) if self.runs else \
+            np.zeros(0, np.int64)
+
     def find(self, keys: I64, out: I64, todo: acyclic.Bools) -> None:
         """Write the number of each key of `keys[todo]` found into `out`, clearing `todo`."""
         for sk, nums in self.runs:
@@ -91,6 +100,59 @@ class _Index:
             hit = found_in(sk, keys[idx])
             out[idx[hit]] = nums[np.searchsorted(sk, keys[idx[hit]])]
             todo[idx[hit]] = False
+
+
+class _Hashed:
+    """The sinks' keys numbered in a hash set (afsmc.verify.kernels.streamed): _Index's
+    compiled counterpart, taken on large models."""
+
+    def __init__(self, keys: I64) -> None:
+        from afsmc.verify.kernels.streamed import Numbered
+
+        self.set = Numbered(keys, 0)
+
+    @classmethod
+    def of(cls, index: _Index) -> _Hashed:
+        """The keys of `index` (numbered 0, 1, ... in the order added)."""
+        if not index.runs:
+            return cls(np.zeros(0, np.int64))
+        keys = np.concatenate([k for k, _ in index.runs])
+        numbers = np.concatenate([n for _, n in index.runs])
+        order = np.argsort(numbers)
+        assert (numbers[order] == np.arange(len(numbers))).all()
+        return cls(keys[order])
+
+    def add(self, keys: I64, numbers: I64) -> None:
+        assert not len(numbers) or int(numbers[0]) == len(self.set.keys())
+        self.set.add(keys)
+
+    def find(self, keys: I64, out: I64, todo: acyclic.Bools) -> None:
+        """Write the number of each key of `keys[todo]` found into `out`, clearing `todo`."""
+        got = np.full(len(keys), -1, np.int64)
+        self.set.find(np.ascontiguousarray(keys), np.flatnonzero(todo), got)
+        hit = got >= 0
+        out[hit] = got[hit]
+        todo[hit] = False
+
+    def sorted_keys(self) -> I64:
+        return np.sort(self.set.keys())
+
+
+# a bucket's keys in the window: sorted with their numbers (the numpy reference), or
+# numbered in a hash set (the compiled path)
+Entry = Union[tuple[I64, I64], "Numbered"]
+
+
+def _hashed(window: dict[int, Entry]) -> None:
+    """The window's buckets moved to hash sets (the exploration has grown past the
+    kernels' threshold)."""
+    from afsmc.verify.kernels.streamed import Numbered
+
+    for b, e in window.items():
+        if isinstance(e, tuple):
+            keys, numbers = e
+            order = np.argsort(numbers)
+            window[b] = Numbered(keys[order], int(numbers[order[0]]) if len(numbers) else 0)
 
 
 def _save_block(s: Scratch, name: str, blk: Block, target: I64 | None) -> None:
@@ -106,6 +168,12 @@ def _save_block(s: Scratch, name: str, blk: Block, target: I64 | None) -> None:
     for i, lab in enumerate(blk.labels):
         arrays[f"label{i}"] = lab
     s.save(name, **arrays)
+
+
+# The most bytes of successors' keys that wait in memory for their buckets to be
+# numbered; the keys of a bucket past it wait in a file of its own (`k{i}`). Each
+# bucket's would take two more opens and a removal.
+HOLD_BYTES = 1 << 28
 
 
 @dataclass
@@ -126,9 +194,11 @@ def explore(c: Compiled, s: Scratch, notify: Notify | None = None,
     waiting.pending[int(c.layout.bucket_of(np.array([c.initial]))[0])] = [
         np.array([c.initial], np.int64)]
     out = Streamed(s)
-    sinks = _Index()
+    sinks: _Index | _Hashed = _Index()
     unresolved: list[_Waiting] = []
-    window: dict[int, tuple[I64, I64]] = {}  # bucket -> its sorted keys and their numbers
+    window: dict[int, Entry] = {}  # bucket -> its keys and their numbers
+    fast = False
+    held: dict[int, I64] = {}  # bucket index -> its successors' keys, kept in memory
     # bucket -> its first number, and which of its states some resolved bucket points at
     seen: dict[int, tuple[int, acyclic.Bools]] = {}
     buckets: list[int] = []
@@ -137,7 +207,12 @@ def explore(c: Compiled, s: Scratch, notify: Notify | None = None,
     initial = np.array([c.initial], np.int64)
     while waiting.pending:
         b = min(waiting.pending)
-        begin = unique(np.concatenate(waiting.pending.pop(b)))
+        if not fast and kernels.enabled(count):
+            fast = True
+            _hashed(window)
+            assert isinstance(sinks, _Index)
+            sinks = _Hashed.of(sinks)
+        begin = waiting.take(b)
         block, known, took = explore_graph.explore_bucket(
             c, table, begin, b, waiting, counted=count, max_states=max_states, rounds=rounds)
         rounds += took
@@ -156,11 +231,16 @@ def explore(c: Compiled, s: Scratch, notify: Notify | None = None,
                                        explore_graph._offsets(sink.nbranch))])
         numbers = np.arange(first, first + len(block.keys), dtype=np.int64)
         order = np.argsort(block.keys)
-        window[b] = (block.keys[order], numbers[order])
-        s.save(f"keys{index}", keys=window[b][0])  # sorted, for _check_late
+        if fast:
+            from afsmc.verify.kernels.streamed import Numbered
+
+            window[b] = Numbered(block.keys, first)
+        else:
+            window[b] = (block.keys[order], numbers[order])
+        s.save(f"keys{index}", keys=block.keys[order])  # sorted, for _check_late
         seen[b] = (first, np.zeros(len(block.keys), bool))
         if index == 0:
-            out.initial = _resolve(window[b], sinks, initial)[0][0]
+            out.initial = _resolve_span([(b, window[b])], sinks, initial, c)[0][0]
             if out.initial >= 0:  # its value is read once the pass is over: never dropped
                 seen[b][1][out.initial - first] = True
         reach = int(c.layout.bucket_of(block.target).max()) if len(block.target) else b
@@ -168,7 +248,11 @@ def explore(c: Compiled, s: Scratch, notify: Notify | None = None,
         out.choices += len(block.nbranch) + len(sink.nbranch)
         out.transitions += len(block.target) + len(sink.target)
         _save_block(s, f"b{index}", block, None)
-        s.save(f"k{index}", target=block.target)  # its successors' keys, until numbered
+        # its successors' keys, until numbered: in memory while the held ones are few
+        if sum(k.nbytes for k in held.values()) + block.target.nbytes <= HOLD_BYTES:
+            held[index] = block.target
+        else:
+            s.save(f"k{index}", target=block.target)
         count += len(known)
         del block, sink, known, order, numbers, sink_numbers
         if max_states is not None and count > max_states:
@@ -176,7 +260,7 @@ def explore(c: Compiled, s: Scratch, notify: Notify | None = None,
         explore_graph.narrow(count, rounds)
         nxt = min(waiting.pending) if waiting.pending else None
         while unresolved and (nxt is None or unresolved[0].reach < nxt):
-            _finish(s, out, unresolved.pop(0), window, seen, sinks, buckets, c)
+            _finish(s, out, unresolved.pop(0), window, seen, sinks, buckets, c, held)
             low = unresolved[0].bucket if unresolved else nxt
             for t in [t for t in window if low is None or t < low]:
                 del window[t], seen[t]
@@ -193,7 +277,31 @@ def explore(c: Compiled, s: Scratch, notify: Notify | None = None,
     return out
 
 
-def _resolve(window: tuple[I64, I64], sinks: _Index, keys: I64) -> tuple[I64, acyclic.Bools]:
+def _resolve_span(span: list[tuple[int, Entry]], sinks: _Index | _Hashed, keys: I64,
+                  c: Compiled) -> tuple[I64, acyclic.Bools]:
+    """_resolve against the keys of several consecutive buckets (their window entries)."""
+    if not span or isinstance(span[0][1], tuple):
+        # a bucket's keys are those whose high bits are the bucket: the window's runs,
+        # end to end in bucket order, are sorted
+        pairs = [e for _, e in span if isinstance(e, tuple)]
+        joined = (np.concatenate([k for k, _ in pairs]), np.concatenate([n for _, n in pairs]))
+        return _resolve(joined, sinks, keys)
+    from afsmc.verify.kernels.streamed import groups
+
+    keys = np.ascontiguousarray(keys)
+    out = np.full(len(keys), -1, np.int64)
+    lo = span[0][0]
+    order, first = groups(c.layout.bucket_of(keys) - lo, span[-1][0] - lo + 1)
+    for t, e in span:  # each key looked up in its bucket's table only
+        assert not isinstance(e, tuple)
+        e.find(keys, order[first[t - lo]:first[t - lo + 1]], out)
+    todo = out < 0
+    out[todo] = keys[todo]
+    return _sinks(sinks, keys, out, todo)
+
+
+def _resolve(window: tuple[I64, I64], sinks: _Index | _Hashed, keys: I64
+             ) -> tuple[I64, acyclic.Bools]:
     """The numbers of `keys` among the window's regular states (>= 0) or the sinks
     (-1 - o); and which keys are neither (left as they are)."""
     sk, nums = window
@@ -203,6 +311,13 @@ def _resolve(window: tuple[I64, I64], sinks: _Index, keys: I64) -> tuple[I64, ac
         hit = found_in(sk, keys)
         out[hit] = nums[np.searchsorted(sk, keys[hit])]
         todo[hit] = False
+    return _sinks(sinks, keys, out, todo)
+
+
+def _sinks(sinks: _Index | _Hashed, keys: I64, out: I64, todo: acyclic.Bools
+           ) -> tuple[I64, acyclic.Bools]:
+    """The keys still `todo` that are sinks numbered in `out` (-1 - o); and which keys
+    are neither regular nor sinks."""
     other = np.zeros(len(keys), np.int64)
     left = todo.copy()
     sinks.find(keys, other, left)  # clears `left` where a sink's
@@ -211,24 +326,21 @@ def _resolve(window: tuple[I64, I64], sinks: _Index, keys: I64) -> tuple[I64, ac
     return out, left
 
 
-def _finish(s: Scratch, out: Streamed, w: _Waiting, window: dict[int, tuple[I64, I64]],
-            seen: dict[int, tuple[int, acyclic.Bools]], sinks: _Index, buckets: list[int],
-            c: Compiled) -> None:
+def _finish(s: Scratch, out: Streamed, w: _Waiting, window: dict[int, Entry],
+            seen: dict[int, tuple[int, acyclic.Bools]], sinks: _Index | _Hashed,
+            buckets: list[int], c: Compiled, held: dict[int, I64]) -> None:
     """Resolve the successors of a bucket whose every successor bucket is explored: its
     successors' keys read back, written over by their numbers; and its dies. Buckets
     are resolved in order, so the first to point at a state is its lowest predecessor."""
-    span = [window[t] for t in sorted(window) if w.bucket <= t <= w.reach]
-    # a bucket's keys are those whose high bits are the bucket: the window's runs, end
-    # to end in bucket order, are sorted
-    joined = (np.concatenate([k for k, _ in span]), np.concatenate([n for _, n in span]))
-    keys = s.load(f"k{w.index}")["target"]
-    target, late = _resolve(joined, sinks, keys)
+    span = [(t, window[t]) for t in sorted(window) if w.bucket <= t <= w.reach]
+    keys = held.pop(w.index) if w.index in held else s.load(f"k{w.index}")["target"]
+    target, late = _resolve_span(span, sinks, keys, c)
     at = np.flatnonzero(late)
     if at.size and (c.layout.bucket_of(keys[at]) >= w.bucket).any():
         raise GiveUp("a successor that was not explored")
     target[at] = np.iinfo(np.int64).min
     out.reach.append(int(np.searchsorted(buckets, w.reach, side="right")) - 1)
-    dies = _dies(target, w, seen)
+    dies = _dies(target, w, seen, not isinstance(sinks, _Index))
     out.dies.append(len(dies))
     first = out.start[w.index]
     # offsets from the bucket's first number: int32 while its reach spans fewer states
@@ -236,7 +348,7 @@ def _finish(s: Scratch, out: Streamed, w: _Waiting, window: dict[int, tuple[I64,
     s.save(f"b{w.index}", append=True, target=narrow(target, first), dies=(
         dies - first).astype(np.int64 if wide else np.int32),
            **({"late_at": at, "late_key": keys[at]} if at.size else {}))
-    s.remove(f"k{w.index}")
+    s.remove(f"k{w.index}")  # (if it was written)
 
 
 def narrow(target: I64, first: int) -> npt.NDArray[np.signedinteger[Any]]:
@@ -262,9 +374,28 @@ def widen(stored: npt.NDArray[np.signedinteger[Any]], first: int) -> I64:
     return out
 
 
-def _dies(target: I64, w: _Waiting, seen: dict[int, tuple[int, acyclic.Bools]]) -> I64:
+def _dies(target: I64, w: _Waiting, seen: dict[int, tuple[int, acyclic.Bools]],
+          fast: bool = False) -> I64:
     """The regular states (sorted numbers) that bucket `w` points at and no earlier bucket
-    did, and those of its own that nothing points at but the initial state; marked seen."""
+    did, and those of its own that nothing points at but the initial state; marked seen.
+    `fast`: by marks in a compiled kernel (afsmc.verify.kernels.streamed), no sort."""
+    if fast:
+        from afsmc.verify.kernels.streamed import first_met, groups
+
+        span = [(t, *seen[t]) for t in sorted(seen) if w.bucket <= t <= w.reach]
+        # the span's buckets are numbered end to end: each target's bucket by its number
+        starts = np.array([first for _, first, _ in span] + [span[-1][1] + len(span[-1][2])])
+        j = np.searchsorted(starts, target, side="right") - 1
+        order, cut = groups(j, len(span))
+        found = []
+        for g, (t, first, mark) in enumerate(span):
+            if t == w.bucket:  # no later bucket points at its states: all of them go now
+                new = np.flatnonzero(~mark).astype(np.int64)
+                mark[:] = True
+                found.append(new + first)
+            else:
+                found.append(first_met(target, order[cut[g]:cut[g + 1]], first, mark))
+        return np.concatenate(found)
     points = unique(target[target >= 0])
     out = []
     for t in sorted(seen):
@@ -282,12 +413,11 @@ def _dies(target: I64, w: _Waiting, seen: dict[int, tuple[int, acyclic.Bools]]) 
 
 
 def _late(c: Compiled, s: Scratch, out: Streamed, table: ProbTable, waiting: Frontiers,
-          sinks: _Index, buckets: list[int], count: int, max_states: int | None) -> None:
+          sinks: _Index | _Hashed, buckets: list[int], count: int, max_states: int | None) -> None:
     """The late states (their successors are late or sinks), as one block in a file."""
     if not waiting.late:
         return
-    absorbing = np.sort(np.concatenate([k for k, _ in sinks.runs])) if sinks.runs else \
-        np.zeros(0, np.int64)
+    absorbing = sinks.sorted_keys()
     block, known, _ = explore_graph.explore_bucket(c, table, np.concatenate(waiting.late), None,
                                                    Frontiers(), absorbing, counted=count,
                                                    max_states=max_states)

@@ -23,6 +23,7 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
+from afsmc.verify import kernels
 from afsmc.verify.arrays import acyclic
 from afsmc.verify.arrays.acyclic import F64, I64, Query, Sense
 from afsmc.verify.explorer import keysets
@@ -145,12 +146,42 @@ def put(out: npt.NDArray[Any], at: int, values: npt.NDArray[Any]) -> None:
         out[:hi - size] = values[size - lo:]
 
 
+@dataclass
+class Fast:
+    """A sweep by the compiled kernels (afsmc.verify.kernels.streamed): every group's
+    values side by side, group g's in columns cut[g] to cut[g + 1] of one matrix of live
+    values and one of the others (solve_part's lists are views of these); and the count
+    of the uniform DTMC's transitions: per successor row (live, other) the last state
+    that had it, and the next state's stamp."""
+
+    live: F64
+    other: F64
+    cut: I64
+    seen_reg: I64
+    seen_oth: I64
+    stamp: int = 0
+
+    @classmethod
+    def of(cls, groups: list[Group], rows: int, others: int) -> Fast:
+        cut = np.cumsum([0] + [len(g.queries) for g in groups]).astype(np.int64)
+        return cls(np.zeros((rows, int(cut[-1]))), np.zeros((others, int(cut[-1]))), cut,
+                   np.full(rows, -1, np.int64), np.full(others, -1, np.int64))
+
+    def views(self, values: F64) -> list[F64]:
+        """Each group's columns of `values`."""
+        return [values[:, a:b] for a, b in itertools.pairwise(self.cut.tolist())]
+
+
 def solve_part(part: Part, groups: list[Group], reg: list[F64] | None, other: list[F64],
-               out: list[F64], at: int | Rows, count: bool = False) -> int:
+               out: list[F64], at: int | Rows, count: bool = False,
+               fast: Fast | None = None) -> int:
     """Solve the part's layers into `out[g]`, its state s at row `at + s` (as a ring),
     or at row `at[s]` where `at` is an array of rows;
     with `count`, the distinct (state, successor) pairs of its states (the uniform
-    DTMC's transitions), else 0."""
+    DTMC's transitions), else 0. With `fast`, by the compiled kernels (the lists of
+    values are views of its matrices)."""
+    if fast is not None:
+        return _solve_compiled(part, groups, reg is not None, at, count, fast)
     pairs = 0
     spans = [(k, min(k + acyclic.SPAN, hi)) for lo, hi in
              itertools.pairwise(part.layers.tolist()) for k in range(lo, hi, acyclic.SPAN)]
@@ -174,6 +205,45 @@ def solve_part(part: Part, groups: list[Group], reg: list[F64] | None, other: li
         if count:
             pairs += _pairs(part, lo, hi)
     return pairs
+
+
+def _solve_compiled(part: Part, groups: list[Group], regular: bool, at: int | Rows,
+                    count: bool, fast: Fast) -> int:
+    """solve_part by afsmc.verify.kernels.streamed: the whole file's layers and every
+    group in one call, no matrix built; the same values to the bit. `regular`: a
+    bucket's file (its values go to the live ones, else to the others)."""
+    from afsmc.verify.kernels import streamed
+
+    n = len(part.states) - 1
+    out = fast.live if regular else fast.other
+    rows = (np.arange(at, at + n, dtype=np.int64) % len(out) if isinstance(at, int)
+            else np.asarray(at, np.int64))
+    stay = np.zeros(0) if part.stay is None else \
+        np.asarray(part.stay[0:len(part.choices) - 1], np.float64)
+    k = int(fast.cut[-1])
+    m = len(part.choices) - 1
+    reward = np.zeros((0, 0))
+    if any(g.reward is not None for g in groups):
+        reward = np.zeros((m, k))
+        for g, a in zip(groups, fast.cut.tolist(), strict=False):
+            for q, r in enumerate(g.reward or []):
+                reward[:, a + q] = part.rewards[r]
+    on = np.zeros((n, k), bool)
+    for g, a in zip(groups, fast.cut.tolist(), strict=False):  # (cut has one more)
+        for q, t in enumerate(g.target):
+            on[:, a + q] = part.labels[t]
+    senses = [g.sense for g in groups]
+    streamed.solve(part.layers, part.states, part.choices, part.reg, part.oth, part.prob,
+                   fast.live, fast.other, reward, stay, on, fast.cut,
+                   np.array([x.stuck for x in senses]), np.array([x.reached for x in senses]),
+                   np.array([x.mean for x in senses]),
+                   np.concatenate([np.where(x.low, 1.0, -1.0) for x in senses]), rows, out)
+    if not count:
+        return 0
+    got = int(streamed.pairs(part.states, part.choices, part.reg, part.oth, fast.seen_reg,
+                             fast.seen_oth, fast.stamp))
+    fast.stamp += n
+    return got
 
 
 def _pairs(part: Part, lo: int, hi: int) -> int:
@@ -272,17 +342,20 @@ def _sweep(st: Streamed, groups: list[Group], nr: int, targets: int, rows: int,
            ) -> tuple[dict[str, float], int]:
     """One sweep over the files for `groups`: their values in the initial state, and
     with `count` the uniform DTMC's transitions."""
-    other = [np.zeros((st.sinks + st.late, len(g.queries))) for g in groups]
+    fast = Fast.of(groups, rows, st.sinks + st.late) if kernels.enabled(st.states) else None
+    other = fast.views(fast.other) if fast is not None else \
+        [np.zeros((st.sinks + st.late, len(g.queries))) for g in groups]
     order = np.argsort(st.late_keys)
     late = (st.late_keys[order], order)
     pairs = 0
     for i, first in enumerate(st.sink_start):
         part = load(st, f"s{i}", 0, first, *late, nr, targets)
-        pairs += solve_part(part, groups, None, other, other, first, count)
+        pairs += solve_part(part, groups, None, other, other, first, count, fast)
     if st.late:
         part = load(st, "late", 0, st.sinks, *late, nr, targets)
-        pairs += solve_part(part, groups, None, other, other, st.sinks, count)
-    live = [np.zeros((rows, len(g.queries))) for g in groups]
+        pairs += solve_part(part, groups, None, other, other, st.sinks, count, fast)
+    live = fast.views(fast.live) if fast is not None else \
+        [np.zeros((rows, len(g.queries))) for g in groups]
     wide = rows >= 2 ** 31
     slot: Rows = np.zeros(window_rows(st), np.int64 if wide else np.int32)
     free = np.arange(rows, dtype=slot.dtype)  # a stack of the free rows, top at the end
@@ -293,10 +366,13 @@ def _sweep(st: Streamed, groups: list[Group], nr: int, targets: int, rows: int,
         mine = free[top - size:top].copy()
         top -= size
         put(slot, first, mine)
-        for r in live:  # its rows start at 0, as the in-memory pass's values do
-            r[mine] = 0.0
+        if fast is not None:  # its rows start at 0, as the in-memory pass's values do
+            fast.live[mine] = 0.0
+        else:
+            for r in live:
+                r[mine] = 0.0
         part = load(st, f"b{i}", first, None, *late, nr, targets, slot)
-        pairs += solve_part(part, groups, live, other, live, mine, count)
+        pairs += solve_part(part, groups, live, other, live, mine, count, fast)
         assert part.dies is not None
         dead = slot[(part.dies.astype(np.int64) + first) % len(slot)]
         del part

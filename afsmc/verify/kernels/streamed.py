@@ -1,0 +1,196 @@
+"""Compiled kernels of the streamed route (afsmc.verify.stream): resolving a bucket's
+successor keys into state numbers by hash lookups, its dies by marks, and a file's
+backward pass without a sparse matrix.
+
+Each has a numpy reference in afsmc.verify.stream.layers or .sweep, and gives the same
+numbers and, for the pass, the same values to the bit: a choice's value is, as the
+numpy code's CSR products add them, 0 plus the sum (in the branches' order, from 0) of
+its branches into regular states, plus the sum of those into the other states, plus its
+reward; the state's value then as :func:`afsmc.verify.kernels.passes._states` settles it.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+import numpy.typing as npt
+
+from afsmc.verify.kernels import jit
+from afsmc.verify.kernels.hashing import KeySet, _home
+from afsmc.verify.kernels.passes import CHUNK, _states
+
+I64 = npt.NDArray[np.int64]
+F64 = npt.NDArray[np.float64]
+Bools = npt.NDArray[np.bool_]
+Ints = npt.NDArray[np.integer[Any]]
+
+
+@jit
+def _lookup(slots: Ints, dense: I64, keys: I64, at: I64, base: int, out: I64) -> None:
+    """For each key keys[i], i in `at`: if the one-region table (`slots` over `dense`)
+    holds it at entry e, out[i] = base + e."""
+    m = len(slots) - 1
+    for i in at:
+        k = keys[i]
+        s = _home(k, m)
+        while True:
+            e = slots[s]
+            if e < 0:
+                break
+            if dense[e] == k:
+                out[i] = base + e
+                break
+            s = (s + 1) & m
+
+
+@jit
+def _group(j: I64, n: int, order: I64, first: I64) -> None:
+    """The positions i with 0 <= j[i] < n grouped by j[i] (a counting sort, stable):
+    group g's are order[first[g]:first[g + 1]]."""
+    for i in range(len(j)):
+        if 0 <= j[i] < n:
+            first[j[i] + 1] += 1
+    for g in range(n):
+        first[g + 1] += first[g]
+    at = first[:-1].copy()
+    for i in range(len(j)):
+        g = j[i]
+        if 0 <= g < n:
+            order[at[g]] = i
+            at[g] += 1
+
+
+def groups(j: I64, n: int) -> tuple[I64, I64]:
+    """:func:`_group`'s order and group offsets (positions outside 0 <= j < n left out)."""
+    order = np.empty(len(j), np.int64)
+    first = np.zeros(n + 1, np.int64)
+    _group(np.ascontiguousarray(j), n, order, first)
+    return order, first
+
+
+class Numbered:
+    """Distinct keys numbered from `first` in the order given (a bucket's states, or
+    the sinks as they come): a hash set whose entry is the number less `first`."""
+
+    def __init__(self, keys: I64, first: int) -> None:
+        self.set = KeySet(len(keys))
+        self.set.add(keys)
+        self.first = first
+
+    def add(self, keys: I64) -> None:
+        """More keys, numbered on from the last (they must be new)."""
+        added = self.set.add(keys)
+        assert len(added) == len(keys), "a key numbered twice"
+
+    def find(self, keys: I64, at: I64, out: I64) -> None:
+        """The number of each key keys[i], i in `at`, that is here into out[i]."""
+        _lookup(self.set.slots, self.set.dense, keys, at, self.first, out)
+
+    def keys(self) -> I64:
+        return self.set.keys()
+
+
+@jit
+def _mark(target: I64, at: I64, lo: int, mark: Bools, out: I64) -> int:
+    """The numbers target[i], i in `at` (each from lo on), not marked yet (each once, in
+    the order met) into `out`, now marked; how many."""
+    n = 0
+    for i in at:
+        t = target[i]
+        if not mark[t - lo]:
+            mark[t - lo] = True
+            out[n] = t
+            n += 1
+    return n
+
+
+def first_met(target: I64, at: I64, lo: int, mark: Bools) -> I64:
+    """The numbers target[i], i in `at` (all among lo .. lo + len(mark)), not marked
+    before, sorted; now marked."""
+    out = np.empty(min(len(at), len(mark)), np.int64)
+    n = _mark(target, at, lo, mark, out)
+    return np.sort(out[:n])
+
+
+@jit
+def solve(layers: I64, states: I64, choices: I64, reg: I64, oth: I64, prob: F64, live: F64,
+          other: F64, reward: F64, stay: F64, on: Bools, cut: I64, stuck: F64, reached: F64,
+          mean: Bools, sign: F64, rows: I64, out: F64) -> None:
+    """One file's states solved layer by layer (from the first; the states of a layer
+    depend only on earlier layers' and on other files'): state s's values (one per
+    query) into out[rows[s]]. The queries are in groups side by side, group g's in
+    columns cut[g] to cut[g + 1] with its `stuck`, `reached` and `mean` (a branch's
+    successor's values in one row for all of them: one visit of the row per branch). A
+    branch b goes to row reg[b] of `live` or, where that is -1, to row oth[b] of `other`;
+    `reward` (choices x queries, 0 where a query has none; no columns if none has) and
+    `on` (states x queries) are the file's; `stay` its choices' self-loops (empty: none
+    loops). CHUNK states of a layer at a time: their choices' values, then settled."""
+    k = len(sign)
+    most = 1
+    for j in range(len(layers) - 1):
+        for s0 in range(layers[j], layers[j + 1], CHUNK):
+            most = max(most, states[min(s0 + CHUNK, layers[j + 1])] - states[s0])
+    pc = np.empty((most, k))
+    here = np.empty((CHUNK, k))
+    r = np.empty(k)
+    o = np.empty(k)
+    cols = np.arange(k)
+    none = np.zeros((0, k), np.int32)
+    loops = len(stay) > 0
+    for j in range(len(layers) - 1):
+        lo, hi = layers[j], layers[j + 1]
+        for s0 in range(lo, hi, CHUNK):
+            s1 = min(s0 + CHUNK, hi)
+            row0 = states[s0]
+            for c in range(row0, states[s1]):
+                for q in range(k):
+                    r[q] = 0.0
+                    o[q] = 0.0
+                for b in range(choices[c], choices[c + 1]):
+                    p = prob[b]
+                    t = reg[b]
+                    if t >= 0:
+                        for q in range(k):
+                            r[q] += p * live[t, q]
+                    else:
+                        t = oth[b]
+                        for q in range(k):
+                            o[q] += p * other[t, q]
+                for q in range(k):
+                    pc[c - row0, q] = (0.0 + r[q]) + o[q]
+                if reward.shape[1]:
+                    for q in range(k):
+                        pc[c - row0, q] += reward[c, q]
+            for g in range(len(cut) - 1):
+                a, b = cut[g], cut[g + 1]
+                _states(pc[:, a:b], states[s0:s1 + 1], 0, s1 - s0, row0,
+                        stay[row0:states[s1]] if loops else stay, on, -s0, cols[a:b],
+                        stuck[g], reached[g], mean[g], sign[a:b], here[:, a:b],
+                        none[:, a:b], none[:, a:b], cols[a:b])
+            for s in range(s1 - s0):
+                for q in range(k):
+                    out[rows[s0 + s], q] = here[s, q]
+
+
+@jit
+def pairs(states: I64, choices: I64, reg: I64, oth: I64, seen_reg: I64, seen_oth: I64,
+          stamp: int) -> int:
+    """The distinct (state, successor) pairs of the file's states (the uniform DTMC's
+    transitions): seen_reg[t] / seen_oth[t] hold the last state stamp (`stamp` + s, unique
+    across calls) that had t as a successor, so each pair counts once."""
+    total = 0
+    for s in range(len(states) - 1):
+        mine = stamp + s
+        for b in range(choices[states[s]], choices[states[s + 1]]):
+            t = reg[b]
+            if t >= 0:
+                if seen_reg[t] != mine:
+                    seen_reg[t] = mine
+                    total += 1
+            else:
+                t = oth[b]
+                if seen_oth[t] != mine:
+                    seen_oth[t] = mine
+                    total += 1
+    return total
