@@ -18,7 +18,7 @@ import numpy.typing as npt
 
 from afsmc.verify.kernels import jit
 from afsmc.verify.kernels.hashing import KeySet, _home
-from afsmc.verify.kernels.passes import CHUNK, _states
+from afsmc.verify.kernels.passes import CHUNK, _reduceat, _states
 
 I64 = npt.NDArray[np.int64]
 F64 = npt.NDArray[np.float64]
@@ -92,6 +92,64 @@ class Numbered:
 
 
 @jit
+def _probe(slots: Ints, dense: I64, k: int) -> int:
+    """The entry of key k in the one-region table, -1 if absent."""
+    m = len(slots) - 1
+    s = _home(k, m)
+    while True:
+        e = slots[s]
+        if e < 0 or dense[e] == k:
+            return int(e)
+        s = (s + 1) & m
+
+
+@jit
+def _resolve_bucket(slots: Ints, dense: I64, base: int, sslots: Ints, sdense: I64, sbase: int,
+                    keys: I64, at: I64, out: I64, mark: Bools, new: I64) -> int:
+    """For each key keys[i], i in `at` (of one bucket): a regular state of the bucket
+    (entry e of `slots` over `dense`) gets out[i] = base + e, and if `mark` is not empty
+    and mark[e] not set yet, it is set and base + e written to `new`; else a sink of the
+    bucket (entry e of the second table) gets out[i] = -1 - (sbase + e); else out[i] is
+    left. How many were written to `new`."""
+    n = 0
+    marking = len(mark) > 0
+    for i in at:
+        k = keys[i]
+        e = _probe(slots, dense, k)
+        if e >= 0:
+            out[i] = base + e
+            if marking and not mark[e]:
+                mark[e] = True
+                new[n] = base + e
+                n += 1
+            continue
+        e = _probe(sslots, sdense, k)
+        if e >= 0:
+            out[i] = -1 - (sbase + e)
+    return n
+
+
+class Bucket:
+    """A bucket of the streamed route's window, compiled: its regular states numbered
+    from `first` and its sinks (afsmc.verify.explorer.explore_graph.split_sinks) from
+    `sink_first`, each in a hash set."""
+
+    def __init__(self, keys: I64, first: int, sink_keys: I64, sink_first: int) -> None:
+        self.regular = Numbered(keys, first)
+        self.sinks = Numbered(sink_keys, sink_first)
+
+    def resolve(self, keys: I64, at: I64, out: I64, mark: Bools) -> I64:
+        """Each key keys[i], i in `at`, that is one of the bucket's states numbered in
+        `out` (a sink o as -1 - o); the regular ones not marked in `mark` yet (if not
+        empty), sorted, now marked."""
+        new = np.empty(min(len(at), len(mark)), np.int64)
+        n = _resolve_bucket(self.regular.set.slots, self.regular.set.dense, self.regular.first,
+                            self.sinks.set.slots, self.sinks.set.dense, self.sinks.first,
+                            keys, at, out, mark, new)
+        return np.sort(new[:n])
+
+
+@jit
 def _mark(target: I64, at: I64, lo: int, mark: Bools, out: I64) -> int:
     """The numbers target[i], i in `at` (each from lo on), not marked yet (each once, in
     the order met) into `out`, now marked; how many."""
@@ -114,9 +172,53 @@ def first_met(target: I64, at: I64, lo: int, mark: Bools) -> I64:
 
 
 @jit
+def prepare(states: I64, choices: I64, stored: Ints, late: int, first: int, slot: Ints,
+            own_other: int, prob: F64, reg: I64, oth: I64, stay: F64) -> bool:
+    """A file's successors as the pass reads them (afsmc.verify.stream.sweep.load's
+    numpy reference): `stored` (afsmc.verify.stream.layers.narrow's form: a regular
+    one as its offset from `first`, another as -1 - its other number, a late one as
+    `late`) into reg[b] (the row slot[g mod len(slot)] of regular state g, else -1) and
+    oth[b] (its other number, else -1; a late branch gets both -1, for its caller to
+    number); and each choice's self-loop probability into stay[c] (its branches to its
+    own state, summed as numpy's add.reduceat sums them): its own states are regular
+    from `first` (own_other < 0) or other from own_other. Whether any choice loops."""
+    size = len(slot)
+    most = 1
+    for c in range(len(choices) - 1):
+        most = max(most, choices[c + 1] - choices[c])
+    buf = np.empty(most)
+    loops = False
+    for s in range(len(states) - 1):
+        for c in range(states[s], states[s + 1]):
+            here = 0
+            for b in range(choices[c], choices[c + 1]):
+                v = stored[b]
+                reg[b] = -1
+                oth[b] = -1
+                if v == late:
+                    continue
+                own = -1
+                if v >= 0:
+                    if size:
+                        reg[b] = slot[(v + first) % size]
+                    if own_other < 0:
+                        own = v
+                else:
+                    oth[b] = -1 - v
+                    if own_other >= 0:
+                        own = oth[b] - own_other
+                if own == s:
+                    buf[here] = prob[b]
+                    here += 1
+            stay[c] = _reduceat(buf, 0, here) if here else 0.0
+            loops = loops or here > 0
+    return loops
+
+
+@jit
 def solve(layers: I64, states: I64, choices: I64, reg: I64, oth: I64, prob: F64, live: F64,
           other: F64, reward: F64, stay: F64, on: Bools, cut: I64, stuck: F64, reached: F64,
-          mean: Bools, sign: F64, rows: I64, out: F64) -> None:
+          mean: Bools, sign: F64, rows: I64, out: F64, clear: bool) -> None:
     """One file's states solved layer by layer (from the first; the states of a layer
     depend only on earlier layers' and on other files'): state s's values (one per
     query) into out[rows[s]]. The queries are in groups side by side, group g's in
@@ -125,8 +227,13 @@ def solve(layers: I64, states: I64, choices: I64, reg: I64, oth: I64, prob: F64,
     branch b goes to row reg[b] of `live` or, where that is -1, to row oth[b] of `other`;
     `reward` (choices x queries, 0 where a query has none; no columns if none has) and
     `on` (states x queries) are the file's; `stay` its choices' self-loops (empty: none
-    loops). CHUNK states of a layer at a time: their choices' values, then settled."""
+    loops). CHUNK states of a layer at a time: their choices' values, then settled.
+    `clear`: the states' rows start at 0 (a branch to its own state reads its row)."""
     k = len(sign)
+    if clear:
+        for s in range(layers[0], layers[-1]):
+            for q in range(k):
+                out[rows[s], q] = 0.0
     most = 1
     for j in range(len(layers) - 1):
         for s0 in range(layers[j], layers[j + 1], CHUNK):
@@ -171,6 +278,14 @@ def solve(layers: I64, states: I64, choices: I64, reg: I64, oth: I64, prob: F64,
             for s in range(s1 - s0):
                 for q in range(k):
                     out[rows[s0 + s], q] = here[s, q]
+
+
+@jit
+def clear(out: F64, rows: I64) -> None:
+    """The rows `rows` of `out` set to 0."""
+    for s in range(len(rows)):
+        for q in range(out.shape[1]):
+            out[rows[s], q] = 0.0
 
 
 @jit

@@ -41,7 +41,7 @@ from afsmc.verify.explorer.keysets import Frontiers, ProbTable, found_in, unique
 from afsmc.verify.stream.scratch import Scratch
 
 if TYPE_CHECKING:
-    from afsmc.verify.kernels.streamed import Numbered
+    from afsmc.verify.kernels.streamed import Bucket, Numbered
 
 
 @dataclass
@@ -91,6 +91,17 @@ class _Index:
         return np.sort(np.concatenate([k for k, _ in self.runs])) if self.runs else \
             np.zeros(0, np.int64)
 
+    def by_number(self) -> I64:
+        """Every key, in the order of their numbers (0, 1, ...)."""
+        if not self.runs:
+            return np.zeros(0, np.int64)
+        keys = np.concatenate([k for k, _ in self.runs])
+        numbers = np.concatenate([n for _, n in self.runs])
+        order = np.argsort(numbers)
+        assert (numbers[order] == np.arange(len(numbers))).all()
+        out: I64 = keys[order]
+        return out
+
     def find(self, keys: I64, out: I64, todo: acyclic.Bools) -> None:
         """Write the number of each key of `keys[todo]` found into `out`, clearing `todo`."""
         for sk, nums in self.runs:
@@ -104,55 +115,76 @@ class _Index:
 
 class _Hashed:
     """The sinks' keys numbered in a hash set (afsmc.verify.kernels.streamed): _Index's
-    compiled counterpart, taken on large models."""
+    compiled counterpart, taken on large models. Filled only when asked: each bucket's
+    own sinks are looked up in its window entry (afsmc.verify.kernels.streamed.Bucket),
+    so this is only asked for a key into an earlier bucket (a clock set back) and for
+    the late states."""
 
     def __init__(self, keys: I64) -> None:
-        from afsmc.verify.kernels.streamed import Numbered
-
-        self.set = Numbered(keys, 0)
+        self.waiting: list[I64] = [keys]  # added, not in the set yet
+        self.count = len(keys)
+        self.set: Numbered | None = None
 
     @classmethod
     def of(cls, index: _Index) -> _Hashed:
         """The keys of `index` (numbered 0, 1, ... in the order added)."""
-        if not index.runs:
-            return cls(np.zeros(0, np.int64))
-        keys = np.concatenate([k for k, _ in index.runs])
-        numbers = np.concatenate([n for _, n in index.runs])
-        order = np.argsort(numbers)
-        assert (numbers[order] == np.arange(len(numbers))).all()
-        return cls(keys[order])
+        return cls(index.by_number())
 
     def add(self, keys: I64, numbers: I64) -> None:
-        assert not len(numbers) or int(numbers[0]) == len(self.set.keys())
-        self.set.add(keys)
+        assert not len(numbers) or int(numbers[0]) == self.count
+        self.waiting.append(keys)
+        self.count += len(keys)
+
+    def _filled(self) -> Numbered:
+        from afsmc.verify.kernels.streamed import Numbered
+
+        if self.set is None:
+            self.set = Numbered(np.zeros(0, np.int64), 0)
+        for keys in self.waiting:
+            self.set.add(keys)
+        self.waiting = []
+        return self.set
 
     def find(self, keys: I64, out: I64, todo: acyclic.Bools) -> None:
         """Write the number of each key of `keys[todo]` found into `out`, clearing `todo`."""
-        got = np.full(len(keys), -1, np.int64)
-        self.set.find(np.ascontiguousarray(keys), np.flatnonzero(todo), got)
+        at = np.flatnonzero(todo)
+        got = self.lookup(keys[at])
         hit = got >= 0
-        out[hit] = got[hit]
-        todo[hit] = False
+        out[at[hit]] = got[hit]
+        todo[at[hit]] = False
+
+    def lookup(self, keys: I64) -> I64:
+        """The number of each key, -1 where it is no sink."""
+        got = np.full(len(keys), -1, np.int64)
+        if len(keys):
+            self._filled().find(np.ascontiguousarray(keys), np.arange(len(keys)), got)
+        return got
 
     def sorted_keys(self) -> I64:
-        return np.sort(self.set.keys())
+        return np.sort(self._filled().keys())
 
 
-# a bucket's keys in the window: sorted with their numbers (the numpy reference), or
-# numbered in a hash set (the compiled path)
-Entry = Union[tuple[I64, I64], "Numbered"]
+# a bucket's keys in the window: sorted with their numbers (the numpy reference), or its
+# states and sinks numbered in hash sets (the compiled path)
+Entry = Union[tuple[I64, I64], "Bucket"]
 
 
-def _hashed(window: dict[int, Entry]) -> None:
+def _hashed(window: dict[int, Entry], sinks: _Index, buckets: list[int], out: Streamed
+            ) -> None:
     """The window's buckets moved to hash sets (the exploration has grown past the
-    kernels' threshold)."""
-    from afsmc.verify.kernels.streamed import Numbered
+    kernels' threshold), each with its own sinks."""
+    from afsmc.verify.kernels.streamed import Bucket
 
+    every = sinks.by_number()
     for b, e in window.items():
         if isinstance(e, tuple):
             keys, numbers = e
             order = np.argsort(numbers)
-            window[b] = Numbered(keys[order], int(numbers[order[0]]) if len(numbers) else 0)
+            i = buckets.index(b)
+            lo = out.sink_start[i]
+            hi = out.sink_start[i + 1] if i + 1 < len(out.sink_start) else out.sinks
+            window[b] = Bucket(keys[order], int(numbers[order[0]]) if len(numbers) else 0,
+                               every[lo:hi], lo)
 
 
 def _save_block(s: Scratch, name: str, blk: Block, target: I64 | None) -> None:
@@ -209,8 +241,8 @@ def explore(c: Compiled, s: Scratch, notify: Notify | None = None,
         b = min(waiting.pending)
         if not fast and kernels.enabled(count):
             fast = True
-            _hashed(window)
             assert isinstance(sinks, _Index)
+            _hashed(window, sinks, buckets, out)
             sinks = _Hashed.of(sinks)
         begin = waiting.take(b)
         block, known, took = explore_graph.explore_bucket(
@@ -229,15 +261,18 @@ def explore(c: Compiled, s: Scratch, notify: Notify | None = None,
         _save_block(s, f"s{index}", sink, -1 - sink_numbers[
             acyclic._state_of_branches(explore_graph._offsets(sink.nchoice),
                                        explore_graph._offsets(sink.nbranch))])
-        numbers = np.arange(first, first + len(block.keys), dtype=np.int64)
-        order = np.argsort(block.keys)
         if fast:
-            from afsmc.verify.kernels.streamed import Numbered
+            from afsmc.verify.kernels.streamed import Bucket
 
-            window[b] = Numbered(block.keys, first)
+            window[b] = Bucket(block.keys, first, sink.keys, int(sink_numbers[0]) if len(
+                sink_numbers) else out.sinks)
+            s.save(f"keys{index}", keys=block.keys)  # for _check_late
         else:
-            window[b] = (block.keys[order], numbers[order])
-        s.save(f"keys{index}", keys=block.keys[order])  # sorted, for _check_late
+            numbers = np.arange(first, first + len(block.keys), dtype=np.int64)
+            order = np.argsort(block.keys)
+            window[b] = entry = (block.keys[order], numbers[order])
+            s.save(f"keys{index}", keys=entry[0])  # for _check_late
+            del order, numbers, entry
         seen[b] = (first, np.zeros(len(block.keys), bool))
         if index == 0:
             out.initial = _resolve_span([(b, window[b])], sinks, initial, c)[0][0]
@@ -254,7 +289,7 @@ def explore(c: Compiled, s: Scratch, notify: Notify | None = None,
         else:
             s.save(f"k{index}", target=block.target)
         count += len(known)
-        del block, sink, known, order, numbers, sink_numbers
+        del block, sink, known, sink_numbers
         if max_states is not None and count > max_states:
             raise TooManyStates(count)
         explore_graph.narrow(count, rounds)
@@ -280,24 +315,55 @@ def explore(c: Compiled, s: Scratch, notify: Notify | None = None,
 def _resolve_span(span: list[tuple[int, Entry]], sinks: _Index | _Hashed, keys: I64,
                   c: Compiled) -> tuple[I64, acyclic.Bools]:
     """_resolve against the keys of several consecutive buckets (their window entries)."""
-    if not span or isinstance(span[0][1], tuple):
-        # a bucket's keys are those whose high bits are the bucket: the window's runs,
-        # end to end in bucket order, are sorted
-        pairs = [e for _, e in span if isinstance(e, tuple)]
-        joined = (np.concatenate([k for k, _ in pairs]), np.concatenate([n for _, n in pairs]))
-        return _resolve(joined, sinks, keys)
+    if span and not isinstance(span[0][1], tuple):
+        target, late, _ = _resolve_hashed(span, sinks, keys, c, None)
+        return target, late
+    # a bucket's keys are those whose high bits are the bucket: the window's runs, end to
+    # end in bucket order, are sorted
+    pairs = [e for _, e in span if isinstance(e, tuple)]
+    joined = (np.concatenate([k for k, _ in pairs]), np.concatenate([n for _, n in pairs]))
+    return _resolve(joined, sinks, keys)
+
+
+def _resolve_hashed(span: list[tuple[int, Entry]], sinks: _Index | _Hashed, keys: I64,
+                    c: Compiled, seen: dict[int, tuple[int, acyclic.Bools]] | None
+                    ) -> tuple[I64, acyclic.Bools, I64]:
+    """_resolve_span and _dies by the compiled path: each key looked up in its own
+    bucket's states and sinks (a bucket of the span: `span[0]` is the bucket resolved),
+    the others among every sink; and with `seen`, the dies (as _dies gives them),
+    marked while looking up."""
     from afsmc.verify.kernels.streamed import groups
 
     keys = np.ascontiguousarray(keys)
-    out = np.full(len(keys), -1, np.int64)
+    out = np.full(len(keys), np.iinfo(np.int64).min, np.int64)
     lo = span[0][0]
-    order, first = groups(c.layout.bucket_of(keys) - lo, span[-1][0] - lo + 1)
-    for t, e in span:  # each key looked up in its bucket's table only
+    order, cut = groups(c.layout.bucket_of(keys) - lo, span[-1][0] - lo + 1)
+    dies = []
+    for t, e in span:
         assert not isinstance(e, tuple)
-        e.find(keys, order[first[t - lo]:first[t - lo + 1]], out)
-    todo = out < 0
-    out[todo] = keys[todo]
-    return _sinks(sinks, keys, out, todo)
+        at = order[cut[t - lo]:cut[t - lo + 1]]
+        if seen is None:
+            e.resolve(keys, at, out, np.zeros(0, bool))
+            continue
+        first, mark = seen[t]
+        if t == lo:  # no later bucket points at its states: all of them go now
+            e.resolve(keys, at, out, np.zeros(0, bool))
+            dies.append(np.flatnonzero(~mark).astype(np.int64) + first)
+            mark[:] = True
+        else:
+            dies.append(e.resolve(keys, at, out, mark))
+    # the rest: sinks of earlier buckets (a clock set back), or late states
+    todo = np.flatnonzero(out == np.iinfo(np.int64).min)
+    late = np.zeros(len(keys), bool)
+    if todo.size:
+        assert isinstance(sinks, _Hashed)
+        got = sinks.lookup(keys[todo])
+        hit = got >= 0
+        out[todo[hit]] = -1 - got[hit]
+        miss = todo[~hit]
+        out[miss] = keys[miss]
+        late[miss] = True
+    return out, late, np.concatenate(dies) if dies else np.zeros(0, np.int64)
 
 
 def _resolve(window: tuple[I64, I64], sinks: _Index | _Hashed, keys: I64
@@ -334,13 +400,18 @@ def _finish(s: Scratch, out: Streamed, w: _Waiting, window: dict[int, Entry],
     are resolved in order, so the first to point at a state is its lowest predecessor."""
     span = [(t, window[t]) for t in sorted(window) if w.bucket <= t <= w.reach]
     keys = held.pop(w.index) if w.index in held else s.load(f"k{w.index}")["target"]
-    target, late = _resolve_span(span, sinks, keys, c)
+    if isinstance(span[0][1], tuple):
+        target, late = _resolve_span(span, sinks, keys, c)
+        dies = None
+    else:
+        target, late, dies = _resolve_hashed(span, sinks, keys, c, seen)
     at = np.flatnonzero(late)
     if at.size and (c.layout.bucket_of(keys[at]) >= w.bucket).any():
         raise GiveUp("a successor that was not explored")
     target[at] = np.iinfo(np.int64).min
     out.reach.append(int(np.searchsorted(buckets, w.reach, side="right")) - 1)
-    dies = _dies(target, w, seen, not isinstance(sinks, _Index))
+    if dies is None:
+        dies = _dies(target, w, seen)
     out.dies.append(len(dies))
     first = out.start[w.index]
     # offsets from the bucket's first number: int32 while its reach spans fewer states
@@ -374,28 +445,10 @@ def widen(stored: npt.NDArray[np.signedinteger[Any]], first: int) -> I64:
     return out
 
 
-def _dies(target: I64, w: _Waiting, seen: dict[int, tuple[int, acyclic.Bools]],
-          fast: bool = False) -> I64:
+def _dies(target: I64, w: _Waiting, seen: dict[int, tuple[int, acyclic.Bools]]) -> I64:
     """The regular states (sorted numbers) that bucket `w` points at and no earlier bucket
-    did, and those of its own that nothing points at but the initial state; marked seen.
-    `fast`: by marks in a compiled kernel (afsmc.verify.kernels.streamed), no sort."""
-    if fast:
-        from afsmc.verify.kernels.streamed import first_met, groups
-
-        span = [(t, *seen[t]) for t in sorted(seen) if w.bucket <= t <= w.reach]
-        # the span's buckets are numbered end to end: each target's bucket by its number
-        starts = np.array([first for _, first, _ in span] + [span[-1][1] + len(span[-1][2])])
-        j = np.searchsorted(starts, target, side="right") - 1
-        order, cut = groups(j, len(span))
-        found = []
-        for g, (t, first, mark) in enumerate(span):
-            if t == w.bucket:  # no later bucket points at its states: all of them go now
-                new = np.flatnonzero(~mark).astype(np.int64)
-                mark[:] = True
-                found.append(new + first)
-            else:
-                found.append(first_met(target, order[cut[g]:cut[g + 1]], first, mark))
-        return np.concatenate(found)
+    did, and those of its own that nothing points at but the initial state; marked seen
+    (the compiled path marks them while resolving: _resolve_hashed)."""
     points = unique(target[target >= 0])
     out = []
     for t in sorted(seen):
@@ -441,5 +494,5 @@ def _check_late(c: Compiled, s: Scratch, late: I64, buckets: list[int]) -> None:
     for b in np.unique(tb).tolist():
         i = int(np.searchsorted(buckets, b))
         if i < len(buckets) and buckets[i] == b and \
-                found_in(s.load(f"keys{i}")["keys"], late[tb == b]).any():
+                found_in(np.sort(s.load(f"keys{i}")["keys"]), late[tb == b]).any():
             raise GiveUp("a state reached both before and after its clock went back")

@@ -16,7 +16,9 @@ integer per state, in a ring: state g at entry g mod its size.
 from __future__ import annotations
 
 import itertools
+import os
 from collections.abc import Callable
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 from typing import Any
 
@@ -90,6 +92,37 @@ def load(st: Streamed, name: str, first: int, own_other: int | None, late_sorted
                 [a[f"label{i}"] for i in range(labels)], a.get("dies"))
 
 
+def load_compiled(st: Streamed, name: str, first: int, own_other: int | None,
+                  late_sorted: I64, late_order: I64, rewards: int, labels: int,
+                  slot: Rows | None = None) -> Part:
+    """`load` by a compiled kernel (afsmc.verify.kernels.streamed.prepare): the same
+    part, its self-loops dense."""
+    from afsmc.verify.kernels import streamed
+
+    a = st.scratch.load(name)
+    states = _offsets(a["nchoice"])
+    choices = _offsets(a["nbranch"])
+    prob = st.table[a["prob"]]
+    stored = a["target"]
+    reg = np.empty(len(stored), np.int64)
+    oth = np.empty(len(stored), np.int64)
+    stay = np.empty(len(choices) - 1)
+    loops = streamed.prepare(states, choices, stored, int(np.iinfo(stored.dtype).min), first,
+                             np.zeros(0, np.int64) if slot is None else slot,
+                             -1 if own_other is None else own_other, prob, reg, oth, stay)
+    if "late_at" in a:
+        at = a["late_at"]
+        oth[at] = st.sinks + late_order[np.searchsorted(late_sorted, a["late_key"])]
+    per_choice = []
+    for i in range(rewards):
+        r = np.zeros(len(choices) - 1)
+        r[a[f"reward{i}_at"]] = a[f"reward{i}_v"]
+        per_choice.append(r)
+    layers = np.concatenate([[0], np.cumsum(a["layers"])]).astype(np.int64)
+    return Part(states, choices, reg, oth, prob, stay if loops else None, layers, per_choice,
+                [a[f"label{i}"] for i in range(labels)], a.get("dies"))
+
+
 def _steps(part: Part, lo: int, hi: int, reg: int, other: int) -> list[tuple[bool, Any]]:
     """The span's choices as sparse rows over the regular window (of `reg` rows; True)
     and over the other values (`other` rows; False), those that have branches there."""
@@ -160,12 +193,19 @@ class Fast:
     seen_reg: I64
     seen_oth: I64
     stamp: int = 0
+    # threads that solve the parts of a large layer side by side (None: one)
+    pool: ThreadPoolExecutor | None = None
+    workers: int = 1
 
     @classmethod
     def of(cls, groups: list[Group], rows: int, others: int) -> Fast:
         cut = np.cumsum([0] + [len(g.queries) for g in groups]).astype(np.int64)
         return cls(np.zeros((rows, int(cut[-1]))), np.zeros((others, int(cut[-1]))), cut,
                    np.full(rows, -1, np.int64), np.full(others, -1, np.int64))
+
+    def close(self) -> None:
+        if self.pool is not None:
+            self.pool.shutdown()
 
     def views(self, values: F64) -> list[F64]:
         """Each group's columns of `values`."""
@@ -207,6 +247,16 @@ def solve_part(part: Part, groups: list[Group], reg: list[F64] | None, other: li
     return pairs
 
 
+# The fewest states of a layer each thread solves: below, the layer is solved in one.
+SPLIT = 1024
+
+
+def threads() -> int:
+    """The threads of a compiled sweep: the cores this process may run on, at most 4
+    (the pass is bound by memory, not arithmetic, past a few)."""
+    return max(1, min(4, len(os.sched_getaffinity(0))))
+
+
 def _solve_compiled(part: Part, groups: list[Group], regular: bool, at: int | Rows,
                     count: bool, fast: Fast) -> int:
     """solve_part by afsmc.verify.kernels.streamed: the whole file's layers and every
@@ -233,11 +283,25 @@ def _solve_compiled(part: Part, groups: list[Group], regular: bool, at: int | Ro
         for q, t in enumerate(g.target):
             on[:, a + q] = part.labels[t]
     senses = [g.sense for g in groups]
-    streamed.solve(part.layers, part.states, part.choices, part.reg, part.oth, part.prob,
-                   fast.live, fast.other, reward, stay, on, fast.cut,
-                   np.array([x.stuck for x in senses]), np.array([x.reached for x in senses]),
-                   np.array([x.mean for x in senses]),
-                   np.concatenate([np.where(x.low, 1.0, -1.0) for x in senses]), rows, out)
+    args = (part.states, part.choices, part.reg, part.oth, part.prob, fast.live, fast.other,
+            reward, stay, on, fast.cut, np.array([x.stuck for x in senses]),
+            np.array([x.reached for x in senses]), np.array([x.mean for x in senses]),
+            np.concatenate([np.where(x.low, 1.0, -1.0) for x in senses]), rows, out)
+    pool = fast.pool
+    threads = 1 if pool is None else fast.workers
+    if pool is None or n < threads * SPLIT:
+        streamed.solve(part.layers, *args, regular)
+    else:
+        # the states of a layer do not depend on each other: its parts side by side
+        if regular:
+            streamed.clear(out, rows)
+        for lo, hi in itertools.pairwise(part.layers.tolist()):
+            cuts = np.linspace(lo, hi, threads + 1).astype(np.int64) if hi - lo >= \
+                threads * SPLIT else np.array([lo, hi], np.int64)
+            done = [pool.submit(streamed.solve, cuts[j:j + 2], *args, False)
+                    for j in range(len(cuts) - 1)]
+            for f in done:
+                f.result()
     if not count:
         return 0
     got = int(streamed.pairs(part.states, part.choices, part.reg, part.oth, fast.seen_reg,
@@ -343,16 +407,30 @@ def _sweep(st: Streamed, groups: list[Group], nr: int, targets: int, rows: int,
     """One sweep over the files for `groups`: their values in the initial state, and
     with `count` the uniform DTMC's transitions."""
     fast = Fast.of(groups, rows, st.sinks + st.late) if kernels.enabled(st.states) else None
+    if fast is not None and threads() > 1:
+        fast.workers = threads()
+        fast.pool = ThreadPoolExecutor(fast.workers, thread_name_prefix="afsmc-sweep")
+    try:
+        return _sweep_with(st, groups, nr, targets, rows, progress, left, count, fast)
+    finally:
+        if fast is not None:
+            fast.close()
+
+
+def _sweep_with(st: Streamed, groups: list[Group], nr: int, targets: int, rows: int,
+                progress: Progress | None, left: int, count: bool, fast: Fast | None
+                ) -> tuple[dict[str, float], int]:
     other = fast.views(fast.other) if fast is not None else \
         [np.zeros((st.sinks + st.late, len(g.queries))) for g in groups]
     order = np.argsort(st.late_keys)
     late = (st.late_keys[order], order)
     pairs = 0
+    read = load if fast is None else load_compiled
     for i, first in enumerate(st.sink_start):
-        part = load(st, f"s{i}", 0, first, *late, nr, targets)
+        part = read(st, f"s{i}", 0, first, *late, nr, targets)
         pairs += solve_part(part, groups, None, other, other, first, count, fast)
     if st.late:
-        part = load(st, "late", 0, st.sinks, *late, nr, targets)
+        part = read(st, "late", 0, st.sinks, *late, nr, targets)
         pairs += solve_part(part, groups, None, other, other, st.sinks, count, fast)
     live = fast.views(fast.live) if fast is not None else \
         [np.zeros((rows, len(g.queries))) for g in groups]
@@ -366,12 +444,10 @@ def _sweep(st: Streamed, groups: list[Group], nr: int, targets: int, rows: int,
         mine = free[top - size:top].copy()
         top -= size
         put(slot, first, mine)
-        if fast is not None:  # its rows start at 0, as the in-memory pass's values do
-            fast.live[mine] = 0.0
-        else:
-            for r in live:
+        if fast is None:  # its rows start at 0, as the in-memory pass's values do
+            for r in live:  # (the kernel clears them itself)
                 r[mine] = 0.0
-        part = load(st, f"b{i}", first, None, *late, nr, targets, slot)
+        part = read(st, f"b{i}", first, None, *late, nr, targets, slot)
         pairs += solve_part(part, groups, live, other, live, mine, count, fast)
         assert part.dies is not None
         dead = slot[(part.dies.astype(np.int64) + first) % len(slot)]
