@@ -75,6 +75,31 @@ def explore_bucket(c: Compiled, table: ProbTable, start: I64, b: int | None,
     bucket's pass `max_states`: a bucket may be deep (a long chain, round after round);
     with `rounds` (those of earlier buckets), GiveUp as soon as the states come too few
     per round (see NARROW_ROUNDS), rather than at the end of the chain."""
+    x = search_bucket(c, start, b, waiting, exclude, counted=counted, max_states=max_states,
+                      rounds=rounds)
+    return x.block(c, table), x.found.sorted(), len(x.parts)
+
+
+@dataclass
+class Search:
+    """A bucket's states found (explore_bucket's first step) and each round's expansion,
+    and whether the compiled kernels took them; `block` assembles them."""
+
+    found: Sorted | Found
+    parts: list[tuple[I64, Expansion]]
+    fast: bool
+    sinks_first: bool
+
+    def block(self, c: Compiled, table: ProbTable) -> Block:
+        """The block of the states found (explore_bucket's second step)."""
+        return _block(c, table, self.found, self.parts, self.fast, self.sinks_first)
+
+
+def search_bucket(c: Compiled, start: I64, b: int | None, waiting: Frontiers,
+                  exclude: I64 | None = None, *, counted: int = 0,
+                  max_states: int | None = None, rounds: int | None = None) -> Search:
+    """explore_bucket's states found and expansions, the block not yet assembled (the
+    streamed route assembles it in another thread)."""
     fast = kernels.enabled(counted + len(start))
     found: Sorted | Found
     if fast:
@@ -103,7 +128,7 @@ def explore_bucket(c: Compiled, table: ProbTable, start: I64, b: int | None,
             raise TooManyStates(counted + found.size, partial=True)
         if rounds is not None:
             narrow(counted + found.size, rounds + len(parts))
-    return _block(c, table, found, parts, fast, fast and b is not None), found.sorted(), len(parts)
+    return Search(found, parts, fast, fast and b is not None)
 
 
 def _span(c: Compiled, b: int | None) -> tuple[int, int]:

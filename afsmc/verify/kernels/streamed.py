@@ -217,16 +217,17 @@ def prepare(states: I64, choices: I64, stored: Ints, late: int, first: int, slot
 
 @jit
 def solve(layers: I64, states: I64, choices: I64, reg: I64, oth: I64, prob: F64, live: F64,
-          other: F64, reward: F64, stay: F64, on: Bools, cut: I64, stuck: F64, reached: F64,
-          mean: Bools, sign: F64, rows: I64, out: F64, clear: bool) -> None:
+          other: F64, reward: F64, rcol: I64, stay: F64, on: Bools, ocol: I64, cut: I64,
+          stuck: F64, reached: F64, mean: Bools, sign: F64, rows: I64, out: F64,
+          clear: bool) -> None:
     """One file's states solved layer by layer (from the first; the states of a layer
     depend only on earlier layers' and on other files'): state s's values (one per
     query) into out[rows[s]]. The queries are in groups side by side, group g's in
     columns cut[g] to cut[g + 1] with its `stuck`, `reached` and `mean` (a branch's
     successor's values in one row for all of them: one visit of the row per branch). A
     branch b goes to row reg[b] of `live` or, where that is -1, to row oth[b] of `other`;
-    `reward` (choices x queries, 0 where a query has none; no columns if none has) and
-    `on` (states x queries) are the file's; `stay` its choices' self-loops (empty: none
+    `reward` (choices x reward models) gives query q its column rcol[q] (-1: none), `on`
+    (states x targets) its column ocol[q]; `stay` is the choices' self-loops (empty: none
     loops). CHUNK states of a layer at a time: their choices' values, then settled.
     `clear`: the states' rows start at 0 (a branch to its own state reads its row)."""
     k = len(sign)
@@ -266,13 +267,13 @@ def solve(layers: I64, states: I64, choices: I64, reg: I64, oth: I64, prob: F64,
                             o[q] += p * other[t, q]
                 for q in range(k):
                     pc[c - row0, q] = (0.0 + r[q]) + o[q]
-                if reward.shape[1]:
-                    for q in range(k):
-                        pc[c - row0, q] += reward[c, q]
+                for q in range(k):
+                    if rcol[q] >= 0:
+                        pc[c - row0, q] += reward[c, rcol[q]]
             for g in range(len(cut) - 1):
                 a, b = cut[g], cut[g + 1]
                 _states(pc[:, a:b], states[s0:s1 + 1], 0, s1 - s0, row0,
-                        stay[row0:states[s1]] if loops else stay, on, -s0, cols[a:b],
+                        stay[row0:states[s1]] if loops else stay, on, -s0, ocol[a:b],
                         stuck[g], reached[g], mean[g], sign[a:b], here[:, a:b],
                         none[:, a:b], none[:, a:b], cols[a:b])
             for s in range(s1 - s0):

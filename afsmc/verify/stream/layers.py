@@ -106,14 +106,16 @@ def explore(c: Compiled, s: Scratch, notify: Notify | None = None,
     """Every state reachable from the initial one, bucket by bucket, written to `s`;
     raises GiveUp as explore_graph.explore does, TooManyStates past `max_states`.
 
-    Two threads: this one explores the buckets in order (explore_graph.explore_bucket)
-    and hands each block to a worker (_Writer) that splits off its sinks, writes it and
-    numbers the successors of the buckets whose reach is explored, in the same order;
-    most of either's work is in numpy or compiled kernels, which let the other run."""
+    Two threads: this one finds each bucket's states in order
+    (explore_graph.search_bucket) and hands each bucket's states found to a worker
+    (_Writer) that assembles their block, splits off its sinks, writes it and numbers
+    the successors of the buckets whose reach is explored, in the same order; most of
+    either's work is in numpy or compiled kernels, which let the other run. The
+    probabilities' table is the writer's until it is done."""
     waiting, table = Frontiers(), ProbTable()
     waiting.pending[int(c.layout.bucket_of(np.array([c.initial]))[0])] = [
         np.array([c.initial], np.int64)]
-    writer = _Writer(c, s)
+    writer = _Writer(c, s, table)
     count = rounds = 0
     shown = time.monotonic()
     try:
@@ -121,17 +123,15 @@ def explore(c: Compiled, s: Scratch, notify: Notify | None = None,
             writer.check()
             b = min(waiting.pending)
             begin = waiting.take(b)
-            block, known, took = explore_graph.explore_bucket(
-                c, table, begin, b, waiting, counted=count, max_states=max_states,
-                rounds=rounds)
-            rounds += took
-            count += len(known)
-            del known
+            found = explore_graph.search_bucket(c, begin, b, waiting, counted=count,
+                                                max_states=max_states, rounds=rounds)
+            rounds += len(found.parts)
+            count += found.found.size
             if max_states is not None and count > max_states:
                 raise TooManyStates(count)
             explore_graph.narrow(count, rounds)
-            writer.put((b, block, min(waiting.pending) if waiting.pending else None, count))
-            del block
+            writer.put((b, found, min(waiting.pending) if waiting.pending else None, count))
+            del found
             if notify is not None and time.monotonic() - shown > explore_graph.PROGRESS_EVERY:
                 shown = time.monotonic()
                 notify("explored", (b, count, s.written))
@@ -146,18 +146,20 @@ def explore(c: Compiled, s: Scratch, notify: Notify | None = None,
     return out
 
 
-# An explored bucket handed to the writer: the bucket, its block, the next bucket to
-# explore (None: none left) and the states explored so far.
-Item = tuple[int, Block, "int | None", int]
+# An explored bucket handed to the writer: the bucket, its states found (the block is
+# assembled by the writer), the next bucket to explore (None: none left) and the states
+# explored so far.
+Item = tuple[int, explore_graph.Search, "int | None", int]
 
 
 class _Writer:
     """The buckets' blocks, written and numbered in a thread of its own in the order
-    explored (at most one waits while one is written, so that memory holds a block or
-    two); an error there is raised in the exploring thread at its next put or close."""
+    explored (at most two wait while one is written, so that memory holds a few
+    buckets' states, and the explorer rarely waits for a slow bucket's writing); an
+    error there is raised in the exploring thread at its next put or close."""
 
-    def __init__(self, c: Compiled, s: Scratch) -> None:
-        self.c, self.s = c, s
+    def __init__(self, c: Compiled, s: Scratch, table: ProbTable) -> None:
+        self.c, self.s, self.table = c, s, table
         self.out = Streamed(s)
         self.sinks: resolve.Sinks = resolve.Index()
         self.window: dict[int, resolve.Entry] = {}  # bucket -> its keys and numbers
@@ -166,7 +168,7 @@ class _Writer:
         self.held: dict[int, I64] = {}  # bucket index -> its successors' keys, in memory
         self.buckets: list[int] = []
         self.fast = False
-        self.items: queue.Queue[Item | None] = queue.Queue(maxsize=1)
+        self.items: queue.Queue[Item | None] = queue.Queue(maxsize=2)
         self.error: BaseException | None = None
         self.halt = threading.Event()
         self.thread = threading.Thread(target=self._run, name="afsmc-layers", daemon=True)
@@ -213,10 +215,12 @@ class _Writer:
         except BaseException as exc:  # handed to the exploring thread
             self.error = exc
 
-    def _write(self, b: int, block: Block, nxt: int | None, count: int) -> None:
-        """Bucket `b`'s block written, and the successors of every bucket whose reach is
-        explored (all up to `nxt`) numbered."""
+    def _write(self, b: int, found: explore_graph.Search, nxt: int | None, count: int) -> None:
+        """Bucket `b`'s block assembled and written, and the successors of every bucket
+        whose reach is explored (all up to `nxt`) numbered."""
         s, out, c = self.s, self.out, self.c
+        block = found.block(c, self.table)
+        del found
         if not self.fast and kernels.enabled(count):
             self.fast = True
             assert isinstance(self.sinks, resolve.Index)

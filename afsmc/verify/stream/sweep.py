@@ -270,21 +270,19 @@ def _solve_compiled(part: Part, groups: list[Group], regular: bool, at: int | Ro
             else np.asarray(at, np.int64))
     stay = np.zeros(0) if part.stay is None else \
         np.asarray(part.stay[0:len(part.choices) - 1], np.float64)
-    k = int(fast.cut[-1])
-    m = len(part.choices) - 1
-    reward = np.zeros((0, 0))
-    if any(g.reward is not None for g in groups):
-        reward = np.zeros((m, k))
-        for g, a in zip(groups, fast.cut.tolist(), strict=False):
-            for q, r in enumerate(g.reward or []):
-                reward[:, a + q] = part.rewards[r]
-    on = np.zeros((n, k), bool)
-    for g, a in zip(groups, fast.cut.tolist(), strict=False):  # (cut has one more)
-        for q, t in enumerate(g.target):
-            on[:, a + q] = part.labels[t]
+    # the distinct reward models and targets, each query pointing at its columns
+    names = sorted({r for g in groups for r in g.reward or []})
+    rcol = np.array([names.index(r) if g.reward is not None else -1
+                     for g in groups for r in (g.reward or [-1] * len(g.queries))], np.int64)
+    reward = np.stack([part.rewards[r] for r in names], axis=1) if names else \
+        np.zeros((0, 0))
+    targets = sorted({t for g in groups for t in g.target})
+    ocol = np.array([targets.index(t) for g in groups for t in g.target], np.int64)
+    on = np.stack([part.labels[t] for t in targets], axis=1) if n else \
+        np.zeros((0, len(targets)), bool)
     senses = [g.sense for g in groups]
     args = (part.states, part.choices, part.reg, part.oth, part.prob, fast.live, fast.other,
-            reward, stay, on, fast.cut, np.array([x.stuck for x in senses]),
+            reward, rcol, stay, on, ocol, fast.cut, np.array([x.stuck for x in senses]),
             np.array([x.reached for x in senses]), np.array([x.mean for x in senses]),
             np.concatenate([np.where(x.low, 1.0, -1.0) for x in senses]), rows, out)
     pool = fast.pool
