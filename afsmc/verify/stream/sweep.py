@@ -17,7 +17,7 @@ from __future__ import annotations
 
 import itertools
 import os
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 from typing import Any
@@ -30,6 +30,7 @@ from afsmc.verify.arrays import acyclic
 from afsmc.verify.arrays.acyclic import F64, I64, Query, Sense
 from afsmc.verify.explorer import keysets
 from afsmc.verify.stream.layers import Streamed, widen
+from afsmc.verify.stream.scratch import Arrays
 
 LATE = np.iinfo(np.int64).min  # a branch into a late state, before it is numbered
 Rows = npt.NDArray[np.signedinteger[Any]]  # rows of the live values (int32 or int64)
@@ -94,12 +95,12 @@ def load(st: Streamed, name: str, first: int, own_other: int | None, late_sorted
 
 def load_compiled(st: Streamed, name: str, first: int, own_other: int | None,
                   late_sorted: I64, late_order: I64, rewards: int, labels: int,
-                  slot: Rows | None = None) -> Part:
+                  slot: Rows | None = None, arrays: Arrays | None = None) -> Part:
     """`load` by a compiled kernel (afsmc.verify.kernels.streamed.prepare): the same
-    part, its self-loops dense."""
+    part, its self-loops dense; from `arrays` if the file was read already."""
     from afsmc.verify.kernels import streamed
 
-    a = st.scratch.load(name)
+    a = st.scratch.load(name) if arrays is None else arrays
     states = _offsets(a["nchoice"])
     choices = _offsets(a["nbranch"])
     prob = st.table[a["prob"]]
@@ -415,6 +416,18 @@ def _sweep(st: Streamed, groups: list[Group], nr: int, targets: int, rows: int,
             fast.close()
 
 
+def _ahead(st: Streamed, names: list[str]) -> Iterator[Arrays]:
+    """Each file's arrays in turn, the next one read by a thread of its own meanwhile."""
+    with ThreadPoolExecutor(1, thread_name_prefix="afsmc-read") as reader:
+        coming = reader.submit(st.scratch.load, names[0]) if names else None
+        for k in range(len(names)):
+            assert coming is not None
+            got = coming.result()
+            coming = reader.submit(st.scratch.load, names[k + 1]) if k + 1 < len(names) \
+                else None
+            yield got
+
+
 def _sweep_with(st: Streamed, groups: list[Group], nr: int, targets: int, rows: int,
                 progress: Progress | None, left: int, count: bool, fast: Fast | None
                 ) -> tuple[dict[str, float], int]:
@@ -437,6 +450,9 @@ def _sweep_with(st: Streamed, groups: list[Group], nr: int, targets: int, rows: 
     free = np.arange(rows, dtype=slot.dtype)  # a stack of the free rows, top at the end
     top = rows
     buckets = len(st.start)
+    # the compiled path reads the next file while it solves one
+    files = _ahead(st, [f"b{i}" for i in reversed(range(buckets))]) if fast is not None \
+        else None
     for i in reversed(range(buckets)):
         first, size = st.start[i], st.size[i]
         mine = free[top - size:top].copy()
@@ -445,7 +461,8 @@ def _sweep_with(st: Streamed, groups: list[Group], nr: int, targets: int, rows: 
         if fast is None:  # its rows start at 0, as the in-memory pass's values do
             for r in live:  # (the kernel clears them itself)
                 r[mine] = 0.0
-        part = read(st, f"b{i}", first, None, *late, nr, targets, slot)
+        part = read(st, f"b{i}", first, None, *late, nr, targets, slot) if files is None \
+            else load_compiled(st, f"b{i}", first, None, *late, nr, targets, slot, next(files))
         pairs += solve_part(part, groups, live, other, live, mine, count, fast)
         assert part.dies is not None
         dead = slot[(part.dies.astype(np.int64) + first) % len(slot)]
