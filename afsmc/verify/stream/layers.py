@@ -71,18 +71,36 @@ class Streamed:
 
 
 def _save_block(s: Scratch, name: str, blk: Block, target: I64 | None) -> None:
-    """The block as one file, what the backward pass reads: its successors (`target`) too
-    unless None (a bucket's are appended once they are numbered); not its keys (a
-    bucket's are a file of their own, read only to check the late states)."""
+    """The block as one file, what the backward pass reads (`opened` gives it back): its
+    successors (`target`) too unless None (a bucket's are appended once they are
+    numbered); not its keys (a bucket's are a file of their own, read only to check the
+    late states). Counts and probability codes in the narrowest unsigned type that holds
+    them (a model's are small: a byte each, mostly), each label's bits packed."""
     arrays: dict[str, Any] = {
-        "nchoice": blk.nchoice, "nbranch": blk.nbranch,
-        "prob": blk.prob, "layers": np.asarray(blk.layers, np.int64),
+        "nchoice": smallest(blk.nchoice), "nbranch": smallest(blk.nbranch),
+        "prob": smallest(blk.prob), "layers": np.asarray(blk.layers, np.int64),
         **({} if target is None else {"target": target})}
     for i, (at, values) in enumerate(blk.reward):
         arrays[f"reward{i}_at"], arrays[f"reward{i}_v"] = at, values
     for i, lab in enumerate(blk.labels):
-        arrays[f"label{i}"] = lab
+        arrays[f"label{i}"] = np.packbits(lab)
     s.save(name, **arrays)
+
+
+def smallest(x: npt.NDArray[np.integer[Any]]) -> npt.NDArray[np.unsignedinteger[Any]]:
+    """Non-negative integers in the narrowest unsigned type that holds them all."""
+    top = int(x.max()) if len(x) else 0
+    kind = np.uint8 if top < 1 << 8 else np.uint16 if top < 1 << 16 else np.uint32 \
+        if top < 1 << 32 else np.uint64
+    out: npt.NDArray[np.unsignedinteger[Any]] = x.astype(kind)
+    return out
+
+
+def opened(a: dict[str, npt.NDArray[Any]]) -> dict[str, npt.NDArray[Any]]:
+    """A block's file as _save_block wrote it, its labels unpacked (one per state)."""
+    n = len(a["nchoice"])
+    return {k: np.unpackbits(v, count=n).astype(bool) if k.startswith("label") else v
+            for k, v in a.items()}
 
 
 # The most bytes of successors' keys that wait in memory for their buckets to be

@@ -29,7 +29,7 @@ from afsmc.verify import kernels
 from afsmc.verify.arrays import acyclic
 from afsmc.verify.arrays.acyclic import F64, I64, Query, Sense
 from afsmc.verify.explorer import keysets
-from afsmc.verify.stream.layers import Streamed, widen
+from afsmc.verify.stream.layers import Streamed, opened, widen
 from afsmc.verify.stream.scratch import Arrays
 
 LATE = np.iinfo(np.int64).min  # a branch into a late state, before it is numbered
@@ -54,9 +54,9 @@ class Part:
     dies: npt.NDArray[np.signedinteger[Any]] | None  # a bucket's, as offsets; else None
 
 
-def _offsets(counts: npt.NDArray[np.int32]) -> I64:
+def _offsets(counts: npt.NDArray[np.integer[Any]]) -> I64:
     out = np.zeros(len(counts) + 1, np.int64)
-    np.cumsum(counts, out=out[1:])
+    np.cumsum(counts, dtype=np.int64, out=out[1:])
     return out
 
 
@@ -66,7 +66,7 @@ def load(st: Streamed, name: str, first: int, own_other: int | None, late_sorted
     the live values (its own states from `first`, its own first number), or, for the
     sinks and the late states (`own_other`: their first other number), its own states as
     rows of the other values from there."""
-    a = st.scratch.load(name)
+    a = opened(st.scratch.load(name))
     states = _offsets(a["nchoice"])
     choices = _offsets(a["nbranch"])
     target = widen(a["target"], first)
@@ -100,7 +100,7 @@ def load_compiled(st: Streamed, name: str, first: int, own_other: int | None,
     part, its self-loops dense; from `arrays` if the file was read already."""
     from afsmc.verify.kernels import streamed
 
-    a = st.scratch.load(name) if arrays is None else arrays
+    a = opened(st.scratch.load(name) if arrays is None else arrays)
     states = _offsets(a["nchoice"])
     choices = _offsets(a["nbranch"])
     prob = st.table[a["prob"]]
