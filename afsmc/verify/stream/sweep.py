@@ -361,19 +361,31 @@ def live_rows(st: Streamed) -> int:
 
 # The most bytes the live values of one sweep take: above it, the queries (P, R, the
 # uniform DTMC's means) are solved in several sweeps, each reading the files again,
-# rather than all side by side.
+# rather than all side by side. At least SWEEP_BYTES, and SWEEP_SHARE of the memory
+# available when the pass begins (the exploration's window is freed by then).
 SWEEP_BYTES = 1 << 28
+SWEEP_SHARE = 0.05
 
 
-def sweeps(queries: list[Query], reward_names: list[str], rows: int) -> list[list[Group]]:
+def sweep_bytes() -> int:
+    """The bytes one sweep's live values may take (see SWEEP_BYTES)."""
+    from afsmc.verify.engines.guard import mem_available
+
+    free = mem_available()
+    return SWEEP_BYTES if free is None else max(SWEEP_BYTES, int(SWEEP_SHARE * free))
+
+
+def sweeps(queries: list[Query], reward_names: list[str], rows: int,
+           most: int | None = None) -> list[list[Group]]:
     """The queries' groups, cut to fit, packed into sweeps whose window of values fits
-    SWEEP_BYTES (one query at a time where one does not)."""
-    groups = groups_of(queries, reward_names, max(1, SWEEP_BYTES // (8 * rows)))
+    `most` bytes (SWEEP_BYTES if None; one query at a time where one does not)."""
+    most = SWEEP_BYTES if most is None else most
+    groups = groups_of(queries, reward_names, max(1, most // (8 * rows)))
     out: list[list[Group]] = []
     cols = 0
     for g in groups:
         k = len(g.queries)
-        if out and (cols + k) * rows * 8 <= SWEEP_BYTES:
+        if out and (cols + k) * rows * 8 <= most:
             out[-1].append(g)
             cols += k
         else:
@@ -385,9 +397,9 @@ def sweeps(queries: list[Query], reward_names: list[str], rows: int) -> list[lis
 def run(st: Streamed, queries: list[Query], reward_names: list[str], targets: int,
         progress: Progress | None = None) -> tuple[dict[str, float], int]:
     """Each query's value in the initial state, and the uniform DTMC's transitions (0
-    unless a query is a mean): as few sweeps over the files as SWEEP_BYTES allows."""
+    unless a query is a mean): as few sweeps over the files as sweep_bytes() allows."""
     rows = live_rows(st)
-    plan = sweeps(queries, reward_names, rows)
+    plan = sweeps(queries, reward_names, rows, sweep_bytes())
     out: dict[str, float] = {}
     pairs = 0
     # the uniform DTMC's transitions counted in the first sweep of means

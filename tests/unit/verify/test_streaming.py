@@ -88,6 +88,7 @@ def test_queries_in_sweeps_of_their_own_have_the_same_values(
         rows = sweep.live_rows(st)
         assert len(sweep.sweeps(p.queries, c.reward_names, rows)) == 1
         monkeypatch.setattr(sweep, "SWEEP_BYTES", 1)  # a sweep for each query
+        monkeypatch.setattr(sweep, "SWEEP_SHARE", 0.0)
         assert len(sweep.sweeps(p.queries, c.reward_names, rows)) == len(p.queries)
         apart, pairs_apart = sweep.run(st, p.queries, c.reward_names, len(p.targets))
     assert apart == together and pairs_apart == pairs > 0
