@@ -83,6 +83,13 @@ def load(st: Streamed, name: str, first: int, own_other: int | None, late_sorted
     own = np.where(regular, target - first, -1) if own_other is None else \
         np.where(regular, -1, oth - own_other)
     stay = acyclic.self_loops(states, choices, own.astype(np.int64), prob)
+    return _part(a, states, choices, reg, oth, prob, stay, rewards, labels)
+
+
+def _part(a: Arrays, states: I64, choices: I64, reg: I64, oth: I64, prob: F64,
+          stay: acyclic.Vec | None, rewards: int, labels: int) -> Part:
+    """The part of a file's arrays `a`, its successors and self-loops given: its rewards
+    per choice, its layers' offsets, its labels and dies as the file has them."""
     per_choice = []
     for i in range(rewards):
         r = np.zeros(len(choices) - 1)
@@ -114,14 +121,7 @@ def load_compiled(st: Streamed, name: str, first: int, own_other: int | None,
     if "late_at" in a:
         at = a["late_at"]
         oth[at] = st.sinks + late_order[np.searchsorted(late_sorted, a["late_key"])]
-    per_choice = []
-    for i in range(rewards):
-        r = np.zeros(len(choices) - 1)
-        r[a[f"reward{i}_at"]] = a[f"reward{i}_v"]
-        per_choice.append(r)
-    layers = np.concatenate([[0], np.cumsum(a["layers"])]).astype(np.int64)
-    return Part(states, choices, reg, oth, prob, stay if loops else None, layers, per_choice,
-                [a[f"label{i}"] for i in range(labels)], a.get("dies"))
+    return _part(a, states, choices, reg, oth, prob, stay if loops else None, rewards, labels)
 
 
 def _steps(part: Part, lo: int, hi: int, reg: int, other: int) -> list[tuple[bool, Any]]:
