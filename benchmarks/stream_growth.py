@@ -34,27 +34,29 @@ from benchmarks.explicit import _scratch_mb, append_rows, csv_options, shown, ti
 from benchmarks.run import UAV  # noqa: E402
 
 
-def _uav(objects: int, t_limit: int) -> list[str]:
-    """The 7x7 arena and alpha of the paper's scenarios (examples/uav-scenario2.args),
-    with `objects` objects and a time limit (and deadline) of `t_limit` s."""
-    return [f"--const=WIDTH=7,HEIGHT=7,ALPHA=0.085,OBJECTS={objects},T_LIMIT={t_limit},"
-            f"DEADLINE={t_limit}"]
+def _uav(objects: int, t_limit: int, arena: int = 7) -> list[str]:
+    """The 7x7 arena (or `arena` x `arena`) and alpha of the paper's scenarios
+    (examples/uav-scenario2.args), with `objects` objects and a time limit (and deadline)
+    of `t_limit` s."""
+    return [f"--const=WIDTH={arena},HEIGHT={arena},ALPHA=0.085,OBJECTS={objects},"
+            f"T_LIMIT={t_limit},DEADLINE={t_limit}"]
 
 
 # the paper's two scenarios: (objects, time limit)
 SCENARIOS: dict[str, tuple[int, int]] = {"scenario2": (2, 500), "scenario1": (3, 900)}
 
 
-def size_of(name: str) -> tuple[int, int]:
-    """A size's objects and time limit: `scenario1`, `scenario2`, `tT` (2 objects, time
-    limit T) or `oN-tT` (N objects)."""
+def size_of(name: str) -> tuple[int, int, int]:
+    """A size's objects, time limit and arena side: `scenario1`, `scenario2`, `tT` (2
+    objects, time limit T, the 7x7 arena), `oN-tT` (N objects) or `aS-oN-tT` (an S x S
+    arena)."""
     if name in SCENARIOS:
-        return SCENARIOS[name]
-    m = re.fullmatch(r"(?:o(\d+)-)?t(\d+)", name)
+        return (*SCENARIOS[name], 7)
+    m = re.fullmatch(r"(?:a(\d+)-)?(?:o(\d+)-)?t(\d+)", name)
     if m is None:
-        raise SystemExit(f"stream_growth: unknown size {name!r} (scenario1, scenario2, tT "
-                         "or oN-tT)")
-    return int(m.group(1) or 2), int(m.group(2))
+        raise SystemExit(f"stream_growth: unknown size {name!r} (scenario1, scenario2, tT, "
+                         "oN-tT or aS-oN-tT)")
+    return int(m.group(2) or 2), int(m.group(3)), int(m.group(1) or 7)
 FIELDS = ["measured", "load", "size", "objects", "t_limit", "status", "wall_s", "cpu_s",
           "peak_gb", "states", "transitions", "scratch_mb"]
 # column, name, its unit, and the factor and unit of its slope per transition
@@ -64,8 +66,8 @@ MEASURES = [("wall_s", "wall", "s", 1e6, "µs"), ("cpu_s", "CPU", "s", 1e6, "µs
 
 
 def run_one(size: str, scratch: str, timeout: float) -> dict[str, object]:
-    objects, t_limit = size_of(size)
-    args = ["verify", UAV, *_uav(objects, t_limit), "--json", "--scratch", scratch]
+    objects, t_limit, arena = size_of(size)
+    args = ["verify", UAV, *_uav(objects, t_limit, arena), "--json", "--scratch", scratch]
     out, row = timed_row(args, timeout, {"size": size, "objects": objects,
                                          "t_limit": t_limit})
     if out is not None and isinstance(out.get("model"), dict):
