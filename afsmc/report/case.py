@@ -34,7 +34,7 @@ from afsmc.report.sensitivity import Sensitivity, sensitivities
 from afsmc.sim.evidence import Evidence
 from afsmc.verify.core.api import load_with_formulas, select, sound_mode
 from afsmc.verify.core.options import VerifyOptions
-from afsmc.verify.engines.guard import default_max_states, mem_available
+from afsmc.verify.engines.guard import IN_PROCESS_STATES, default_max_states, mem_available
 from afsmc.verify.outcome.results import PropertyResult, VerifyResult
 from afsmc.verify.outcome.strategy import StrategyEntry, has_choices
 
@@ -43,6 +43,9 @@ PATHS = 3  # the most probable paths shown into each failure property's largest 
 # the shares of the free memory the verification and the causes, which run side by
 # side, may take (verify alone takes 70%: afsmc.verify.engines.jobs)
 VERIFY_SHARE, CAUSES_SHARE = 0.45, 0.3
+# how far below guard.IN_PROCESS_STATES the verified model must be for the sensitivities'
+# runs (the model with one figure moved, a little larger or smaller) to stay in process
+SMALL_MARGIN = 4
 
 
 @dataclass(frozen=True)
@@ -303,8 +306,14 @@ def build(path: str, consts: Mapping[str, str] | None = None, *,
         comparison = compare(baseline, res.to_json(), tolerance, baseline_name)
     slopes = None
     if sensitivity:
+        # dozens of verifications of the model with one figure moved within its range:
+        # where the model verified is far below the size that needs a watched child
+        # (guard.IN_PROCESS_STATES), they run in this process, without a fresh
+        # interpreter's start (about a second each) per run
+        small = res.model.states * SMALL_MARGIN <= IN_PROCESS_STATES
         slopes = sensitivities(path, checked.model.source.text, model, consts,
-                               [p for p in res.properties if p.threshold is not None], opts,
+                               [p for p in res.properties if p.threshold is not None],
+                               dataclasses.replace(opts, isolate=False) if small else opts,
                                say)
     agents = [a.name for a in model.composition.agents] if model.composition else []
     return Case(path, model.name, description(checked.model.source.text),
