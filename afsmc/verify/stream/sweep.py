@@ -255,7 +255,9 @@ SPLIT = 1024
 def threads() -> int:
     """The threads of a compiled sweep: the cores this process may run on, at most 4
     (the pass is bound by memory, not arithmetic, past a few)."""
-    return max(1, min(4, len(os.sched_getaffinity(0))))
+    cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else \
+        os.cpu_count() or 1
+    return max(1, min(4, cores))
 
 
 def _solve_compiled(part: Part, groups: list[Group], regular: bool, at: int | Rows,
