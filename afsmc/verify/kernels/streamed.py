@@ -1,8 +1,8 @@
 """Compiled kernels of the streamed route (afsmc.verify.stream): resolving a bucket's
-successor keys into state numbers by hash lookups, its dies by marks, and a file's
-backward pass without a sparse matrix.
+successor keys into state numbers by hash lookups (its dies marked in the same lookup),
+and a file's backward pass without a sparse matrix.
 
-Each has a numpy reference in afsmc.verify.stream.layers or .sweep, and gives the same
+Each has a numpy reference in afsmc.verify.stream.resolve or .sweep, and gives the same
 numbers and, for the pass, the same values to the bit: a choice's value is, as the
 numpy code's CSR products add them, 0 plus the sum (in the branches' order, from 0) of
 its branches into regular states, plus the sum of those into the other states, plus its
@@ -27,21 +27,25 @@ Ints = npt.NDArray[np.integer[Any]]
 
 
 @jit
+def _probe(slots: Ints, dense: I64, k: int) -> int:
+    """The entry of key k in the one-region table, -1 if absent."""
+    m = len(slots) - 1
+    s = _home(k, m)
+    while True:
+        e = slots[s]
+        if e < 0 or dense[e] == k:
+            return int(e)
+        s = (s + 1) & m
+
+
+@jit
 def _lookup(slots: Ints, dense: I64, keys: I64, at: I64, base: int, out: I64) -> None:
     """For each key keys[i], i in `at`: if the one-region table (`slots` over `dense`)
     holds it at entry e, out[i] = base + e."""
-    m = len(slots) - 1
     for i in at:
-        k = keys[i]
-        s = _home(k, m)
-        while True:
-            e = slots[s]
-            if e < 0:
-                break
-            if dense[e] == k:
-                out[i] = base + e
-                break
-            s = (s + 1) & m
+        e = _probe(slots, dense, keys[i])
+        if e >= 0:
+            out[i] = base + e
 
 
 @jit
@@ -92,18 +96,6 @@ class Numbered:
 
 
 @jit
-def _probe(slots: Ints, dense: I64, k: int) -> int:
-    """The entry of key k in the one-region table, -1 if absent."""
-    m = len(slots) - 1
-    s = _home(k, m)
-    while True:
-        e = slots[s]
-        if e < 0 or dense[e] == k:
-            return int(e)
-        s = (s + 1) & m
-
-
-@jit
 def _resolve_bucket(slots: Ints, dense: I64, base: int, sslots: Ints, sdense: I64, sbase: int,
                     keys: I64, at: I64, out: I64, mark: Bools, new: I64) -> int:
     """For each key keys[i], i in `at` (of one bucket): a regular state of the bucket
@@ -147,28 +139,6 @@ class Bucket:
                             self.sinks.set.slots, self.sinks.set.dense, self.sinks.first,
                             keys, at, out, mark, new)
         return np.sort(new[:n])
-
-
-@jit
-def _mark(target: I64, at: I64, lo: int, mark: Bools, out: I64) -> int:
-    """The numbers target[i], i in `at` (each from lo on), not marked yet (each once, in
-    the order met) into `out`, now marked; how many."""
-    n = 0
-    for i in at:
-        t = target[i]
-        if not mark[t - lo]:
-            mark[t - lo] = True
-            out[n] = t
-            n += 1
-    return n
-
-
-def first_met(target: I64, at: I64, lo: int, mark: Bools) -> I64:
-    """The numbers target[i], i in `at` (all among lo .. lo + len(mark)), not marked
-    before, sorted; now marked."""
-    out = np.empty(min(len(at), len(mark)), np.int64)
-    n = _mark(target, at, lo, mark, out)
-    return np.sort(out[:n])
 
 
 @jit
