@@ -17,6 +17,10 @@ transition, intercept and R^2, so that linear growth shows as R^2 near 1.
 
     .venv/bin/python benchmarks/stream_growth.py \\
         --sizes t300,t400,scenario2,o3-t600,o3-t750,scenario1
+
+A size `aS-oN-tT` takes an S x S arena instead (the billion-state run of
+docs/benchmarks.md is `a12-o3-t1750`). `--table` fits every row of the CSV, whatever
+the code that measured it: give it a CSV of one session's rows to fit one version.
 """
 
 from __future__ import annotations

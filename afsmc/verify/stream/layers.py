@@ -301,8 +301,8 @@ class _Writer:
         resolved in order, so the first to point at a state is its lowest predecessor."""
         s, out, c, seen = self.s, self.out, self.c, self.seen
         span = [(t, self.window[t]) for t in sorted(self.window) if w.bucket <= t <= w.reach]
-        keys = self.held.pop(w.index) if w.index in self.held else \
-            s.load(f"k{w.index}")["target"]
+        on_disk = w.index not in self.held
+        keys = s.load(f"k{w.index}")["target"] if on_disk else self.held.pop(w.index)
         if isinstance(span[0][1], tuple):
             target, late = resolve.resolve_span(span, self.sinks, keys, c)
             dies = None
@@ -322,7 +322,8 @@ class _Writer:
         s.save(f"b{w.index}", append=True, target=narrow(target, first), dies=(
             dies - first).astype(np.int64 if wide else np.int32),
                **({"late_at": at, "late_key": keys[at]} if at.size else {}))
-        s.remove(f"k{w.index}")  # (if it was written)
+        if on_disk:
+            s.remove(f"k{w.index}")
 
 
 def narrow(target: I64, first: int) -> npt.NDArray[np.signedinteger[Any]]:

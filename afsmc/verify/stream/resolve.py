@@ -149,8 +149,9 @@ def hashed(window: dict[int, Entry], sinks: Index, buckets: list[int], sink_star
 
 
 def resolve_span(span: list[tuple[int, Entry]], sinks: Sinks, keys: I64,
-                  c: Compiled) -> tuple[I64, acyclic.Bools]:
-    """_resolve against the keys of several consecutive buckets (their window entries)."""
+                 c: Compiled) -> tuple[I64, acyclic.Bools]:
+    """resolve_sorted against the keys of several consecutive buckets (their window
+    entries), or resolve_hashed where they are hash sets."""
     if span and not isinstance(span[0][1], tuple):
         target, late, _ = resolve_hashed(span, sinks, keys, c, None)
         return target, late
@@ -162,11 +163,11 @@ def resolve_span(span: list[tuple[int, Entry]], sinks: Sinks, keys: I64,
 
 
 def resolve_hashed(span: list[tuple[int, Entry]], sinks: Sinks, keys: I64,
-                    c: Compiled, seen: Seen | None
-                    ) -> tuple[I64, acyclic.Bools, I64]:
-    """_resolve_span and _dies by the compiled path: each key looked up in its own
+                   c: Compiled, seen: Seen | None
+                   ) -> tuple[I64, acyclic.Bools, I64]:
+    """resolve_span and dies_sorted by the compiled path: each key looked up in its own
     bucket's states and sinks (a bucket of the span: `span[0]` is the bucket resolved),
-    the others among every sink; and with `seen`, the dies (as _dies gives them),
+    the others among every sink; and with `seen`, the dies (as dies_sorted gives them),
     marked while looking up."""
     from afsmc.verify.kernels.streamed import groups
 
@@ -178,16 +179,15 @@ def resolve_hashed(span: list[tuple[int, Entry]], sinks: Sinks, keys: I64,
     for t, e in span:
         assert not isinstance(e, tuple)
         at = order[cut[t - lo]:cut[t - lo + 1]]
-        if seen is None:
-            e.resolve(keys, at, out, np.zeros(0, bool))
-            continue
-        first, mark = seen[t]
-        if t == lo:  # no later bucket points at its states: all of them go now
-            e.resolve(keys, at, out, np.zeros(0, bool))
-            dies.append(np.flatnonzero(~mark).astype(np.int64) + first)
-            mark[:] = True
-        else:
-            dies.append(e.resolve(keys, at, out, mark))
+        first, mark = seen[t] if seen is not None else (0, np.zeros(0, bool))
+        # the bucket resolved: no later bucket points at its states, all of them go now
+        own = t == lo
+        new = e.resolve(keys, at, out, np.zeros(0, bool) if own else mark)
+        if seen is not None:
+            if own:
+                new = np.flatnonzero(~mark).astype(np.int64) + first
+                mark[:] = True
+            dies.append(new)
     # the rest: sinks of earlier buckets (a clock set back), or late states
     todo = np.flatnonzero(out == np.iinfo(np.int64).min)
     late = np.zeros(len(keys), bool)
@@ -203,7 +203,7 @@ def resolve_hashed(span: list[tuple[int, Entry]], sinks: Sinks, keys: I64,
 
 
 def resolve_sorted(window: tuple[I64, I64], sinks: Sinks, keys: I64
-             ) -> tuple[I64, acyclic.Bools]:
+                   ) -> tuple[I64, acyclic.Bools]:
     """The numbers of `keys` among the window's regular states (>= 0) or the sinks
     (-1 - o); and which keys are neither (left as they are)."""
     sk, nums = window
@@ -217,7 +217,7 @@ def resolve_sorted(window: tuple[I64, I64], sinks: Sinks, keys: I64
 
 
 def sinks_of(sinks: Sinks, keys: I64, out: I64, todo: acyclic.Bools
-           ) -> tuple[I64, acyclic.Bools]:
+             ) -> tuple[I64, acyclic.Bools]:
     """The keys still `todo` that are sinks numbered in `out` (-1 - o); and which keys
     are neither regular nor sinks."""
     other = np.zeros(len(keys), np.int64)

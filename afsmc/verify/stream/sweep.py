@@ -15,9 +15,10 @@ integer per state, in a ring: state g at entry g mod its size.
 
 from __future__ import annotations
 
+import contextlib
 import itertools
 import os
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Generator
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 from typing import Any
@@ -193,6 +194,17 @@ class Fast:
     cut: I64
     seen_reg: I64
     seen_oth: I64
+    # the groups' distinct reward models and targets (indices among the files'), each
+    # query pointing at its column (rcol -1: no reward); per group its stuck and reached
+    # values and whether it is a mean; per query 1 for a min, -1 for a max
+    rewards: list[int]
+    rcol: I64
+    targets: list[int]
+    ocol: I64
+    stuck: F64
+    reached: F64
+    mean: acyclic.Bools
+    sign: F64
     stamp: int = 0
     # threads that solve the parts of a large layer side by side (None: one)
     pool: ThreadPoolExecutor | None = None
@@ -201,8 +213,18 @@ class Fast:
     @classmethod
     def of(cls, groups: list[Group], rows: int, others: int) -> Fast:
         cut = np.cumsum([0] + [len(g.queries) for g in groups]).astype(np.int64)
+        rewards = sorted({r for g in groups for r in g.reward or []})
+        targets = sorted({t for g in groups for t in g.target})
+        senses = [g.sense for g in groups]
         return cls(np.zeros((rows, int(cut[-1]))), np.zeros((others, int(cut[-1]))), cut,
-                   np.full(rows, -1, np.int64), np.full(others, -1, np.int64))
+                   np.full(rows, -1, np.int64), np.full(others, -1, np.int64), rewards,
+                   np.array([rewards.index(r) if g.reward is not None else -1 for g in groups
+                             for r in (g.reward or [-1] * len(g.queries))], np.int64),
+                   targets,
+                   np.array([targets.index(t) for g in groups for t in g.target], np.int64),
+                   np.array([x.stuck for x in senses]), np.array([x.reached for x in senses]),
+                   np.array([x.mean for x in senses]),
+                   np.concatenate([np.where(x.low, 1.0, -1.0) for x in senses]))
 
     def close(self) -> None:
         if self.pool is not None:
@@ -222,7 +244,7 @@ def solve_part(part: Part, groups: list[Group], reg: list[F64] | None, other: li
     DTMC's transitions), else 0. With `fast`, by the compiled kernels (the lists of
     values are views of its matrices)."""
     if fast is not None:
-        return _solve_compiled(part, groups, reg is not None, at, count, fast)
+        return _solve_compiled(part, reg is not None, at, count, fast)
     pairs = 0
     spans = [(k, min(k + acyclic.SPAN, hi)) for lo, hi in
              itertools.pairwise(part.layers.tolist()) for k in range(lo, hi, acyclic.SPAN)]
@@ -260,10 +282,10 @@ def threads() -> int:
     return max(1, min(4, cores))
 
 
-def _solve_compiled(part: Part, groups: list[Group], regular: bool, at: int | Rows,
-                    count: bool, fast: Fast) -> int:
+def _solve_compiled(part: Part, regular: bool, at: int | Rows, count: bool, fast: Fast
+                    ) -> int:
     """solve_part by afsmc.verify.kernels.streamed: the whole file's layers and every
-    group in one call, no matrix built; the same values to the bit. `regular`: a
+    group of `fast` in one call, no matrix built; the same values to the bit. `regular`: a
     bucket's file (its values go to the live ones, else to the others)."""
     from afsmc.verify.kernels import streamed
 
@@ -273,21 +295,13 @@ def _solve_compiled(part: Part, groups: list[Group], regular: bool, at: int | Ro
             else np.asarray(at, np.int64))
     stay = np.zeros(0) if part.stay is None else \
         np.asarray(part.stay[0:len(part.choices) - 1], np.float64)
-    # the distinct reward models and targets, each query pointing at its columns
-    names = sorted({r for g in groups for r in g.reward or []})
-    rcol = np.array([names.index(r) if g.reward is not None else -1
-                     for g in groups for r in (g.reward or [-1] * len(g.queries))], np.int64)
-    reward = np.stack([part.rewards[r] for r in names], axis=1) if names else \
-        np.zeros((0, 0))
-    targets = sorted({t for g in groups for t in g.target})
-    ocol = np.array([targets.index(t) for g in groups for t in g.target], np.int64)
-    on = np.stack([part.labels[t] for t in targets], axis=1) if n else \
-        np.zeros((0, len(targets)), bool)
-    senses = [g.sense for g in groups]
+    reward = np.stack([part.rewards[r] for r in fast.rewards], axis=1) if fast.rewards \
+        else np.zeros((0, 0))
+    on = np.stack([part.labels[t] for t in fast.targets], axis=1) if n else \
+        np.zeros((0, len(fast.targets)), bool)
     args = (part.states, part.choices, part.reg, part.oth, part.prob, fast.live, fast.other,
-            reward, rcol, stay, on, ocol, fast.cut, np.array([x.stuck for x in senses]),
-            np.array([x.reached for x in senses]), np.array([x.mean for x in senses]),
-            np.concatenate([np.where(x.low, 1.0, -1.0) for x in senses]), rows, out)
+            reward, fast.rcol, stay, on, fast.ocol, fast.cut, fast.stuck, fast.reached,
+            fast.mean, fast.sign, rows, out)
     pool = fast.pool
     threads = 1 if pool is None else fast.workers
     if pool is None or n < threads * SPLIT:
@@ -420,9 +434,10 @@ def _sweep(st: Streamed, groups: list[Group], nr: int, targets: int, rows: int,
     """One sweep over the files for `groups`: their values in the initial state, and
     with `count` the uniform DTMC's transitions."""
     fast = Fast.of(groups, rows, st.sinks + st.late) if kernels.enabled(st.states) else None
-    if fast is not None and threads() > 1:
+    if fast is not None:
         fast.workers = threads()
-        fast.pool = ThreadPoolExecutor(fast.workers, thread_name_prefix="afsmc-sweep")
+        if fast.workers > 1:
+            fast.pool = ThreadPoolExecutor(fast.workers, thread_name_prefix="afsmc-sweep")
     try:
         return _sweep_with(st, groups, nr, targets, rows, progress, left, count, fast)
     finally:
@@ -430,7 +445,7 @@ def _sweep(st: Streamed, groups: list[Group], nr: int, targets: int, rows: int,
             fast.close()
 
 
-def _ahead(st: Streamed, names: list[str]) -> Iterator[Arrays]:
+def _ahead(st: Streamed, names: list[str]) -> Generator[Arrays, None, None]:
     """Each file's arrays in turn, the next one read by a thread of its own meanwhile."""
     with ThreadPoolExecutor(1, thread_name_prefix="afsmc-read") as reader:
         coming = reader.submit(st.scratch.load, names[0]) if names else None
@@ -464,27 +479,29 @@ def _sweep_with(st: Streamed, groups: list[Group], nr: int, targets: int, rows: 
     free = np.arange(rows, dtype=slot.dtype)  # a stack of the free rows, top at the end
     top = rows
     buckets = len(st.start)
-    # the compiled path reads the next file while it solves one
+    # the compiled path reads the next file while it solves one (its reader closed at
+    # the end or on an error, before the scratch is removed)
     files = _ahead(st, [f"b{i}" for i in reversed(range(buckets))]) if fast is not None \
         else None
-    for i in reversed(range(buckets)):
-        first, size = st.start[i], st.size[i]
-        mine = free[top - size:top].copy()
-        top -= size
-        put(slot, first, mine)
-        if fast is None:  # its rows start at 0, as the in-memory pass's values do
-            for r in live:  # (the kernel clears them itself)
-                r[mine] = 0.0
-        part = read(st, f"b{i}", first, None, *late, nr, targets, slot) if files is None \
-            else load_compiled(st, f"b{i}", first, None, *late, nr, targets, slot, next(files))
-        pairs += solve_part(part, groups, live, other, live, mine, count, fast)
-        assert part.dies is not None
-        dead = slot[(part.dies.astype(np.int64) + first) % len(slot)]
-        del part
-        free[top:top + len(dead)] = dead
-        top += len(dead)
-        if progress is not None:
-            progress(buckets - i, buckets, left)
+    with contextlib.closing(files) if files is not None else contextlib.nullcontext():
+        for i in reversed(range(buckets)):
+            first, size = st.start[i], st.size[i]
+            mine = free[top - size:top].copy()
+            top -= size
+            put(slot, first, mine)
+            if fast is None:  # its rows start at 0, as the in-memory pass's values do
+                for r in live:  # (the kernel clears them itself)
+                    r[mine] = 0.0
+            part = read(st, f"b{i}", first, None, *late, nr, targets, slot) if files is None \
+                else load_compiled(st, f"b{i}", first, None, *late, nr, targets, slot, next(files))
+            pairs += solve_part(part, groups, live, other, live, mine, count, fast)
+            assert part.dies is not None
+            dead = slot[(part.dies.astype(np.int64) + first) % len(slot)]
+            del part
+            free[top:top + len(dead)] = dead
+            top += len(dead)
+            if progress is not None:
+                progress(buckets - i, buckets, left)
     out: dict[str, float] = {}
     for g, grp in enumerate(groups):
         row = live[g][slot[st.initial % len(slot)]] if st.initial >= 0 else \
