@@ -2,12 +2,14 @@
 most +50% time and memory on scenario 2), each run under `/usr/bin/time -v`.
 
     .venv/bin/python benchmarks/strategy.py [--instances 4x4-t300,scenario2]
-        [--routes default,storm] [--reference 4x4-obj2-t300] [--out benchmarks/strategy.csv]
+        [--routes default,storm,memory,stream] [--reference 4x4-obj2-t300] [--out benchmarks/strategy.csv]
 
 Per instance and route, two commands one after the other: `verify ... -p success --json`
 (base) and the same with `--strategy --witness 10`. Route `default` is what a user gets
 (afsmc's own exploration and backward pass); `storm` adds `--solver topological`: Storm's
-build, solver, scheduler and path generator, the oracle. The reference instance runs
+build, solver, scheduler and path generator, the oracle; `memory` keeps afsmc's
+exploration in memory (`--no-scratch`) and `stream` writes it layer by layer through the
+system temp directory (`--scratch`), the strategies and paths read from the same files. The reference instance runs
 first (the whole file, default route): its time tells how busy the machine was. Rows go
 to the CSV (the values, the strategy tables' sizes and the paths' mass included) and are
 printed as a markdown table with each extraction's CPU and memory against its base.
@@ -18,6 +20,7 @@ from __future__ import annotations
 import argparse
 import os
 import sys
+import tempfile
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 sys.path.insert(0, ROOT)
@@ -29,7 +32,9 @@ LOCAL: dict[str, list[str]] = {
     "4x4-t300": ["--const", "WIDTH=4", "--const", "HEIGHT=4", "--const", "T_LIMIT=300",
                  "--const", "DEADLINE=300"],
 }
-ROUTES: dict[str, list[str]] = {"default": [], "storm": ["--solver", "topological"]}
+ROUTES: dict[str, list[str]] = {"default": [], "storm": ["--solver", "topological"],
+                                "memory": ["--no-scratch"],
+                                "stream": ["--scratch", tempfile.gettempdir()]}
 RUNS: dict[str, list[str]] = {"base": [], "extract": ["--strategy", "--witness", "10"]}
 FIELDS = ["measured", "load", "instance", "route", "run", "status", "wall_s", "cpu_s",
           "peak_gb", "states", "engine", "solver", "min", "max", "strategy_rows",

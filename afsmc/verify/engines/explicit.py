@@ -144,8 +144,8 @@ def answer(low: Lowered, names: tuple[str, ...], what: str, notify: Notify,
     None if the explorer gives up or the pass does not give what `extract` asks (Storm
     then answers them all). `uniform`: properties whose values in the uniform DTMC the
     same exploration gives (Answer.uniform), those it can. `scratch`: a directory of the
-    job's own, to explore through layer by layer (afsmc.verify.stream; not for a
-    strategy yet, which is explored in memory); with `scratch_auto`, only once the
+    job's own, to explore through layer by layer (afsmc.verify.stream, strategies
+    and witnesses too); with `scratch_auto`, only once the
     in-memory exploration would not fit comfortably (afsmc.verify.stream.route.Watch).
     Raises TooMany past `max_states`, and ScratchFull when the scratch disk fills."""
     p = plan(low, names)
@@ -160,15 +160,10 @@ def answer(low: Lowered, names: tuple[str, ...], what: str, notify: Notify,
         notify("solver", f"explored {data[1]:,} states of the {what} so far (clock at "
                f"{data[0]}; {time.perf_counter() - started:.0f} s)")
 
-    if scratch is not None and extract is not None:
-        if not scratch_auto:
-            notify("solver", "strategies and witnesses are not streamed yet: the "
-                   f"{what} is explored in memory, not through --scratch")
-        scratch = None
     try:
         compiled = explore.compile_model(low, p.targets, p.rewards, extract is not None)
         found = _explored(compiled, p, means, what, notify, explored, max_states, max_bytes,
-                          scratch, scratch_auto)
+                          scratch, scratch_auto, extract, low)
         if isinstance(found, Answer):
             return found
     except (explore.GiveUp, SimError) as exc:
@@ -202,18 +197,20 @@ def answer(low: Lowered, names: tuple[str, ...], what: str, notify: Notify,
 
 def _explored(compiled: explore.Compiled, p: Plan, means: list[str], what: str,
               notify: Notify, explored: Notify, max_states: int | None,
-              max_bytes: int | None, scratch: str | None, scratch_auto: bool
-              ) -> explore_graph.Explored | Answer:
-    """The model explored in memory, or the queries' answer through `scratch`: at once,
-    or (`scratch_auto`) once the in-memory exploration would not fit comfortably, the
-    exploration then begun again layer by layer."""
+              max_bytes: int | None, scratch: str | None, scratch_auto: bool,
+              extract: Extract | None, low: Lowered) -> explore_graph.Explored | Answer:
+    """The model explored in memory, or the queries' answer (and what `extract` asks)
+    through `scratch`: at once, or (`scratch_auto`) once the in-memory exploration would
+    not fit comfortably, the exploration then begun again layer by layer."""
     if scratch is None:
         return explore_graph.explore(compiled, explored, max_states, max_bytes)
     from afsmc.verify.engines.guard import mem_available
     from afsmc.verify.stream import route
 
+    view_of = None if extract is None else key_view(low, compiled.layout, extract)
     if not scratch_auto:
-        return route.answer(compiled, p, means, scratch, what, notify, max_states)
+        return route.answer(compiled, p, means, scratch, what, notify, max_states,
+                            extract=extract, view_of=view_of)
     why = ""
     try:
         return explore_graph.explore(compiled, route.Watch(mem_available(), explored),
@@ -225,7 +222,7 @@ def _explored(compiled: explore.Compiled, p: Plan, means: list[str], what: str,
            f"through the scratch directory in {Path(scratch).parent} (--no-scratch keeps "
            "it in memory; --scratch DIR picks the directory)")
     return route.answer(compiled, p, means, scratch, what, notify, max_states,
-                        f"by default: {why}")
+                        f"by default: {why}", extract=extract, view_of=view_of)
 
 
 def _uniform(a: acyclic.Arrays, queries: list[acyclic.Query], names: list[str],
@@ -249,8 +246,18 @@ def view(a: acyclic.Arrays, low: Lowered, layout: explore.Layout,
     """The explored states' values from their keys, the choices' commands as explored;
     the variables in the order of Storm's valuations (the mode, the integers, the
     booleans), as Storm's route gives them."""
-    keys, commands = a.order, a.commands
-    assert keys is not None and commands is not None
+    assert a.order is not None and a.commands is not None
+    return key_view(low, layout, extract)(a.order, a.commands)
+
+
+def key_view(low: Lowered, layout: explore.Layout, extract: Extract
+             ) -> Callable[[acyclic.I64, Any], strategy_arrays.View]:
+    """`view` of any states, from their keys and their choices' commands."""
+    return lambda keys, commands: _key_view(low, layout, extract, keys, commands)
+
+
+def _key_view(low: Lowered, layout: explore.Layout, extract: Extract, keys: acyclic.I64,
+              commands: Any) -> strategy_arrays.View:
     variables = ("mode", *[v.name for v in low.model.variables if v.type is not E.Type.BOOL],
                  *[v.name for v in low.model.variables if v.type is E.Type.BOOL])
     decisive = np.asarray(extract.decisive, np.int64)

@@ -189,7 +189,7 @@ def prepare(states: I64, choices: I64, stored: Ints, late: int, first: int, slot
 def solve(layers: I64, states: I64, choices: I64, reg: I64, oth: I64, prob: F64, live: F64,
           other: F64, reward: F64, rcol: I64, stay: F64, on: Bools, ocol: I64, cut: I64,
           stuck: F64, reached: F64, mean: Bools, sign: F64, rows: I64, out: F64,
-          clear: bool) -> None:
+          best: Ints, clear: bool) -> None:
     """One file's states solved layer by layer (from the first; the states of a layer
     depend only on earlier layers' and on other files'): state s's values (one per
     query) into out[rows[s]]. The queries are in groups side by side, group g's in
@@ -199,6 +199,8 @@ def solve(layers: I64, states: I64, choices: I64, reg: I64, oth: I64, prob: F64,
     `reward` (choices x reward models) gives query q its column rcol[q] (-1: none), `on`
     (states x targets) its column ocol[q]; `stay` is the choices' self-loops (empty: none
     loops). CHUNK states of a layer at a time: their choices' values, then settled.
+    `best` (states x queries, or no rows): each state's first optimal choice, within the
+    state, written there (not for a mean).
     `clear`: the states' rows start at 0 (a branch to its own state reads its row)."""
     k = len(sign)
     if clear:
@@ -242,10 +244,11 @@ def solve(layers: I64, states: I64, choices: I64, reg: I64, oth: I64, prob: F64,
                         pc[c - row0, q] += reward[c, rcol[q]]
             for g in range(len(cut) - 1):
                 a, b = cut[g], cut[g + 1]
+                kept = best[s0:s1, a:b] if len(best) else none[:, a:b]
                 _states(pc[:, a:b], states[s0:s1 + 1], 0, s1 - s0, row0,
                         stay[row0:states[s1]] if loops else stay, on, -s0, ocol[a:b],
                         stuck[g], reached[g], mean[g], sign[a:b], here[:, a:b],
-                        none[:, a:b], none[:, a:b], cols[a:b])
+                        kept, none[:, a:b], cols[a:b])
             for s in range(s1 - s0):
                 for q in range(k):
                     out[rows[s0 + s], q] = here[s, q]
@@ -280,3 +283,38 @@ def pairs(states: I64, choices: I64, reg: I64, oth: I64, seen_reg: I64, seen_oth
                     seen_oth[t] = mine
                     total += 1
     return total
+
+
+@jit
+def differ(states: I64, choices: I64, reg: I64, oth: I64, prob: F64, live: F64, other: F64,
+           reward: F64, lo: int, hi: int, same: float, out: Bools) -> None:
+    """Whether the choices of a file's states lo..hi differ in value, into out[s - lo]
+    (afsmc.verify.stream.extract.Kept._matters, its numpy reference): each choice's
+    branches' probabilities times their successors' values (row reg[b] of `live`, else
+    row oth[b] of `other`; an infinite one as 1e300), summed as numpy's add.reduceat
+    sums them, plus its reward (`reward` per choice, empty: none); the state's largest
+    and smallest of those more than `same` apart, relative to 1 or their size."""
+    most = 1
+    for c in range(states[lo], states[hi]):
+        most = max(most, choices[c + 1] - choices[c])
+    buf = np.empty(most)
+    rewarded = len(reward) > 0
+    for s in range(lo, hi):
+        c0, c1 = states[s], states[s + 1]
+        out[s - lo] = False
+        low = high = 0.0
+        for c in range(c0, c1):
+            b0, b1 = choices[c], choices[c + 1]
+            for b in range(b0, b1):
+                t = reg[b]
+                v = live[t] if t >= 0 else other[oth[b]]
+                buf[b - b0] = prob[b] * (v if np.isfinite(v) else 1e300)
+            x = _reduceat(buf, 0, b1 - b0) if b1 > b0 else 0.0
+            if rewarded:
+                x += reward[c]
+            if c == c0 or x < low:
+                low = x
+            if c == c0 or x > high:
+                high = x
+        if c1 > c0:
+            out[s - lo] = abs(high - low) > same * max(1.0, max(abs(high), abs(low)))

@@ -84,6 +84,8 @@ def _save_block(s: Scratch, name: str, blk: Block, target: I64 | None) -> None:
         arrays[f"reward{i}_at"], arrays[f"reward{i}_v"] = at, values
     for i, lab in enumerate(blk.labels):
         arrays[f"label{i}"] = np.packbits(lab)
+    if len(blk.command):  # kept for a strategy or a witness (Compiled.keep)
+        arrays["command"] = smallest(blk.command)
     s.save(name, **arrays)
 
 
@@ -254,6 +256,8 @@ class _Writer:
         sink_numbers = np.arange(out.sinks, out.sinks + len(sink.keys), dtype=np.int64)
         self.sinks.add(sink.keys, sink_numbers)
         out.sinks += len(sink.keys)
+        if c.keep:  # a strategy's or a witness's: the sinks' variables, from their keys
+            s.save(f"sk{index}", keys=sink.keys)
         _save_block(s, f"s{index}", sink, -1 - sink_numbers[
             acyclic._state_of_branches(explore_graph._offsets(sink.nchoice),
                                        explore_graph._offsets(sink.nbranch))])
@@ -262,13 +266,13 @@ class _Writer:
 
             self.window[b] = Bucket(block.keys, first, sink.keys, int(sink_numbers[0]) if len(
                 sink_numbers) else out.sinks)
-            s.save(f"keys{index}", keys=block.keys)  # for _check_late
+            s.save(f"keys{index}", keys=block.keys)  # for _check_late and a strategy
         else:
             numbers = np.arange(first, first + len(block.keys), dtype=np.int64)
             order = np.argsort(block.keys)
-            self.window[b] = entry = (block.keys[order], numbers[order])
-            s.save(f"keys{index}", keys=entry[0])  # for _check_late
-            del order, numbers, entry
+            self.window[b] = (block.keys[order], numbers[order])
+            s.save(f"keys{index}", keys=block.keys)  # for _check_late and a strategy
+            del order, numbers
         self.seen[b] = (first, np.zeros(len(block.keys), bool))
         if index == 0:
             initial = np.array([c.initial], np.int64)

@@ -1,6 +1,6 @@
 """The queries of afsmc's own exploration answered through the scratch directory:
 :func:`afsmc.verify.engines.explicit.answer` calls :func:`answer` when a job has a
-scratch directory and asks for no strategy, at once with ``verify --scratch DIR``, and by
+scratch directory (a strategy's and a witness's too), at once with ``verify --scratch DIR``, and by
 default (:func:`where`) once the in-memory exploration would not fit comfortably
 (:class:`Watch`, :func:`too_big`); ``--no-scratch`` keeps it in memory."""
 
@@ -14,8 +14,10 @@ from pathlib import Path
 from typing import Any
 
 from afsmc.verify.engines import explicit
+from afsmc.verify.engines.strategy_storm import Extract, Extracted
 from afsmc.verify.explorer import explore_graph
 from afsmc.verify.explorer.explore import Compiled
+from afsmc.verify.stream import extract as extract_files
 from afsmc.verify.stream import layers, sweep
 from afsmc.verify.stream.scratch import Scratch, clear, unusable
 
@@ -108,10 +110,14 @@ def mb(n: int) -> str:
 
 def answer(c: Compiled, p: explicit.Plan, means: list[str], into: str, what: str,
            notify: explicit.Notify, max_states: int | None, why: str = "--scratch",
-           before_write: Any = None) -> explicit.Answer:
+           before_write: Any = None, extract: Extract | None = None,
+           view_of: extract_files.ViewOf | None = None) -> explicit.Answer:
     """Explore into `into` (a directory of this job's own), answer every query of `p`
     by one sweep over the files, and remove them (also on error); `why` it is streamed
-    goes into the answer. Raises what layers.explore raises, and ScratchFull."""
+    goes into the answer. With `extract`, the queries it asks of by a sweep of their
+    own, and their strategies and witness from the same files
+    (afsmc.verify.stream.extract; `view_of` reads the states' variables from their
+    keys). Raises what layers.explore raises, and ScratchFull."""
     started = time.perf_counter()
     s = Scratch(Path(into), before_write)
 
@@ -139,7 +145,16 @@ def answer(c: Compiled, p: explicit.Plan, means: list[str], into: str, what: str
                 notify("solver", f"solved {done:,} of {of:,} buckets of the {what}"
                        + (f" ({left} sweeps to go, this one included)" if left > 1 else ""))
 
-        values, pairs = sweep.run(st, p.queries, c.reward_names, len(p.targets), solved)
+        asked = [] if extract is None else [q for q in p.queries if q.name in extract.queries]
+        plain = [q for q in p.queries if q not in asked]
+        values, pairs = sweep.run(st, plain, c.reward_names, len(p.targets), solved) \
+            if plain else ({}, 0)
+        out = None
+        if extract is not None and asked:
+            assert view_of is not None
+            out = Extracted()
+            values |= extract_files.run(st, asked, c.reward_names, len(p.targets), extract,
+                                        view_of, out, notify, solved)
     finally:
         clear(s.root)
     secs = (time.perf_counter() - t0) / len(p.queries)
@@ -153,4 +168,4 @@ def answer(c: Compiled, p: explicit.Plan, means: list[str], into: str, what: str
                                    dict.fromkeys(means, secs), pairs)
     return explicit.Answer({q.name: values[q.name] for q in mine},
                            {q.name: secs for q in mine}, st.states, st.choices,
-                           st.transitions, built, p.left, None, uniform, s.written, why)
+                           st.transitions, built, p.left, out, uniform, s.written, why)

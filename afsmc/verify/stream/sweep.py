@@ -21,7 +21,7 @@ import os
 from collections.abc import Callable, Generator
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, Protocol
 
 import numpy as np
 import numpy.typing as npt
@@ -235,16 +235,32 @@ class Fast:
         return [values[:, a:b] for a, b in itertools.pairwise(self.cut.tolist())]
 
 
+class Keep(Protocol):
+    """What a sweep keeps of each file besides the values (a strategy's choices, a
+    witness's bounds: afsmc.verify.stream.extract): told of each file before it is
+    solved (its part, the live and the other values, where its states' rows are), of
+    each span of a group once its values are in place (each state's first optimal
+    choice per query of the group, within the state), and of the file's end."""
+
+    def begin(self, name: str, part: Part, reg: list[F64] | None, other: list[F64],
+              at: int | Rows) -> None: ...
+
+    def span(self, g: int, lo: int, hi: int, best: I64) -> None: ...
+
+    def end(self) -> None: ...
+
+
 def solve_part(part: Part, groups: list[Group], reg: list[F64] | None, other: list[F64],
                out: list[F64], at: int | Rows, count: bool = False,
-               fast: Fast | None = None) -> int:
+               fast: Fast | None = None, keep: Keep | None = None) -> int:
     """Solve the part's layers into `out[g]`, its state s at row `at + s` (as a ring),
     or at row `at[s]` where `at` is an array of rows;
     with `count`, the distinct (state, successor) pairs of its states (the uniform
     DTMC's transitions), else 0. With `fast`, by the compiled kernels (the lists of
-    values are views of its matrices)."""
+    values are views of its matrices); with `keep`, each span's optimal choices handed
+    to it once its values are in place."""
     if fast is not None:
-        return _solve_compiled(part, reg is not None, at, count, fast)
+        return _solve_compiled(part, reg is not None, at, count, fast, keep)
     pairs = 0
     spans = [(k, min(k + acyclic.SPAN, hi)) for lo, hi in
              itertools.pairwise(part.layers.tolist()) for k in range(lo, hi, acyclic.SPAN)]
@@ -260,11 +276,15 @@ def solve_part(part: Part, groups: list[Group], reg: list[F64] | None, other: li
                 per_choice += np.stack([part.rewards[r][c0:c1] for r in grp.reward], axis=1)
             on = np.stack([part.labels[t][lo:hi] for t in grp.target], axis=1)
             stay = None if part.stay is None else part.stay[c0:c1]
-            values = acyclic.settle(per_choice, stay, offsets, on, grp.sense)
+            best = None if keep is None else np.zeros((hi - lo, len(grp.queries)), np.int64)
+            values = acyclic.settle(per_choice, stay, offsets, on, grp.sense, best)
             if isinstance(at, int):
                 put(out[g], at + lo, values)
             else:
                 out[g][at[lo:hi]] = values
+            if keep is not None:
+                assert best is not None
+                keep.span(g, lo, hi, best)
         if count:
             pairs += _pairs(part, lo, hi)
     return pairs
@@ -282,11 +302,12 @@ def threads() -> int:
     return max(1, min(4, cores))
 
 
-def _solve_compiled(part: Part, regular: bool, at: int | Rows, count: bool, fast: Fast
-                    ) -> int:
+def _solve_compiled(part: Part, regular: bool, at: int | Rows, count: bool, fast: Fast,
+                    keep: Keep | None = None) -> int:
     """solve_part by afsmc.verify.kernels.streamed: the whole file's layers and every
     group of `fast` in one call, no matrix built; the same values to the bit. `regular`: a
-    bucket's file (its values go to the live ones, else to the others)."""
+    bucket's file (its values go to the live ones, else to the others). With `keep`, the
+    optimal choices too, handed to it layer by layer once the file is solved."""
     from afsmc.verify.kernels import streamed
 
     n = len(part.states) - 1
@@ -299,9 +320,10 @@ def _solve_compiled(part: Part, regular: bool, at: int | Rows, count: bool, fast
         else np.zeros((0, 0))
     on = np.stack([part.labels[t] for t in fast.targets], axis=1) if n else \
         np.zeros((0, len(fast.targets)), bool)
+    best = np.zeros((n if keep is not None else 0, len(fast.sign)), np.int32)
     args = (part.states, part.choices, part.reg, part.oth, part.prob, fast.live, fast.other,
             reward, fast.rcol, stay, on, fast.ocol, fast.cut, fast.stuck, fast.reached,
-            fast.mean, fast.sign, rows, out)
+            fast.mean, fast.sign, rows, out, best)
     pool = fast.pool
     threads = 1 if pool is None else fast.workers
     if pool is None or n < threads * SPLIT:
@@ -317,6 +339,10 @@ def _solve_compiled(part: Part, regular: bool, at: int | Rows, count: bool, fast
                     for j in range(len(cuts) - 1)]
             for f in done:
                 f.result()
+    if keep is not None:  # a layer's states depend on the earlier layers' (a witness's h)
+        for lo, hi in itertools.pairwise(part.layers.tolist()):
+            for g, (a, b) in enumerate(itertools.pairwise(fast.cut.tolist())):
+                keep.span(g, lo, hi, best[lo:hi, a:b].astype(np.int64))
     if not count:
         return 0
     got = int(streamed.pairs(part.states, part.choices, part.reg, part.oth, fast.seen_reg,
@@ -428,18 +454,28 @@ def run(st: Streamed, queries: list[Query], reward_names: list[str], targets: in
     return {q.name: out[q.name] for q in queries}, pairs
 
 
+def run_kept(st: Streamed, queries: list[Query], reward_names: list[str], targets: int,
+             keep: Keep, progress: Progress | None = None) -> dict[str, float]:
+    """Each query's value in the initial state by one sweep that hands `keep` every
+    file's optimal choices."""
+    rows = live_rows(st)
+    values, _ = _sweep(st, groups_of(queries, reward_names), len(reward_names), targets,
+                       rows, progress, 1, False, keep)
+    return {q.name: values[q.name] for q in queries}
+
+
 def _sweep(st: Streamed, groups: list[Group], nr: int, targets: int, rows: int,
-           progress: Progress | None, left: int, count: bool
+           progress: Progress | None, left: int, count: bool, keep: Keep | None = None
            ) -> tuple[dict[str, float], int]:
     """One sweep over the files for `groups`: their values in the initial state, and
-    with `count` the uniform DTMC's transitions."""
+    with `count` the uniform DTMC's transitions; each file's optimal choices to `keep`."""
     fast = Fast.of(groups, rows, st.sinks + st.late) if kernels.enabled(st.states) else None
     if fast is not None:
         fast.workers = threads()
         if fast.workers > 1:
             fast.pool = ThreadPoolExecutor(fast.workers, thread_name_prefix="afsmc-sweep")
     try:
-        return _sweep_with(st, groups, nr, targets, rows, progress, left, count, fast)
+        return _sweep_with(st, groups, nr, targets, rows, progress, left, count, fast, keep)
     finally:
         if fast is not None:
             fast.close()
@@ -458,20 +494,30 @@ def _ahead(st: Streamed, names: list[str]) -> Generator[Arrays, None, None]:
 
 
 def _sweep_with(st: Streamed, groups: list[Group], nr: int, targets: int, rows: int,
-                progress: Progress | None, left: int, count: bool, fast: Fast | None
-                ) -> tuple[dict[str, float], int]:
+                progress: Progress | None, left: int, count: bool, fast: Fast | None,
+                keep: Keep | None = None) -> tuple[dict[str, float], int]:
     other = fast.views(fast.other) if fast is not None else \
         [np.zeros((st.sinks + st.late, len(g.queries))) for g in groups]
     order = np.argsort(st.late_keys)
     late = (st.late_keys[order], order)
     pairs = 0
     read = load if fast is None else load_compiled
+
+    def solve(name: str, part: Part, reg: list[F64] | None, out: list[F64],
+              at: int | Rows) -> int:
+        if keep is not None:
+            keep.begin(name, part, reg, other, at)
+        got = solve_part(part, groups, reg, other, out, at, count, fast, keep)
+        if keep is not None:
+            keep.end()
+        return got
+
     for i, first in enumerate(st.sink_start):
         part = read(st, f"s{i}", 0, first, *late, nr, targets)
-        pairs += solve_part(part, groups, None, other, other, first, count, fast)
+        pairs += solve(f"s{i}", part, None, other, first)
     if st.late:
         part = read(st, "late", 0, st.sinks, *late, nr, targets)
-        pairs += solve_part(part, groups, None, other, other, st.sinks, count, fast)
+        pairs += solve("late", part, None, other, st.sinks)
     live = fast.views(fast.live) if fast is not None else \
         [np.zeros((rows, len(g.queries))) for g in groups]
     wide = rows >= 2 ** 31
@@ -494,7 +540,7 @@ def _sweep_with(st: Streamed, groups: list[Group], nr: int, targets: int, rows: 
                     r[mine] = 0.0
             part = read(st, f"b{i}", first, None, *late, nr, targets, slot) if files is None \
                 else load_compiled(st, f"b{i}", first, None, *late, nr, targets, slot, next(files))
-            pairs += solve_part(part, groups, live, other, live, mine, count, fast)
+            pairs += solve(f"b{i}", part, live, live, mine)
             assert part.dies is not None
             dead = slot[(part.dies.astype(np.int64) + first) % len(slot)]
             del part

@@ -209,15 +209,6 @@ def test_an_interrupt_leaves_nothing(tmp_path: Path, monkeypatch: pytest.MonkeyP
     assert list(tmp_path.iterdir()) == []
 
 
-def test_a_strategy_with_a_scratch_is_explored_in_memory_and_says_so(tmp_path: Path) -> None:
-    said: list[str] = []
-    res = run(_loops(tmp_path), isolate=True, scratch=str(tmp_path), strategy=True,
-              progress=said.append)
-    assert any("not streamed yet" in s for s in said), said
-    assert res.properties[0].strategy is not None
-    assert [p.name for p in tmp_path.iterdir()] == ["loops.afsm"]
-
-
 def test_a_bucket_is_one_file_read_back_with_its_appended_records(tmp_path: Path) -> None:
     # every dtype and shape the layers use, empty ones too, in one file; an appended
     # record's array replaces the earlier one of its name; written counts the bytes on disk
