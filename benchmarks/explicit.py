@@ -40,10 +40,13 @@ sys.path.insert(0, ROOT)
 from benchmarks.acyclic import WORKLOADS, values_of  # noqa: E402
 from benchmarks.run import INSTANCES, UAV  # noqa: E402
 
+# "explicit" is the default (in memory, through the disk from route.STREAM_FROM states);
 # "stream": afsmc's exploration through a scratch directory in the system's temp directory
-# (verify --scratch), the layers on disk; its scratch_mb is the bytes it wrote there
+# (verify --scratch), the layers on disk; its scratch_mb is the bytes it wrote there;
+# "memory": never through the disk (--no-scratch)
 PATHS: dict[str, list[str]] = {"explicit": [], "storm": ["--solver", "topological"],
-                               "stream": ["--scratch", tempfile.gettempdir()]}
+                               "stream": ["--scratch", tempfile.gettempdir()],
+                               "memory": ["--no-scratch"]}
 FIELDS = ["measured", "load", "instance", "workload", "path", "status", "wall_s", "cpu_s",
           "peak_gb", "states", "transitions", "build_s", "check_s", "uniform_build_s",
           "uniform_check_s", "engine_used", "solver_used", "values", "scratch_mb"]

@@ -201,7 +201,8 @@ def _explored(compiled: explore.Compiled, p: Plan, means: list[str], what: str,
               extract: Extract | None, low: Lowered) -> explore_graph.Explored | Answer:
     """The model explored in memory, or the queries' answer (and what `extract` asks)
     through `scratch`: at once, or (`scratch_auto`) once the in-memory exploration would
-    not fit comfortably, the exploration then begun again layer by layer."""
+    not fit comfortably or passes route.STREAM_FROM states, its buckets so far then
+    written to the scratch and the exploration gone on from there layer by layer."""
     if scratch is None:
         return explore_graph.explore(compiled, explored, max_states, max_bytes)
     from afsmc.verify.engines.guard import mem_available
@@ -211,18 +212,18 @@ def _explored(compiled: explore.Compiled, p: Plan, means: list[str], what: str,
     if not scratch_auto:
         return route.answer(compiled, p, means, scratch, what, notify, max_states,
                             extract=extract, view_of=view_of)
-    why = ""
+    watch = route.Watch(mem_available(), explored)
     try:
-        return explore_graph.explore(compiled, route.Watch(mem_available(), explored),
-                                     max_states, max_bytes)
-    except route.TooBig as exc:
-        why = exc.why  # (the partial exploration is freed with the exception)
-    acyclic.trim_heap()
-    notify("solver", f"the {what}'s exploration {why}: explored again layer by layer "
-           f"through the scratch directory in {Path(scratch).parent} (--no-scratch keeps "
-           "it in memory; --scratch DIR picks the directory)")
+        return explore_graph.explore(compiled, watch, max_states, max_bytes, watch.handover)
+    except explore_graph.Handover as exc:
+        why, partial = exc.why, exc.partial
+    notify("solver", f"the {what}'s exploration {why}: the {partial.counts[-1]:,} states "
+           f"explored in memory are written to the scratch directory in "
+           f"{Path(scratch).parent} and the exploration goes on layer by layer (--no-scratch "
+           "keeps it in memory; --scratch DIR picks the directory)")
     return route.answer(compiled, p, means, scratch, what, notify, max_states,
-                        f"by default: {why}", extract=extract, view_of=view_of)
+                        f"by default: {why}", extract=extract, view_of=view_of,
+                        resume=partial)
 
 
 def _uniform(a: acyclic.Arrays, queries: list[acyclic.Query], names: list[str],

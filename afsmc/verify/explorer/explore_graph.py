@@ -330,17 +330,46 @@ def _nbytes(b: Block) -> int:
     return sum(int(a.nbytes) for a in arrays)
 
 
+@dataclass
+class Partial:
+    """An exploration stopped after a bucket, to go on elsewhere (Handover): the buckets
+    explored, in order, with their blocks (the absorbing states split off into `sinks`)
+    and the states explored after each; the states waiting, the probabilities' table the
+    blocks' codes point into, and the rounds taken."""
+
+    buckets: list[int]
+    blocks: list[Block | None]
+    sinks: list[Block | None]
+    counts: list[int]
+    waiting: Frontiers
+    table: ProbTable
+    rounds: int
+
+
+class Handover(Exception):
+    """The in-memory exploration stopped, as its `handover` asked after a bucket, `why`
+    (afsmc.verify.stream.layers.explore goes on from `partial` through the disk)."""
+
+    def __init__(self, partial: Partial, why: str) -> None:
+        super().__init__(why)
+        self.partial, self.why = partial, why
+
+
 def explore(c: Compiled, notify: Notify | None = None, max_states: int | None = None,
-            max_bytes: int | None = None) -> Explored:
+            max_bytes: int | None = None, handover: Callable[[int], str | None] | None = None
+            ) -> Explored:
     """Every state reachable from the initial one, bucket by bucket; raises GiveUp (also
     once the blocks, times PEAK_FACTOR, pass `max_bytes`), or TooManyStates past
-    `max_states`."""
+    `max_states`; and Handover once `handover`, asked after each bucket with the states
+    explored so far, gives a reason."""
     waiting, table = Frontiers(), ProbTable()
     waiting.pending[int(c.layout.bucket_of(np.array([c.initial]))[0])] = [
         np.array([c.initial], np.int64)]
     blocks: list[Block] = []
     sinks: list[Block] = []
     regular: list[I64] = []
+    buckets: list[int] = []
+    counts: list[int] = []
     count = held = rounds = 0
     shown = time.monotonic()
     while waiting.pending:
@@ -354,6 +383,8 @@ def explore(c: Compiled, notify: Notify | None = None, max_states: int | None = 
         sinks.append(sink)
         regular.append(known)
         count += len(known)
+        buckets.append(b)
+        counts.append(count)
         held += _nbytes(block) + _nbytes(sink) + known.nbytes
         if max_states is not None and count > max_states:
             raise TooManyStates(count)
@@ -366,6 +397,9 @@ def explore(c: Compiled, notify: Notify | None = None, max_states: int | None = 
         if notify is not None and time.monotonic() - shown > PROGRESS_EVERY:
             shown = time.monotonic()
             notify("explored", (b, count))
+        if handover is not None and (why := handover(count)) is not None:
+            raise Handover(Partial(buckets, list(blocks), list(sinks), counts, waiting,
+                                   table, rounds), why)
     if waiting.late:
         absorbing = np.sort(np.concatenate([s.keys for s in sinks]))
         block, known, _ = explore_bucket(c, table, np.concatenate(waiting.late), None,

@@ -4,7 +4,7 @@ same exploration, so that a strategy or a witness asks for no exploration of its
 
 Three steps, each reading the files once:
 
-1. *Backward* (sweep.run_kept with :class:`Kept`): the asked queries' values, and per file,
+1. *Backward* (sweep.run with :class:`Kept`): every query's value, and per file,
    in a file of its own (``x`` + the file's name), each state's first optimal choice per
    asked query; for a summarised strategy, whether the state's choices differ in value (as
    strategy_arrays._matters says it); for a witness's query, whether the state reaches the
@@ -75,6 +75,8 @@ def columns(queries: list[Query], groups: list[sweep.Group], extract: Extract
     out = []
     for g, grp in enumerate(groups):
         for j, q in enumerate(grp.queries):
+            if q.name not in extract.queries:
+                continue
             out.append(_Column(q, g, j, queries.index(q),
                                None if grp.reward is None else grp.reward[j],
                                q.name in extract.strategies,
@@ -498,13 +500,14 @@ TRIES = 4
 
 def run(st: Streamed, queries: list[Query], reward_names: list[str], targets: int,
         extract: Extract, view_of: ViewOf, out: Extracted, notify: Notify,
-        progress: sweep.Progress | None = None) -> dict[str, float]:
-    """The asked queries' values, and their strategies and witness into `out`."""
+        progress: sweep.Progress | None = None) -> tuple[dict[str, float], int]:
+    """Every query's value and the uniform DTMC's transitions (as sweep.run gives them, by
+    one sweep), and the strategies and witness `extract` asks into `out`."""
     t0 = time.perf_counter()
     groups = sweep.groups_of(queries, reward_names)
     cols = columns(queries, groups, extract)
     kept = Kept(st, cols, sweep.live_rows(st))
-    values = sweep.run_kept(st, queries, reward_names, targets, kept, progress)
+    values, pairs = sweep.run(st, queries, reward_names, targets, progress, kept)
     del kept
     notify("solver", "the strategies' decisions read forward from the same layers")
     out.variables = view_of(np.zeros(0, np.int64), np.zeros(0, np.int64)).variables
@@ -513,4 +516,4 @@ def run(st: Streamed, queries: list[Query], reward_names: list[str], targets: in
     if w is not None and dist is not None:
         witness(st, w, extract, values[w.query.name], dist, tops, view_of, out)
     out.seconds += time.perf_counter() - t0
-    return values
+    return values, pairs

@@ -122,9 +122,12 @@ class _Waiting:
 
 
 def explore(c: Compiled, s: Scratch, notify: Notify | None = None,
-            max_states: int | None = None) -> Streamed:
+            max_states: int | None = None, resume: explore_graph.Partial | None = None
+            ) -> Streamed:
     """Every state reachable from the initial one, bucket by bucket, written to `s`;
-    raises GiveUp as explore_graph.explore does, TooManyStates past `max_states`.
+    raises GiveUp as explore_graph.explore does, TooManyStates past `max_states`. With
+    `resume`, the buckets an in-memory exploration explored are written first (each
+    block let go once handed over), and the exploration goes on from where it stopped.
 
     Two threads: this one finds each bucket's states in order
     (explore_graph.search_bucket) and hands each bucket's states found to a worker
@@ -132,13 +135,19 @@ def explore(c: Compiled, s: Scratch, notify: Notify | None = None,
     the successors of the buckets whose reach is explored, in the same order; most of
     either's work is in numpy or compiled kernels, which let the other run. The
     probabilities' table is the writer's until it is done."""
-    waiting, table = Frontiers(), ProbTable()
-    waiting.pending[int(c.layout.bucket_of(np.array([c.initial]))[0])] = [
-        np.array([c.initial], np.int64)]
+    if resume is None:
+        waiting, table = Frontiers(), ProbTable()
+        waiting.pending[int(c.layout.bucket_of(np.array([c.initial]))[0])] = [
+            np.array([c.initial], np.int64)]
+        count = rounds = 0
+    else:
+        waiting, table = resume.waiting, resume.table
+        count, rounds = resume.counts[-1], resume.rounds
     writer = _Writer(c, s, table)
-    count = rounds = 0
     shown = time.monotonic()
     try:
+        if resume is not None:
+            _replay(writer, resume)
         while waiting.pending:
             writer.check()
             b = min(waiting.pending)
@@ -166,10 +175,24 @@ def explore(c: Compiled, s: Scratch, notify: Notify | None = None,
     return out
 
 
+def _replay(writer: _Writer, resume: explore_graph.Partial) -> None:
+    """Hand the writer the buckets an in-memory exploration explored, in order, each as
+    it would have been handed over had it been explored here (its successor bucket the
+    next explored, after the last the first still waiting)."""
+    nxt_after = min(resume.waiting.pending) if resume.waiting.pending else None
+    for i, b in enumerate(resume.buckets):
+        sink, block = resume.sinks[i], resume.blocks[i]
+        assert sink is not None and block is not None
+        resume.sinks[i] = resume.blocks[i] = None  # the writer's alone: freed once written
+        nxt = resume.buckets[i + 1] if i + 1 < len(resume.buckets) else nxt_after
+        writer.put((b, (sink, block), nxt, resume.counts[i]))
+        del sink, block
+
+
 # An explored bucket handed to the writer: the bucket, its states found (the block is
-# assembled by the writer), the next bucket to explore (None: none left) and the states
-# explored so far.
-Item = tuple[int, explore_graph.Search, "int | None", int]
+# assembled by the writer) or, from an in-memory exploration, its sinks and block; the
+# next bucket to explore (None: none left) and the states explored so far.
+Item = tuple[int, "explore_graph.Search | tuple[Block, Block]", "int | None", int]
 
 
 class _Writer:
@@ -235,18 +258,22 @@ class _Writer:
         except BaseException as exc:  # handed to the exploring thread
             self.error = exc
 
-    def _write(self, b: int, found: explore_graph.Search, nxt: int | None, count: int) -> None:
-        """Bucket `b`'s block assembled and written, and the successors of every bucket
-        whose reach is explored (all up to `nxt`) numbered."""
+    def _write(self, b: int, found: explore_graph.Search | tuple[Block, Block],
+               nxt: int | None, count: int) -> None:
+        """Bucket `b`'s block assembled (unless given, with its sinks split off) and
+        written, and the successors of every bucket whose reach is explored (all up to
+        `nxt`) numbered."""
         s, out, c = self.s, self.out, self.c
-        block = found.block(c, self.table)
+        if isinstance(found, tuple):
+            sink, block = found
+        else:
+            sink, block = explore_graph.split_sinks(found.block(c, self.table))
         del found
         if not self.fast and kernels.enabled(count):
             self.fast = True
             assert isinstance(self.sinks, resolve.Index)
             resolve.hashed(self.window, self.sinks, self.buckets, out.sink_start, out.sinks)
             self.sinks = resolve.HashedSinks.of(self.sinks)
-        sink, block = explore_graph.split_sinks(block)
         index = len(self.buckets)
         self.buckets.append(b)
         first = sum(out.size)

@@ -68,15 +68,17 @@ def too_big(grown: int, available: int | None) -> bool:
     return available is not None and grown * explore_graph.PEAK_FACTOR > COMFORT * available
 
 
-class TooBig(Exception):
-    """The in-memory exploration would not fit comfortably: stream it instead."""
+def too_big_why(states: int, grown: int, available: int) -> str:
+    """Why an exploration that grew by `grown` bytes after `states` states is streamed."""
+    return (f"in memory it would peak at about {grown * explore_graph.PEAK_FACTOR / 1e9:.1f} "
+            f"GB after {states:,} states, more than {COMFORT:.0%} of the "
+            f"{available / 1e9:.1f} GB available")
 
-    def __init__(self, states: int, grown: int, available: int) -> None:
-        self.why = (f"in memory it would peak at about "
-                    f"{grown * explore_graph.PEAK_FACTOR / 1e9:.1f} GB after {states:,} "
-                    f"states, more than {COMFORT:.0%} of the {available / 1e9:.1f} GB "
-                    "available")
-        super().__init__(self.why)
+
+# From this many states on, by default, the exploration goes on through the disk: the
+# streamed route is then the faster one as well as the smaller (docs/benchmarks.md,
+# "Streaming by default, without a restart").
+STREAM_FROM = 2_000_000
 
 
 def resident() -> int:
@@ -89,8 +91,9 @@ def resident() -> int:
 
 
 class Watch:
-    """The in-memory exploration's progress callback with a watch on its memory: raises
-    TooBig once too_big says so (as often as explore_graph notifies progress)."""
+    """The in-memory exploration's progress callback, and its `handover`, asked after each
+    bucket: a reason to go on through the disk once the exploration would not fit
+    comfortably (too_big), or once it passes STREAM_FROM states."""
 
     def __init__(self, available: int | None, then: explicit.Notify) -> None:
         self.available = available
@@ -98,10 +101,16 @@ class Watch:
         self.base = resident()
 
     def __call__(self, event: str, data: Any) -> None:
+        self.then(event, data)
+
+    def handover(self, states: int) -> str | None:
         grown = resident() - self.base
         if self.available is not None and too_big(grown, self.available):
-            raise TooBig(int(data[1]), grown, self.available)
-        self.then(event, data)
+            return too_big_why(states, grown, self.available)
+        if states >= STREAM_FROM:
+            return (f"passed {states:,} states (from {STREAM_FROM:,} on, the streamed route "
+                    "is the faster one and the smaller)")
+        return None
 
 
 def mb(n: int) -> str:
@@ -111,13 +120,15 @@ def mb(n: int) -> str:
 def answer(c: Compiled, p: explicit.Plan, means: list[str], into: str, what: str,
            notify: explicit.Notify, max_states: int | None, why: str = "--scratch",
            before_write: Any = None, extract: Extract | None = None,
-           view_of: extract_files.ViewOf | None = None) -> explicit.Answer:
+           view_of: extract_files.ViewOf | None = None,
+           resume: explore_graph.Partial | None = None) -> explicit.Answer:
     """Explore into `into` (a directory of this job's own), answer every query of `p`
     by one sweep over the files, and remove them (also on error); `why` it is streamed
     goes into the answer. With `extract`, the queries it asks of by a sweep of their
     own, and their strategies and witness from the same files
     (afsmc.verify.stream.extract; `view_of` reads the states' variables from their
-    keys). Raises what layers.explore raises, and ScratchFull."""
+    keys). `resume`: an in-memory exploration's buckets, written first and gone on
+    from. Raises what layers.explore raises, and ScratchFull."""
     started = time.perf_counter()
     s = Scratch(Path(into), before_write)
 
@@ -127,7 +138,8 @@ def answer(c: Compiled, p: explicit.Plan, means: list[str], into: str, what: str
                f"{time.perf_counter() - started:.0f} s)")
 
     try:
-        st = layers.explore(c, s, explored, max_states)
+        st = layers.explore(c, s, explored, max_states, resume)
+        del resume
         built = time.perf_counter() - started
         notify("built", (st.states, st.transitions, built))
         notify("solver", f"the {what} explored by afsmc into the scratch directory "
@@ -145,16 +157,14 @@ def answer(c: Compiled, p: explicit.Plan, means: list[str], into: str, what: str
                 notify("solver", f"solved {done:,} of {of:,} buckets of the {what}"
                        + (f" ({left} sweeps to go, this one included)" if left > 1 else ""))
 
-        asked = [] if extract is None else [q for q in p.queries if q.name in extract.queries]
-        plain = [q for q in p.queries if q not in asked]
-        values, pairs = sweep.run(st, plain, c.reward_names, len(p.targets), solved) \
-            if plain else ({}, 0)
         out = None
-        if extract is not None and asked:
+        if extract is None or not any(q.name in extract.queries for q in p.queries):
+            values, pairs = sweep.run(st, p.queries, c.reward_names, len(p.targets), solved)
+        else:
             assert view_of is not None
             out = Extracted()
-            values |= extract_files.run(st, asked, c.reward_names, len(p.targets), extract,
-                                        view_of, out, notify, solved)
+            values, pairs = extract_files.run(st, p.queries, c.reward_names, len(p.targets),
+                                              extract, view_of, out, notify, solved)
     finally:
         clear(s.root)
     secs = (time.perf_counter() - t0) / len(p.queries)

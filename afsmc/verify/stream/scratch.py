@@ -18,9 +18,9 @@ from __future__ import annotations
 import errno
 import json
 import os
+import secrets
 import shutil
 import struct
-import tempfile
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from pathlib import Path
@@ -56,8 +56,11 @@ def unusable(directory: str) -> str | None:
 
 @contextmanager
 def made(directory: str) -> Iterator[Path]:
-    """A new subdirectory of `directory`, removed with everything in it on the way out."""
-    path = Path(tempfile.mkdtemp(prefix=PREFIX, dir=directory))
+    """A new subdirectory of `directory` for one job, removed with everything in it on
+    the way out. It is made only once something is written there (Scratch makes it), so
+    that a job that stays in memory leaves nothing behind even if its process is killed
+    before the way out."""
+    path = Path(directory) / f"{PREFIX}{os.getpid()}-{secrets.token_hex(6)}"
     try:
         yield path
     finally:
@@ -112,6 +115,7 @@ class Scratch:
     on disk (a file replaced or removed counts no more)."""
 
     def __init__(self, root: Path, before_write: BeforeWrite | None = None) -> None:
+        root.mkdir(mode=0o700, exist_ok=True)  # (made names it; it is made here)
         self.root = root
         self.written = 0
         self.before_write = before_write

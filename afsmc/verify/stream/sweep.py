@@ -437,31 +437,24 @@ def sweeps(queries: list[Query], reward_names: list[str], rows: int,
 
 
 def run(st: Streamed, queries: list[Query], reward_names: list[str], targets: int,
-        progress: Progress | None = None) -> tuple[dict[str, float], int]:
+        progress: Progress | None = None, keep: Keep | None = None
+        ) -> tuple[dict[str, float], int]:
     """Each query's value in the initial state, and the uniform DTMC's transitions (0
-    unless a query is a mean): as few sweeps over the files as sweep_bytes() allows."""
+    unless a query is a mean): as few sweeps over the files as sweep_bytes() allows;
+    with `keep`, one sweep that hands it every file's optimal choices."""
     rows = live_rows(st)
-    plan = sweeps(queries, reward_names, rows, sweep_bytes())
+    plan = sweeps(queries, reward_names, rows, sweep_bytes()) if keep is None else \
+        [groups_of(queries, reward_names)]
     out: dict[str, float] = {}
     pairs = 0
     # the uniform DTMC's transitions counted in the first sweep of means
     counted = next((k for k, part in enumerate(plan) if any(g.sense.mean for g in part)), -1)
     for k, part in enumerate(plan):
         values, got = _sweep(st, part, len(reward_names), targets, rows, progress,
-                             len(plan) - k, k == counted)
+                             len(plan) - k, k == counted, keep)
         out |= values
         pairs += got
     return {q.name: out[q.name] for q in queries}, pairs
-
-
-def run_kept(st: Streamed, queries: list[Query], reward_names: list[str], targets: int,
-             keep: Keep, progress: Progress | None = None) -> dict[str, float]:
-    """Each query's value in the initial state by one sweep that hands `keep` every
-    file's optimal choices."""
-    rows = live_rows(st)
-    values, _ = _sweep(st, groups_of(queries, reward_names), len(reward_names), targets,
-                       rows, progress, 1, False, keep)
-    return {q.name: values[q.name] for q in queries}
 
 
 def _sweep(st: Streamed, groups: list[Group], nr: int, targets: int, rows: int,

@@ -11,6 +11,7 @@ from __future__ import annotations
 import math
 import tempfile
 from pathlib import Path
+from typing import Any
 
 import pytest
 
@@ -20,9 +21,10 @@ from afsmc.diagnostics import CompileError
 from afsmc.verify import run
 from afsmc.verify.engines import explicit
 from afsmc.verify.explorer import explore_graph
-from afsmc.verify.stream import route
+from afsmc.verify.stream import layers, route
 from tests.conftest import EXAMPLES, run_cli
 from tests.unit.backends.test_prism import SMALL
+from tests.unit.verify.test_streaming import CASES
 
 UAV = str(EXAMPLES / "uav.afsm")
 GB = 10**9
@@ -114,22 +116,83 @@ def test_the_progress_lines_say_why_the_model_is_streamed(
     ans = explicit.answer(low, names, "MDP", lambda e, d: said.append(str(d)),
                           scratch=str(work), scratch_auto=True)
     assert ans is not None and ans.scratch and ans.scratch_why.startswith("by default")
-    assert any("explored again layer by layer through the scratch directory in "
-               f"{tmp_path} (--no-scratch keeps it in memory" in s for s in said), said
+    assert any("states explored in memory are written to the scratch directory in "
+               f"{tmp_path} and the exploration goes on layer by layer (--no-scratch keeps "
+               "it in memory" in s for s in said), said
     assert any("into the scratch directory" in s for s in said), said
     assert list(work.iterdir()) == []
 
 
 @pytest.mark.storm
-def test_a_strategy_stays_in_memory_by_default_without_a_word(
+def test_a_strategy_is_streamed_by_default_too(
         tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    plain = run(UAV, consts=SMALL["uav"], isolate=False, properties=["success"],
+                strategy=True, witness=("success", 3))
     _tight(monkeypatch, tmp_path)
-    said: list[str] = []
     res = run(UAV, consts=SMALL["uav"], isolate=False, properties=["success"],
-              strategy=True, progress=said.append)
-    assert res.properties[0].strategy is not None
-    assert not any("scratch" in s for s in said), said
+              strategy=True, witness=("success", 3))
+    # streamed, the strategy and the paths with it (no second exploration in memory)
+    assert "MB of scratch disk (by default" in str(res.model.engine_reason)
+    a, b = plain.properties[0], res.properties[0]
+    assert a.strategy is not None and b.strategy == a.strategy
+    assert a.witnesses and b.witnesses == a.witnesses
     assert list(tmp_path.iterdir()) == []
+
+
+def _count_buckets(monkeypatch: pytest.MonkeyPatch) -> list[int]:
+    """Count every bucket's exploration, in memory or through the disk."""
+    calls: list[int] = []
+    search = explore_graph.search_bucket
+
+    def counted(*args: Any, **kwargs: Any) -> Any:
+        calls.append(1)
+        return search(*args, **kwargs)
+
+    monkeypatch.setattr(explore_graph, "search_bucket", counted)
+    monkeypatch.setattr(layers.explore_graph, "search_bucket", counted)
+    return calls
+
+
+@pytest.mark.storm
+@pytest.mark.parametrize("case", ["uav", "rover"])
+@pytest.mark.parametrize("edge", ["first", "middle", "last"])
+def test_past_stream_from_the_exploration_goes_on_through_the_disk_without_a_restart(
+        case: str, edge: str, tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    # the buckets explored in memory are written out and the rest explored on the disk:
+    # every bucket explored once (a restart would explore the first ones twice), after
+    # the first bucket, in the middle and after the last one; the values equal the
+    # in-memory route's to 1e-12
+    path, consts = CASES[case]
+    low = lowered(load(path, consts).model, "nondet")
+    names = tuple(n for q in low.model.properties for n, _ in property_variants(low, q))
+    calls = _count_buckets(monkeypatch)
+    monkeypatch.setattr(tempfile, "tempdir", str(tmp_path))
+    work = tmp_path / "afsmc-scratch-job"
+    work.mkdir()
+    # in memory first (never past STREAM_FROM): the states explored after each bucket
+    seen: list[int] = []
+    asked = route.Watch.handover
+    monkeypatch.setattr(route, "STREAM_FROM", 10**12)
+    monkeypatch.setattr(route.Watch, "handover",
+                        lambda self, states: seen.append(states) or asked(self, states))
+    plain = explicit.answer(low, names, "MDP", lambda *_: None, scratch=str(work),
+                            scratch_auto=True)
+    assert plain is not None and not plain.scratch and len(seen) > 2
+    once = len(calls)
+    monkeypatch.setattr(route, "STREAM_FROM", {"first": seen[0], "middle": seen[len(seen) // 2],
+                                               "last": seen[-1]}[edge])
+    calls.clear()
+    said: list[str] = []
+    got = explicit.answer(low, names, "MDP", lambda e, d: said.append(str(d)),
+                          scratch=str(work), scratch_auto=True)
+    assert got is not None and got.scratch and got.scratch_why.startswith("by default: passed")
+    assert len(calls) == once, (len(calls), once)
+    assert any("states explored in memory are written to the scratch directory" in s
+               for s in said), said
+    assert got.states == plain.states and got.transitions == plain.transitions
+    for q, v in plain.values.items():
+        assert got.values[q] == pytest.approx(v, rel=1e-12, abs=1e-12), q
+    assert list(work.iterdir()) == []
 
 
 def test_scratch_and_no_scratch_together_are_refused(tmp_path: Path) -> None:
