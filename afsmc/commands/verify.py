@@ -92,7 +92,8 @@ def add_storm_options(p: argparse.ArgumentParser) -> None:
                         "reads it back for one backward pass: the memory is that of a window "
                         "of layers, not of the whole model; the directory is removed at the end "
                         "(default: in the system temp directory, once the exploration in "
-                        "memory would take more than half the memory available; "
+                        "memory passes 2 M states or would take more than 65%% of the memory "
+                        "available, going on from the states explored; "
                         "docs/verification.md#streaming-layers---scratch)")
     p.add_argument("--no-scratch", action="store_true",
                    help="keep afsmc's own exploration in memory, never streamed through "

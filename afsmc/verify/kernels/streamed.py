@@ -318,3 +318,38 @@ def differ(states: I64, choices: I64, reg: I64, oth: I64, prob: F64, live: F64, 
                 high = x
         if c1 > c0:
             out[s - lo] = abs(high - low) > same * max(1.0, max(abs(high), abs(low)))
+
+
+@jit
+def follow(states: I64, choices: I64, succ: I64, best: I64, layers: I64, own: I64,
+           reached: Bools) -> None:
+    """A strategy followed through one file (afsmc.verify.stream.extract.forward, its
+    numpy reference): from its last layer to its first, each reached state's chosen
+    choice (states[s] + best[s]) marks its successors (global numbers) reached."""
+    for j in range(len(layers) - 2, -1, -1):
+        for s in range(layers[j], layers[j + 1]):
+            if reached[own[s]]:
+                c = states[s] + best[s]
+                for b in range(choices[c], choices[c + 1]):
+                    reached[succ[b]] = True
+
+
+@jit
+def relax(states: I64, choices: I64, succ: I64, prob: F64, best: I64, layers: I64,
+          own: I64, dist: F64, alive: Bools, on: Bools) -> None:
+    """A witness's dist through one file (extract._relax, its numpy reference): from its
+    last layer to its first, each state that reaches the target, is no target and is
+    reached (dist > 0) raises its chosen choice's successors' dist to its own times the
+    branch's probability; a self-loop never does."""
+    for j in range(len(layers) - 2, -1, -1):
+        for s in range(layers[j], layers[j + 1]):
+            g = own[s]
+            d = dist[g]
+            if d > 0.0 and alive[s] and not on[s]:
+                c = states[s] + best[s]
+                for b in range(choices[c], choices[c + 1]):
+                    t = succ[b]
+                    if t != g:
+                        x = d * prob[b]
+                        if x > dist[t]:
+                            dist[t] = x

@@ -302,14 +302,17 @@ def forward(st: Streamed, cols: list[_Column], extract: Extract, view_of: ViewOf
         dist[init] = 1.0
     decisive = np.asarray(extract.decisive, np.int64)
     tops = np.zeros(0)
+    fast = kernels.enabled(total)
     for f in _files(st):
         bests = {c.index: f.best(c.index) for c in cols}
         alive = on = None
         if w is not None:
             assert w.witness is not None
             alive, on = f.bools("alive"), f.labels[w.witness]
-        for lo, hi in reversed(list(zip(f.layers[:-1].tolist(), f.layers[1:].tolist(),
-                                        strict=True))):
+        if fast:
+            _through_compiled(f, decisions, bests, dist, alive, on, w)
+        for lo, hi in [] if fast else reversed(list(zip(f.layers[:-1].tolist(),
+                                                        f.layers[1:].tolist(), strict=True))):
             for d in decisions:
                 r = np.flatnonzero(d.reached[f.own[lo:hi]]) + lo
                 if r.size:
@@ -338,6 +341,22 @@ def forward(st: Streamed, cols: list[_Column], extract: Extract, view_of: ViewOf
                                  for row in view.values(np.arange(len(keys), dtype=np.int64))]
             out.policy_commands = [int(x) for x in commands[order]]
     return dist, tops
+
+
+def _through_compiled(f: _File, decisions: list[_Decisions], bests: dict[int, I64],
+                      dist: F64 | None, alive: npt.NDArray[np.bool_] | None,
+                      on: npt.NDArray[np.bool_] | None, w: _Column | None) -> None:
+    """forward's steps through one file by the compiled kernels (streamed.follow and
+    relax): the same marks and dists as the numpy steps."""
+    from afsmc.verify.kernels import streamed
+
+    for d in decisions:
+        streamed.follow(f.states, f.choices, f.succ, bests[d.column.index], f.layers, f.own,
+                        d.reached)
+    if dist is not None and w is not None:
+        assert alive is not None and on is not None
+        streamed.relax(f.states, f.choices, f.succ, f.prob, bests[w.index], f.layers, f.own,
+                       dist, alive, on)
 
 
 def _k(extract: Extract) -> int:
