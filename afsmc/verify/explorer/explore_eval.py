@@ -13,6 +13,7 @@ checks' evaluation (:mod:`afsmc.model.evaluate`) do.
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Callable
 from typing import Any
 
@@ -31,10 +32,19 @@ def frame(values: dict[str, Any]) -> Frame:
 
 
 class Compiler:
-    """Compiles folded expressions, sharing one numbering of subexpressions."""
+    """Compiles folded expressions, sharing one numbering of subexpressions.
+
+    A subexpression is numbered by its structure: its class and fields, each compiled
+    child standing for its own number (`_key`). Equal keys are equal expressions (the
+    dataclasses' equality, by induction over the children), and a key is hashed in
+    constant time, where hashing the expression itself walks its whole subtree: a chain
+    nested thousands deep would cost the square of its depth."""
 
     def __init__(self) -> None:
-        self.ids: dict[E.Expr, int] = {}
+        self.ids: dict[tuple[Any, ...], int] = {}
+        # id of each compiled subexpression -> it (kept, so that its id stays its own)
+        # and its number
+        self.seen: dict[int, tuple[E.Expr, int]] = {}
 
     def __call__(self, e: E.Expr) -> Fn:
         if isinstance(e, E.Lit):
@@ -45,8 +55,9 @@ class Compiler:
             return lambda fr: fr[name]
         if isinstance(e, E.CurrentMode):
             return lambda fr: fr["mode"]
-        i = self.ids.setdefault(e, len(self.ids))
-        inner = self._op(e)
+        inner = self._op(e)  # (its children compiled and numbered first)
+        i = self.ids.setdefault(self._key(e), len(self.ids))
+        self.seen[id(e)] = (e, i)
 
         def cached(fr: Frame) -> Any:
             memo = fr[MEMO]
@@ -59,7 +70,22 @@ class Compiler:
 
     def key(self, e: E.Expr) -> int | None:
         """The number of a compiled subexpression (None for a literal or a variable)."""
-        return self.ids.get(e)
+        got = self.seen.get(id(e))
+        if got is not None and got[0] is e:
+            return got[1]
+        if isinstance(e, (E.Lit, E.VarRef, E.CurrentMode)):
+            return None
+        return self.ids.get(self._key(e))
+
+    def _key(self, e: E.Expr) -> tuple[Any, ...]:
+        """`e`'s structure, each compiled child as its number (see the class)."""
+        return (type(e), *(tuple(self._part(x) for x in v) if isinstance(v, tuple)
+                           else self._part(v)
+                           for v in (getattr(e, f.name) for f in dataclasses.fields(e))))
+
+    def _part(self, v: Any) -> Any:
+        got = self.seen.get(id(v))
+        return ("#", got[1]) if got is not None and got[0] is v else v
 
     def _op(self, e: E.Expr) -> Fn:
         if isinstance(e, E.Unary):
