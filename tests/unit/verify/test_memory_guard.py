@@ -25,8 +25,9 @@ def test_a_users_address_space_limit_is_kept_not_raised(tmp_path: Path) -> None:
     import subprocess
     import sys
 
+    # N = 450: 203,401 states, just past IN_PROCESS_STATES, so it runs in the watched process
     model = tmp_path / "grid.afsm"
-    model.write_text("machine grid;\nparam int N = 700;\nvar a : [0..N] init 0;\n"
+    model.write_text("machine grid;\nparam int N = 450;\nvar a : [0..N] init 0;\n"
                      "var c : [0..N] init 0;\nmode A = 0 initial;\nmode B = 1 final;\n"
                      "action Inc in A when a < N { 0.5: a := a + 1; 0.5: c := min(c + 1, N); }\n"
                      "action Stop in A when a >= N { goto B; }\n"
