@@ -1,8 +1,9 @@
-"""The queries of afsmc's own exploration answered through the scratch directory:
-:func:`afsmc.verify.engines.explicit.answer` calls :func:`answer` when a job has a
-scratch directory (a strategy's and a witness's too), at once with ``verify --scratch DIR``, and by
-default (:func:`where`) once the in-memory exploration would not fit comfortably
-(:class:`Watch`, :func:`too_big`); ``--no-scratch`` keeps it in memory."""
+"""The queries of afsmc's own exploration answered through the scratch directory (and the
+strategies and witnesses asked of them): :func:`afsmc.verify.engines.explicit.answer`
+calls :func:`answer` when a job has a scratch directory, at once with ``verify --scratch
+DIR``, and by default (:func:`where`) once the in-memory exploration passes
+:data:`STREAM_FROM` states or would not fit comfortably (:class:`Watch`, :func:`too_big`),
+going on from the buckets it explored; ``--no-scratch`` keeps it in memory."""
 
 from __future__ import annotations
 
