@@ -24,7 +24,7 @@ from afsmc.model import expr as E
 from afsmc.model import ir
 from afsmc.sim.compile import SimError
 from afsmc.verify import kernels
-from afsmc.verify.arrays import acyclic
+from afsmc.verify.arrays import acyclic, layering
 from afsmc.verify.engines import strategy_arrays
 from afsmc.verify.engines.strategy_storm import Extract, Extracted
 from afsmc.verify.explorer import explore, explore_graph
@@ -172,6 +172,12 @@ def answer(low: Lowered, names: tuple[str, ...], what: str, notify: Notify,
         return None
     except explore.TooManyStates as exc:
         raise TooMany(exc.states, exc.partial) from None
+    if layering.tiny(found.arrays):  # a long chain in each bucket: one layering for all
+        again = layering.relayered(found.arrays)
+        if again is not None:
+            notify("solver", f"the {what}'s {len(found.arrays.layers) - 1:,} layers laid out "
+                   f"again as {len(again.layers) - 1:,}: its buckets' layers were tiny")
+            found.arrays = again
     built = time.perf_counter() - started
     notify("built", (found.states, found.transitions, built))
     notify("solver", f"the {what} explored by afsmc, acyclic but for self-loops "
