@@ -4,7 +4,8 @@ same exploration, so that a strategy or a witness asks for no exploration of its
 
 Three steps, each reading the files once:
 
-1. *Backward* (sweep.run with :class:`Kept`): every query's value, and per file,
+1. *Backward* (sweep.run with :class:`Kept`): every query's value (in one sweep where
+   they fit sweep.sweep_bytes(), else the asked ones apart), and per file,
    in a file of its own (``x`` + the file's name), each state's first optimal choice per
    asked query; for a summarised strategy, whether the state's choices differ in value (as
    strategy_arrays._matters says it); for a witness's query, whether the state reaches the
@@ -520,14 +521,22 @@ TRIES = 4
 def run(st: Streamed, queries: list[Query], reward_names: list[str], targets: int,
         extract: Extract, view_of: ViewOf, out: Extracted, notify: Notify,
         progress: sweep.Progress | None = None) -> tuple[dict[str, float], int]:
-    """Every query's value and the uniform DTMC's transitions (as sweep.run gives them, by
-    one sweep), and the strategies and witness `extract` asks into `out`."""
+    """Every query's value and the uniform DTMC's transitions (as sweep.run gives them),
+    and the strategies and witness `extract` asks into `out`."""
     t0 = time.perf_counter()
-    groups = sweep.groups_of(queries, reward_names)
-    cols = columns(queries, groups, extract)
-    kept = Kept(st, cols, sweep.live_rows(st))
-    values, pairs = sweep.run(st, queries, reward_names, targets, progress, kept)
+    rows = sweep.live_rows(st)
+    # every query in the one sweep that keeps the choices where their values fit the
+    # bytes a sweep may take; else the asked ones there and the rest in sweeps of their own
+    together = len(queries) * rows * 8 <= sweep.sweep_bytes()
+    mine = queries if together else [q for q in queries if q.name in extract.queries]
+    cols = columns(mine, sweep.groups_of(mine, reward_names), extract)
+    kept = Kept(st, cols, rows)
+    values, pairs = sweep.run(st, mine, reward_names, targets, progress, kept)
     del kept
+    rest = [q for q in queries if q not in mine]
+    if rest:
+        more, counted = sweep.run(st, rest, reward_names, targets, progress)
+        values, pairs = values | more, pairs + counted
     notify("solver", "the strategies' decisions read forward from the same layers")
     out.variables = view_of(np.zeros(0, np.int64), np.zeros(0, np.int64)).variables
     dist, tops = forward(st, cols, extract, view_of, out)

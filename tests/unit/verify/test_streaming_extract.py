@@ -137,3 +137,36 @@ def test_verify_strategy_and_witness_say_the_same_with_a_scratch(tmp_path: Path)
     assert kept(plain.out) == kept(streamed.out)
     assert "scratch disk" in streamed.out
     assert list(tmp_path.iterdir()) == []
+
+
+def test_with_little_room_the_asked_queries_keep_their_choices_in_a_sweep_of_their_own(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    # every query's values not fitting one sweep: the asked one in the sweep that keeps
+    # the choices, the others (the uniform DTMC's means among them) in sweeps of their own
+    monkeypatch.setattr(sweep, "SWEEP_BYTES", 1)
+    monkeypatch.setattr(sweep, "SWEEP_SHARE", 0.0)
+    kept: list[bool] = []
+    whole = sweep.run
+
+    def counted(*args: Any, **kwargs: Any) -> Any:
+        kept.append((len(args) > 5 and args[5] is not None) or "keep" in kwargs)
+        return whole(*args, **kwargs)
+
+    monkeypatch.setattr(sweep, "run", counted)
+    path, consts = CASES["uav"]
+    low = lowered(load(path, consts).model, "nondet")
+    names = tuple(n for p in low.model.properties for n, _ in property_variants(low, p))
+    means = tuple(p.name for p in low.model.properties)
+    ex = extract_for(low, ("success_max",), None, WitnessRequest("success_max", 3))
+    memory = explicit.answer(low, names, "MDP", lambda *_: None, extract=ex, uniform=means)
+    with scratch.made(str(tmp_path)) as into:
+        streamed = explicit.answer(low, names, "MDP", lambda *_: None, extract=ex,
+                                   uniform=means, scratch=str(into))
+    assert memory is not None and streamed is not None
+    assert kept[0] and len(kept) > 1 and not any(kept[1:])
+    assert streamed.values == pytest.approx(memory.values, rel=1e-12, abs=1e-12)
+    assert streamed.uniform is not None and memory.uniform is not None
+    assert streamed.uniform.values == pytest.approx(memory.uniform.values, rel=1e-12,
+                                                    abs=1e-12)
+    assert streamed.uniform.transitions == memory.uniform.transitions
+    _same(memory.extracted, streamed.extracted)
