@@ -145,8 +145,9 @@ def answer(low: Lowered, names: tuple[str, ...], what: str, notify: Notify,
     then answers them all). `uniform`: properties whose values in the uniform DTMC the
     same exploration gives (Answer.uniform), those it can. `scratch`: a directory of the
     job's own, to explore through layer by layer (afsmc.verify.stream, strategies
-    and witnesses too); with `scratch_auto`, only once the
-    in-memory exploration would not fit comfortably (afsmc.verify.stream.route.Watch).
+    and witnesses too); with `scratch_auto`, only once the in-memory exploration passes
+    route.STREAM_FROM states or would not fit comfortably (afsmc.verify.stream.route.Watch),
+    going on from the buckets it explored.
     Raises TooMany past `max_states`, and ScratchFull when the scratch disk fills."""
     p = plan(low, names)
     if not p.queries or (extract is not None and not strategy_arrays.covers(extract, p.queries)):
@@ -218,9 +219,9 @@ def _explored(compiled: explore.Compiled, p: Plan, means: list[str], what: str,
     if not scratch_auto:
         return route.answer(compiled, p, means, scratch, what, notify, max_states,
                             extract=extract, view_of=view_of)
-    watch = route.Watch(mem_available(), explored)
+    watch = route.Watch(mem_available())
     try:
-        return explore_graph.explore(compiled, watch, max_states, max_bytes, watch.handover)
+        return explore_graph.explore(compiled, explored, max_states, max_bytes, watch.handover)
     except explore_graph.Handover as exc:
         why, partial = exc.why, exc.partial
     notify("solver", f"the {what}'s exploration {why}: the {partial.counts[-1]:,} states "

@@ -32,6 +32,7 @@ Memory: per asked query a byte per state (reached), for a witness 8 bytes per st
 
 from __future__ import annotations
 
+import itertools
 import time
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
@@ -233,18 +234,17 @@ class _File:
         return out
 
 
-def _files(st: Streamed) -> Iterator[_File]:
-    """The files in exploration order: the buckets, the late states, the sinks."""
+def _files(st: Streamed, notify: Notify | None = None, what: str = "") -> Iterator[_File]:
+    """The files in exploration order: the buckets, the late states, the sinks; with
+    `notify`, a progress line now and then saying how many are read for `what`."""
     regular = sum(st.size)
-    order = np.argsort(st.late_keys)
-    late_sorted, late_order = st.late_keys[order], order
+    late = sweep.late_index(st)
 
     def read(name: str, first: int, base: int, keys: I64) -> _File:
         a = opened(st.scratch.load(name))
         target = widen(a["target"], first)
         if "late_at" in a:
-            target[a["late_at"]] = -1 - (st.sinks + late_order[np.searchsorted(
-                late_sorted, a["late_key"])])
+            target[a["late_at"]] = -1 - sweep.late_numbers(st, *late, a["late_key"])
         n = len(a["nchoice"])
         labels = [a[k] for k in sorted((k for k in a if k.startswith("label")),
                                        key=lambda k: int(k[5:]))]
@@ -254,12 +254,21 @@ def _files(st: Streamed) -> Iterator[_File]:
                      sweep._offsets(a["layers"]), keys, a.get("command", np.zeros(0)).astype(np.int64),
                      labels, st.scratch.load("x" + name))
 
-    for i, first in enumerate(st.start):
-        yield read(f"b{i}", first, first, st.scratch.load(f"keys{i}")["keys"])
-    if st.late:
-        yield read("late", 0, regular + st.sinks, st.late_keys)
-    for i, first in enumerate(st.sink_start):
-        yield read(f"s{i}", 0, regular + first, st.scratch.load(f"sk{i}")["keys"])
+    def every() -> Iterator[_File]:
+        for i, first in enumerate(st.start):
+            yield read(f"b{i}", first, first, st.scratch.load(f"keys{i}")["keys"])
+        if st.late:
+            yield read("late", 0, regular + st.sinks, st.late_keys)
+        for i, first in enumerate(st.sink_start):
+            yield read(f"s{i}", 0, regular + first, st.scratch.load(f"sk{i}")["keys"])
+
+    files = len(st.start) + len(st.sink_start) + (1 if st.late else 0)
+    shown = time.monotonic()
+    for done, f in enumerate(every(), 1):
+        yield f
+        if notify is not None and time.monotonic() - shown > PROGRESS_EVERY:
+            shown = time.monotonic()
+            notify("solver", f"read {done:,} of {files:,} files forward for {what}")
 
 
 def _chosen_branches(f: _File, states: I64, best: I64) -> tuple[I64, I64]:
@@ -288,7 +297,7 @@ class _Decisions:
 
 
 def forward(st: Streamed, cols: list[_Column], extract: Extract, view_of: ViewOf,
-            out: Extracted) -> tuple[F64 | None, F64]:
+            out: Extracted, notify: Notify | None = None) -> tuple[F64 | None, F64]:
     """Step 2: every asked query's decisions into `out` (strategy_arrays._tables on the
     files); for a witness, every state's dist and the largest dists of its targets."""
     total = st.states
@@ -304,24 +313,13 @@ def forward(st: Streamed, cols: list[_Column], extract: Extract, view_of: ViewOf
     decisive = np.asarray(extract.decisive, np.int64)
     tops = np.zeros(0)
     fast = kernels.enabled(total)
-    for f in _files(st):
+    for f in _files(st, notify, "the strategies"):
         bests = {c.index: f.best(c.index) for c in cols}
         alive = on = None
         if w is not None:
             assert w.witness is not None
             alive, on = f.bools("alive"), f.labels[w.witness]
-        if fast:
-            _through_compiled(f, decisions, bests, dist, alive, on, w)
-        for lo, hi in [] if fast else reversed(list(zip(f.layers[:-1].tolist(),
-                                                        f.layers[1:].tolist(), strict=True))):
-            for d in decisions:
-                r = np.flatnonzero(d.reached[f.own[lo:hi]]) + lo
-                if r.size:
-                    br, _ = _chosen_branches(f, r, bests[d.column.index])
-                    d.reached[f.succ[br]] = True
-            if dist is not None and w is not None:
-                assert alive is not None and on is not None
-                _relax(f, lo, hi, dist, alive, on, bests[w.index])
+        (_through_compiled if fast else _through)(f, decisions, bests, dist, alive, on, w)
         for d in decisions:
             _decide(f, d, bests[d.column.index], decisive, extract, view_of)
         if dist is not None:
@@ -344,11 +342,28 @@ def forward(st: Streamed, cols: list[_Column], extract: Extract, view_of: ViewOf
     return dist, tops
 
 
+def _through(f: _File, decisions: list[_Decisions], bests: dict[int, I64],
+             dist: F64 | None, alive: npt.NDArray[np.bool_] | None,
+             on: npt.NDArray[np.bool_] | None, w: _Column | None) -> None:
+    """forward's steps through one file, from its last layer to its first: each
+    strategy's reached states mark their chosen choices' successors reached, and the
+    witness's dist is passed on (_relax)."""
+    for lo, hi in reversed(list(itertools.pairwise(f.layers.tolist()))):
+        for d in decisions:
+            r = np.flatnonzero(d.reached[f.own[lo:hi]]) + lo
+            if r.size:
+                br, _ = _chosen_branches(f, r, bests[d.column.index])
+                d.reached[f.succ[br]] = True
+        if dist is not None and w is not None:
+            assert alive is not None and on is not None
+            _relax(f, lo, hi, dist, alive, on, bests[w.index])
+
+
 def _through_compiled(f: _File, decisions: list[_Decisions], bests: dict[int, I64],
                       dist: F64 | None, alive: npt.NDArray[np.bool_] | None,
                       on: npt.NDArray[np.bool_] | None, w: _Column | None) -> None:
-    """forward's steps through one file by the compiled kernels (streamed.follow and
-    relax): the same marks and dists as the numpy steps."""
+    """_through by the compiled kernels (streamed.follow and relax): the same marks and
+    dists."""
     from afsmc.verify.kernels import streamed
 
     for d in decisions:
@@ -404,7 +419,8 @@ def _decide(f: _File, d: _Decisions, best: I64, decisive: I64, extract: Extract,
         d.commands.append(variant)
 
 
-def _sub(st: Streamed, w: _Column, dist: F64, tau: float) -> acyclic.Arrays:
+def _sub(st: Streamed, w: _Column, dist: F64, tau: float, notify: Notify | None = None
+         ) -> acyclic.Arrays:
     """Step 3's sub-model: the states that reach the target with dist x h >= tau (all
     that reach it with dist > 0 for tau 0), each with its chosen choice's branches into
     such states, numbered so that successors come first (the reverse of the forward
@@ -413,7 +429,7 @@ def _sub(st: Streamed, w: _Column, dist: F64, tau: float) -> acyclic.Arrays:
     own, keys, command, target, layer = [], [], [], [], []
     src, dst, prob = [], [], []
     count = 0
-    for f in _files(st):
+    for f in _files(st, notify, "the witness's paths"):
         assert w.witness is not None
         alive = f.bools("alive")
         h, best = f.kept["h"], f.best(w.index)
@@ -483,7 +499,7 @@ def _numbered(own: list[I64], keys: list[I64], command: list[I64], target: list[
 
 
 def witness(st: Streamed, w: _Column, extract: Extract, value: float, dist: F64, tops: F64,
-            view_of: ViewOf, out: Extracted) -> None:
+            view_of: ViewOf, out: Extracted, notify: Notify | None = None) -> None:
     """Step 3: the witness's paths into `out`, or why there are none."""
     q = w.query
     assert extract.witness is not None
@@ -500,7 +516,7 @@ def witness(st: Streamed, w: _Column, extract: Extract, value: float, dist: F64,
     for attempt in range(TRIES + 1):
         if attempt == TRIES:
             tau = 0.0
-        sub = _sub(st, w, dist, tau)
+        sub = _sub(st, w, dist, tau, notify)
         got = Extracted()
         n = len(sub.states) - 1
         assert sub.commands is not None and sub.order is not None
@@ -512,6 +528,8 @@ def witness(st: Streamed, w: _Column, extract: Extract, value: float, dist: F64,
         tau *= LOWER
     out.paths, out.witness_note = got.paths, got.witness_note
 
+
+PROGRESS_EVERY = 2.0  # seconds between two progress lines of a forward read
 
 # Where fewer than k paths are found above tau: tau times LOWER, at most TRIES times, then 0
 LOWER = 1e-3
@@ -539,9 +557,9 @@ def run(st: Streamed, queries: list[Query], reward_names: list[str], targets: in
         values, pairs = values | more, pairs + counted
     notify("solver", "the strategies' decisions read forward from the same layers")
     out.variables = view_of(np.zeros(0, np.int64), np.zeros(0, np.int64)).variables
-    dist, tops = forward(st, cols, extract, view_of, out)
+    dist, tops = forward(st, cols, extract, view_of, out, notify)
     w = next((c for c in cols if c.witness is not None), None)
     if w is not None and dist is not None:
-        witness(st, w, extract, values[w.query.name], dist, tops, view_of, out)
+        witness(st, w, extract, values[w.query.name], dist, tops, view_of, out, notify)
     out.seconds += time.perf_counter() - t0
     return values, pairs

@@ -92,17 +92,13 @@ def resident() -> int:
 
 
 class Watch:
-    """The in-memory exploration's progress callback, and its `handover`, asked after each
-    bucket: a reason to go on through the disk once the exploration would not fit
-    comfortably (too_big), or once it passes STREAM_FROM states."""
+    """The in-memory exploration's `handover`, asked after each bucket: a reason to go on
+    through the disk once the exploration would not fit comfortably (too_big), or once
+    it passes STREAM_FROM states."""
 
-    def __init__(self, available: int | None, then: explicit.Notify) -> None:
+    def __init__(self, available: int | None) -> None:
         self.available = available
-        self.then = then
         self.base = resident()
-
-    def __call__(self, event: str, data: Any) -> None:
-        self.then(event, data)
 
     def handover(self, states: int) -> str | None:
         grown = resident() - self.base

@@ -61,6 +61,19 @@ def _offsets(counts: npt.NDArray[np.integer[Any]]) -> I64:
     return out
 
 
+def late_index(st: Streamed) -> tuple[I64, I64]:
+    """The late states' keys sorted, and each one's number among the late states: how a
+    branch into a late state, kept by its key, is numbered (late_numbers)."""
+    order = np.argsort(st.late_keys)
+    return st.late_keys[order], order
+
+
+def late_numbers(st: Streamed, late_sorted: I64, late_order: I64, keys: I64) -> I64:
+    """The other numbers (the sinks first, then the late states) of late states' `keys`."""
+    out: I64 = st.sinks + late_order[np.searchsorted(late_sorted, keys)]
+    return out
+
+
 def load(st: Streamed, name: str, first: int, own_other: int | None, late_sorted: I64,
          late_order: I64, rewards: int, labels: int, slot: Rows | None = None) -> Part:
     """The file `name`; its regular successors as the rows `slot[g mod len(slot)]` of
@@ -72,8 +85,7 @@ def load(st: Streamed, name: str, first: int, own_other: int | None, late_sorted
     choices = _offsets(a["nbranch"])
     target = widen(a["target"], first)
     if "late_at" in a:
-        target[a["late_at"]] = -1 - (st.sinks + late_order[np.searchsorted(late_sorted,
-                                                                             a["late_key"])])
+        target[a["late_at"]] = -1 - late_numbers(st, late_sorted, late_order, a["late_key"])
     assert not (target == LATE).any()
     prob = st.table[a["prob"]]
     regular = target >= 0
@@ -120,8 +132,7 @@ def load_compiled(st: Streamed, name: str, first: int, own_other: int | None,
                              np.zeros(0, np.int64) if slot is None else slot,
                              -1 if own_other is None else own_other, prob, reg, oth, stay)
     if "late_at" in a:
-        at = a["late_at"]
-        oth[at] = st.sinks + late_order[np.searchsorted(late_sorted, a["late_key"])]
+        oth[a["late_at"]] = late_numbers(st, late_sorted, late_order, a["late_key"])
     return _part(a, states, choices, reg, oth, prob, stay if loops else None, rewards, labels)
 
 
@@ -491,8 +502,7 @@ def _sweep_with(st: Streamed, groups: list[Group], nr: int, targets: int, rows: 
                 keep: Keep | None = None) -> tuple[dict[str, float], int]:
     other = fast.views(fast.other) if fast is not None else \
         [np.zeros((st.sinks + st.late, len(g.queries))) for g in groups]
-    order = np.argsort(st.late_keys)
-    late = (st.late_keys[order], order)
+    late = late_index(st)
     pairs = 0
     read = load if fast is None else load_compiled
 

@@ -76,6 +76,7 @@ def test_streamed_strategies_and_witnesses_equal_the_in_memory_ones(
     # between its threads
     monkeypatch.setenv("AFSMC_KERNELS", kernels)
     monkeypatch.setattr(sweep, "SPLIT", 1)
+    monkeypatch.setattr(extract, "PROGRESS_EVERY", -1.0)  # a progress line for every file
     path, consts = CASES[case] if case != "loops" else (_loops(tmp_path), {})
     memory, streamed, said = _both(path, consts, tmp_path, witness, k, policy)
     assert streamed.scratch is not None and memory.scratch is None
@@ -84,6 +85,7 @@ def test_streamed_strategies_and_witnesses_equal_the_in_memory_ones(
     assert memory.extracted is not None
     assert memory.extracted.paths or memory.extracted.witness_note  # a witness was asked
     assert any("read forward from the same layers" in s for s in said)
+    assert any("files forward for the strategies" in s for s in said), said
     assert not list(tmp_path.glob(scratch.PREFIX + "*"))
 
 
